@@ -1,0 +1,88 @@
+"""UDP multicast sockets that behave well on a shared field network.
+
+Receivers set SO_REUSEADDR/SO_REUSEPORT, bind the group port and join the group on a
+configured interface address, so several programs (station, ssl-vision-client, game
+controller) listen at once. Senders set IP_MULTICAST_IF, IP_MULTICAST_LOOP and a TTL.
+"""
+
+from __future__ import annotations
+
+import socket
+import struct
+
+
+def open_multicast_receiver(
+    group: str, port: int, interface: str = "127.0.0.1", *, rcvbuf: int = 1 << 21
+) -> socket.socket:
+    """A non-blocking UDP socket bound to ``port`` that has joined ``group`` on ``interface``."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        if hasattr(socket, "SO_REUSEPORT"):
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        # Binding the group address (not INADDR_ANY) keeps unicast and other groups on the
+        # same port out of this socket.
+        sock.bind((group, port))
+        mreq = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton(interface))
+        sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, mreq)
+        sock.setblocking(False)
+    except OSError:
+        sock.close()
+        raise
+    return sock
+
+
+def open_multicast_sender(
+    interface: str = "127.0.0.1", *, ttl: int = 1, loop: bool = True
+) -> socket.socket:
+    """A non-blocking UDP socket that sends multicast out of ``interface``."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+    try:
+        sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(interface))
+        sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
+        sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1 if loop else 0)
+        sock.setblocking(False)
+    except OSError:
+        sock.close()
+        raise
+    return sock
+
+
+def open_udp_server(host: str, port: int) -> socket.socket:
+    """A non-blocking unicast UDP socket bound to ``host:port`` (simulator command ports)."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.setblocking(False)
+    except OSError:
+        sock.close()
+        raise
+    return sock
+
+
+def loopback_multicast_ok() -> bool:
+    """True if a multicast datagram sent on 127.0.0.1 comes back to a receiver on lo."""
+    import os
+    import select
+
+    group = "239.255.77.77"
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        rx.bind((group, 0))
+        port = rx.getsockname()[1]
+        mreq = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton("127.0.0.1"))
+        rx.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, mreq)
+        tx = open_multicast_sender("127.0.0.1")
+        token = os.urandom(8)
+        try:
+            tx.sendto(token, (group, port))
+        finally:
+            tx.close()
+        ready, _, _ = select.select([rx], [], [], 0.5)
+        return bool(ready) and rx.recv(64) == token
+    except OSError:
+        return False
+    finally:
+        rx.close()

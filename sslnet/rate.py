@@ -1,0 +1,41 @@
+"""Counters with a per-second rate, used by every process for its health numbers."""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+
+
+class RateCounter:
+    """Counts events; ``rate_hz`` is the number of events in the last ``window_s`` / window."""
+
+    def __init__(self, window_s: float = 1.0) -> None:
+        self.window_s = window_s
+        self.total = 0
+        self.last_time: float | None = None
+        self._times: deque[float] = deque()
+
+    def add(self, now: float | None = None) -> None:
+        t = time.monotonic() if now is None else now
+        self.total += 1
+        self.last_time = t
+        self._times.append(t)
+        self._trim(t)
+
+    def _trim(self, now: float) -> None:
+        cutoff = now - self.window_s
+        times = self._times
+        while times and times[0] < cutoff:
+            times.popleft()
+
+    def rate_hz(self, now: float | None = None) -> float:
+        t = time.monotonic() if now is None else now
+        self._trim(t)
+        return len(self._times) / self.window_s
+
+    def age_s(self, now: float | None = None) -> float:
+        """Seconds since the last event, -1 if none yet."""
+        if self.last_time is None:
+            return -1.0
+        t = time.monotonic() if now is None else now
+        return t - self.last_time
