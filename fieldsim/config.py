@@ -1,0 +1,92 @@
+"""Every fieldsim setting in one typed dataclass, with defaults (see README.md for the flags)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sslnet import defaults
+
+
+@dataclass
+class SimConfig:
+    """Settings of one fieldsim process. Units: mm and rad for vision, m and s for physics."""
+
+    # World
+    seed: int = 1
+    division: str = "B"  # "A" (12000x9000) or "B" (9000x6000)
+    blue: int = 6  # robots per team at start, 0..11
+    yellow: int = 6
+    blue_on_positive_half: bool = False  # blue starts on the negative-x half by default
+    generation: int = 2  # 1: unequal gains C per robot, 2: C = 1 for every robot
+    gain_min: float = 0.6  # generation 1: C drawn uniformly in [gain_min, gain_max]
+    gain_max: float = 1.4
+    gains: list[float] | None = None  # generation 1: fixed C list (robot order: blue, yellow)
+
+    # Physics (SI units)
+    physics_hz: float = 200.0
+    robot_radius_m: float = 0.09
+    robot_max_speed: float = 3.5  # m/s
+    robot_max_accel: float = 3.0  # m/s^2
+    robot_max_angular_speed: float = 10.0  # rad/s
+    robot_max_angular_accel: float = 20.0  # rad/s^2
+    command_timeout_s: float = 0.2  # no command for this long: the robot brakes to a stop
+    ball_radius_m: float = 0.0215
+    ball_rolling_decel: float = 0.4  # m/s^2
+    ball_wall_restitution: float = 0.6
+    ball_robot_restitution: float = 0.3
+    ball_max_speed: float = 10.0  # m/s, kicks are clamped to this
+    kicker_half_angle_rad: float = 0.6981  # 40 degrees either side of the heading
+    kicker_reach_m: float = 0.010  # extra reach beyond robot radius + ball radius
+    gravity: float = 9.81
+    chip_bounce_restitution: float = 0.5
+
+    # Vision
+    cameras: int = 4  # 1, 2 or 4
+    camera_hz: float = 60.0
+    camera_overlap_mm: float = 400.0  # each camera sees this far past the centre lines
+    camera_height_mm: float = 4000.0
+    geometry_hz: float = 3.0
+    noise_mm: float = 2.0
+    noise_rad: float = 0.01
+    miss_prob: float = 0.01
+    false_prob: float = 0.0
+    confidence: float = 0.9
+
+    # Network
+    interface: str = "127.0.0.1"
+    vision_group: str = defaults.VISION_GROUP
+    vision_port: int = defaults.VISION_PORT_SIM
+    vision_ttl: int = 1
+    sim_host: str = "127.0.0.1"
+    control_port: int = defaults.SIM_CONTROL_PORT  # 0 picks a free port
+    blue_port: int = defaults.SIM_BLUE_PORT
+    yellow_port: int = defaults.SIM_YELLOW_PORT
+    grsim_port: int = defaults.GRSIM_COMMAND_PORT
+    truth_pub: str | None = None  # e.g. "tcp://127.0.0.1:5580"
+    max_catch_up_steps: int = 50  # physics steps per wake-up before the sim gives up real time
+
+    def validate(self) -> None:
+        """Raise ValueError for settings that cannot work."""
+        if self.division not in ("A", "B"):
+            raise ValueError("division must be 'A' or 'B'")
+        for name in ("blue", "yellow"):
+            n = getattr(self, name)
+            if not 0 <= n <= 11:
+                raise ValueError(f"{name} must be in 0..11")
+        if self.generation not in (1, 2):
+            raise ValueError("generation must be 1 or 2")
+        if self.cameras not in (1, 2, 4):
+            raise ValueError("cameras must be 1, 2 or 4")
+        for name in ("physics_hz", "camera_hz", "geometry_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0")
+        for name in ("miss_prob", "false_prob"):
+            p = getattr(self, name)
+            if not 0.0 <= p <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1]")
+        if self.noise_mm < 0 or self.noise_rad < 0:
+            raise ValueError("noise must be >= 0")
+        if self.gain_min <= 0 or self.gain_max < self.gain_min:
+            raise ValueError("need 0 < gain_min <= gain_max")
+        if self.gains is not None and any(not g > 0 for g in self.gains):
+            raise ValueError("gains must be > 0")
