@@ -1,0 +1,165 @@
+"""Command line: ``python -m larcmacs_relay [flags]`` (see README.md)."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import dataclasses
+import logging
+import signal
+import sys
+
+from larcmacs_relay.config import RelayConfig
+from larcmacs_relay.relay import run_relay
+
+
+def _hostport(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host:
+        raise argparse.ArgumentTypeError(f"expected host:port, got {text!r}")
+    return host, int(port)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    d = RelayConfig()
+    p = argparse.ArgumentParser(
+        prog="python -m larcmacs_relay",
+        description="Touchline relay: SSL multicast <-> ZeroMQ, commands -> simulator/robots.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    a = p.add_argument
+    a("--interface", default=d.interface, help="interface address to join multicast on")
+    a(
+        "--vision",
+        type=_hostport,
+        default=(d.vision_group, d.vision_port),
+        metavar="GROUP:PORT",
+        help="vision multicast (real SSL-Vision: 224.5.23.2:10006)",
+    )
+    a(
+        "--referee",
+        type=_hostport,
+        default=(d.referee_group, d.referee_port),
+        metavar="GROUP:PORT",
+        help="referee multicast",
+    )
+    a(
+        "--tracker",
+        type=_hostport,
+        default=None,
+        metavar="GROUP:PORT",
+        help=f"enable tracker input (e.g. {d.tracker_group}:{d.tracker_port})",
+    )
+    a("--pub", default=d.pub_endpoint, help="ZeroMQ PUB endpoint to bind")
+    a("--sub", default=d.sub_endpoint, help="ZeroMQ SUB endpoint to bind")
+    a("--output", choices=["sim", "grsim", "robot-box"], default=d.output)
+    a("--sim-host", default=d.sim_host, help="simulator host (sim and grsim modes)")
+    a("--sim-control-port", type=int, default=d.sim_control_port)
+    a("--sim-blue-port", type=int, default=d.sim_blue_port)
+    a("--sim-yellow-port", type=int, default=d.sim_yellow_port)
+    a("--grsim-port", type=int, default=d.grsim_port)
+    a(
+        "--robot-box",
+        type=_hostport,
+        default=(d.robot_box_host, d.robot_box_port),
+        metavar="HOST:PORT",
+        help="robot box address (robot-box mode)",
+    )
+    a("--rate", type=float, default=d.output_rate_hz, help="output rate, Hz (>= 100)")
+    a(
+        "--command-timeout",
+        type=float,
+        default=d.command_timeout_s,
+        help="seconds after which a robot's last command is replaced by zero velocity",
+    )
+    a(
+        "--hold-time",
+        type=float,
+        default=d.hold_time_s,
+        help="seconds zero velocity is sent before the relay stops sending to a robot",
+    )
+    a("--chip-angle", type=float, default=d.chip_angle_deg, help="chip kick angle, degrees")
+    a("--kick-mps-per-volt", type=float, default=d.kick_mps_per_volt)
+    a("--dribbler-rpm-per-unit", type=float, default=d.dribbler_rpm_per_unit)
+    a("--compat", action="store_true", help="also serve the seed LARCmaCS ZeroMQ contract")
+    a("--compat-vision-pub", default=d.compat_vision_pub)
+    a("--compat-referee-pub", default=d.compat_referee_pub)
+    a(
+        "--compat-commands",
+        default=d.compat_commands,
+        help="strategy-bridge PUB to connect to (32x13 float64 matrix)",
+    )
+    a(
+        "--our-team",
+        choices=["blue", "yellow"],
+        default=d.our_team,
+        help="our colour, for the compat referee is_left",
+    )
+    a("--log-level", default="INFO")
+    return p
+
+
+def config_from_args(args: argparse.Namespace) -> RelayConfig:
+    cfg = RelayConfig(
+        interface=args.interface,
+        vision_group=args.vision[0],
+        vision_port=args.vision[1],
+        referee_group=args.referee[0],
+        referee_port=args.referee[1],
+        pub_endpoint=args.pub,
+        sub_endpoint=args.sub,
+        output=args.output,
+        sim_host=args.sim_host,
+        sim_control_port=args.sim_control_port,
+        sim_blue_port=args.sim_blue_port,
+        sim_yellow_port=args.sim_yellow_port,
+        grsim_port=args.grsim_port,
+        robot_box_host=args.robot_box[0],
+        robot_box_port=args.robot_box[1],
+        output_rate_hz=args.rate,
+        command_timeout_s=args.command_timeout,
+        hold_time_s=args.hold_time,
+        chip_angle_deg=args.chip_angle,
+        kick_mps_per_volt=args.kick_mps_per_volt,
+        dribbler_rpm_per_unit=args.dribbler_rpm_per_unit,
+        compat=args.compat,
+        compat_vision_pub=args.compat_vision_pub,
+        compat_referee_pub=args.compat_referee_pub,
+        compat_commands=args.compat_commands,
+        our_team=args.our_team,
+    )
+    if args.tracker is not None:
+        cfg = dataclasses.replace(
+            cfg, tracker_enabled=True, tracker_group=args.tracker[0], tracker_port=args.tracker[1]
+        )
+    return cfg
+
+
+async def _main(cfg: RelayConfig) -> None:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    await run_relay(cfg, stop)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=args.log_level.upper(),
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        cfg = config_from_args(args)
+        cfg.validate()
+    except ValueError as exc:
+        logging.getLogger("larcmacs_relay").error("bad configuration: %s", exc)
+        return 2
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(_main(cfg))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

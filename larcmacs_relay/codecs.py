@@ -1,0 +1,355 @@
+"""Pure codecs of the relay: validation, command conversion and output encodings.
+
+No sockets, no event loop, no clock (times are arguments), so all of it is testable directly.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+
+from google.protobuf import empty_pb2
+from google.protobuf.message import DecodeError, Message
+
+from sslpb import (
+    grsim_packet_pb2,
+    ssl_gc_common_pb2,
+    ssl_gc_referee_message_pb2,
+    ssl_simulation_control_pb2,
+    ssl_simulation_robot_control_pb2,
+    ssl_simulation_robot_feedback_pb2,
+    ssl_vision_wrapper_pb2,
+    touchline_pb2,
+)
+
+TEAM_YELLOW = touchline_pb2.TEAM_YELLOW
+TEAM_BLUE = touchline_pb2.TEAM_BLUE
+TEAMS = (TEAM_BLUE, TEAM_YELLOW)
+MAX_ROBOT_ID = 15
+
+# Seed power scale (DESIGN.md s.3): linear power * 0.05 m/s, angular power / 5 rad/s.
+MPS_PER_POWER = 0.05
+POWER_PER_RADPS = 5.0
+MAX_POWER = 100.0
+
+ROBOT_BOX_OPCODE = 1
+ROBOT_BOX_SIZE = 13
+
+
+def team_name(team: int) -> str:
+    return "blue" if team == TEAM_BLUE else "yellow" if team == TEAM_YELLOW else "unknown"
+
+
+# --------------------------------------------------------------------------- input validation
+
+
+def _parse(msg: Message, data: bytes) -> str | None:
+    try:
+        msg.ParseFromString(data)
+    except (DecodeError, RuntimeError, ValueError) as exc:
+        return f"does not parse as {msg.DESCRIPTOR.name}: {exc}"
+    if not msg.IsInitialized():
+        missing = ", ".join(msg.FindInitializationErrors()[:5])  # type: ignore[attr-defined]
+        return f"{msg.DESCRIPTOR.name} misses required fields: {missing}"
+    return None
+
+
+def validate_vision(data: bytes) -> str | None:
+    """None if ``data`` is a complete SSL_WrapperPacket with detection or geometry, else why."""
+    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
+    err = _parse(wrapper, data)
+    if err is None and not (wrapper.HasField("detection") or wrapper.HasField("geometry")):
+        err = "SSL_WrapperPacket has neither detection nor geometry"
+    return err
+
+
+def validate_referee(data: bytes) -> str | None:
+    """None if ``data`` is a complete Referee message, else the reason."""
+    return _parse(ssl_gc_referee_message_pb2.Referee(), data)
+
+
+def parse_referee(data: bytes) -> ssl_gc_referee_message_pb2.Referee | None:
+    ref = ssl_gc_referee_message_pb2.Referee()
+    return ref if _parse(ref, data) is None else None
+
+
+def validate_tracker(data: bytes) -> str | None:
+    """Tracker packets: Touchline has no TrackerWrapperPacket schema, so only the protobuf wire
+    format is checked (parsed as a message with only unknown fields), and empty is rejected."""
+    if not data:
+        return "empty tracker datagram"
+    return _parse(empty_pb2.Empty(), data)
+
+
+# --------------------------------------------------------------------------- command model
+
+
+@dataclass(frozen=True)
+class BoxExtras:
+    """Seed robot-box fields carried unchanged from a compat (32x13 matrix) command."""
+
+    kick_up: int = 0
+    kick_forward: int = 0
+    auto_kick: int = 0
+    kicker_voltage: int = 0
+    dribbler_enable: int = 0
+    dribbler_speed: int = 0
+    kicker_charge_enable: int = 0
+    beep: int = 0
+
+
+@dataclass(frozen=True)
+class Command:
+    """One robot's command in SI units, robot-local frame (team uses touchline.Team numbers)."""
+
+    team: int
+    id: int
+    forward_mps: float = 0.0
+    left_mps: float = 0.0
+    angular_radps: float = 0.0
+    kick_speed_mps: float = 0.0
+    chip: bool = False
+    dribbler_rpm: float = 0.0
+    box: BoxExtras | None = None
+
+    def zero(self) -> Command:
+        """The stop command for the same robot: no motion, no kick, no dribbler."""
+        return Command(self.team, self.id)
+
+    @property
+    def is_zero(self) -> bool:
+        return self == self.zero()
+
+
+class CommandError(ValueError):
+    """A command the relay refuses (bad id, team, or non-finite value)."""
+
+
+def command_from_proto(cmd: touchline_pb2.RobotCommand) -> Command:
+    """Validate a native RobotCommand; raise CommandError with the reason if it is unusable."""
+    if cmd.team not in TEAMS:
+        raise CommandError(f"robot command with team {cmd.team} (must be blue or yellow)")
+    if cmd.id > MAX_ROBOT_ID:
+        raise CommandError(f"robot command for id {cmd.id} (must be 0..{MAX_ROBOT_ID})")
+    values = (
+        cmd.forward_mps,
+        cmd.left_mps,
+        cmd.angular_radps,
+        cmd.kick_speed_mps,
+        cmd.dribbler_rpm,
+    )
+    if not all(math.isfinite(v) for v in values):
+        raise CommandError(f"robot command {team_name(cmd.team)} {cmd.id} has a non-finite value")
+    if cmd.kick_speed_mps < 0:
+        raise CommandError(f"robot command {team_name(cmd.team)} {cmd.id} has a negative kick")
+    return Command(
+        team=cmd.team,
+        id=cmd.id,
+        forward_mps=cmd.forward_mps,
+        left_mps=cmd.left_mps,
+        angular_radps=cmd.angular_radps,
+        kick_speed_mps=cmd.kick_speed_mps,
+        chip=cmd.chip,
+        dribbler_rpm=cmd.dribbler_rpm,
+    )
+
+
+# --------------------------------------------------------------------------- power scale
+
+
+def clamp(value: float, low: float, high: float) -> float:
+    return low if value < low else high if value > high else value
+
+
+def power_to_si(speed_x: float, speed_y: float, speed_r: float) -> tuple[float, float, float]:
+    """Seed +-100 power -> (forward m/s, left m/s, angular rad/s).
+
+    SpeedX is forward and SpeedY is left (the seed's column order SpeedX, SpeedY). The linear
+    vector's norm is clipped to 100 before * 0.05 m/s; the angular power is clamped to +-100,
+    then / 5 rad/s (same sign: positive = counter-clockwise).
+    """
+    norm = math.hypot(speed_x, speed_y)
+    if norm > MAX_POWER:
+        speed_x, speed_y = speed_x * MAX_POWER / norm, speed_y * MAX_POWER / norm
+    angular = clamp(speed_r, -MAX_POWER, MAX_POWER) / POWER_PER_RADPS
+    return speed_x * MPS_PER_POWER, speed_y * MPS_PER_POWER, angular
+
+
+def si_to_power(forward: float, left: float, angular: float) -> tuple[int, int, int]:
+    """(forward m/s, left m/s, angular rad/s) -> seed power (speedX, speedY, speedR) as ints.
+
+    Inverse of power_to_si: linear power = m/s / 0.05 with the vector norm clipped to 100,
+    angular power = rad/s * 5 clamped to +-100; rounded to the nearest integer.
+    """
+    px, py = forward / MPS_PER_POWER, left / MPS_PER_POWER
+    norm = math.hypot(px, py)
+    if norm > MAX_POWER:
+        px, py = px * MAX_POWER / norm, py * MAX_POWER / norm
+    pr = clamp(angular * POWER_PER_RADPS, -MAX_POWER, MAX_POWER)
+    return round(px), round(py), round(pr)
+
+
+# --------------------------------------------------------------------------- sim protocol
+
+
+def kick_components(speed: float, chip: bool, chip_angle_deg: float) -> tuple[float, float]:
+    """Kick speed (m/s, 3D) -> (horizontal, vertical) m/s; straight kicks are all horizontal."""
+    if not chip or speed == 0.0:
+        return speed, 0.0
+    rad = math.radians(chip_angle_deg)
+    return speed * math.cos(rad), speed * math.sin(rad)
+
+
+def encode_sim_robot_control(commands: list[Command], chip_angle_deg: float) -> bytes:
+    """SSL simulation protocol RobotControl with one local_velocity RobotCommand per robot."""
+    msg = ssl_simulation_robot_control_pb2.RobotControl()
+    for c in commands:
+        rc = msg.robot_commands.add()
+        rc.id = c.id
+        lv = rc.move_command.local_velocity
+        lv.forward = c.forward_mps
+        lv.left = c.left_mps
+        lv.angular = c.angular_radps
+        rc.kick_speed = c.kick_speed_mps
+        rc.kick_angle = chip_angle_deg if (c.chip and c.kick_speed_mps > 0) else 0.0
+        rc.dribbler_speed = c.dribbler_rpm
+    return msg.SerializeToString()
+
+
+def count_response_errors(data: bytes) -> tuple[int, str]:
+    """Errors in a RobotControlResponse / SimulatorResponse (both carry errors as field 1).
+
+    Returns (count, description); an unparsable reply counts as one error.
+    """
+    msg = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
+    err = _parse(msg, data)
+    if err is not None:
+        return 1, err
+    if not msg.errors:
+        return 0, ""
+    first = msg.errors[0]
+    return len(msg.errors), f"simulator error {first.code}: {first.message}"
+
+
+# --------------------------------------------------------------------------- grSim legacy
+
+
+def encode_grsim_commands(
+    commands: list[Command], yellow: bool, timestamp_s: float, chip_angle_deg: float
+) -> bytes:
+    """grSim_Packet with grSim_Commands for one team (veltangent = forward, velnormal = left)."""
+    pkt = grsim_packet_pb2.grSim_Packet()
+    gc = pkt.commands
+    gc.timestamp = timestamp_s
+    gc.isteamyellow = yellow
+    for c in commands:
+        rc = gc.robot_commands.add()
+        rc.id = c.id
+        kx, kz = kick_components(c.kick_speed_mps, c.chip, chip_angle_deg)
+        rc.kickspeedx = kx
+        rc.kickspeedz = kz
+        rc.veltangent = c.forward_mps
+        rc.velnormal = c.left_mps
+        rc.velangular = c.angular_radps
+        rc.spinner = c.dribbler_rpm > 0
+        rc.wheelsspeed = False
+    return pkt.SerializeToString()
+
+
+def sim_command_to_grsim(cmd: ssl_simulation_control_pb2.SimulatorCommand) -> bytes | None:
+    """Translate teleport_ball / teleport_robot to a grSim_Replacement packet (None if nothing).
+
+    Metres stay metres; orientation rad -> dir degrees; ``present`` -> ``turnon``. Fields grSim
+    cannot express (z, vz, config, simulation speed) are dropped.
+    """
+    if not cmd.HasField("control"):
+        return None
+    ctl = cmd.control
+    pkt = grsim_packet_pb2.grSim_Packet()
+    rep = pkt.replacement
+    used = False
+    if ctl.HasField("teleport_ball"):
+        tb = ctl.teleport_ball
+        ball = rep.ball
+        ball.SetInParent()
+        if tb.HasField("x"):
+            ball.x = tb.x
+        if tb.HasField("y"):
+            ball.y = tb.y
+        if tb.HasField("vx"):
+            ball.vx = tb.vx
+        if tb.HasField("vy"):
+            ball.vy = tb.vy
+        used = True
+    for tr in ctl.teleport_robot:
+        r = rep.robots.add()
+        r.x = tr.x
+        r.y = tr.y
+        r.dir = math.degrees(tr.orientation)
+        r.id = tr.id.id
+        r.yellowteam = tr.id.team == ssl_gc_common_pb2.YELLOW
+        if tr.HasField("present"):
+            r.turnon = tr.present
+        used = True
+    return pkt.SerializeToString() if used else None
+
+
+# --------------------------------------------------------------------------- robot box
+
+
+def _u8(value: float) -> int:
+    return int(clamp(round(value), 0, 255))
+
+
+def _i8(value: int) -> int:
+    return int(clamp(value, -100, 100)) & 0xFF
+
+
+def encode_robot_box(
+    c: Command,
+    *,
+    kick_mps_per_volt: float = 0.5,
+    dribbler_rpm_per_unit: float = 1000.0,
+    charge: bool = True,
+) -> bytes:
+    """The seed's 13-byte robot-box datagram for one robot.
+
+    Byte order: opcode 1, robot number, speedY int8, speedX int8, speedR int8 (sign inverted),
+    dribbler speed, kicker voltage, kickUp, kickForward, beep, dribbler enable,
+    kicker-charge enable, autoKick. Speeds use the seed's +-100 power scale with SpeedX =
+    forward and SpeedY = left (si_to_power). For commands that came through the compat matrix,
+    the seed's own kick/dribbler/beep bytes are passed through; for native commands they are
+    derived: voltage = kick m/s / kick_mps_per_volt, kickUp = chip, kickForward = straight,
+    dribbler speed = rpm / dribbler_rpm_per_unit, dribbler enable = rpm > 0, charge as given.
+    A zero (stop) command sends zeros in every byte after the robot number.
+    """
+    px, py, pr = si_to_power(c.forward_mps, c.left_mps, c.angular_radps)
+    if c.box is not None:
+        b = c.box
+        tail = (
+            b.dribbler_speed,
+            b.kicker_voltage,
+            b.kick_up,
+            b.kick_forward,
+            b.beep,
+            b.dribbler_enable,
+            b.kicker_charge_enable,
+            b.auto_kick,
+        )
+    elif c.is_zero:
+        tail = (0, 0, 0, 0, 0, 0, 0, 0)
+    else:
+        kicking = c.kick_speed_mps > 0
+        tail = (
+            _u8(c.dribbler_rpm / dribbler_rpm_per_unit),
+            _u8(c.kick_speed_mps / kick_mps_per_volt) if kicking else 0,
+            1 if kicking and c.chip else 0,
+            1 if kicking and not c.chip else 0,
+            0,
+            1 if c.dribbler_rpm > 0 else 0,
+            1 if charge else 0,
+            0,
+        )
+    head = (ROBOT_BOX_OPCODE, c.id, _i8(py), _i8(px), _i8(-pr))
+    return struct.pack("13B", *head, *(_u8(v) for v in tail))

@@ -1,0 +1,76 @@
+"""The command table: latest command per robot, staleness, stop-all and hold (pure, clocked
+by the caller with monotonic seconds)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+from larcmacs_relay.codecs import Command
+
+
+class RobotState(Enum):
+    ACTIVE = "active"  # fresh command, repeated every cycle
+    STALE = "stale"  # command older than the timeout: zero velocity is sent
+    STOPPED = "stopped"  # zeroed by stop_all: zero velocity is sent
+    IDLE = "idle"  # held at zero for the hold time: nothing is sent
+
+
+@dataclass
+class _Entry:
+    command: Command
+    arrival: float
+    state: RobotState = RobotState.ACTIVE
+    zero_since: float = 0.0
+
+
+@dataclass
+class CommandTable:
+    """Latest command per (team, id).
+
+    Every output cycle ``due(now)`` returns what to send: the latest command while it is
+    younger than ``timeout_s``; zero velocity once it is older (counted once in
+    ``stale_stops``) or after a stop_all; nothing once the robot has been held at zero for
+    ``hold_time_s``. A newer command revives a robot; stop_all zeroes every robot known.
+    """
+
+    timeout_s: float = 0.1
+    hold_time_s: float = 1.0
+    stale_stops: int = 0
+    _entries: dict[tuple[int, int], _Entry] = field(default_factory=dict)
+
+    def update(self, command: Command, now: float) -> None:
+        self._entries[(command.team, command.id)] = _Entry(command, now)
+
+    def stop_all(self, now: float) -> None:
+        for entry in self._entries.values():
+            entry.command = entry.command.zero()
+            entry.state = RobotState.STOPPED
+            entry.zero_since = now
+
+    def due(self, now: float) -> list[Command]:
+        """Commands to send this cycle, sorted by (team, id)."""
+        out: list[Command] = []
+        for key in sorted(self._entries):
+            entry = self._entries[key]
+            if entry.state is RobotState.ACTIVE and now - entry.arrival > self.timeout_s:
+                entry.state = RobotState.STALE
+                entry.zero_since = now
+                self.stale_stops += 1
+            if entry.state is RobotState.ACTIVE:
+                out.append(entry.command)
+                continue
+            if entry.state is RobotState.IDLE:
+                continue
+            if now - entry.zero_since >= self.hold_time_s:
+                entry.state = RobotState.IDLE
+                continue
+            out.append(entry.command.zero())
+        return out
+
+    def count(self, state: RobotState) -> int:
+        return sum(1 for e in self._entries.values() if e.state is state)
+
+    @property
+    def known(self) -> int:
+        return len(self._entries)

@@ -1,0 +1,75 @@
+"""Typed configuration of the relay: every setting with its default (argparse lives in __main__)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from sslnet import defaults
+
+OutputMode = Literal["sim", "grsim", "robot-box"]
+TeamColour = Literal["blue", "yellow"]
+
+
+@dataclass(frozen=True)
+class RelayConfig:
+    """Everything the relay needs; defaults are the SSL / Touchline defaults (DESIGN.md s.2)."""
+
+    # Multicast inputs.
+    interface: str = "127.0.0.1"
+    vision_group: str = defaults.VISION_GROUP
+    vision_port: int = defaults.VISION_PORT_SIM
+    referee_group: str = defaults.REFEREE_GROUP
+    referee_port: int = defaults.REFEREE_PORT
+    tracker_enabled: bool = False
+    tracker_group: str = defaults.VISION_GROUP
+    tracker_port: int = defaults.TRACKER_PORT
+
+    # Native ZeroMQ endpoints (both bound by the relay).
+    pub_endpoint: str = defaults.RELAY_PUB
+    sub_endpoint: str = defaults.RELAY_SUB
+
+    # Command output.
+    output: OutputMode = "sim"
+    sim_host: str = "127.0.0.1"
+    sim_control_port: int = defaults.SIM_CONTROL_PORT
+    sim_blue_port: int = defaults.SIM_BLUE_PORT
+    sim_yellow_port: int = defaults.SIM_YELLOW_PORT
+    grsim_port: int = defaults.GRSIM_COMMAND_PORT
+    robot_box_host: str = "127.0.0.1"
+    robot_box_port: int = defaults.ROBOT_BOX_PORT
+    output_rate_hz: float = 120.0
+    command_timeout_s: float = 0.100
+    hold_time_s: float = 1.0
+
+    # Kick / dribbler conversions (uncalibrated, documented in README.md).
+    chip_angle_deg: float = 45.0
+    kick_mps_per_volt: float = 0.5  # robot-box kicker voltage byte <-> kick speed
+    max_kick_mps: float = 6.5  # league limit
+    dribbler_rpm_per_unit: float = 1000.0  # robot-box dribbler speed byte <-> rpm
+    robot_box_charge: bool = True  # kicker-charge enable for native commands
+
+    # Seed LARCmaCS compatibility sockets.
+    compat: bool = False
+    compat_vision_pub: str = defaults.COMPAT_VISION_PUB
+    compat_referee_pub: str = defaults.COMPAT_REFEREE_PUB
+    compat_commands: str = defaults.COMPAT_COMMANDS
+    our_team: TeamColour = "blue"
+
+    stats_interval_s: float = 1.0
+    log_interval_s: float = 5.0
+
+    def validate(self) -> None:
+        """Raise ValueError for settings the relay cannot run safely with."""
+        if self.output not in ("sim", "grsim", "robot-box"):
+            raise ValueError(f"unknown output mode {self.output!r}")
+        if self.output_rate_hz < 100.0:
+            raise ValueError("output_rate_hz must be >= 100 (simulators need >= 100 Hz)")
+        if not 0.0 < self.command_timeout_s <= 1.0:
+            raise ValueError("command_timeout_s must be in (0, 1] s")
+        if self.hold_time_s < 0.0:
+            raise ValueError("hold_time_s must be >= 0")
+        if self.our_team not in ("blue", "yellow"):
+            raise ValueError(f"our_team must be blue or yellow, not {self.our_team!r}")
+        if self.kick_mps_per_volt <= 0 or self.dribbler_rpm_per_unit <= 0:
+            raise ValueError("conversion factors must be > 0")

@@ -1,0 +1,496 @@
+"""The relay's I/O: multicast in, ZeroMQ out; ZeroMQ commands in, UDP to simulator/robots out.
+
+Use ``Relay(config)`` and ``await relay.run()`` (``relay.stop()`` ends it), or
+``await run_relay(config, stop_event)``. Nothing is opened before ``run()``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import socket
+import time
+from collections import deque
+from collections.abc import Callable
+
+import zmq
+import zmq.asyncio
+from google.protobuf.message import DecodeError
+
+from larcmacs_relay import codecs
+from larcmacs_relay.codecs import Command, CommandError
+from larcmacs_relay.commands import CommandTable, RobotState
+from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
+from larcmacs_relay.config import RelayConfig
+from sslnet.multicast import open_multicast_receiver
+from sslnet.rate import RateCounter
+from sslnet.ratelog import RateLimitedLog
+from sslpb import ssl_simulation_control_pb2, touchline_pb2
+
+log = logging.getLogger("larcmacs_relay")
+
+MAX_DATAGRAM = 65536
+
+
+class StreamCounter:
+    """Packets, errors, bytes, rate and last error of one stream (published in RelayStats)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.rate = RateCounter()
+        self.errors = 0
+        self.bytes = 0
+        self.last_error = ""
+
+    @property
+    def packets(self) -> int:
+        return self.rate.total
+
+    def packet(self, size: int, now: float | None = None) -> None:
+        self.rate.add(now)
+        self.bytes += size
+
+    def error(self, reason: str, n: int = 1) -> None:
+        self.errors += n
+        self.last_error = reason
+
+    def to_proto(self, now: float) -> touchline_pb2.StreamStats:
+        return touchline_pb2.StreamStats(
+            name=self.name,
+            packets=self.packets,
+            errors=self.errors,
+            bytes=self.bytes,
+            rate_hz=self.rate.rate_hz(now),
+            last_age_s=self.rate.age_s(now),
+            last_error=self.last_error,
+        )
+
+
+class Relay:
+    """One relay instance. Attributes ``streams``, ``table`` and the bound endpoints
+    (``pub_address``, ``sub_address``, ``compat_vision_address``, ``compat_referee_address``)
+    are valid once ``ready`` is set."""
+
+    def __init__(self, config: RelayConfig) -> None:
+        config.validate()
+        self.config = config
+        self.table = CommandTable(config.command_timeout_s, config.hold_time_s)
+        names = ["vision", "referee", "tracker", "commands", "output", "sim_responses"]
+        names += ["sim_commands"]
+        if config.compat:
+            names.append("compat_commands")
+        self.streams = {n: StreamCounter(n) for n in names}
+        self.cycles = RateCounter()
+        self.ready = asyncio.Event()
+        self.pub_address = ""
+        self.sub_address = ""
+        self.compat_vision_address = ""
+        self.compat_referee_address = ""
+        self._stop = asyncio.Event()
+        self._ratelog = RateLimitedLog(log, config.log_interval_s)
+        self._sequences = {"vision": 0, "referee": 0, "tracker": 0}
+        self._referee_mapper = RefereeMapper(config.our_team)
+        self._pending_latency_ns: list[int] = []
+        self._latencies: deque[tuple[float, float]] = deque()
+        self._ctx: zmq.asyncio.Context | None = None
+        self._pub: zmq.Socket[bytes] | None = None
+        self._compat_vision: zmq.Socket[bytes] | None = None
+        self._compat_referee: zmq.Socket[bytes] | None = None
+        self._udp_out: socket.socket | None = None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    async def run(self) -> None:
+        loop = asyncio.get_running_loop()
+        cfg = self.config
+        ctx = zmq.asyncio.Context()
+        self._ctx = ctx
+        sync_ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context.shadow(ctx.underlying)
+        zsockets: list[zmq.Socket[bytes] | zmq.asyncio.Socket] = []
+        udp: list[socket.socket] = []
+        tasks: list[asyncio.Task[None]] = []
+
+        def zsock(c: zmq.Context[zmq.Socket[bytes]], kind: int) -> zmq.Socket[bytes]:
+            s = c.socket(kind)
+            s.setsockopt(zmq.LINGER, 0)
+            zsockets.append(s)
+            return s
+
+        def asock(kind: int) -> zmq.asyncio.Socket:
+            s = ctx.socket(kind)
+            s.setsockopt(zmq.LINGER, 0)
+            zsockets.append(s)
+            return s
+
+        try:
+            pub = zsock(sync_ctx, zmq.PUB)
+            pub.setsockopt(zmq.SNDHWM, 10000)
+            pub.bind(cfg.pub_endpoint)
+            self.pub_address = _endpoint(pub)
+            self._pub = pub
+            sub = asock(zmq.SUB)
+            sub.setsockopt(zmq.SUBSCRIBE, b"commands")
+            sub.setsockopt(zmq.SUBSCRIBE, b"sim")
+            sub.bind(cfg.sub_endpoint)
+            self.sub_address = _endpoint(sub)
+            compat_sub: zmq.asyncio.Socket | None = None
+            if cfg.compat:
+                cv = zsock(sync_ctx, zmq.PUB)
+                cv.bind(cfg.compat_vision_pub)
+                self.compat_vision_address = _endpoint(cv)
+                self._compat_vision = cv
+                cr = zsock(sync_ctx, zmq.PUB)
+                cr.bind(cfg.compat_referee_pub)
+                self.compat_referee_address = _endpoint(cr)
+                self._compat_referee = cr
+                compat_sub = asock(zmq.SUB)
+                compat_sub.setsockopt(zmq.SUBSCRIBE, b"")
+                compat_sub.connect(cfg.compat_commands)
+
+            inputs: list[tuple[str, str, int, Callable[[bytes], str | None]]] = [
+                ("vision", cfg.vision_group, cfg.vision_port, codecs.validate_vision),
+                ("referee", cfg.referee_group, cfg.referee_port, codecs.validate_referee),
+            ]
+            if cfg.tracker_enabled:
+                inputs.append(
+                    ("tracker", cfg.tracker_group, cfg.tracker_port, codecs.validate_tracker)
+                )
+            for name, group, port, validate in inputs:
+                rx = open_multicast_receiver(group, port, cfg.interface)
+                udp.append(rx)
+                loop.add_reader(rx.fileno(), self._drain_input, rx, name, validate)
+                log.info("listening for %s on %s:%d via %s", name, group, port, cfg.interface)
+
+            out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+            out.setblocking(False)
+            udp.append(out)
+            self._udp_out = out
+            if cfg.output == "sim":
+                loop.add_reader(out.fileno(), self._drain_responses, out)
+
+            tasks.append(asyncio.create_task(self._command_loop(sub)))
+            if compat_sub is not None:
+                tasks.append(asyncio.create_task(self._compat_loop(compat_sub)))
+            tasks.append(asyncio.create_task(self._output_loop()))
+            tasks.append(asyncio.create_task(self._stats_loop()))
+            log.info(
+                "relay up: pub %s, sub %s, output %s at %.0f Hz",
+                self.pub_address,
+                self.sub_address,
+                cfg.output,
+                cfg.output_rate_hz,
+            )
+            self.ready.set()
+            stop_wait = asyncio.create_task(self._stop.wait())
+            done, _ = await asyncio.wait([stop_wait, *tasks], return_when=asyncio.FIRST_COMPLETED)
+            stop_wait.cancel()
+            for t in done:
+                if t is not stop_wait and not t.cancelled() and t.exception() is not None:
+                    raise t.exception()  # type: ignore[misc]
+        finally:
+            for t in tasks:
+                t.cancel()
+            for t in tasks:
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await t
+            for s in udp:
+                with contextlib.suppress(Exception):
+                    loop.remove_reader(s.fileno())
+                s.close()
+            self._pub = self._compat_vision = self._compat_referee = None
+            self._udp_out = None
+            for z in zsockets:
+                z.close(linger=0)
+            ctx.term()
+            self._ctx = None
+            log.info("relay stopped")
+
+    # ------------------------------------------------------------------ inputs
+
+    def _drain_input(
+        self, sock: socket.socket, name: str, validate: Callable[[bytes], str | None]
+    ) -> None:
+        """Read every datagram waiting on ``sock`` (never just one per wakeup)."""
+        counter = self.streams[name]
+        topic = name.encode()
+        stream = {
+            "vision": touchline_pb2.STREAM_VISION,
+            "referee": touchline_pb2.STREAM_REFEREE,
+            "tracker": touchline_pb2.STREAM_TRACKER,
+        }[name]
+        while True:
+            try:
+                data, addr = sock.recvfrom(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                counter.error(f"receive failed: {exc}")
+                self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
+                return
+            receive_ns = time.time_ns()
+            reason = validate(data)
+            if reason is not None:
+                counter.error(reason)
+                self._ratelog.warning(
+                    f"{name}-bad",
+                    "dropped malformed %s datagram from %s:%d: %s",
+                    name,
+                    addr[0],
+                    addr[1],
+                    reason,
+                )
+                continue
+            counter.packet(len(data))
+            self._sequences[name] += 1
+            env = touchline_pb2.Envelope(
+                stream=stream,
+                receive_time_ns=receive_ns,
+                sequence=self._sequences[name],
+                source=f"{addr[0]}:{addr[1]}",
+                payload=data,
+            )
+            self._publish(self._pub, [topic, env.SerializeToString()])
+            if name == "vision" and self._compat_vision is not None:
+                self._publish(self._compat_vision, [data])
+            elif name == "referee" and self._compat_referee is not None:
+                ref = codecs.parse_referee(data)
+                if ref is not None:
+                    self._publish(self._compat_referee, [self._referee_mapper.encode(ref)])
+
+    def _publish(self, sock: zmq.Socket[bytes] | None, frames: list[bytes]) -> None:
+        if sock is None:
+            return
+        try:
+            sock.send_multipart(frames, flags=zmq.NOBLOCK)
+        except zmq.Again:
+            self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
+
+    # ------------------------------------------------------------------ commands
+
+    async def _command_loop(self, sub: zmq.asyncio.Socket) -> None:
+        while True:
+            frames = await sub.recv_multipart()
+            try:
+                self._handle_native(frames)
+            except Exception as exc:  # never fatal: a bad message is an error, not a crash
+                self.streams["commands"].error(f"internal error: {exc}")
+                log.exception("command handling failed")
+
+    def _handle_native(self, frames: list[bytes]) -> None:
+        now = time.monotonic()
+        if len(frames) != 2:
+            self._command_error("commands", f"expected [topic, message], got {len(frames)} frames")
+            return
+        topic, body = frames
+        if topic == b"sim":
+            self._handle_sim_command(body)
+            return
+        if topic != b"commands":
+            self._command_error("commands", f"unknown topic {topic[:32]!r}")
+            return
+        counter = self.streams["commands"]
+        cset = touchline_pb2.RobotCommandSet()
+        try:
+            cset.ParseFromString(body)
+        except DecodeError as exc:
+            self._command_error("commands", f"RobotCommandSet does not parse: {exc}")
+            return
+        counter.packet(len(body), now)
+        accepted: list[Command] = []
+        for pc in cset.commands:
+            try:
+                accepted.append(codecs.command_from_proto(pc))
+            except CommandError as exc:
+                self._command_error("commands", str(exc))
+        if cset.stop_all:
+            for c in accepted:
+                self.table.update(c.zero(), now)
+            self.table.stop_all(now)
+            log.warning("stop_all received: every known robot zeroed")
+            return
+        for c in accepted:
+            self.table.update(c, now)
+        if cset.source_receive_time_ns > 0 and accepted:
+            self._pending_latency_ns.append(cset.source_receive_time_ns)
+
+    def _command_error(self, stream: str, reason: str) -> None:
+        self.streams[stream].error(reason)
+        self._ratelog.warning(f"{stream}-bad:{reason[:24]}", "rejected %s: %s", stream, reason)
+
+    def _handle_sim_command(self, body: bytes) -> None:
+        cfg = self.config
+        counter = self.streams["sim_commands"]
+        cmd = ssl_simulation_control_pb2.SimulatorCommand()
+        try:
+            cmd.ParseFromString(body)
+        except DecodeError as exc:
+            self._command_error("sim_commands", f"SimulatorCommand does not parse: {exc}")
+            return
+        if not cmd.IsInitialized():
+            self._command_error("sim_commands", "SimulatorCommand misses required fields")
+            return
+        counter.packet(len(body))
+        if cfg.output == "sim":
+            self._send(body, (cfg.sim_host, cfg.sim_control_port))
+        elif cfg.output == "grsim":
+            pkt = codecs.sim_command_to_grsim(cmd)
+            if pkt is not None:
+                self._send(pkt, (cfg.sim_host, cfg.grsim_port))
+        else:
+            self._command_error("sim_commands", "simulator commands unsupported in robot-box mode")
+
+    async def _compat_loop(self, sub: zmq.asyncio.Socket) -> None:
+        cfg = self.config
+        counter = self.streams["compat_commands"]
+        while True:
+            frames = await sub.recv_multipart()
+            now = time.monotonic()
+            body = frames[-1]
+            try:
+                result = decode_command_matrix(
+                    body,
+                    kick_mps_per_volt=cfg.kick_mps_per_volt,
+                    max_kick_mps=cfg.max_kick_mps,
+                    dribbler_rpm_per_unit=cfg.dribbler_rpm_per_unit,
+                )
+            except ValueError as exc:
+                self._command_error("compat_commands", str(exc))
+                continue
+            counter.packet(len(body), now)
+            for err in result.errors:
+                self._command_error("compat_commands", err)
+            for c in result.commands:
+                self.table.update(c, now)
+
+    # ------------------------------------------------------------------ output
+
+    async def _output_loop(self) -> None:
+        period = 1.0 / self.config.output_rate_hz
+        next_t = time.monotonic()
+        while True:
+            next_t += period
+            delay = next_t - time.monotonic()
+            if delay > 0:
+                await asyncio.sleep(delay)
+            else:
+                if delay < -period:  # fell behind by more than a cycle: do not burst
+                    next_t = time.monotonic()
+                await asyncio.sleep(0)
+            self.output_cycle(time.monotonic())
+
+    def output_cycle(self, now: float) -> None:
+        """One output cycle: send every due command (public for tests and benchmarks)."""
+        self.cycles.add(now)
+        due = self.table.due(now)
+        if not due:
+            return
+        cfg = self.config
+        if cfg.output == "robot-box":
+            for c in due:
+                self._send(
+                    codecs.encode_robot_box(
+                        c,
+                        kick_mps_per_volt=cfg.kick_mps_per_volt,
+                        dribbler_rpm_per_unit=cfg.dribbler_rpm_per_unit,
+                        charge=cfg.robot_box_charge,
+                    ),
+                    (cfg.robot_box_host, cfg.robot_box_port),
+                )
+        else:
+            for team in codecs.TEAMS:
+                cmds = [c for c in due if c.team == team]
+                if not cmds:
+                    continue
+                if cfg.output == "sim":
+                    port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
+                    data = codecs.encode_sim_robot_control(cmds, cfg.chip_angle_deg)
+                    self._send(data, (cfg.sim_host, port))
+                else:
+                    data = codecs.encode_grsim_commands(
+                        cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg
+                    )
+                    self._send(data, (cfg.sim_host, cfg.grsim_port))
+        if self._pending_latency_ns:
+            sent_ns = time.time_ns()
+            for src in self._pending_latency_ns:
+                self._latencies.append((now, (sent_ns - src) / 1e6))
+            self._pending_latency_ns.clear()
+
+    def _send(self, data: bytes, addr: tuple[str, int]) -> None:
+        counter = self.streams["output"]
+        if self._udp_out is None:
+            return
+        try:
+            self._udp_out.sendto(data, addr)
+        except OSError as exc:
+            counter.error(f"send to {addr[0]}:{addr[1]} failed: {exc}")
+            self._ratelog.warning("output-send", "send to %s:%d failed: %s", *addr, exc)
+            return
+        counter.packet(len(data))
+
+    def _drain_responses(self, sock: socket.socket) -> None:
+        counter = self.streams["sim_responses"]
+        while True:
+            try:
+                data, addr = sock.recvfrom(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. ICMP port unreachable reported on the socket
+                counter.error(f"simulator socket error: {exc}")
+                self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
+                continue
+            counter.packet(len(data))
+            n, reason = codecs.count_response_errors(data)
+            if n:
+                counter.error(reason, n)
+                self._ratelog.warning(
+                    "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
+                )
+
+    # ------------------------------------------------------------------ stats
+
+    def stats(self, now: float | None = None) -> touchline_pb2.RelayStats:
+        t = time.monotonic() if now is None else now
+        while self._latencies and self._latencies[0][0] < t - 1.0:
+            self._latencies.popleft()
+        lat = [v for _, v in self._latencies]
+        latency = sum(lat) / len(lat) if lat else math.nan
+        return touchline_pb2.RelayStats(
+            time_ns=time.time_ns(),
+            streams=[s.to_proto(t) for s in self.streams.values()],
+            output_mode=self.config.output,
+            active_robots=self.table.count(RobotState.ACTIVE),
+            stale_robots=self.table.count(RobotState.STALE) + self.table.count(RobotState.STOPPED),
+            output_rate_hz=self.cycles.rate_hz(t),
+            command_latency_ms=latency,
+            stale_stops=self.table.stale_stops,
+        )
+
+    async def _stats_loop(self) -> None:
+        while True:
+            await asyncio.sleep(self.config.stats_interval_s)
+            self._publish(self._pub, [b"stats", self.stats().SerializeToString()])
+
+
+def _endpoint(sock: zmq.Socket[bytes] | zmq.asyncio.Socket) -> str:
+    value = sock.getsockopt(zmq.LAST_ENDPOINT)
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+async def run_relay(config: RelayConfig, stop: asyncio.Event | None = None) -> None:
+    """Run a relay until ``stop`` is set (or forever); all sockets are closed on return."""
+    relay = Relay(config)
+    if stop is None:
+        await relay.run()
+        return
+    task = asyncio.create_task(relay.run())
+    waiter = asyncio.create_task(stop.wait())
+    await asyncio.wait([task, waiter], return_when=asyncio.FIRST_COMPLETED)
+    relay.stop()
+    waiter.cancel()
+    await task
