@@ -1,0 +1,162 @@
+"""Fixtures for the relay tests: a relay in-process on random ports, UDP stand-ins, helpers."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import random
+import socket
+import time
+from collections.abc import AsyncIterator, Callable
+from typing import Any
+
+import zmq
+import zmq.asyncio
+
+from larcmacs_relay import Relay, RelayConfig
+from sslnet.multicast import open_multicast_sender
+
+STARTUP_TIMEOUT_S = 5.0
+
+
+def free_udp_port() -> int:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    port: int = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def random_multicast_port() -> int:
+    """A random port in 20000-40000 that is free for UDP on this host right now."""
+    for _ in range(50):
+        port = random.randint(20000, 40000)
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            s.bind(("0.0.0.0", port))
+        except OSError:
+            continue
+        finally:
+            s.close()
+        return port
+    raise RuntimeError("no free port found")
+
+
+def udp_server() -> socket.socket:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    s.setblocking(False)
+    return s
+
+
+async def wait_for(cond: Callable[[], bool], timeout: float = 3.0, what: str = "") -> None:
+    """Poll ``cond`` until true; fail after ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what or cond}")
+        await asyncio.sleep(0.005)
+
+
+async def recv_udp(sock: socket.socket, timeout: float = 2.0) -> tuple[bytes, float]:
+    """One datagram and its monotonic arrival time."""
+    loop = asyncio.get_running_loop()
+    data, _ = await asyncio.wait_for(loop.sock_recvfrom(sock, 65536), timeout)
+    return data, time.monotonic()
+
+
+def drain_udp(sock: socket.socket) -> int:
+    n = 0
+    while True:
+        try:
+            sock.recv(65536)
+        except BlockingIOError:
+            return n
+        n += 1
+
+
+@dataclasses.dataclass
+class Harness:
+    relay: Relay
+    config: RelayConfig
+    ctx: zmq.asyncio.Context
+    sim_blue: socket.socket
+    sim_yellow: socket.socket
+    sim_control: socket.socket
+    out_box: socket.socket
+    sender: socket.socket
+
+    def send_vision(self, data: bytes) -> None:
+        self.sender.sendto(data, (self.config.vision_group, self.config.vision_port))
+
+    def send_referee(self, data: bytes) -> None:
+        self.sender.sendto(data, (self.config.referee_group, self.config.referee_port))
+
+    def subscriber(self, *topics: bytes, endpoint: str | None = None) -> zmq.asyncio.Socket:
+        s = self.ctx.socket(zmq.SUB)
+        s.setsockopt(zmq.LINGER, 0)
+        for t in topics or (b"",):
+            s.setsockopt(zmq.SUBSCRIBE, t)
+        s.connect(endpoint or self.relay.pub_address)
+        return s
+
+    def publisher(self) -> zmq.asyncio.Socket:
+        s = self.ctx.socket(zmq.PUB)
+        s.setsockopt(zmq.LINGER, 0)
+        s.connect(self.relay.sub_address)
+        return s
+
+
+@contextlib.asynccontextmanager
+async def running_relay(**overrides: Any) -> AsyncIterator[Harness]:
+    sim_blue, sim_yellow, sim_control, out_box = (
+        udp_server(),
+        udp_server(),
+        udp_server(),
+        udp_server(),
+    )
+    port_of: Callable[[socket.socket], int] = lambda s: s.getsockname()[1]  # noqa: E731
+    base = RelayConfig(
+        vision_port=random_multicast_port(),
+        referee_port=random_multicast_port(),
+        pub_endpoint="tcp://127.0.0.1:*",
+        sub_endpoint="tcp://127.0.0.1:*",
+        sim_blue_port=port_of(sim_blue),
+        sim_yellow_port=port_of(sim_yellow),
+        sim_control_port=port_of(sim_control),
+        grsim_port=port_of(sim_blue),
+        robot_box_port=port_of(out_box),
+        compat_vision_pub="tcp://127.0.0.1:*",
+        compat_referee_pub="tcp://127.0.0.1:*",
+        compat_commands=f"tcp://127.0.0.1:{free_udp_port()}",
+        stats_interval_s=0.2,
+    )
+    cfg = dataclasses.replace(base, **overrides)
+    relay = Relay(cfg)
+    task = asyncio.create_task(relay.run())
+    ctx = zmq.asyncio.Context()
+    sender = open_multicast_sender("127.0.0.1")
+    try:
+        await asyncio.wait_for(relay.ready.wait(), STARTUP_TIMEOUT_S)
+        yield Harness(relay, cfg, ctx, sim_blue, sim_yellow, sim_control, out_box, sender)
+    finally:
+        relay.stop()
+        await asyncio.wait_for(task, 5.0)
+        ctx.destroy(linger=0)
+        for s in (sim_blue, sim_yellow, sim_control, out_box, sender):
+            s.close()
+
+
+async def subscribed(
+    sub: zmq.asyncio.Socket, probe: Callable[[], None], timeout: float = 3.0
+) -> list[bytes]:
+    """Work around the ZeroMQ slow-joiner: call ``probe`` until ``sub`` receives something.
+
+    Returns the first message received."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        probe()
+        if await sub.poll(50):
+            return list(await sub.recv_multipart())
+    raise AssertionError("subscriber never received anything")
