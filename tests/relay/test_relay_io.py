@@ -1,0 +1,362 @@
+"""The relay in-process with real multicast, UDP and ZeroMQ on loopback (random ports)."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+
+import pytest
+import zmq
+
+from sslnet.multicast import open_multicast_receiver
+from sslpb import (
+    grsim_packet_pb2,
+    ssl_gc_common_pb2,
+    ssl_gc_referee_message_pb2,
+    ssl_simulation_control_pb2,
+    ssl_simulation_robot_control_pb2,
+    ssl_simulation_robot_feedback_pb2,
+    touchline_pb2,
+)
+from tests.relay.conftest import (
+    Harness,
+    drain_udp,
+    recv_udp,
+    running_relay,
+    subscribed,
+    wait_for,
+)
+from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
+
+BLUE, YELLOW = touchline_pb2.TEAM_BLUE, touchline_pb2.TEAM_YELLOW
+Ref = ssl_gc_referee_message_pb2.Referee
+
+
+def command_set(
+    *cmds: touchline_pb2.RobotCommand, stop_all: bool = False, source_ns: int = 0
+) -> list[bytes]:
+    s = touchline_pb2.RobotCommandSet(
+        commands=list(cmds), stop_all=stop_all, source_receive_time_ns=source_ns
+    )
+    return [b"commands", s.SerializeToString()]
+
+
+async def connect_commands(h: Harness) -> zmq.asyncio.Socket:
+    """A PUB connected to the relay SUB; returns once the relay has seen a message from it."""
+    pub = h.publisher()
+    probe = [b"commands", touchline_pb2.RobotCommandSet().SerializeToString()]
+    counter = h.relay.streams["commands"]
+    deadline = time.monotonic() + 3.0
+    while counter.packets == 0:
+        assert time.monotonic() < deadline, "relay SUB never received the probe"
+        await pub.send_multipart(probe)
+        await asyncio.sleep(0.02)
+    return pub
+
+
+def decode_rc(data: bytes) -> ssl_simulation_robot_control_pb2.RobotControl:
+    msg = ssl_simulation_robot_control_pb2.RobotControl.FromString(data)
+    assert msg.IsInitialized()
+    return msg
+
+
+# ----------------------------------------------------------------- inputs
+
+
+async def test_vision_and_referee_forwarded_unchanged_with_reuse() -> None:
+    async with running_relay() as h:
+        # A second program on the same port: must also get the datagrams (SO_REUSEPORT).
+        other = open_multicast_receiver(h.config.vision_group, h.config.vision_port, "127.0.0.1")
+        try:
+            sub = h.subscriber(b"vision", b"referee")
+            first = await subscribed(sub, lambda: h.send_vision(make_detection_wrapper(0)))
+            assert first[0] == b"vision"
+            before_ns = time.time_ns()
+            frames = [make_detection_wrapper(i, camera=i % 4) for i in range(1, 21)]
+            for f in frames:
+                h.send_vision(f)
+            got: list[touchline_pb2.Envelope] = []
+            while len(got) < len(frames):
+                topic, body = await asyncio.wait_for(sub.recv_multipart(), 2.0)
+                env = touchline_pb2.Envelope.FromString(body)
+                if topic == b"vision" and env.payload in frames:
+                    got.append(env)
+            after_ns = time.time_ns()
+            assert [e.payload for e in got] == frames
+            seqs = [e.sequence for e in got]
+            assert seqs == list(range(seqs[0], seqs[0] + len(frames)))
+            for e in got:
+                assert e.stream == touchline_pb2.STREAM_VISION
+                assert before_ns <= e.receive_time_ns <= after_ns
+                assert e.source.startswith("127.0.0.1:")
+            # the other receiver got them too
+            loop = asyncio.get_running_loop()
+            seen = set()
+            while not set(frames) <= seen:
+                seen.add(await asyncio.wait_for(loop.sock_recv(other, 65536), 2.0))
+
+            ref = make_referee(Ref.STOP, 7)
+            h.send_referee(ref)
+            while True:
+                topic, body = await asyncio.wait_for(sub.recv_multipart(), 2.0)
+                if topic == b"referee":
+                    break
+            env = touchline_pb2.Envelope.FromString(body)
+            assert env.payload == ref and env.stream == touchline_pb2.STREAM_REFEREE
+            assert env.sequence == 1
+        finally:
+            other.close()
+
+
+async def test_malformed_datagrams_counted_not_forwarded() -> None:
+    async with running_relay() as h:
+        sub = h.subscriber(b"vision")
+        await subscribed(sub, lambda: h.send_vision(make_detection_wrapper(0)))
+        vision = h.relay.streams["vision"]
+        errors_before = vision.errors
+        h.send_vision(b"\xff\xfe garbage \x00\x07")
+        h.send_vision(b"\x0a\x02\x08\x05")  # wrapper.detection{frame_number=5}: required missing
+        await wait_for(lambda: vision.errors >= errors_before + 2, what="two errors")
+        assert "required" in vision.last_error
+        good = make_detection_wrapper(42)
+        h.send_vision(good)
+        while True:
+            _, body = await asyncio.wait_for(sub.recv_multipart(), 2.0)
+            env = touchline_pb2.Envelope.FromString(body)
+            assert env.payload[:3] != b"\xff\xfe "
+            assert env.payload != b"\x0a\x02\x08\x05"
+            if env.payload == good:
+                break
+        h.send_referee(b"not a referee")
+        await wait_for(lambda: h.relay.streams["referee"].errors == 1, what="referee error")
+
+
+async def test_stats_published() -> None:
+    async with running_relay() as h:
+        sub = h.subscriber(b"stats")
+        topic, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
+        st = touchline_pb2.RelayStats.FromString(body)
+        assert topic == b"stats" and st.output_mode == "sim"
+        names = {s.name for s in st.streams}
+        assert {"vision", "referee", "tracker", "commands", "output", "sim_responses"} <= names
+        # wait for a stats message with a full second of cycles behind it
+        while st.output_rate_hz < 100:
+            _, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
+            st = touchline_pb2.RelayStats.FromString(body)
+        assert st.output_rate_hz < 140
+
+
+# ----------------------------------------------------------------- commands, sim mode
+
+
+async def test_commands_repeated_then_stale_then_silent() -> None:
+    async with running_relay(hold_time_s=0.3) as h:
+        pub = await connect_commands(h)
+        cmd = touchline_pb2.RobotCommand(
+            team=BLUE,
+            id=2,
+            forward_mps=1.25,
+            left_mps=-0.5,
+            angular_radps=0.75,
+            kick_speed_mps=3.0,
+            chip=True,
+            dribbler_rpm=500.0,
+        )
+        # Keep commanding for ~1.2 s and count datagrams over a measured window.
+        t_end = time.monotonic() + 1.2
+        arrivals: list[float] = []
+        last: bytes = b""
+        while time.monotonic() < t_end:
+            await pub.send_multipart(command_set(cmd))
+            try:
+                while True:
+                    data, t = await recv_udp(h.sim_blue, timeout=0.01)
+                    arrivals.append(t)
+                    last = data
+            except TimeoutError:
+                pass
+        assert len(arrivals) > 20
+        window = arrivals[-1] - arrivals[5]
+        rate = (len(arrivals) - 6) / window
+        assert rate >= 80, f"only {rate:.1f} datagrams/s"
+        rc = decode_rc(last).robot_commands
+        assert len(rc) == 1
+        r = rc[0]
+        lv = r.move_command.local_velocity
+        assert r.id == 2
+        assert (lv.forward, lv.left, lv.angular) == (1.25, -0.5, 0.75)
+        assert (r.kick_speed, r.kick_angle, r.dribbler_speed) == (3.0, 45.0, 500.0)
+
+        # The last command was sent at about t_end; find the first zero-velocity datagram.
+        last_cmd_t = time.monotonic()
+        stale_stops = h.relay.table.stale_stops
+        first_zero = None
+        while first_zero is None:
+            data, t = await recv_udp(h.sim_blue, timeout=1.0)
+            lv = decode_rc(data).robot_commands[0].move_command.local_velocity
+            if lv.forward == 0 and lv.left == 0 and lv.angular == 0:
+                first_zero = t
+        assert first_zero - last_cmd_t <= 0.1 + 1 / 120 + 0.08
+        assert h.relay.table.stale_stops == stale_stops + 1
+        # Zero is held ~0.3 s, then nothing more is sent.
+        last_zero = first_zero
+        with pytest.raises(TimeoutError):
+            while True:
+                data, last_zero = await recv_udp(h.sim_blue, timeout=0.25)
+                rc0 = decode_rc(data).robot_commands[0]
+                assert rc0.move_command.local_velocity.forward == 0 and rc0.kick_speed == 0
+        assert 0.2 <= last_zero - first_zero <= 0.45
+        stats = h.relay.stats()
+        assert stats.stale_stops >= 1 and stats.active_robots == 0
+
+
+async def test_stop_all_zeroes_every_robot_and_latency() -> None:
+    async with running_relay(command_timeout_s=1.0) as h:
+        pub = await connect_commands(h)
+        cmds = [
+            touchline_pb2.RobotCommand(team=BLUE, id=1, forward_mps=1.0),
+            touchline_pb2.RobotCommand(team=YELLOW, id=4, left_mps=1.0),
+        ]
+        await pub.send_multipart(command_set(*cmds, source_ns=time.time_ns() - 5_000_000))
+
+        def moving(sock_data: bytes) -> bool:
+            lv = decode_rc(sock_data).robot_commands[0].move_command.local_velocity
+            return lv.forward != 0 or lv.left != 0
+
+        data, _ = await recv_udp(h.sim_blue)
+        assert moving(data)
+        data, _ = await recv_udp(h.sim_yellow)
+        assert moving(data)
+        stats = h.relay.stats()
+        assert stats.active_robots == 2
+        assert 5.0 <= stats.command_latency_ms < 500.0
+
+        await pub.send_multipart(command_set(stop_all=True))
+        await wait_for(lambda: h.relay.stats().stale_robots == 2, what="both zeroed")
+        t_stop = time.monotonic()
+        drain_udp(h.sim_blue)
+        drain_udp(h.sim_yellow)
+        for sock in (h.sim_blue, h.sim_yellow):
+            data, _ = await recv_udp(sock)
+            assert not moving(data)
+        # still zero 0.2 s later although the old commands would not be stale yet
+        await asyncio.sleep(0.2)
+        drain_udp(h.sim_blue)
+        data, _ = await recv_udp(h.sim_blue)
+        assert not moving(data) and time.monotonic() - t_stop < 1.0
+        # a newer non-stop command revives the robot
+        await pub.send_multipart(command_set(cmds[0]))
+
+        async def blue_moving() -> None:
+            while not moving((await recv_udp(h.sim_blue))[0]):
+                pass
+
+        await asyncio.wait_for(blue_moving(), 2.0)
+
+
+async def test_bad_commands_rejected_and_counted() -> None:
+    async with running_relay() as h:
+        pub = await connect_commands(h)
+        counter = h.relay.streams["commands"]
+        before = counter.errors
+        await pub.send_multipart(
+            command_set(
+                touchline_pb2.RobotCommand(team=BLUE, id=20, forward_mps=1.0),
+                touchline_pb2.RobotCommand(team=BLUE, id=3, forward_mps=math.nan),
+                touchline_pb2.RobotCommand(team=touchline_pb2.TEAM_UNSPECIFIED, id=3),
+            )
+        )
+        await pub.send_multipart([b"commands", b"\xff\xff\xff"])
+        await wait_for(lambda: counter.errors >= before + 4, what="four command errors")
+        assert h.relay.table.known == 0
+        # nothing is sent for rejected commands
+        with pytest.raises(TimeoutError):
+            await recv_udp(h.sim_blue, timeout=0.2)
+
+
+async def test_sim_topic_forwarded_and_responses_counted() -> None:
+    async with running_relay() as h:
+        pub = await connect_commands(h)
+        cmd = ssl_simulation_control_pb2.SimulatorCommand()
+        cmd.control.teleport_ball.x = 1.0
+        body = cmd.SerializeToString()
+        await pub.send_multipart([b"sim", body])
+        data, _ = await recv_udp(h.sim_control)
+        assert data == body
+        # answer with an error to the sender's address, like a simulator
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=0)))
+        loop = asyncio.get_running_loop()
+        _, addr = await asyncio.wait_for(loop.sock_recvfrom(h.sim_blue, 65536), 2.0)
+        resp = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
+        e = resp.errors.add()
+        e.code, e.message = "E1", "robot 0 unknown"
+        h.sim_blue.sendto(resp.SerializeToString(), addr)
+        counter = h.relay.streams["sim_responses"]
+        await wait_for(lambda: counter.errors == 1, what="sim response error")
+        assert "E1" in counter.last_error and counter.packets == 1
+
+
+# ----------------------------------------------------------------- grsim and robot-box
+
+
+async def test_grsim_mode_commands_and_teleport() -> None:
+    async with running_relay(output="grsim") as h:
+        pub = await connect_commands(h)
+        await pub.send_multipart(
+            command_set(
+                touchline_pb2.RobotCommand(
+                    team=YELLOW,
+                    id=6,
+                    forward_mps=0.5,
+                    left_mps=0.25,
+                    angular_radps=-1.0,
+                    kick_speed_mps=2.0,
+                    dribbler_rpm=300.0,
+                )
+            )
+        )
+        data, _ = await recv_udp(h.sim_blue)  # grsim_port is the sim_blue socket here
+        pkt = grsim_packet_pb2.grSim_Packet.FromString(data)
+        assert pkt.IsInitialized() and pkt.HasField("commands")
+        gc = pkt.commands
+        assert gc.isteamyellow and abs(gc.timestamp - time.time()) < 5
+        r = gc.robot_commands[0]
+        assert (r.id, r.veltangent, r.velnormal, r.velangular) == (6, 0.5, 0.25, -1.0)
+        assert (r.kickspeedx, r.kickspeedz, r.spinner, r.wheelsspeed) == (2.0, 0.0, True, False)
+
+        cmd = ssl_simulation_control_pb2.SimulatorCommand()
+        tr = cmd.control.teleport_robot.add()
+        tr.id.id, tr.id.team = 2, ssl_gc_common_pb2.BLUE
+        tr.x, tr.y, tr.orientation, tr.present = 1.5, -1.0, -math.pi, True
+        await pub.send_multipart([b"sim", cmd.SerializeToString()])
+        while True:
+            data, _ = await recv_udp(h.sim_blue)
+            pkt = grsim_packet_pb2.grSim_Packet.FromString(data)
+            if pkt.HasField("replacement"):
+                break
+        assert pkt.IsInitialized()
+        rr = pkt.replacement.robots[0]
+        assert (rr.id, rr.yellowteam, rr.x, rr.y, rr.turnon) == (2, False, 1.5, -1.0, True)
+        assert rr.dir == pytest.approx(-180.0, abs=1e-4)
+
+
+async def test_robot_box_mode_datagram() -> None:
+    async with running_relay(output="robot-box") as h:
+        pub = await connect_commands(h)
+        await pub.send_multipart(
+            command_set(
+                touchline_pb2.RobotCommand(
+                    team=BLUE,
+                    id=9,
+                    forward_mps=-1.0,
+                    left_mps=0.5,
+                    angular_radps=-2.0,
+                    kick_speed_mps=2.0,
+                    chip=True,
+                )
+            )
+        )
+        data, _ = await recv_udp(h.out_box)
+        expected = bytes([1, 9, 10, 256 - 20, 10, 0, 4, 1, 0, 0, 0, 1, 0])
+        assert data == expected
