@@ -1,0 +1,48 @@
+// User actions that talk to the backend and update the store.
+
+import { ApiError, deleteTarget, postEstop, postTarget } from "./api/http";
+import type { RobotKey } from "./api/types";
+import type { Point } from "./field/transform";
+import { appStore } from "./store/appStore";
+import { pushToast } from "./store/toasts";
+
+function errorText(e: unknown): string {
+  if (e instanceof ApiError) return e.status ? `${e.message} (HTTP ${e.status})` : e.message;
+  return e instanceof Error ? e.message : String(e);
+}
+
+export function selectRobot(key: RobotKey | null): void {
+  appStore.setState({ selected: key });
+}
+
+export async function sendTarget(robot: RobotKey, p: Point): Promise<boolean> {
+  try {
+    await postTarget(robot.team, robot.id, { x: p.x, y: p.y });
+    return true;
+  } catch (e) {
+    pushToast("error", `Target for ${robot.team} ${robot.id} rejected: ${errorText(e)}`);
+    return false;
+  }
+}
+
+export async function clearTarget(robot: RobotKey): Promise<void> {
+  try {
+    await deleteTarget(robot.team, robot.id);
+    pushToast("info", `${robot.team} ${robot.id} back to demo behaviour`);
+  } catch (e) {
+    pushToast("error", `Cannot clear target of ${robot.team} ${robot.id}: ${errorText(e)}`);
+  }
+}
+
+export async function setEstop(active: boolean): Promise<void> {
+  try {
+    const reply = await postEstop(active);
+    // Reflect the answer at once; the next world message confirms it.
+    const world = appStore.getState().world;
+    if (world && typeof reply?.estop === "boolean" && world.estop !== reply.estop) {
+      appStore.setState({ world: { ...world, estop: reply.estop } });
+    }
+  } catch (e) {
+    pushToast("error", `Emergency stop request failed: ${errorText(e)}`);
+  }
+}

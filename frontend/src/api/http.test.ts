@@ -1,0 +1,54 @@
+import { afterEach, describe, expect, it, vi } from "vitest";
+import { ApiError, errorMessageFromBody, postTarget } from "./http";
+
+describe("errorMessageFromBody", () => {
+  it("reads FastAPI string details", () => {
+    expect(errorMessageFromBody(404, { detail: "no geometry packet received yet" })).toBe(
+      "no geometry packet received yet",
+    );
+  });
+  it("joins validation errors with their location", () => {
+    const body = {
+      detail: [
+        { loc: ["body", "x"], msg: "point is far outside the field", type: "value_error" },
+        { loc: ["path", "id"], msg: "Input should be less than or equal to 15" },
+      ],
+    };
+    expect(errorMessageFromBody(422, body)).toBe(
+      "x: point is far outside the field; path.id: Input should be less than or equal to 15",
+    );
+  });
+  it("falls back to text or the status", () => {
+    expect(errorMessageFromBody(500, "Internal Server Error")).toBe("Internal Server Error");
+    expect(errorMessageFromBody(502, "", "502 Bad Gateway")).toBe("502 Bad Gateway");
+    expect(errorMessageFromBody(503, { detail: [] })).toBe("HTTP 503");
+  });
+});
+
+describe("postTarget", () => {
+  afterEach(() => {
+    vi.unstubAllGlobals();
+  });
+
+  it("posts rounded mm without orientation", async () => {
+    const fetchMock = vi.fn(async () => new Response('{"team":"blue","id":3,"target":{"x":1200,"y":-300,"orientation":null}}'));
+    vi.stubGlobal("fetch", fetchMock);
+    await postTarget("blue", 3, { x: 1200.4, y: -299.6 });
+    expect(fetchMock).toHaveBeenCalledTimes(1);
+    const [url, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
+    expect(url).toBe("/api/robots/blue/3/target");
+    expect(init.method).toBe("POST");
+    expect(JSON.parse(String(init.body))).toEqual({ x: 1200, y: -300 });
+  });
+
+  it("throws an ApiError with the server's message on 422", async () => {
+    vi.stubGlobal(
+      "fetch",
+      vi.fn(async () => new Response(JSON.stringify({ detail: [{ loc: ["body"], msg: "far outside the field" }] }), { status: 422 })),
+    );
+    const err = await postTarget("yellow", 1, { x: 99999, y: 0 }).catch((e: unknown) => e);
+    expect(err).toBeInstanceOf(ApiError);
+    expect((err as ApiError).status).toBe(422);
+    expect((err as ApiError).message).toBe("far outside the field");
+  });
+});

@@ -1,0 +1,187 @@
+// Types of the backend contract (docs/api.md). Lengths mm, angles rad, speeds mm/s, times s.
+
+export type Team = "blue" | "yellow";
+export const TEAMS: readonly Team[] = ["blue", "yellow"];
+
+export interface Vec {
+  x: number;
+  y: number;
+}
+
+export interface Ball {
+  x: number;
+  y: number;
+  vx: number;
+  vy: number;
+  visible: boolean;
+  age_s: number;
+  cameras: number[];
+}
+
+export interface RobotTarget {
+  x: number;
+  y: number;
+  orientation: number | null;
+  source: "operator" | "demo";
+}
+
+export interface RobotCommand {
+  forward_mps: number;
+  left_mps: number;
+  angular_radps: number;
+}
+
+export interface Robot {
+  team: Team;
+  id: number;
+  x: number;
+  y: number;
+  orientation: number;
+  vx: number;
+  vy: number;
+  omega: number;
+  visible: boolean;
+  age_s: number;
+  cameras: number[];
+  target: RobotTarget | null;
+  controlled: boolean;
+  command: RobotCommand | null;
+}
+
+export interface RawCamera {
+  camera_id: number;
+  frame_number: number;
+  t_capture: number;
+  age_s: number;
+  balls: Vec[];
+  robots: { team: Team; id: number; x: number; y: number; orientation: number }[];
+}
+
+export interface RefereeTeam {
+  name: string;
+  score: number;
+  yellow_cards: number;
+  red_cards: number;
+  goalkeeper: number;
+}
+
+export interface Referee {
+  source: "game-controller" | "none";
+  command: string;
+  stage: string;
+  command_counter: number;
+  stage_time_left_s: number | null;
+  blue: RefereeTeam;
+  yellow: RefereeTeam;
+  designated_position: Vec | null;
+  blue_team_on_positive_half: boolean | null;
+  age_s: number;
+}
+
+export interface World {
+  seq: number;
+  t_capture: number;
+  ball: Ball | null;
+  robots: Robot[];
+  cameras: RawCamera[];
+  referee: Referee | null;
+  estop: boolean;
+}
+
+export interface FieldLine {
+  name: string;
+  p1: Vec;
+  p2: Vec;
+  thickness: number;
+}
+
+export interface FieldArc {
+  name: string;
+  center: Vec;
+  radius: number;
+  a1: number;
+  a2: number;
+  thickness: number;
+}
+
+export interface Geometry {
+  field_length: number;
+  field_width: number;
+  goal_width: number;
+  goal_depth: number;
+  boundary_width: number;
+  penalty_area_depth: number;
+  penalty_area_width: number;
+  center_circle_radius: number;
+  ball_radius: number;
+  max_robot_radius: number;
+  lines: FieldLine[];
+  arcs: FieldArc[];
+}
+
+export interface StreamHealth {
+  packets: number;
+  errors: number;
+  rate_hz: number;
+  last_age_s: number;
+  last_error: string;
+}
+
+export interface ProcessorHealth {
+  name: string;
+  trigger: string;
+  configured_hz: number | null;
+  measured_hz: number;
+  tick_mean_ms: number;
+  tick_p99_ms: number;
+  overruns: number;
+  runs: number;
+  errors: number;
+  last_error: string;
+}
+
+export interface TopicHealth {
+  name: string;
+  size: number;
+  capacity: number;
+  seq: number;
+  age_s: number;
+}
+
+export interface RelayHealth {
+  alive: boolean;
+  age_s: number;
+  output_mode: string;
+  output_rate_hz: number;
+  active_robots: number;
+  stale_robots: number;
+  command_latency_ms: number;
+}
+
+export interface Health {
+  ok: boolean;
+  streams: Record<string, StreamHealth>;
+  processors: ProcessorHealth[];
+  topics: TopicHealth[];
+  relay: RelayHealth | null;
+  websocket_clients: number;
+}
+
+export type ServerMessage =
+  | { type: "snapshot"; world: World; geometry: Geometry | null; health: Health }
+  | { type: "world"; world: World }
+  | { type: "geometry"; geometry: Geometry }
+  | { type: "health"; health: Health };
+
+export interface RobotKey {
+  team: Team;
+  id: number;
+}
+
+export function robotKeyString(k: RobotKey): string {
+  return `${k.team}-${k.id}`;
+}
+
+export function sameRobot(a: RobotKey | null, b: RobotKey | null): boolean {
+  return a !== null && b !== null && a.team === b.team && a.id === b.id;
+}

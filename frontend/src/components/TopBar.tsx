@@ -1,0 +1,112 @@
+import { setEstop } from "../actions";
+import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
+import { fmtFixed } from "../format";
+
+interface Props {
+  onRetryNow: () => void;
+}
+
+function ConnectionStatus({ onRetryNow }: Props) {
+  const connection = useAppState((s) => s.connection);
+  const reconnecting = connection.status === "reconnecting";
+  const now = useTicker(reconnecting && connection.retryAt !== null, 250);
+  let label: string;
+  if (connection.status === "connected") label = "connected";
+  else if (connection.status === "connecting") label = "connecting…";
+  else {
+    const left = connection.retryAt !== null ? Math.max(0, (connection.retryAt - now) / 1000) : null;
+    label = left !== null && left > 0.05 ? `reconnecting… ${left.toFixed(1)} s` : "reconnecting…";
+  }
+  const title =
+    connection.status === "connected"
+      ? "Live data from the station"
+      : `${connection.lastError ?? "Not connected"}${reconnecting ? " — click to retry now" : ""}`;
+  return (
+    <button
+      type="button"
+      className={`conn conn-${connection.status}`}
+      data-testid="connection-status"
+      data-state={connection.status}
+      title={title}
+      onClick={reconnecting ? onRetryNow : undefined}
+      aria-live="polite"
+    >
+      <span className="dot" aria-hidden="true" />
+      <span className="conn-label">{label}</span>
+    </button>
+  );
+}
+
+function VisionRate() {
+  const health = useAppState((s) => s.health);
+  const vision = health?.streams?.["vision"];
+  const rate = vision?.rate_hz;
+  const stale = vision === undefined || vision.last_age_s > 1 || !(rate !== undefined && rate > 0);
+  return (
+    <div className={`stat ${stale ? "stat-bad" : ""}`} title="Vision packets per second">
+      <span className="stat-label">Vision</span>
+      <span className="stat-value num" data-testid="vision-rate">
+        {rate === undefined ? "—" : fmtFixed(rate, 1)} Hz
+      </span>
+    </div>
+  );
+}
+
+function refereeClass(command: string): string {
+  if (command === "HALT") return "ref-halt";
+  if (command === "STOP") return "ref-stop";
+  if (command === "NORMAL_START" || command === "FORCE_START") return "ref-run";
+  return "ref-other";
+}
+
+function RefereeInfo() {
+  const world = useThrottledWorld(250);
+  const ref = world?.referee ?? null;
+  const command = ref && ref.source !== "none" ? ref.command : null;
+  return (
+    <div className="stat referee" title={ref ? `Stage ${ref.stage}` : "No referee messages"}>
+      <span className="stat-label">Referee</span>
+      <span className={`ref-cmd ${command ? refereeClass(command) : ""}`} data-testid="referee-command">
+        {command ?? "—"}
+      </span>
+      {ref && ref.source !== "none" && (
+        <span className="score num" data-testid="score">
+          <span className="score-blue">{ref.blue.score}</span>:<span className="score-yellow">{ref.yellow.score}</span>
+        </span>
+      )}
+    </div>
+  );
+}
+
+function EstopButton() {
+  const estop = useAppState((s) => s.world?.estop ?? false);
+  return (
+    <button
+      type="button"
+      className={`estop ${estop ? "estop-active" : ""}`}
+      data-testid="estop-button"
+      data-active={estop ? "true" : "false"}
+      aria-pressed={estop}
+      onClick={() => void setEstop(!estop)}
+      title={estop ? "Release the emergency stop" : "Stop every robot now"}
+    >
+      {estop ? "Release" : "EMERGENCY STOP"}
+    </button>
+  );
+}
+
+export function TopBar({ onRetryNow }: Props) {
+  return (
+    <header className="topbar">
+      <div className="brand">
+        <span className="brand-mark" aria-hidden="true" />
+        Touchline
+      </div>
+      <ConnectionStatus onRetryNow={onRetryNow} />
+      <VisionRate />
+      <RefereeInfo />
+      <div className="spacer" />
+      <EstopButton />
+    </header>
+  );
+}

@@ -1,0 +1,30 @@
+// Test fixtures (only imported by tests).
+import type { Geometry, Health, World } from "../api/types";
+import { DEFAULT_GEOMETRY } from "../field/defaultGeometry";
+import { robot } from "../field/testRobots";
+
+export function world(seq: number, extra: Partial<World> = {}): World {
+  return {
+    seq,
+    t_capture: 1_700_000_000 + seq / 60,
+    ball: { x: 10, y: 20, vx: 0, vy: 0, visible: true, age_s: 0, cameras: [0] },
+    robots: [robot("blue", 0, -1000, 0), robot("yellow", 0, 1000, 0)],
+    cameras: [],
+    referee: null,
+    estop: false,
+    ...extra,
+  };
+}
+
+export function health(rate = 60): Health {
+  return {
+    ok: true,
+    streams: { vision: { packets: 100, errors: 0, rate_hz: rate, last_age_s: 0.01, last_error: "" } },
+    processors: [],
+    topics: [],
+    relay: null,
+    websocket_clients: 1,
+  };
+}
+
+export const geometry: Geometry = { ...DEFAULT_GEOMETRY, field_length: 12000, field_width: 9000 };

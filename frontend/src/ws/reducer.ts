@@ -1,0 +1,103 @@
+// Pure handling of server -> client websocket messages (docs/api.md, "Websocket /api/ws").
+
+import type { Geometry, Health, World } from "../api/types";
+
+export interface LiveData {
+  world: World | null;
+  geometry: Geometry | null;
+  health: Health | null;
+  /** Number of messages applied (useful to detect activity). */
+  messages: number;
+}
+
+export const emptyLiveData: LiveData = { world: null, geometry: null, health: null, messages: 0 };
+
+export type ParseResult =
+  | { ok: true; msg: { type: string; [k: string]: unknown } }
+  | { ok: false; error: string };
+
+/** Parse a websocket text frame; never throws. */
+export function parseMessage(data: unknown): ParseResult {
+  if (typeof data !== "string") return { ok: false, error: "non-text websocket frame" };
+  let value: unknown;
+  try {
+    value = JSON.parse(data);
+  } catch (e) {
+    return { ok: false, error: `invalid JSON: ${(e as Error).message}` };
+  }
+  if (typeof value !== "object" || value === null || Array.isArray(value)) {
+    return { ok: false, error: "message is not an object" };
+  }
+  const type = (value as { type?: unknown }).type;
+  if (typeof type !== "string") return { ok: false, error: "message has no type" };
+  return { ok: true, msg: value as { type: string; [k: string]: unknown } };
+}
+
+function isObject(v: unknown): v is Record<string, unknown> {
+  return typeof v === "object" && v !== null && !Array.isArray(v);
+}
+
+function asWorld(v: unknown): World | undefined {
+  if (!isObject(v) || typeof v.seq !== "number" || !Array.isArray(v.robots)) return undefined;
+  return v as unknown as World;
+}
+
+function asGeometry(v: unknown): Geometry | null | undefined {
+  if (v === null) return null;
+  if (!isObject(v) || typeof v.field_length !== "number" || typeof v.field_width !== "number") {
+    return undefined;
+  }
+  const g = v as unknown as Geometry;
+  // Tolerate a server that omits the line/arc lists.
+  return {
+    ...g,
+    lines: Array.isArray(g.lines) ? g.lines : [],
+    arcs: Array.isArray(g.arcs) ? g.arcs : [],
+  };
+}
+
+function asHealth(v: unknown): Health | undefined {
+  if (!isObject(v) || !isObject(v.streams)) return undefined;
+  return v as unknown as Health;
+}
+
+/**
+ * Apply one parsed message. Returns the same object when nothing changed (unknown type,
+ * malformed payload, or an older world than the one held).
+ */
+export function applyMessage(state: LiveData, msg: { type: string; [k: string]: unknown }): LiveData {
+  switch (msg.type) {
+    case "snapshot": {
+      const world = asWorld(msg.world);
+      const geometry = asGeometry(msg.geometry);
+      const health = asHealth(msg.health);
+      if (world === undefined) return state;
+      // A snapshot starts a new session: the backend may have restarted, so its seq may be
+      // lower than ours. Accept it unconditionally.
+      return {
+        world,
+        geometry: geometry === undefined ? state.geometry : geometry,
+        health: health ?? state.health,
+        messages: state.messages + 1,
+      };
+    }
+    case "world": {
+      const world = asWorld(msg.world);
+      if (world === undefined) return state;
+      if (state.world !== null && world.seq < state.world.seq) return state;
+      return { ...state, world, messages: state.messages + 1 };
+    }
+    case "geometry": {
+      const geometry = asGeometry(msg.geometry);
+      if (geometry === undefined) return state;
+      return { ...state, geometry, messages: state.messages + 1 };
+    }
+    case "health": {
+      const health = asHealth(msg.health);
+      if (health === undefined) return state;
+      return { ...state, health, messages: state.messages + 1 };
+    }
+    default:
+      return state;
+  }
+}
