@@ -136,7 +136,7 @@ def test_pixels_inside_image() -> None:
 
 @pytest.mark.parametrize("division", ["A", "B"])
 def test_geometry_packet(division: str) -> None:
-    w, v = setup(division=division)
+    _w, v = setup(division=division)
     p = v.geometry_packet()
     assert p.IsInitialized() and not p.HasField("detection")
     f = p.geometry.field
