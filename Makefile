@@ -1,0 +1,66 @@
+# Touchline: `make run` starts the station on the built-in simulator; `make test` runs every test.
+# Both install whatever is missing first (uv and Python deps, npm deps, protobuf code, frontend).
+SHELL := /bin/bash
+PY := .venv/bin/python
+UV := python3 -m uv
+SIM ?= builtin
+PORT ?= 8000
+RUN_ARGS ?=
+
+.PHONY: run test setup proto build multicast chromium lint typecheck test-py test-ts test-e2e \
+        bench clean
+
+run: build multicast
+	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
+
+test: build multicast chromium lint typecheck test-py test-ts test-e2e
+
+setup: .venv/.ok node_modules/.ok sslpb/__init__.py
+
+.venv/.ok: pyproject.toml uv.lock
+	@python3 -m uv --version >/dev/null 2>&1 || python3 -m pip install --quiet uv \
+	  || python3 -m pip install --quiet --user uv \
+	  || python3 -m pip install --quiet --break-system-packages uv
+	$(UV) sync --frozen --python python3.11
+	@touch $@
+
+node_modules/.ok: package.json package-lock.json
+	PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund
+	@touch $@
+
+sslpb/__init__.py: .venv/.ok node_modules/.ok $(wildcard proto/sslpb/*.proto) scripts/gen_proto.py
+	TOUCHLINE_REQUIRE_TS_PROTO=1 $(PY) scripts/gen_proto.py
+
+proto: .venv/.ok node_modules/.ok
+	TOUCHLINE_REQUIRE_TS_PROTO=1 $(PY) scripts/gen_proto.py
+
+build: setup
+	npm run build
+
+multicast: .venv/.ok
+	@scripts/setup-multicast.sh $(PY)
+
+chromium:
+	@scripts/ensure-chromium.sh
+
+lint: setup
+	$(PY) -m ruff check .
+
+typecheck: setup
+	$(PY) -m mypy
+	npm run typecheck
+
+test-py: setup multicast
+	$(PY) -m pytest -q
+
+test-ts: setup
+	npm run test:unit
+
+test-e2e: build multicast chromium
+	npm run test:e2e
+
+bench: setup multicast
+	for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+
+clean:
+	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report

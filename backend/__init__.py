@@ -1,0 +1,1 @@
+"""Touchline backend: the paper's strategy-bridge (Data Bus + Processors) hosted by FastAPI."""

@@ -1,0 +1,206 @@
+"""The HTTP and websocket API (docs/api.md) and the built frontend, on one port."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import time
+from collections.abc import AsyncIterator
+from pathlib import Path
+from typing import Annotated, Any, Literal
+from urllib.parse import urlsplit
+
+from fastapi import APIRouter, FastAPI, HTTPException, Request, WebSocket
+from fastapi import Path as PathParam
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.websockets import WebSocketDisconnect, WebSocketState
+
+from .config import Settings
+from .station import Station, _finite
+
+log = logging.getLogger("touchline.api")
+
+TeamParam = Annotated[Literal["blue", "yellow"], PathParam(description="robot team")]
+IdParam = Annotated[int, PathParam(ge=0, le=15, description="robot id, 0..15")]
+
+
+class TargetIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="target x in mm (vision frame)")
+    y: float = Field(description="target y in mm")
+    orientation: float | None = Field(default=None, description="target heading in rad")
+
+
+class EstopIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    active: bool
+
+
+def _error_list(exc: RequestValidationError) -> list[dict[str, Any]]:
+    out = []
+    for e in exc.errors():
+        msg = str(e.get("msg", "invalid"))
+        if e.get("type") == "finite_number":
+            msg = "must be a finite number (NaN and Infinity are not allowed)"
+        out.append({"loc": [str(p) for p in e.get("loc", ())], "msg": msg,
+                    "type": str(e.get("type", ""))})
+    return out
+
+
+def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
+    st = station or Station(settings)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        await st.start()
+        try:
+            yield
+        finally:
+            await st.stop()
+
+    app = FastAPI(title="Touchline", version="0.1.0", lifespan=lifespan)
+    app.state.station = st
+
+    @app.exception_handler(RequestValidationError)
+    async def validation_handler(_req: Request, exc: RequestValidationError) -> JSONResponse:
+        # The default handler echoes the input, and a NaN input makes it fail with a 500.
+        return JSONResponse(status_code=422, content={"detail": _error_list(exc)})
+
+    api = APIRouter(prefix="/api")
+
+    @api.get("/health")
+    async def health() -> JSONResponse:
+        return JSONResponse(st.health())
+
+    @api.get("/world")
+    async def world() -> JSONResponse:
+        return JSONResponse(_finite(st.world_dict()))
+
+    @api.get("/geometry")
+    async def geometry() -> JSONResponse:
+        geo = st.geometry()
+        if geo is None:
+            raise HTTPException(404, "no geometry packet received yet")
+        return JSONResponse(geo)
+
+    @api.post("/robots/{team}/{rid}/target")
+    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> dict[str, Any]:
+        geo = st.geometry()
+        half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
+        half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
+        if abs(body.x) > half_l or abs(body.y) > half_w:
+            raise HTTPException(422, [{
+                "loc": ["body", "x" if abs(body.x) > half_l else "y"],
+                "msg": f"target ({body.x:.0f}, {body.y:.0f}) mm is outside the field "
+                       f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
+                "type": "outside_field"}])
+        st.set_target(team, rid, body.x, body.y, body.orientation)
+        return {"team": team, "id": rid,
+                "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
+
+    @api.delete("/robots/{team}/{rid}/target")
+    async def clear_target(team: TeamParam, rid: IdParam) -> dict[str, Any]:
+        st.clear_target(team, rid)
+        return {"team": team, "id": rid, "target": None}
+
+    @api.post("/estop")
+    async def estop(body: EstopIn) -> dict[str, bool]:
+        st.set_estop(body.active)
+        log.warning("emergency stop %s", "ACTIVE" if body.active else "released")
+        return {"estop": body.active}
+
+    @api.websocket("/ws")
+    async def ws_endpoint(ws: WebSocket) -> None:
+        origin = ws.headers.get("origin")
+        if origin is not None and not _origin_allowed(origin, ws.headers.get("host", ""),
+                                                      settings.allowed_origins):
+            log.warning("websocket from origin %s refused", origin)
+            await ws.close(code=1008, reason="origin not allowed")
+            return
+        await ws.accept()
+        st.ws_clients += 1
+        try:
+            await _serve_client(ws, st, settings.ws_max_hz)
+        except (WebSocketDisconnect, RuntimeError, ConnectionError):
+            pass
+        finally:
+            st.ws_clients -= 1
+
+    app.include_router(api)
+    _mount_frontend(app, settings.static_dir)
+    return app
+
+
+def _origin_allowed(origin: str, host: str, allowed: list[str]) -> bool:
+    """Same-origin pages and the configured dev origins may open the websocket."""
+    if origin in allowed:
+        return True
+    return urlsplit(origin).netloc == host
+
+
+async def _serve_client(ws: WebSocket, st: Station, max_hz: float) -> None:
+    """Sends a snapshot, then the latest world at up to ``max_hz``; a slow client only
+    delays itself: it always gets the newest world, never a backlog."""
+    min_period = 1.0 / max_hz
+    world_ev = st.world_topic.subscribe_event()
+    closed = asyncio.Event()
+
+    async def receive() -> None:
+        try:
+            while True:
+                msg = await ws.receive()
+                if msg["type"] == "websocket.disconnect":
+                    break
+        finally:
+            closed.set()
+
+    rx = asyncio.create_task(receive())
+    try:
+        await ws.send_text(json.dumps(_finite({"type": "snapshot", "world": st.world_dict(),
+                                               "geometry": st.geometry(),
+                                               "health": st.health()})))
+        geo_seq = st.geometry_topic.seq
+        last_health = time.monotonic()
+        last_sent = 0.0
+        sent_key = -1
+        while not closed.is_set():
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(world_ev.wait(), 0.5)
+            world_ev.clear()
+            now = time.monotonic()
+            if now - last_sent < min_period:
+                await asyncio.sleep(min_period - (now - last_sent))
+            if ws.application_state != WebSocketState.CONNECTED or closed.is_set():
+                break
+            if st.geometry_topic.seq != geo_seq:
+                geo_seq = st.geometry_topic.seq
+                await ws.send_text(json.dumps({"type": "geometry", "geometry": st.geometry()}))
+            text = st.world_json()
+            key = hash(text)
+            if key != sent_key:
+                await ws.send_text(text)
+                sent_key = key
+                last_sent = time.monotonic()
+            if time.monotonic() - last_health >= 0.5:
+                last_health = time.monotonic()
+                await ws.send_text(json.dumps({"type": "health", "health": st.health()}))
+    finally:
+        rx.cancel()
+        st.world_topic.unsubscribe_event(world_ev)
+
+
+def _mount_frontend(app: FastAPI, static_dir: Path) -> None:
+    if (static_dir / "index.html").exists():
+        app.mount("/", StaticFiles(directory=static_dir, html=True), name="frontend")
+        return
+
+    @app.get("/", response_class=HTMLResponse)
+    async def not_built() -> str:
+        return ("<!doctype html><title>Touchline</title><h1>Touchline backend is running</h1>"
+                f"<p>The frontend is not built ({static_dir} has no index.html). "
+                "Run <code>make run</code>, which builds it.</p>")

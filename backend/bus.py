@@ -1,0 +1,144 @@
+"""The Data Bus: named topics, each a bounded ring that evicts its oldest records.
+
+Producers never wait for consumers. Every record gets a topic-wide sequence number; a
+reader keeps its own cursor and sees each record at most once (``read_new``), and learns how
+many records it missed when it fell more than a ring behind.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True, slots=True)
+class Record(Generic[T]):
+    seq: int
+    time_mono: float  # time.monotonic() when written
+    value: T
+
+
+class Topic(Generic[T]):
+    """A bounded queue of records plus the latest value and a change notification."""
+
+    def __init__(self, name: str, capacity: int) -> None:
+        if capacity < 1:
+            raise ValueError(f"topic {name!r}: capacity must be >= 1, got {capacity}")
+        self.name = name
+        self._ring: deque[Record[T]] = deque(maxlen=capacity)
+        self._seq = 0
+        self._waiters: list[asyncio.Event] = []
+
+    @property
+    def capacity(self) -> int:
+        assert self._ring.maxlen is not None
+        return self._ring.maxlen
+
+    def resize(self, capacity: int) -> None:
+        if capacity < 1:
+            raise ValueError(f"topic {self.name!r}: capacity must be >= 1, got {capacity}")
+        self._ring = deque(self._ring, maxlen=capacity)
+
+    @property
+    def seq(self) -> int:
+        """Sequence number of the newest record (0 before the first write)."""
+        return self._seq
+
+    def __len__(self) -> int:
+        return len(self._ring)
+
+    def write(self, value: T) -> Record[T]:
+        self._seq += 1
+        rec = Record(self._seq, time.monotonic(), value)
+        self._ring.append(rec)
+        for ev in self._waiters:
+            ev.set()
+        return rec
+
+    def latest(self) -> Record[T] | None:
+        return self._ring[-1] if self._ring else None
+
+    def latest_value(self) -> T | None:
+        return self._ring[-1].value if self._ring else None
+
+    def records_after(self, seq: int) -> Iterator[Record[T]]:
+        """Records with a sequence number greater than ``seq``, oldest first."""
+        ring = self._ring
+        if not ring or ring[-1].seq <= seq:
+            return iter(())
+        first = ring[0].seq
+        start = max(0, seq + 1 - first)
+        return (ring[i] for i in range(start, len(ring)))
+
+    def age_s(self, now: float | None = None) -> float:
+        rec = self.latest()
+        if rec is None:
+            return -1.0
+        return (time.monotonic() if now is None else now) - rec.time_mono
+
+    def subscribe_event(self) -> asyncio.Event:
+        """An event set on every write; the owner clears it. Used to wake waiting readers."""
+        ev = asyncio.Event()
+        self._waiters.append(ev)
+        return ev
+
+    def unsubscribe_event(self, ev: asyncio.Event) -> None:
+        if ev in self._waiters:
+            self._waiters.remove(ev)
+
+
+class Reader(Generic[T]):
+    """A cursor over one topic: each record is returned by ``read_new`` exactly once."""
+
+    def __init__(self, topic: Topic[T], *, from_start: bool = False) -> None:
+        self.topic = topic
+        self.cursor = 0 if from_start else topic.seq
+        self.missed = 0  # records evicted before this reader saw them
+
+    def read_new(self) -> list[T]:
+        return [r.value for r in self.read_new_records()]
+
+    def read_new_records(self) -> list[Record[T]]:
+        recs = list(self.topic.records_after(self.cursor))
+        if recs:
+            gap = recs[0].seq - self.cursor - 1
+            if gap > 0:
+                self.missed += gap
+            self.cursor = recs[-1].seq
+        elif self.topic.seq > self.cursor:  # everything new was already evicted
+            self.missed += self.topic.seq - self.cursor
+            self.cursor = self.topic.seq
+        return recs
+
+    def has_new(self) -> bool:
+        return self.topic.seq > self.cursor
+
+
+class DataBus:
+    """The registry of topics. Topic sizes come from configuration."""
+
+    def __init__(self, sizes: dict[str, int] | None = None, default_size: int = 30) -> None:
+        self._topics: dict[str, Topic[object]] = {}
+        self._sizes = dict(sizes or {})
+        self._default = default_size
+
+    def topic(self, name: str, capacity: int | None = None) -> Topic[object]:
+        t = self._topics.get(name)
+        if t is None:
+            cap = self._sizes.get(name, capacity if capacity is not None else self._default)
+            t = Topic[object](name, cap)
+            self._topics[name] = t
+        return t
+
+    def typed(self, name: str, _type: type[T], capacity: int | None = None) -> Topic[T]:
+        """The topic ``name``, typed for the caller (the bus stores objects)."""
+        return self.topic(name, capacity)  # type: ignore[return-value]
+
+    def topics(self) -> list[Topic[object]]:
+        return list(self._topics.values())

@@ -1,0 +1,423 @@
+"""The station's processors: relay ingest, vision ingest, referee ingest, world model,
+strategy (demo + operator targets), control, command publishing."""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import zmq
+import zmq.asyncio
+from google.protobuf.message import DecodeError, Message
+
+from sslnet.rate import RateCounter
+from sslnet.ratelog import RateLimitedLog
+from sslpb import touchline_pb2 as tl
+from sslpb.ssl_gc_referee_message_pb2 import Referee
+from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+from .bus import DataBus, Reader
+from .control.goto import GoToConfig, GoToController, LocalVelocity, Target
+from .processor import Every, OnTopic, Processor
+from .strategy.demo import DemoConfig, demo_targets
+from .world.decode import decode_detection, geometry_to_dict
+from .world.model import WorldModel
+from .world.referee import RefereeState, decode_referee
+from .world.state import CameraFrame, Team, WorldState
+
+log = logging.getLogger("touchline.processors")
+_badlog = RateLimitedLog(log, interval_s=10.0)
+
+
+@dataclass
+class StreamCounter:
+    """Packets and errors of one input stream as the backend sees it."""
+
+    rate: RateCounter = field(default_factory=RateCounter)
+    errors: int = 0
+    last_error: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "packets": self.rate.total,
+            "errors": self.errors,
+            "rate_hz": self.rate.rate_hz(),
+            "last_age_s": self.rate.age_s(),
+            "last_error": self.last_error,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class Command:
+    team: Team
+    id: int
+    velocity: LocalVelocity
+    kick_speed_mps: float = 0.0
+    chip: bool = False
+    dribbler_rpm: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class CommandSet:
+    created_time_ns: int
+    source_receive_time_ns: int
+    commands: tuple[Command, ...]
+    stop_all: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class TargetEntry:
+    target: Target
+    source: str  # "operator" or "demo"
+
+
+@dataclass(frozen=True, slots=True)
+class OperatorTarget:
+    team: Team
+    id: int
+    target: Target | None  # None: release the robot back to the demo
+
+
+class RelayIngest(Processor):
+    """Source: receives everything the relay publishes and puts it on the bus unchanged."""
+
+    name = "relay-ingest"
+
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+        super().__init__(None)
+        self.sock = sock
+        self.vision_packets = bus.typed("vision-packets", tl.Envelope)
+        self.referee_packets = bus.typed("referee-packets", tl.Envelope)
+        self.relay_stats = bus.typed("relay-stats", dict)
+        self.counters = {"zmq": StreamCounter()}
+
+    async def wait_input(self) -> None:
+        await self.sock.poll()
+
+    async def tick(self) -> None:
+        for _ in range(1000):  # drain what is there, bounded so other tasks get a turn
+            try:
+                frames = await self.sock.recv_multipart(flags=zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            self._handle(frames)
+
+    def _handle(self, frames: list[bytes]) -> None:
+        c = self.counters["zmq"]
+        c.rate.add()
+        if len(frames) != 2:
+            c.errors += 1
+            c.last_error = f"expected 2 frames, got {len(frames)}"
+            _badlog.warning("zmq-frames", "relay message with %d frames ignored", len(frames))
+            return
+        topic, body = frames
+        if topic == b"stats":
+            stats = tl.RelayStats()
+            try:
+                stats.ParseFromString(body)
+            except DecodeError as exc:
+                c.errors += 1
+                c.last_error = f"stats: {exc}"
+                return
+            self.relay_stats.write(_relay_stats_dict(stats))
+            return
+        env = tl.Envelope()
+        try:
+            env.ParseFromString(body)
+        except DecodeError as exc:
+            c.errors += 1
+            c.last_error = f"envelope: {exc}"
+            _badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, exc)
+            return
+        if topic == b"vision":
+            self.vision_packets.write(env)
+        elif topic == b"referee":
+            self.referee_packets.write(env)
+
+
+def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
+    return {
+        "time_ns": s.time_ns,
+        "received_mono": time.monotonic(),
+        "output_mode": s.output_mode,
+        "active_robots": s.active_robots,
+        "stale_robots": s.stale_robots,
+        "output_rate_hz": s.output_rate_hz,
+        "command_latency_ms": s.command_latency_ms,
+        "stale_stops": s.stale_stops,
+        "streams": {
+            st.name: {
+                "packets": st.packets,
+                "errors": st.errors,
+                "rate_hz": st.rate_hz,
+                "last_age_s": st.last_age_s,
+                "last_error": st.last_error,
+            }
+            for st in s.streams
+        },
+    }
+
+
+def _missing(msg: Message) -> str:
+    errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
+    return "missing required fields: " + ", ".join(errors)
+
+
+class VisionIngest(Processor):
+    """Decodes vision datagrams: detection frames and geometry onto their topics."""
+
+    name = "vision-ingest"
+
+    def __init__(self, bus: DataBus) -> None:
+        packets = bus.typed("vision-packets", tl.Envelope)
+        super().__init__(OnTopic(packets))
+        self.reader = Reader(packets)
+        self.detections = bus.typed("vision-detections", CameraFrame)
+        self.geometry = bus.typed("geometry", dict)
+        self.counter = StreamCounter()
+        self._last_geometry_bytes = b""
+
+    async def tick(self) -> None:
+        for env in self.reader.read_new():
+            self.counter.rate.add()
+            pkt = SSL_WrapperPacket()
+            try:
+                pkt.ParseFromString(env.payload)
+                if not pkt.IsInitialized():
+                    raise DecodeError(_missing(pkt))
+            except DecodeError as exc:
+                self.counter.errors += 1
+                self.counter.last_error = str(exc)
+                _badlog.warning("vision", "bad vision packet from %s: %s", env.source, exc)
+                continue
+            if pkt.HasField("detection"):
+                self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
+            if pkt.HasField("geometry"):
+                raw = pkt.geometry.field.SerializeToString()
+                if raw != self._last_geometry_bytes:  # only a change goes on the bus
+                    self._last_geometry_bytes = raw
+                    self.geometry.write(geometry_to_dict(pkt.geometry))
+
+
+class RefereeIngest(Processor):
+    name = "referee-ingest"
+
+    def __init__(self, bus: DataBus) -> None:
+        packets = bus.typed("referee-packets", tl.Envelope)
+        super().__init__(OnTopic(packets))
+        self.reader = Reader(packets)
+        self.referee = bus.typed("referee", RefereeState)
+        self.counter = StreamCounter()
+
+    async def tick(self) -> None:
+        for env in self.reader.read_new():
+            self.counter.rate.add()
+            msg = Referee()
+            try:
+                msg.ParseFromString(env.payload)
+                if not msg.IsInitialized():
+                    raise DecodeError(_missing(msg))
+            except DecodeError as exc:
+                self.counter.errors += 1
+                self.counter.last_error = str(exc)
+                _badlog.warning("referee", "bad referee packet from %s: %s", env.source, exc)
+                continue
+            self.referee.write(decode_referee(msg))
+
+
+class WorldProcessor(Processor):
+    """Merges camera frames into the world, on every new frame."""
+
+    name = "world-model"
+
+    def __init__(self, bus: DataBus, model: WorldModel | None = None) -> None:
+        detections = bus.typed("vision-detections", CameraFrame)
+        super().__init__(OnTopic(detections))
+        self.reader = Reader(detections)
+        self.world = bus.typed("world", WorldState)
+        self.model = model or WorldModel()
+
+    async def tick(self) -> None:
+        frames = self.reader.read_new()
+        if not frames:
+            return
+        for f in frames:
+            self.model.update(f)
+        self.world.write(self.model.snapshot())
+
+
+class StrategyProcessor(Processor):
+    """Decides targets: operator targets first, the formation demo for the rest of our team."""
+
+    name = "strategy"
+
+    def __init__(self, bus: DataBus, our_team: Team, demo: DemoConfig | None,
+                 hz: float = 20.0) -> None:
+        super().__init__(Every(hz))
+        self.world = bus.typed("world", WorldState)
+        self.geometry = bus.typed("geometry", dict)
+        self.operator = Reader(bus.typed("operator-targets", OperatorTarget))
+        self.targets = bus.typed("targets", dict)
+        self.our_team: Team = our_team
+        self.demo = demo
+        self.operator_targets: dict[tuple[Team, int], Target] = {}
+        self._t0 = time.monotonic()
+
+    async def tick(self) -> None:
+        for op in self.operator.read_new():
+            if op.target is None:
+                self.operator_targets.pop((op.team, op.id), None)
+            else:
+                self.operator_targets[(op.team, op.id)] = op.target
+        out: dict[tuple[Team, int], TargetEntry] = {
+            k: TargetEntry(t, "operator") for k, t in self.operator_targets.items()
+        }
+        world = self.world.latest_value()
+        if self.demo is not None and world is not None:
+            geo = self.geometry.latest_value()
+            if geo is not None:
+                self.demo.field_length_mm = float(geo["field_length"])
+                self.demo.field_width_mm = float(geo["field_width"])
+            free = [r.id for r in world.robots
+                    if r.team == self.our_team and (r.team, r.id) not in self.operator_targets]
+            t = time.monotonic() - self._t0
+            for rid, tgt in demo_targets(t, free, self.demo).items():
+                out[(self.our_team, rid)] = TargetEntry(tgt, "demo")
+        self.targets.write(out)
+
+
+class ControlProcessor(Processor):
+    """Turns targets into robot commands on every world update, with the safety rules:
+    emergency stop and HALT zero every robot; robots not seen and a stale world get zero."""
+
+    name = "control"
+
+    def __init__(self, bus: DataBus, max_wait_s: float, vision_stale_s: float,
+                 goto: GoToConfig | None = None) -> None:
+        world = bus.typed("world", WorldState)
+        super().__init__(OnTopic(world, max_wait_s=max_wait_s))
+        self.world = world
+        self.targets = bus.typed("targets", dict)
+        self.referee = bus.typed("referee", RefereeState)
+        self.estop = bus.typed("estop", bool)
+        self.commands = bus.typed("robot-commands", CommandSet)
+        self.vision_stale_s = vision_stale_s
+        self.goto_config = goto or GoToConfig()
+        self.controllers: dict[tuple[Team, int], GoToController] = {}
+        self.last_commands: dict[tuple[Team, int], Command] = {}
+        self._last_tick = time.monotonic()
+        self.halt_reason = ""
+
+    async def tick(self) -> None:
+        now = time.monotonic()
+        dt = min(0.1, now - self._last_tick)
+        self._last_tick = now
+        rec = self.world.latest()
+        targets: dict[tuple[Team, int], TargetEntry] = self.targets.latest_value() or {}
+        ref = self.referee.latest_value()
+        estop = bool(self.estop.latest_value())
+        created = time.time_ns()
+        if estop:
+            self.halt_reason = "emergency stop"
+            self._reset_all()
+            self.commands.write(CommandSet(created, 0, (), stop_all=True))
+            return
+        keys = sorted(targets)
+        zero = LocalVelocity.zero()
+        if rec is None or now - rec.time_mono > self.vision_stale_s or (ref and ref.halted):
+            self.halt_reason = "HALT" if ref and ref.halted else "no vision"
+            self._reset_all()
+            cmds = tuple(Command(t, i, zero) for t, i in keys)
+            self.commands.write(CommandSet(created, 0, cmds))
+            self.last_commands = {(c.team, c.id): c for c in cmds}
+            return
+        self.halt_reason = ""
+        world = rec.value
+        out: list[Command] = []
+        for key in keys:
+            robot = world.robot(*key)
+            if robot is None or not robot.visible:
+                ctrl = self.controllers.get(key)
+                if ctrl:
+                    ctrl.reset()
+                out.append(Command(key[0], key[1], zero))
+                continue
+            ctrl = self.controllers.get(key)
+            if ctrl is None:
+                ctrl = self.controllers[key] = GoToController(self.goto_config)
+            vel = ctrl.step(robot.x, robot.y, robot.orientation, targets[key].target, dt)
+            if ref is not None and ref.stopped:  # STOP: at most 1.5 m/s
+                vel = _limit_speed(vel, 1.5)
+            out.append(Command(key[0], key[1], vel))
+        cmds = tuple(out)
+        self.last_commands = {(c.team, c.id): c for c in cmds}
+        self.commands.write(CommandSet(created, world.receive_time_ns, cmds))
+
+    def _reset_all(self) -> None:
+        for c in self.controllers.values():
+            c.reset()
+
+
+def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:
+    s = math.hypot(v.forward_mps, v.left_mps)
+    if s <= max_mps:
+        return v
+    k = max_mps / s
+    return LocalVelocity(v.forward_mps * k, v.left_mps * k, v.angular_radps)
+
+
+class CommandPublisher(Processor):
+    """Sends each command set and simulator command to the relay."""
+
+    name = "command-publisher"
+
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+        cmds = bus.typed("robot-commands", CommandSet)
+        super().__init__(OnTopic(cmds, max_wait_s=0.05))
+        self.sock = sock
+        self.reader = Reader(cmds)
+        self.sim_reader = Reader(bus.typed("sim-commands", bytes))
+        self.seq = 0
+        self.latency_ms: deque[float] = deque(maxlen=500)  # vision arrival -> command sent
+        self.sent = RateCounter()
+
+    async def tick(self) -> None:
+        for cs in self.reader.read_new():
+            self.seq += 1
+            msg = tl.RobotCommandSet(
+                created_time_ns=cs.created_time_ns,
+                source_receive_time_ns=cs.source_receive_time_ns,
+                sequence=self.seq,
+                stop_all=cs.stop_all,
+            )
+            for c in cs.commands:
+                msg.commands.add(
+                    team=tl.TEAM_BLUE if c.team == "blue" else tl.TEAM_YELLOW,
+                    id=c.id,
+                    forward_mps=c.velocity.forward_mps,
+                    left_mps=c.velocity.left_mps,
+                    angular_radps=c.velocity.angular_radps,
+                    kick_speed_mps=c.kick_speed_mps,
+                    chip=c.chip,
+                    dribbler_rpm=c.dribbler_rpm,
+                )
+            await self.sock.send_multipart([b"commands", msg.SerializeToString()])
+            self.sent.add()
+            if cs.source_receive_time_ns:
+                self.latency_ms.append((time.time_ns() - cs.source_receive_time_ns) / 1e6)
+        for raw in self.sim_reader.read_new():
+            await self.sock.send_multipart([b"sim", raw])
+
+    def latency_summary(self) -> dict[str, float]:
+        vals = sorted(self.latency_ms)
+        if not vals:
+            return {"mean_ms": 0.0, "p50_ms": 0.0, "p99_ms": 0.0}
+        return {
+            "mean_ms": sum(vals) / len(vals),
+            "p50_ms": vals[len(vals) // 2],
+            "p99_ms": vals[min(len(vals) - 1, int(0.99 * len(vals)))],
+        }

@@ -1,0 +1,242 @@
+"""The composition root of the backend: bus, processors and ZeroMQ, started and stopped in
+mirror order. The API reads through this object and writes only onto bus topics."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import math
+import time
+from typing import Any
+
+import zmq
+import zmq.asyncio
+
+from .bus import DataBus
+from .config import Settings
+from .control.goto import Target
+from .processor import Every, OnTopic, Runner
+from .processors import (
+    CommandPublisher,
+    CommandSet,
+    ControlProcessor,
+    OperatorTarget,
+    RefereeIngest,
+    RelayIngest,
+    StrategyProcessor,
+    TargetEntry,
+    VisionIngest,
+    WorldProcessor,
+)
+from .strategy.demo import DemoConfig
+from .world.referee import RefereeState
+from .world.state import Team, WorldState
+from .zmqio import pub_socket, sub_socket
+
+log = logging.getLogger("touchline.station")
+
+
+class Station:
+    def __init__(self, settings: Settings) -> None:
+        self.settings = settings
+        self.bus = DataBus(settings.topic_sizes)
+        self.ctx: zmq.asyncio.Context | None = None
+        self.runner = Runner()
+        self.started_mono = time.monotonic()
+        self._world_json_cache: tuple[int, str] = (-1, "")
+        self.ws_clients = 0
+        our: Team = "blue" if settings.our_team == "blue" else "yellow"
+        self.our_team: Team = our
+        # topics the API writes to
+        self.operator_targets = self.bus.typed("operator-targets", OperatorTarget)
+        self.estop_topic = self.bus.typed("estop", bool)
+        self.sim_commands = self.bus.typed("sim-commands", bytes)
+        self.world_topic = self.bus.typed("world", WorldState)
+        self.geometry_topic = self.bus.typed("geometry", dict)
+        self.referee_topic = self.bus.typed("referee", RefereeState)
+        self.targets_topic = self.bus.typed("targets", dict)
+        self.relay_stats = self.bus.typed("relay-stats", dict)
+        for name in settings.topic_sizes:
+            self.bus.topic(name)
+
+    async def start(self) -> None:
+        s = self.settings
+        self.ctx = zmq.asyncio.Context()
+        sub = sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"])
+        pub = pub_socket(self.ctx, s.relay_sub)
+        demo = DemoConfig(own_half_sign=s.our_side) if s.demo else None
+        self.ingest = RelayIngest(self.bus, sub)
+        self.vision = VisionIngest(self.bus)
+        self.referee = RefereeIngest(self.bus)
+        self.world = WorldProcessor(self.bus)
+        self.strategy = StrategyProcessor(self.bus, self.our_team, demo)
+        self.control = ControlProcessor(self.bus, s.control_rate_max_wait_s, s.vision_stale_s)
+        self.publisher = CommandPublisher(self.bus, pub)
+        for p in (self.ingest, self.vision, self.referee, self.world, self.strategy,
+                  self.control, self.publisher):
+            self.runner.add(p)
+        await self.runner.start()
+        log.info("station started: relay pub %s, relay sub %s, our team %s", s.relay_pub,
+                 s.relay_sub, s.our_team)
+
+    async def stop(self) -> None:
+        # a last stop to every robot we drive, then shut down
+        if self.ctx is not None and hasattr(self, "publisher"):
+            with contextlib.suppress(zmq.ZMQError):
+                await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
+        await self.runner.stop()
+        if self.ctx is not None:
+            self.ctx.destroy(linger=0)
+            self.ctx = None
+
+    # ---- commands from the API (written onto the bus; processors apply them) ----
+
+    def set_target(self, team: Team, rid: int, x: float, y: float,
+                   orientation: float | None) -> None:
+        self.operator_targets.write(OperatorTarget(team, rid, Target(x, y, orientation)))
+
+    def clear_target(self, team: Team, rid: int) -> None:
+        self.operator_targets.write(OperatorTarget(team, rid, None))
+
+    def set_estop(self, active: bool) -> None:
+        self.estop_topic.write(active)
+
+    @property
+    def estop(self) -> bool:
+        return bool(self.estop_topic.latest_value())
+
+    # ---- views ----
+
+    def world_dict(self) -> dict[str, Any]:
+        world = self.world_topic.latest_value()
+        targets: dict[tuple[Team, int], TargetEntry] = self.targets_topic.latest_value() or {}
+        ref = self.referee_topic.latest()
+        commands = self.control.last_commands if hasattr(self, "control") else {}
+        now_unix = time.time()
+        out: dict[str, Any] = {
+            "seq": self.world_topic.seq,
+            "t_capture": world.t_capture if world else 0.0,
+            "ball": None,
+            "robots": [],
+            "cameras": [],
+            "referee": None,
+            "estop": self.estop,
+            "halt_reason": self.control.halt_reason if hasattr(self, "control") else "",
+        }
+        if ref is not None:
+            rd = ref.value.to_dict()
+            rd["age_s"] = time.monotonic() - ref.time_mono
+            out["referee"] = rd
+        if world is None:
+            return out
+        t_ref = world.t_capture
+        if world.ball is not None:
+            b = world.ball
+            out["ball"] = {"x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
+                           "age_s": t_ref - b.t_seen, "cameras": list(b.cameras)}
+        robots = []
+        for r in world.robots:
+            entry = targets.get((r.team, r.id))
+            cmd = commands.get((r.team, r.id))
+            robots.append({
+                "team": r.team, "id": r.id, "x": r.x, "y": r.y, "orientation": r.orientation,
+                "vx": r.vx, "vy": r.vy, "omega": r.omega, "visible": r.visible,
+                "age_s": t_ref - r.t_seen, "cameras": list(r.cameras),
+                "target": None if entry is None else {
+                    "x": entry.target.x, "y": entry.target.y,
+                    "orientation": entry.target.orientation, "source": entry.source,
+                },
+                "controlled": entry is not None,
+                "command": None if cmd is None else {
+                    "forward_mps": cmd.velocity.forward_mps,
+                    "left_mps": cmd.velocity.left_mps,
+                    "angular_radps": cmd.velocity.angular_radps,
+                },
+            })
+        out["robots"] = robots
+        out["cameras"] = [{
+            "camera_id": c.camera_id, "frame_number": c.frame_number, "t_capture": c.t_capture,
+            "age_s": now_unix - c.t_capture,
+            "balls": [{"x": b.x, "y": b.y} for b in c.balls],
+            "robots": [{"team": rr.team, "id": rr.id, "x": rr.x, "y": rr.y,
+                        "orientation": rr.orientation} for rr in c.robots],
+        } for c in world.cameras]
+        return out
+
+    def world_json(self) -> str:
+        """The world as JSON, encoded once per world update and shared by every client."""
+        key = self.world_topic.seq * 2 + (1 if self.estop else 0)
+        if self._world_json_cache[0] != key:
+            self._world_json_cache = (key, json.dumps({"type": "world",
+                                                       "world": _finite(self.world_dict())}))
+        return self._world_json_cache[1]
+
+    def geometry(self) -> dict[str, Any] | None:
+        return self.geometry_topic.latest_value()
+
+    def health(self) -> dict[str, Any]:
+        procs = []
+        for p in self.runner.processors:
+            trig = p.trigger
+            procs.append({
+                "name": p.name,
+                "trigger": ("rate" if isinstance(trig, Every) else
+                            f"topic:{trig.topic.name}" if isinstance(trig, OnTopic) else "source"),
+                "configured_hz": trig.hz if isinstance(trig, Every) else None,
+                **p.stats.summary(),
+                "overruns": p.stats.overruns,
+                "runs": p.stats.rate.total,
+                "errors": p.stats.errors,
+                "last_error": p.stats.last_error,
+            })
+        topics = [{"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
+                   "age_s": t.age_s()} for t in self.bus.topics()]
+        streams: dict[str, Any] = {}
+        if hasattr(self, "vision"):
+            streams["vision"] = self.vision.counter.to_dict()
+            streams["referee"] = self.referee.counter.to_dict()
+            streams["zmq"] = self.ingest.counters["zmq"].to_dict()
+        relay = None
+        rs = self.relay_stats.latest_value()
+        if rs is not None:
+            age = time.monotonic() - rs["received_mono"]
+            relay = {k: v for k, v in rs.items() if k not in ("streams", "received_mono")}
+            relay["alive"] = age < 3.0
+            relay["age_s"] = age
+            for name, st in rs["streams"].items():
+                streams[f"relay.{name}"] = st
+        vision = streams.get("vision", {})
+        ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
+            relay is not None and relay["alive"]
+        out: dict[str, Any] = _finite({
+            "ok": ok,
+            "uptime_s": time.monotonic() - self.started_mono,
+            "streams": streams,
+            "processors": procs,
+            "topics": topics,
+            "relay": relay,
+            "latency": self.publisher.latency_summary() if hasattr(self, "publisher") else None,
+            "websocket_clients": self.ws_clients,
+        })
+        return out
+
+
+def _finite(obj: Any) -> Any:
+    """JSON cannot carry NaN/inf: replace them by None."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def _stop_all_bytes() -> bytes:
+    from sslpb import touchline_pb2 as tl
+
+    return tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True).SerializeToString()
+
+
+__all__ = ["CommandSet", "Station"]

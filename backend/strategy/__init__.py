@@ -1,0 +1,1 @@
+"""Strategy: who goes where. The end-to-end loop ships a formation demo."""

@@ -1,0 +1,80 @@
+"""Decoding of SSL-Vision wrapper packets into plain data (no I/O)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from sslpb.ssl_vision_detection_pb2 import SSL_DetectionFrame
+from sslpb.ssl_vision_geometry_pb2 import SSL_GeometryData
+
+from .state import CameraFrame, RawBall, RawRobot, Team
+
+
+def _finite(*vals: float) -> bool:
+    return all(math.isfinite(v) for v in vals)
+
+
+def decode_detection(frame: SSL_DetectionFrame, receive_time_ns: int) -> CameraFrame:
+    """Plain copy of a detection frame. Robots without an id and non-finite values are dropped."""
+    robots: list[RawRobot] = []
+    team: Team
+    for team, dets in (("yellow", frame.robots_yellow), ("blue", frame.robots_blue)):
+        for d in dets:
+            if not d.HasField("robot_id") or d.robot_id > 15 or not _finite(d.x, d.y):
+                continue
+            ori = d.orientation if d.HasField("orientation") else 0.0
+            if not math.isfinite(ori):
+                ori = 0.0
+            robots.append(RawRobot(team, d.robot_id, d.x, d.y, ori, d.confidence))
+    balls = tuple(RawBall(b.x, b.y, b.confidence) for b in frame.balls if _finite(b.x, b.y))
+    return CameraFrame(
+        camera_id=frame.camera_id,
+        frame_number=frame.frame_number,
+        t_capture=frame.t_capture,
+        t_sent=frame.t_sent,
+        receive_time_ns=receive_time_ns,
+        balls=balls,
+        robots=tuple(robots),
+    )
+
+
+def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
+    """The field part of a geometry packet as the JSON the browser draws from (mm, rad)."""
+    f = geo.field
+    lines = [
+        {
+            "name": ln.name,
+            "p1": {"x": ln.p1.x, "y": ln.p1.y},
+            "p2": {"x": ln.p2.x, "y": ln.p2.y},
+            "thickness": ln.thickness,
+        }
+        for ln in f.field_lines
+    ]
+    arcs = [
+        {
+            "name": a.name,
+            "center": {"x": a.center.x, "y": a.center.y},
+            "radius": a.radius,
+            "a1": a.a1,
+            "a2": a.a2,
+            "thickness": a.thickness,
+        }
+        for a in f.field_arcs
+    ]
+    return {
+        "field_length": f.field_length,
+        "field_width": f.field_width,
+        "goal_width": f.goal_width,
+        "goal_depth": f.goal_depth,
+        "boundary_width": f.boundary_width,
+        "penalty_area_depth": f.penalty_area_depth if f.HasField("penalty_area_depth") else 0,
+        "penalty_area_width": f.penalty_area_width if f.HasField("penalty_area_width") else 0,
+        "center_circle_radius": (
+            f.center_circle_radius if f.HasField("center_circle_radius") else 500
+        ),
+        "ball_radius": f.ball_radius if f.HasField("ball_radius") else 21.5,
+        "max_robot_radius": f.max_robot_radius if f.HasField("max_robot_radius") else 90.0,
+        "lines": lines,
+        "arcs": arcs,
+    }

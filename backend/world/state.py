@@ -1,0 +1,80 @@
+"""Plain data of the world, shared by the world model, strategy, control and the API."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+Team = Literal["blue", "yellow"]
+TEAMS: tuple[Team, Team] = ("blue", "yellow")
+
+
+@dataclass(slots=True)
+class RobotState:
+    team: Team
+    id: int
+    x: float  # mm
+    y: float  # mm
+    orientation: float  # rad
+    vx: float = 0.0  # mm/s
+    vy: float = 0.0  # mm/s
+    omega: float = 0.0  # rad/s
+    t_seen: float = 0.0  # t_capture (Unix s) of the newest detection merged
+    visible: bool = True
+    cameras: tuple[int, ...] = ()
+
+
+@dataclass(slots=True)
+class BallState:
+    x: float
+    y: float
+    vx: float = 0.0
+    vy: float = 0.0
+    t_seen: float = 0.0
+    visible: bool = True
+    cameras: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class RawRobot:
+    team: Team
+    id: int
+    x: float
+    y: float
+    orientation: float
+    confidence: float
+
+
+@dataclass(frozen=True, slots=True)
+class RawBall:
+    x: float
+    y: float
+    confidence: float
+
+
+@dataclass(frozen=True, slots=True)
+class CameraFrame:
+    """One camera's detection frame, decoded."""
+
+    camera_id: int
+    frame_number: int
+    t_capture: float
+    t_sent: float
+    receive_time_ns: int
+    balls: tuple[RawBall, ...]
+    robots: tuple[RawRobot, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class WorldState:
+    t_capture: float  # Unix s of the newest frame merged
+    receive_time_ns: int  # relay receive time of the newest frame merged
+    ball: BallState | None
+    robots: tuple[RobotState, ...]
+    cameras: tuple[CameraFrame, ...] = field(default=())
+
+    def robot(self, team: Team, rid: int) -> RobotState | None:
+        for r in self.robots:
+            if r.team == team and r.id == rid:
+                return r
+        return None

@@ -1,0 +1,1 @@
+"""Starts and supervises Touchline's three processes: fieldsim, larcmacs_relay, backend."""

@@ -1,0 +1,129 @@
+import json
+import socket
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from backend.api import create_app
+from backend.config import Settings
+from backend.processors import OperatorTarget
+from backend.station import Station
+from backend.world.state import BallState, RobotState, WorldState
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture
+def client(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
+    settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path)
+    st = Station(settings)
+    with TestClient(create_app(settings, st)) as c:
+        yield c, st
+
+
+def _world(n: int = 2) -> WorldState:
+    robots = tuple(RobotState("blue", i, 100.0 * i, -50.0, 0.5, t_seen=10.0) for i in range(n))
+    return WorldState(10.0, 10_000_000_000, BallState(1.0, 2.0, t_seen=10.0), robots)
+
+
+def test_world_reports_robots_in_mm_and_rad(client) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    assert c.get("/api/world").json()["robots"] == []
+    st.world_topic.write(_world(3))
+    w = c.get("/api/world").json()
+    assert [(r["team"], r["id"], r["x"], r["y"]) for r in w["robots"]] == [
+        ("blue", 0, 0.0, -50.0), ("blue", 1, 100.0, -50.0), ("blue", 2, 200.0, -50.0)]
+    assert w["ball"]["x"] == 1.0 and w["robots"][0]["orientation"] == 0.5
+
+
+def test_target_is_queued_on_the_bus(client) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    r = c.post("/api/robots/blue/3/target", json={"x": 1000, "y": -500, "orientation": 1.0})
+    assert r.status_code == 200, r.text
+    rec = st.operator_targets.latest_value()
+    assert isinstance(rec, OperatorTarget)
+    assert (rec.team, rec.id, rec.target.x, rec.target.y) == ("blue", 3, 1000.0, -500.0)
+
+
+@pytest.mark.parametrize("path,body,field", [
+    ("/api/robots/green/1/target", {"x": 0, "y": 0}, "team"),
+    ("/api/robots/blue/16/target", {"x": 0, "y": 0}, "rid"),
+    ("/api/robots/blue/-1/target", {"x": 0, "y": 0}, "rid"),
+    ("/api/robots/blue/1/target", {"x": "left", "y": 0}, "x"),
+    ("/api/robots/blue/1/target", {"y": 0}, "x"),
+    ("/api/robots/blue/1/target", {"x": 0, "y": 0, "speed": 3}, "speed"),
+    ("/api/robots/blue/1/target", {"x": 99999, "y": 0}, "x"),
+])
+def test_bad_targets_get_422_with_field_and_reason(client, path, body, field) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    r = c.post(path, json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert any(field in d["loc"] for d in detail), detail
+    assert all(d["msg"] for d in detail)
+    assert st.operator_targets.seq == 0  # nothing applied
+
+
+@pytest.mark.parametrize("raw", ['{"x": NaN, "y": 0}', '{"x": 0, "y": Infinity}',
+                                 '{"x": 0, "y": 0, "orientation": -Infinity}'])
+def test_nan_and_infinity_are_rejected_cleanly(client, raw: str) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    r = c.post("/api/robots/blue/1/target", content=raw,
+               headers={"content-type": "application/json"})
+    assert r.status_code == 422, r.text
+    assert "finite" in json.dumps(r.json())
+    assert st.operator_targets.seq == 0
+
+
+def test_estop_is_reported_in_the_world(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    assert c.post("/api/estop", json={"active": True}).json() == {"estop": True}
+    assert c.get("/api/world").json()["estop"] is True
+    c.post("/api/estop", json={"active": False})
+    assert c.get("/api/world").json()["estop"] is False
+
+
+def test_health_lists_processors_and_topics(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    h = c.get("/api/health").json()
+    names = {p["name"] for p in h["processors"]}
+    assert {"relay-ingest", "vision-ingest", "referee-ingest", "world-model", "strategy",
+            "control", "command-publisher"} <= names
+    topics = {t["name"]: t for t in h["topics"]}
+    assert topics["robot-commands"]["capacity"] == 20
+    assert h["ok"] is False  # no vision, no relay
+
+
+def test_websocket_snapshot_then_world(client) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    with c.websocket_connect("/api/ws") as ws:
+        snap = ws.receive_json()
+        assert snap["type"] == "snapshot" and "health" in snap
+        st.world_topic.write(_world(4))
+        for _ in range(20):
+            msg = ws.receive_json()
+            if msg["type"] == "world" and len(msg["world"]["robots"]) == 4:
+                break
+        else:
+            raise AssertionError("no world with 4 robots")
+
+
+def test_websocket_from_a_foreign_origin_is_refused(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    with pytest.raises(WebSocketDisconnect) as exc, \
+            c.websocket_connect("/api/ws", headers={"origin": "http://evil.example"}) as ws:
+        ws.receive_json()
+    assert exc.value.code == 1008
+
+
+def test_geometry_404_before_first_packet(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    r = c.get("/api/geometry")
+    assert r.status_code == 404 and "geometry" in r.json()["detail"]

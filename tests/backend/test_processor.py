@@ -1,0 +1,149 @@
+import asyncio
+import time
+
+import pytest
+
+from backend.bus import Reader, Topic
+from backend.processor import Every, OnTopic, Processor, Runner
+
+
+class Counter(Processor):
+    name = "counter"
+
+    def __init__(self, hz: float) -> None:
+        super().__init__(Every(hz))
+        self.ticks = 0
+
+    async def tick(self) -> None:
+        self.ticks += 1
+
+
+async def _until(cond, timeout_s: float = 5.0) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout_s
+    while not cond():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        await asyncio.sleep(0.005)
+
+
+async def test_fixed_rate_processor_runs_at_its_rate_without_a_default_pause() -> None:
+    p = Counter(200.0)
+    r = Runner()
+    r.add(p)
+    await r.start()
+    t0 = time.monotonic()
+    await _until(lambda: p.ticks >= 100)
+    elapsed = time.monotonic() - t0
+    await r.stop()
+    # 100 ticks at 200 Hz take ~0.5 s; the seed's 1 s default pause would take 100 s
+    assert elapsed < 2.0
+    assert p.stats.rate.total >= 100
+    assert p.stats.summary()["tick_mean_ms"] >= 0.0
+
+
+class Echo(Processor):
+    name = "echo"
+
+    def __init__(self, src: Topic[int], dst: Topic[list[int]]) -> None:
+        super().__init__(OnTopic(src))
+        self.reader = Reader(src)
+        self.dst = dst
+
+    async def tick(self) -> None:
+        vals = self.reader.read_new()
+        if vals:
+            self.dst.write(vals)
+
+
+async def test_topic_triggered_processor_coalesces_and_loses_nothing() -> None:
+    src: Topic[int] = Topic("src", 100)
+    dst: Topic[list[int]] = Topic("dst", 100)
+    r = Runner()
+    r.add(Echo(src, dst))
+    await r.start()
+    for i in range(50):
+        src.write(i)  # written without yielding: one run sees them all
+    await _until(lambda: dst.seq >= 1)
+    src.write(50)
+    await _until(lambda: sum(len(v.value) for v in dst.records_after(0)) == 51)
+    await r.stop()
+    got = [x for rec in dst.records_after(0) for x in rec.value]
+    assert got == list(range(51))
+    assert dst.seq <= 3  # coalesced: not one run per record
+
+
+class Boom(Processor):
+    name = "boom"
+
+    def __init__(self) -> None:
+        super().__init__(Every(500.0))
+        self.calls = 0
+
+    async def tick(self) -> None:
+        self.calls += 1
+        if self.calls % 2:
+            raise ValueError("bad tick")
+
+
+async def test_exception_in_tick_is_counted_and_the_processor_keeps_running() -> None:
+    p = Boom()
+    r = Runner()
+    r.add(p)
+    await r.start()
+    await _until(lambda: p.calls >= 10)
+    await r.stop()
+    assert p.stats.errors >= 5
+    assert "ValueError: bad tick" in p.stats.last_error
+
+
+class Slow(Processor):
+    name = "slow"
+
+    def __init__(self) -> None:
+        super().__init__(Every(100.0))
+
+    async def tick(self) -> None:
+        t = time.perf_counter()
+        while time.perf_counter() - t < 0.015:  # 15 ms of work in a 10 ms period
+            pass
+
+
+async def test_overruns_are_counted() -> None:
+    p = Slow()
+    r = Runner()
+    r.add(p)
+    await r.start()
+    await _until(lambda: p.stats.rate.total >= 5)
+    await r.stop()
+    assert p.stats.overruns >= 5
+
+
+class Watchdog(Processor):
+    name = "watchdog"
+
+    def __init__(self, src: Topic[int]) -> None:
+        super().__init__(OnTopic(src, max_wait_s=0.02))
+        self.runs = 0
+
+    async def tick(self) -> None:
+        self.runs += 1
+
+
+async def test_max_wait_runs_a_quiet_processor() -> None:
+    src: Topic[int] = Topic("src", 4)
+    p = Watchdog(src)
+    r = Runner()
+    r.add(p)
+    await r.start()
+    await _until(lambda: p.runs >= 5)  # nothing is ever written: only the max wait runs it
+    await r.stop()
+
+
+def test_set_rate_rejects_nonsense() -> None:
+    p = Counter(10.0)
+    with pytest.raises(ValueError):
+        p.set_rate(float("nan"))
+    with pytest.raises(ValueError):
+        p.set_rate(0.0)
+    p.set_rate(50.0)
+    assert isinstance(p.trigger, Every) and p.trigger.hz == 50.0

@@ -1,0 +1,70 @@
+import math
+
+from backend.world.model import WorldModel
+from backend.world.state import CameraFrame, RawBall, RawRobot
+
+
+def frame(cam: int, t: float, robots=(), balls=(), n: int = 0) -> CameraFrame:  # type: ignore[no-untyped-def]
+    return CameraFrame(cam, n, t, t, int(t * 1e9), tuple(balls), tuple(robots))
+
+
+def test_two_cameras_seeing_one_robot_make_one_object_at_the_mean() -> None:
+    m = WorldModel()
+    m.update(frame(0, 100.000, [RawRobot("blue", 3, 10.0, 20.0, 0.1, 0.9)]))
+    m.update(frame(1, 100.004, [RawRobot("blue", 3, 14.0, 24.0, 0.3, 0.9)]))
+    w = m.snapshot()
+    blues = [r for r in w.robots if r.team == "blue"]
+    assert len(blues) == 1
+    r = blues[0]
+    assert (r.x, r.y) == (12.0, 22.0)
+    assert math.isclose(r.orientation, 0.2, abs_tol=1e-9)
+    assert r.cameras == (0, 1)
+
+
+def test_same_id_in_both_teams_are_two_objects() -> None:
+    m = WorldModel()
+    m.update(frame(0, 1.0, [RawRobot("blue", 1, 0, 0, 0, 1), RawRobot("yellow", 1, 500, 0, 0, 1)]))
+    assert {(r.team, r.id) for r in m.snapshot().robots} == {("blue", 1), ("yellow", 1)}
+
+
+def test_orientation_mean_across_the_pi_wrap() -> None:
+    m = WorldModel()
+    m.update(frame(0, 1.0, [RawRobot("blue", 0, 0, 0, math.pi - 0.05, 1)]))
+    m.update(frame(1, 1.001, [RawRobot("blue", 0, 0, 0, -math.pi + 0.05, 1)]))
+    assert math.isclose(abs(m.snapshot().robots[0].orientation), math.pi, abs_tol=1e-6)
+
+
+def test_velocity_from_consecutive_frames() -> None:
+    m = WorldModel()
+    for k in range(60):  # 1 m/s along x seen by one camera at 60 Hz
+        t = 10.0 + k / 60
+        m.update(frame(0, t, [RawRobot("yellow", 2, 1000.0 * (t - 10.0), 0, 0, 1)]))
+    r = m.snapshot().robots[0]
+    assert math.isclose(r.vx, 1000.0, rel_tol=0.02)
+    assert abs(r.vy) < 1.0
+
+
+def test_unseen_robot_becomes_invisible_then_dropped() -> None:
+    m = WorldModel()
+    m.update(frame(0, 1.0, [RawRobot("blue", 5, 0, 0, 0, 1)]))
+    assert m.snapshot(now=1.1).robots[0].visible
+    assert not m.snapshot(now=1.5).robots[0].visible
+    assert m.snapshot(now=10.0).robots == ()
+
+
+def test_ball_follows_the_detection_nearest_its_prediction() -> None:
+    m = WorldModel()
+    m.update(frame(0, 1.0, balls=[RawBall(0, 0, 0.9)]))
+    # a false ball far away with higher confidence, and the real ball a little further on
+    m.update(frame(0, 1.0 + 1 / 60, balls=[RawBall(3000, 2000, 1.0), RawBall(10, 0, 0.8)]))
+    b = m.snapshot().ball
+    assert b is not None and (b.x, b.y) == (10, 0)
+
+
+def test_ball_seen_by_two_cameras_at_once_is_averaged() -> None:
+    m = WorldModel()
+    m.update(frame(0, 1.0, balls=[RawBall(100, 0, 0.9)]))
+    m.update(frame(1, 1.002, balls=[RawBall(110, 10, 0.9)]))
+    b = m.snapshot().ball
+    assert b is not None and (b.x, b.y) == (105, 5)
+    assert b.cameras == (0, 1)
