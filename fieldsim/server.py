@@ -39,8 +39,15 @@ T = TypeVar("T")
 class _Datagrams(asyncio.DatagramProtocol):
     """Calls ``handle(data) -> reply | None`` per datagram and sends the reply to the sender."""
 
-    def __init__(self, name: str, handle: Callable[[bytes], bytes | None], sim: FieldSim) -> None:
+    def __init__(
+        self,
+        name: str,
+        handle: Callable[[bytes], bytes | None],
+        sim: FieldSim,
+        sock: socket.socket,
+    ) -> None:
         self.name = name
+        self.sock = sock
         self.handle = handle
         self.sim = sim
         self.transport: asyncio.DatagramTransport | None = None
@@ -55,9 +62,11 @@ class _Datagrams(asyncio.DatagramProtocol):
             self.sim.internal_errors += 1
             log.exception("error handling a %s datagram", self.name)
             return
-        if reply is not None and self.transport is not None:
+        if reply is not None and self.transport is not None and not self.transport.is_closing():
+            # the raw socket, not transport.sendto: asyncio silently drops empty datagrams, and
+            # an empty RobotControlResponse / SimulatorResponse (no errors) is a valid reply
             try:
-                self.transport.sendto(reply, addr)
+                self.sock.sendto(reply, addr)
             except OSError as exc:
                 self.sim.ratelog.warning(f"reply-{self.name}", "cannot reply on %s: %s",
                                          self.name, exc)
@@ -119,7 +128,8 @@ class FieldSim:
                 sock = open_udp_server(cfg.sim_host, port)
                 self.ports[name] = sock.getsockname()[1]
                 transport, _ = await loop.create_datagram_endpoint(
-                    lambda n=name, h=handle: _Datagrams(n, h, self), sock=sock  # type: ignore[misc]
+                    lambda n=name, h=handle, s=sock: _Datagrams(n, h, self, s),  # type: ignore[misc]
+                    sock=sock,
                 )
                 self._transports.append(transport)
             if cfg.truth_pub:
