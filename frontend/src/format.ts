@@ -17,6 +17,14 @@ export function fmtDeg(rad: number | null | undefined): string {
   return `${fmtInt((rad * 180) / Math.PI)}°`;
 }
 
+/** An angle in degrees normalised to (-180, 180]. */
+export function fmtHeading(rad: number | null | undefined): string {
+  if (rad === null || rad === undefined || !Number.isFinite(rad)) return "—";
+  let deg = ((((rad * 180) / Math.PI) % 360) + 360) % 360;
+  if (deg > 180) deg -= 360;
+  return `${fmtInt(deg)}°`;
+}
+
 /** Robot speed in m/s from mm/s components. */
 export function speedMps(vx: number, vy: number): number {
   return Math.hypot(vx, vy) / 1000;

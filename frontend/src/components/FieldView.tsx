@@ -4,7 +4,7 @@ import { sameRobot } from "../api/types";
 import { selectRobot, sendTarget } from "../actions";
 import { decideClick } from "../field/clickAction";
 import { effectiveGeometry } from "../field/defaultGeometry";
-import { drawField } from "../field/draw";
+import { drawField, MIN_ROBOT_PX } from "../field/draw";
 import { hitRadiusMm, hitTestRobot } from "../field/hitTest";
 import { canvasToWorld, type FieldTransform } from "../field/transform";
 import { registerFieldCanvas, transformFor } from "../field/viewState";
@@ -37,8 +37,9 @@ export function FieldView() {
 
     const measure = () => {
       const rect = wrap.getBoundingClientRect();
-      cssW = Math.max(1, Math.floor(rect.width));
-      cssH = Math.max(1, Math.floor(rect.height));
+      // Fractional CSS size on purpose: clicks and window.__touchline use the same numbers.
+      cssW = Math.max(1, rect.width);
+      cssH = Math.max(1, rect.height);
       sizeDirty = true;
     };
     measure();
@@ -54,8 +55,6 @@ export function FieldView() {
         dpr = ratio;
         canvas.width = Math.round(cssW * dpr);
         canvas.height = Math.round(cssH * dpr);
-        canvas.style.width = `${cssW}px`;
-        canvas.style.height = `${cssH}px`;
         sizeDirty = false;
       }
       lastState = state;
@@ -83,14 +82,14 @@ export function FieldView() {
     const onClick = (ev: MouseEvent) => {
       const { t, p } = worldPoint(ev);
       const s = appStore.getState();
-      const action = decideClick(s.world?.robots ?? [], s.selected, p, hitRadiusMm(t.scale));
+      const action = decideClick(s.world?.robots ?? [], s.selected, p, hitRadiusMm(t.scale, MIN_ROBOT_PX + 2));
       if (action.kind === "select") selectRobot(action.robot);
       else if (action.kind === "target") void sendTarget(action.robot, action.point);
     };
 
     const onMove = (ev: MouseEvent) => {
       const { t, p } = worldPoint(ev);
-      const hit = hitTestRobot(appStore.getState().world?.robots ?? [], p, hitRadiusMm(t.scale));
+      const hit = hitTestRobot(appStore.getState().world?.robots ?? [], p, hitRadiusMm(t.scale, MIN_ROBOT_PX + 2));
       const key = hit ? { team: hit.team, id: hit.id } : null;
       if (!sameRobot(key, hovered) && !(key === null && hovered === null)) hovered = key;
       canvas.style.cursor = hit ? "pointer" : appStore.getState().selected ? "crosshair" : "default";

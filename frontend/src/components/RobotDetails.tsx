@@ -1,6 +1,6 @@
 import type { Robot, RobotKey } from "../api/types";
 import { clearTarget, selectRobot } from "../actions";
-import { fmtDeg, fmtFixed, fmtInt, speedMps } from "../format";
+import { fmtDeg, fmtFixed, fmtHeading, fmtInt, speedMps } from "../format";
 
 function Field({ label, value, testId }: { label: string; value: string; testId?: string }) {
   return (
@@ -44,7 +44,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
       {robot && (
         <dl className="details-grid" data-testid="selected-robot-details">
           <Field label="x, y" value={`${fmtInt(robot.x)}, ${fmtInt(robot.y)} mm`} />
-          <Field label="heading" value={fmtDeg(robot.orientation)} />
+          <Field label="heading" value={fmtHeading(robot.orientation)} />
           <Field label="speed" value={`${fmtFixed(speedMps(robot.vx, robot.vy), 2)} m/s`} />
           <Field label="turn" value={`${fmtDeg(robot.omega)}/s`} />
           <Field
@@ -57,7 +57,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
             value={
               robot.target
                 ? `${fmtInt(robot.target.x)}, ${fmtInt(robot.target.y)} mm${
-                    robot.target.orientation !== null ? ` @ ${fmtDeg(robot.target.orientation)}` : ""
+                    robot.target.orientation !== null ? ` @ ${fmtHeading(robot.target.orientation)}` : ""
                   } (${robot.target.source})`
                 : "—"
             }

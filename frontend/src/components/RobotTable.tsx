@@ -49,7 +49,7 @@ export function RobotTable({ robots, selected }: { robots: readonly Robot[]; sel
             <th className="c-vis" title="Visible">Vis</th>
             <th className="c-num">x mm</th>
             <th className="c-num">y mm</th>
-            <th className="c-num">m/s</th>
+            <th className="c-num" title="speed">m/s</th>
             <th className="c-target">Target</th>
           </tr>
         </thead>

@@ -144,6 +144,9 @@ function drawGoals(
   }
 }
 
+/** Smallest drawn robot radius in CSS px, so ids stay readable when zoomed out. */
+export const MIN_ROBOT_PX = 10;
+
 /** Fraction of the radius at which the flat front of the robot is cut. */
 const FRONT_CUT = 0.72;
 
@@ -155,7 +158,7 @@ function drawRobot(
   hovered: boolean,
 ) {
   const c = worldToCanvas(t, r.x, r.y);
-  const rad = Math.max(5, ROBOT_RADIUS_MM * t.scale);
+  const rad = Math.max(MIN_ROBOT_PX, ROBOT_RADIUS_MM * t.scale);
   const heading = angleToCanvas(Number.isFinite(r.orientation) ? r.orientation : 0);
   const alpha = Math.acos(FRONT_CUT);
 
@@ -193,22 +196,12 @@ function drawRobot(
   ctx.stroke();
 
   // Id on top, upright.
-  const fontPx = Math.max(9, Math.round(rad * 1.05));
+  const fontPx = Math.max(10, Math.round(rad * 1.1));
   ctx.font = `700 ${fontPx}px system-ui, -apple-system, "Segoe UI", Roboto, sans-serif`;
   ctx.textAlign = "center";
   ctx.textBaseline = "middle";
-  const label = String(r.id);
-  if (rad < 9) {
-    // Too small to hold the digits: draw them next to the robot with a halo.
-    ctx.lineWidth = 3;
-    ctx.strokeStyle = COLORS.robotOutline;
-    ctx.strokeText(label, c.x, c.y - rad - fontPx / 2);
-    ctx.fillStyle = "#ffffff";
-    ctx.fillText(label, c.x, c.y - rad - fontPx / 2);
-  } else {
-    ctx.fillStyle = r.team === "blue" ? COLORS.blueText : COLORS.yellowText;
-    ctx.fillText(label, c.x, c.y + fontPx * 0.05);
-  }
+  ctx.fillStyle = r.team === "blue" ? COLORS.blueText : COLORS.yellowText;
+  ctx.fillText(String(r.id), c.x, c.y + fontPx * 0.05);
   ctx.restore();
 }
 
