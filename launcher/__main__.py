@@ -8,6 +8,7 @@ for everything (used by the end-to-end tests so they never disturb a running sta
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import os
 import random
@@ -17,7 +18,7 @@ import subprocess
 import sys
 import time
 import urllib.request
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from sslnet import defaults
@@ -96,8 +97,8 @@ def build_children(a: argparse.Namespace, ports: Ports) -> list[Child]:
         ]))
     children.append(Child("relay", [
         py, "-m", "larcmacs_relay",
-        "--vision-group", ports.vision_group, "--vision-port", str(ports.vision),
-        "--referee-group", ports.referee_group, "--referee-port", str(ports.referee),
+        "--vision", f"{ports.vision_group}:{ports.vision}",
+        "--referee", f"{ports.referee_group}:{ports.referee}",
         "--interface", a.interface,
         "--output", a.output, "--sim-host", a.sim_host,
         "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
@@ -153,7 +154,8 @@ def main() -> int:
     p.add_argument("--relay-arg", dest="relay_args", action="append", default=[])
     p.add_argument("--backend-arg", dest="backend_args", action="append", default=[])
     a = p.parse_args()
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s launcher: %(message)s")
+    logging.basicConfig(level=logging.INFO,
+                        format="%(asctime)s %(levelname)s launcher: %(message)s")
 
     if not loopback_multicast_ok() and a.interface == "127.0.0.1":
         log.error("multicast on loopback does not work on this machine. As root run:\n"
@@ -180,7 +182,9 @@ def main() -> int:
     url = f"http://{a.host}:{ports.http}"
     if wait_http(url + "/api/health", 30.0):
         print(f"\n  Touchline is running: {url}\n", flush=True)  # noqa: T201
-        print(f"TOUCHLINE_READY {url}", flush=True)  # noqa: T201  (machine-readable, for tests)
+        # machine-readable lines for tests and scripts
+        print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
+        print(f"TOUCHLINE_READY {url}", flush=True)  # noqa: T201
     else:
         log.error("backend did not answer on %s within 30 s", url)
 

@@ -1,0 +1,45 @@
+import { defineConfig } from "@playwright/test";
+
+// The end-to-end tests run against the real three processes (fieldsim, larcmacs_relay,
+// backend) started by the launcher on free, non-standard ports, so they never disturb a
+// station already running on this machine.
+const port = Number(process.env.E2E_PORT ?? 18000 + (process.pid % 1000));
+const baseURL = `http://127.0.0.1:${port}`;
+
+export default defineConfig({
+  testDir: "tests",
+  timeout: 60_000,
+  expect: { timeout: 15_000 },
+  fullyParallel: false,
+  workers: 1,
+  retries: 0,
+  reporter: [["list"]],
+  outputDir: "test-results",
+  use: {
+    baseURL,
+    viewport: { width: 1280, height: 720 },
+    screenshot: "only-on-failure",
+    trace: "off",
+    launchOptions: {
+      executablePath: process.env.CHROMIUM_PATH ?? "/usr/bin/chromium",
+      args: [
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+      ],
+    },
+  },
+  webServer: {
+    command: `.venv/bin/python -m launcher --isolated --port ${port}`,
+    cwd: "..",
+    url: `${baseURL}/api/health`,
+    timeout: 60_000,
+    reuseExistingServer: false,
+    stdout: "pipe",
+    stderr: "pipe",
+    gracefulShutdown: { signal: "SIGTERM", timeout: 10_000 },
+  },
+});

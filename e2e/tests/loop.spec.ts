@@ -1,0 +1,76 @@
+import { expect, test, type Page } from "@playwright/test";
+
+interface Robot { team: string; id: number; x: number; y: number; visible: boolean }
+interface World { robots: Robot[]; ball: { x: number; y: number } | null }
+
+async function world(page: Page): Promise<World> {
+  const r = await page.request.get("/api/world");
+  expect(r.ok()).toBeTruthy();
+  return (await r.json()) as World;
+}
+
+async function waitForRobots(page: Page, n: number): Promise<World> {
+  let w: World = { robots: [], ball: null };
+  await expect
+    .poll(async () => {
+      w = await world(page);
+      return w.robots.filter((r) => r.visible).length;
+    }, { timeout: 30_000 })
+    .toBeGreaterThanOrEqual(n);
+  return w;
+}
+
+test("the page shows the robots that /api/world reports", async ({ page }) => {
+  await page.goto("/");
+  await expect(page.getByTestId("connection-status")).toContainText("connected");
+  const w = await waitForRobots(page, 12);
+  const blue = w.robots.filter((r) => r.team === "blue");
+  const yellow = w.robots.filter((r) => r.team === "yellow");
+  expect(blue.length).toBe(6);
+  expect(yellow.length).toBe(6);
+  for (const r of w.robots) {
+    await expect(page.getByTestId(`robot-row-${r.team}-${r.id}`)).toBeVisible();
+  }
+  // the yellow robots stand still: the table shows their positions as the API does
+  for (const r of yellow) {
+    const row = page.getByTestId(`robot-row-${r.team}-${r.id}`);
+    const x = Number(await row.getByTestId("robot-x").innerText());
+    const y = Number(await row.getByTestId("robot-y").innerText());
+    expect(Math.abs(x - r.x)).toBeLessThan(60);
+    expect(Math.abs(y - r.y)).toBeLessThan(60);
+  }
+  await expect(page.getByTestId("vision-rate")).not.toHaveText(/^0/);
+  const shot = await page.getByTestId("field-canvas").screenshot();
+  expect(shot.byteLength).toBeGreaterThan(5000);
+});
+
+test("click a robot, click a point: the robot drives there", async ({ page }) => {
+  await page.goto("/");
+  await expect(page.getByTestId("connection-status")).toContainText("connected");
+  const w = await waitForRobots(page, 12);
+  const robot = w.robots.find((r) => r.team === "blue" && r.id === 2)!;
+  const canvas = page.getByTestId("field-canvas");
+  const box = (await canvas.boundingBox())!;
+  const toScreen = async (x: number, y: number) =>
+    page.evaluate(([xx, yy]) => (window as unknown as {
+      __touchline: { worldToScreen(x: number, y: number): { x: number; y: number } };
+    }).__touchline.worldToScreen(xx, yy), [x, y]);
+
+  // the robot moves under the demo: read its position right before the click
+  const now = (await world(page)).robots.find((r) => r.team === "blue" && r.id === 2)!;
+  const p = await toScreen(now.x, now.y);
+  await page.mouse.click(box.x + p.x, box.y + p.y);
+  await expect(page.getByTestId("selected-robot")).toContainText("blue 2");
+
+  const target = { x: 1500, y: 1200 }; // on the opponent half, away from everyone's formation
+  const q = await toScreen(target.x, target.y);
+  await page.mouse.click(box.x + q.x, box.y + q.y);
+
+  await expect
+    .poll(async () => {
+      const r = (await world(page)).robots.find((rr) => rr.team === "blue" && rr.id === 2)!;
+      return Math.hypot(r.x - target.x, r.y - target.y);
+    }, { timeout: 30_000, intervals: [250] })
+    .toBeLessThan(150);
+  expect(Math.hypot(robot.x - target.x, robot.y - target.y)).toBeGreaterThan(1000);
+});

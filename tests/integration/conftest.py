@@ -1,0 +1,80 @@
+"""Starts the real station (fieldsim + larcmacs_relay + backend) through the launcher on
+free, non-standard ports, once for the integration tests."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@dataclass
+class StationHandle:
+    url: str
+    ports: dict[str, Any]
+    log: list[str]
+
+    def get(self, path: str) -> Any:
+        r = httpx.get(self.url + path, timeout=5.0)
+        r.raise_for_status()
+        return r.json()
+
+
+@pytest.fixture(scope="session")
+def station() -> Iterator[StationHandle]:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "launcher", "--isolated"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    lines: list[str] = []
+    ready = threading.Event()
+    info: dict[str, Any] = {}
+
+    def pump() -> None:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            lines.append(line.rstrip())
+            if line.startswith("TOUCHLINE_PORTS "):
+                info["ports"] = json.loads(line.split(" ", 1)[1])
+            if line.startswith("TOUCHLINE_READY "):
+                info["url"] = line.split(" ", 1)[1].strip()
+                ready.set()
+
+    threading.Thread(target=pump, daemon=True).start()
+    if not ready.wait(90):
+        proc.kill()
+        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
+    try:
+        yield StationHandle(info["url"], info["ports"], lines)
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") -> Any:  # type: ignore[no-untyped-def]
+    """Polls ``cond`` until it returns a truthy value; bounded."""
+    deadline = time.monotonic() + timeout_s
+    last = None
+    while time.monotonic() < deadline:
+        last = cond()
+        if last:
+            return last
+        time.sleep(interval_s)
+    raise AssertionError(f"timed out after {timeout_s} s waiting for {what or cond}: {last!r}")

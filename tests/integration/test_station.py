@@ -1,0 +1,164 @@
+"""The whole loop through the real processes: fieldsim -> relay -> backend -> relay -> fieldsim."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import Any
+
+import httpx
+
+from sslnet.multicast import open_multicast_sender
+from sslpb.ssl_gc_referee_message_pb2 import Referee
+
+from .conftest import StationHandle, wait_until
+
+
+def _visible(world: dict[str, Any], team: str) -> list[dict[str, Any]]:
+    return [r for r in world["robots"] if r["team"] == team and r["visible"]]
+
+
+def _speed(r: dict[str, Any]) -> float:
+    return math.hypot(r["vx"], r["vy"])
+
+
+def test_station_sees_both_teams_ball_and_geometry(station: StationHandle) -> None:
+    w = wait_until(lambda: (lambda w: w if len(_visible(w, "blue")) == 6 and
+                            len(_visible(w, "yellow")) == 6 and w["ball"] else None)(
+        station.get("/api/world")), 30, what="6 v 6 and a ball")
+    assert {r["id"] for r in _visible(w, "blue")} == set(range(6))
+    geo = wait_until(lambda: httpx.get(station.url + "/api/geometry").json()
+                     if httpx.get(station.url + "/api/geometry").status_code == 200 else None,
+                     10, what="geometry")
+    assert geo["field_length"] == 9000 and geo["field_width"] == 6000
+    assert len(geo["lines"]) >= 5 and len(geo["arcs"]) >= 1
+    cams = {c["camera_id"] for c in w["cameras"]}
+    assert len(cams) == 4
+
+
+def test_health_reports_rates_of_every_stream_and_processor(station: StationHandle) -> None:
+    # rates are measured over the last second(s): look once the station has run a while
+    h = wait_until(lambda: (lambda h: h if h["ok"] and h["relay"] and
+                            h["streams"]["vision"]["packets"] > 1000 else None)(
+        station.get("/api/health")), 30, what="healthy station")
+    # 4 cameras x 60 Hz; generous bounds for a loaded 2-core machine
+    assert 150 < h["streams"]["vision"]["rate_hz"] < 330, h["streams"]["vision"]
+    assert h["streams"]["vision"]["errors"] == 0
+    assert h["relay"]["output_rate_hz"] >= 90
+    procs = {p["name"]: p for p in h["processors"]}
+    # topic-triggered processors coalesce bursts of frames into one run, so they run at
+    # least at the camera frame rate of one camera, not once per datagram
+    assert procs["world-model"]["measured_hz"] > 40
+    assert procs["control"]["measured_hz"] > 40
+    assert procs["world-model"]["errors"] == 0 and procs["control"]["errors"] == 0
+    assert procs["strategy"]["configured_hz"] == 20.0
+
+
+def test_demo_moves_blue_robots_and_not_yellow(station: StationHandle) -> None:
+    def positions(team: str) -> dict[int, tuple[float, float]]:
+        return {r["id"]: (r["x"], r["y"]) for r in _visible(station.get("/api/world"), team)}
+
+    wait_until(lambda: len(positions("blue")) == 6, 30)
+    b0, y0 = positions("blue"), positions("yellow")
+    moved = wait_until(lambda: [i for i, p in positions("blue").items()
+                                if math.dist(p, b0[i]) > 200], 15, what="blue robots moving")
+    assert len(moved) >= 3
+    y1 = positions("yellow")
+    assert all(math.dist(y1[i], y0[i]) < 50 for i in y0)
+
+
+def test_operator_target_drives_a_robot_there(station: StationHandle) -> None:
+    target = {"x": 1200.0, "y": -1500.0, "orientation": 1.2}
+    r = httpx.post(station.url + "/api/robots/blue/4/target", json=target)
+    assert r.status_code == 200, r.text
+
+    def close() -> dict[str, Any] | None:
+        rb = next(r for r in station.get("/api/world")["robots"]
+                  if r["team"] == "blue" and r["id"] == 4)
+        ok = math.hypot(rb["x"] - target["x"], rb["y"] - target["y"]) < 60 and _speed(rb) < 100
+        return rb if ok else None
+
+    rb = wait_until(close, 20, what="robot 4 at its target")
+    assert abs(math.remainder(rb["orientation"] - target["orientation"], 2 * math.pi)) < 0.15
+    assert rb["target"]["source"] == "operator"
+    httpx.delete(station.url + "/api/robots/blue/4/target")
+
+
+def test_bad_target_is_rejected_and_station_keeps_running(station: StationHandle) -> None:
+    r = httpx.post(station.url + "/api/robots/blue/1/target", content='{"x": NaN, "y": 1}',
+                   headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    assert station.get("/api/health")["processors"]
+
+
+class RefereeSender:
+    """Plays the game controller: sends Referee multicast at 20 Hz."""
+
+    def __init__(self, group: str, port: int) -> None:
+        self.sock = open_multicast_sender("127.0.0.1")
+        self.addr = (group, port)
+        self.command = Referee.HALT
+        self.counter = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def set(self, command: int) -> None:
+        self.command = command
+        self.counter += 1
+
+    def _msg(self) -> bytes:
+        m = Referee(packet_timestamp=int(time.time() * 1e6), stage=Referee.NORMAL_FIRST_HALF,
+                    command=self.command, command_counter=self.counter,  # type: ignore[arg-type]
+                    command_timestamp=int(time.time() * 1e6))
+        for t in (m.yellow, m.blue):
+            t.name, t.score, t.red_cards, t.yellow_cards = "t", 0, 0, 0
+            t.timeouts, t.timeout_time, t.goalkeeper = 4, 300_000_000, 0
+        return m.SerializeToString()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            self.sock.sendto(self._msg(), self.addr)
+            self._stop.wait(0.05)
+
+    def __enter__(self) -> RefereeSender:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.sock.close()
+
+
+def _all_blue_still(station: StationHandle) -> bool:
+    w = station.get("/api/world")
+    blues = _visible(w, "blue")
+    return len(blues) == 6 and all(_speed(r) < 60 for r in blues)
+
+
+def test_referee_halt_stops_our_robots_and_force_start_resumes(station: StationHandle) -> None:
+    p = station.ports
+    with RefereeSender(p["referee_group"], p["referee"]) as gc:
+        gc.set(Referee.HALT)
+        wait_until(lambda: station.get("/api/world")["referee"] and
+                   station.get("/api/world")["referee"]["command"] == "HALT", 10)
+        wait_until(lambda: _all_blue_still(station), 5, what="all blue robots stopped on HALT")
+        w = station.get("/api/world")
+        assert all(r["command"] is None or (r["command"]["forward_mps"] == 0 and
+                   r["command"]["left_mps"] == 0) for r in _visible(w, "blue"))
+        gc.set(Referee.FORCE_START)
+        wait_until(lambda: any(_speed(r) > 200 for r in _visible(station.get("/api/world"),
+                                                                  "blue")), 15,
+                   what="blue robots moving again after FORCE_START")
+
+
+def test_emergency_stop_stops_every_robot(station: StationHandle) -> None:
+    wait_until(lambda: any(_speed(r) > 200 for r in _visible(station.get("/api/world"), "blue")),
+               15, what="robots moving before the stop")
+    assert httpx.post(station.url + "/api/estop", json={"active": True}).status_code == 200
+    try:
+        wait_until(lambda: _all_blue_still(station), 5, what="all robots stopped")
+        assert station.get("/api/world")["estop"] is True
+    finally:
+        httpx.post(station.url + "/api/estop", json={"active": False})
