@@ -3,7 +3,9 @@ import { defineConfig } from "@playwright/test";
 // The end-to-end tests run against the real three processes (fieldsim, larcmacs_relay,
 // backend) started by the launcher on free, non-standard ports, so they never disturb a
 // station already running on this machine.
-const port = Number(process.env.E2E_PORT ?? 18000 + (process.pid % 1000));
+// Chosen once in the runner process; workers inherit it through the environment.
+process.env.E2E_PORT ??= String(18000 + (process.pid % 1000));
+const port = Number(process.env.E2E_PORT);
 const baseURL = `http://127.0.0.1:${port}`;
 
 export default defineConfig({
