@@ -66,6 +66,7 @@ export function FieldView() {
         t: transform,
         geometry: effectiveGeometry(state.geometry),
         waitingForGeometry: state.geometry === null,
+        stale: state.connection.status !== "connected",
         world: state.world,
         selected: state.selected,
         hovered,

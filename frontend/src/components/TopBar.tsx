@@ -15,7 +15,7 @@ function ConnectionStatus({ onRetryNow }: Props) {
   else if (connection.status === "connecting") label = "connecting…";
   else {
     const left = connection.retryAt !== null ? Math.max(0, (connection.retryAt - now) / 1000) : null;
-    label = left !== null && left > 0.05 ? `reconnecting… ${left.toFixed(1)} s` : "reconnecting…";
+    label = left !== null && left > 0.05 ? `reconnecting… ${left.toFixed(1)}s` : "reconnecting…";
   }
   const title =
     connection.status === "connected"

@@ -34,6 +34,8 @@ export interface DrawInput {
   geometry: Geometry;
   /** True when `geometry` is the default (no packet received yet). */
   waitingForGeometry: boolean;
+  /** True when the live connection is down and the world shown is the last one received. */
+  stale: boolean;
   world: World | null;
   selected: RobotKey | null;
   hovered: RobotKey | null;
@@ -61,11 +63,13 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
     if (world.ball) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
   }
 
-  if (input.waitingForGeometry) {
-    drawBanner(ctx, t, "waiting for geometry", "rgba(15,23,42,0.8)", "#e2e8f0", 0);
+  let slot = 0;
+  if (world?.estop) drawBanner(ctx, t, "EMERGENCY STOP ACTIVE", COLORS.estop, "#ffffff", slot++);
+  if (input.stale && world) {
+    drawBanner(ctx, t, "connection lost: showing the last data received", "rgba(120,53,15,0.92)", "#fef3c7", slot++);
   }
-  if (world?.estop) {
-    drawBanner(ctx, t, "EMERGENCY STOP ACTIVE", COLORS.estop, "#ffffff", 1);
+  if (input.waitingForGeometry) {
+    drawBanner(ctx, t, "waiting for geometry", "rgba(15,23,42,0.8)", "#e2e8f0", slot++);
   }
   ctx.restore();
 }
