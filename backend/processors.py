@@ -282,8 +282,8 @@ class StrategyProcessor(Processor):
             if geo is not None:
                 self.demo.field_length_mm = float(geo["field_length"])
                 self.demo.field_width_mm = float(geo["field_width"])
-            free = [r.id for r in world.robots
-                    if r.team == self.our_team and (r.team, r.id) not in self.operator_targets]
+            free = {r.id: (r.x, r.y) for r in world.robots
+                    if r.team == self.our_team and (r.team, r.id) not in self.operator_targets}
             t = time.monotonic() - self._t0
             for rid, tgt in demo_targets(t, free, self.demo).items():
                 out[(self.our_team, rid)] = TargetEntry(tgt, "demo")

@@ -44,17 +44,40 @@ def formation(index: int, n: int, cfg: DemoConfig) -> list[tuple[float, float]]:
         return _lines(n, s * half * 0.25, s * half * 0.6, usable_w)
     # a diagonal chevron
     pts = []
+    dy = min(650.0, usable_w / max(1, n - 1))
+    dx = min(450.0, half * 0.35 / max(1.0, (n - 1) / 2))
     for i in range(n):
         k = i - (n - 1) / 2
-        pts.append((s * (half * 0.3 + abs(k) * 450.0), k * 650.0))
+        pts.append((s * (half * 0.3 + abs(k) * dx), k * dy))
     return pts
 
 
-def demo_targets(t_s: float, robot_ids: list[int], cfg: DemoConfig) -> dict[int, Target]:
-    """Targets for our robots at time ``t_s``: robots sorted by id take the formation's
-    points in order; everyone faces the opponent's goal."""
-    ids = sorted(robot_ids)
+def assign_greedy(robots: dict[int, tuple[float, float]],
+                  points: list[tuple[float, float]]) -> dict[int, tuple[float, float]]:
+    """Gives each robot a point, closest pairs first, so paths rarely cross. (Optimal
+    assignment comes with strategy; this keeps the demo from driving robots through each
+    other.)"""
+    pairs = sorted(
+        ((math.dist(pos, pt), rid, k) for rid, pos in robots.items()
+         for k, pt in enumerate(points)),
+        key=lambda e: (e[0], e[1], e[2]),
+    )
+    out: dict[int, tuple[float, float]] = {}
+    used: set[int] = set()
+    for _, rid, k in pairs:
+        if rid in out or k in used:
+            continue
+        out[rid] = points[k]
+        used.add(k)
+    return out
+
+
+def demo_targets(t_s: float, robots: dict[int, tuple[float, float]],
+                 cfg: DemoConfig) -> dict[int, Target]:
+    """Targets for our robots (id -> current position, mm) at time ``t_s``: the formation of
+    the current period, points assigned closest-first; everyone faces the opponent's goal."""
     index = int(t_s // cfg.period_s)
-    pts = formation(index, len(ids), cfg)
+    pts = formation(index, len(robots), cfg)
     heading = 0.0 if cfg.own_half_sign < 0 else math.pi
-    return {rid: Target(px, py, heading) for rid, (px, py) in zip(ids, pts, strict=True)}
+    return {rid: Target(px, py, heading)
+            for rid, (px, py) in assign_greedy(robots, pts).items()}
