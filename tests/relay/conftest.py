@@ -7,6 +7,7 @@ import contextlib
 import dataclasses
 import random
 import socket
+import struct
 import time
 from collections.abc import AsyncIterator, Callable
 from typing import Any
@@ -43,9 +44,14 @@ def random_multicast_port() -> int:
     raise RuntimeError("no free port found")
 
 
+SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux value, not exported by Python
+
+
 def udp_server() -> socket.socket:
+    """A UDP socket standing in for a simulator / robot box; the kernel stamps arrivals."""
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
+    s.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
     s.setblocking(False)
     return s
 
@@ -60,10 +66,42 @@ async def wait_for(cond: Callable[[], bool], timeout: float = 3.0, what: str = "
 
 
 async def recv_udp(sock: socket.socket, timeout: float = 2.0) -> tuple[bytes, float]:
-    """One datagram and its monotonic arrival time."""
+    """One datagram and its arrival time (kernel timestamp, Unix seconds, ``time.time()``
+    clock), so that a busy test event loop does not distort measured timing."""
+    data, t, _ = await recv_udp_from(sock, timeout)
+    return data, t
+
+
+def _wake(fut: asyncio.Future[None]) -> None:
+    if not fut.done():
+        fut.set_result(None)
+
+
+async def recv_udp_from(
+    sock: socket.socket, timeout: float = 2.0
+) -> tuple[bytes, float, tuple[str, int]]:
     loop = asyncio.get_running_loop()
-    data, _ = await asyncio.wait_for(loop.sock_recvfrom(sock, 65536), timeout)
-    return data, time.monotonic()
+    deadline = loop.time() + timeout
+    while True:
+        try:
+            data, anc, _, addr = sock.recvmsg(65536, 64)
+        except BlockingIOError:
+            remaining = deadline - loop.time()
+            if remaining <= 0:
+                raise TimeoutError from None
+            fut: asyncio.Future[None] = loop.create_future()
+            loop.add_reader(sock.fileno(), _wake, fut)
+            try:
+                await asyncio.wait_for(fut, remaining)
+            finally:
+                loop.remove_reader(sock.fileno())
+            continue
+        t = time.time()
+        for level, kind, payload in anc:
+            if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS:
+                sec, nsec = struct.unpack("qq", payload[:16])
+                t = sec + nsec * 1e-9
+        return data, t, addr
 
 
 def drain_udp(sock: socket.socket) -> int:

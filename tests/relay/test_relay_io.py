@@ -23,6 +23,7 @@ from tests.relay.conftest import (
     Harness,
     drain_udp,
     recv_udp,
+    recv_udp_from,
     running_relay,
     subscribed,
     wait_for,
@@ -163,19 +164,25 @@ async def test_commands_repeated_then_stale_then_silent() -> None:
             chip=True,
             dribbler_rpm=500.0,
         )
-        # Keep commanding for ~1.2 s and count datagrams over a measured window.
+        # Keep commanding at ~50 Hz for ~1.2 s and count datagrams over a measured window.
         t_end = time.monotonic() + 1.2
+
+        sent_at: list[float] = []
+
+        async def commander() -> None:
+            while time.monotonic() < t_end:
+                await pub.send_multipart(command_set(cmd))
+                sent_at.append(time.time())
+                await asyncio.sleep(0.02)
+
+        sender = asyncio.create_task(commander())
         arrivals: list[float] = []
         last: bytes = b""
-        while time.monotonic() < t_end:
-            await pub.send_multipart(command_set(cmd))
-            try:
-                while True:
-                    data, t = await recv_udp(h.sim_blue, timeout=0.01)
-                    arrivals.append(t)
-                    last = data
-            except TimeoutError:
-                pass
+        while not sender.done():
+            data, t = await recv_udp(h.sim_blue, timeout=1.0)
+            arrivals.append(t)
+            last = data
+        await sender
         assert len(arrivals) > 20
         window = arrivals[-1] - arrivals[5]
         rate = (len(arrivals) - 6) / window
@@ -188,11 +195,12 @@ async def test_commands_repeated_then_stale_then_silent() -> None:
         assert (lv.forward, lv.left, lv.angular) == (1.25, -0.5, 0.75)
         assert (r.kick_speed, r.kick_angle, r.dribbler_speed) == (3.0, 45.0, 500.0)
 
-        # The last command was sent at about t_end; find the first zero-velocity datagram.
-        last_cmd_t = time.monotonic()
+        # Find the first zero-velocity datagram after the last command.
+        last_cmd_t = sent_at[-1]
         stale_stops = h.relay.table.stale_stops
         first_zero = None
         while first_zero is None:
+            assert time.time() - last_cmd_t < 1.0, "no zero velocity sent"
             data, t = await recv_udp(h.sim_blue, timeout=1.0)
             lv = decode_rc(data).robot_commands[0].move_command.local_velocity
             if lv.forward == 0 and lv.left == 0 and lv.angular == 0:
@@ -286,8 +294,7 @@ async def test_sim_topic_forwarded_and_responses_counted() -> None:
         assert data == body
         # answer with an error to the sender's address, like a simulator
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=0)))
-        loop = asyncio.get_running_loop()
-        _, addr = await asyncio.wait_for(loop.sock_recvfrom(h.sim_blue, 65536), 2.0)
+        _, _, addr = await recv_udp_from(h.sim_blue)
         resp = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
         e = resp.errors.add()
         e.code, e.message = "E1", "robot 0 unknown"

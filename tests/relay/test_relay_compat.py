@@ -1,0 +1,93 @@
+"""Compat mode: this test plays the seed strategy-bridge against the relay's LARCmaCS sockets."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+
+import numpy as np
+import zmq
+import zmq.asyncio
+
+from sslpb import ssl_gc_referee_message_pb2, ssl_simulation_robot_control_pb2
+from tests.relay.conftest import free_udp_port, recv_udp, running_relay, subscribed, wait_for
+from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
+
+Ref = ssl_gc_referee_message_pb2.Referee
+
+
+async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
+    ctx = zmq.asyncio.Context()
+    bridge = ctx.socket(zmq.PUB)  # stands in for the strategy-bridge's tcp://*:5667
+    bridge.setsockopt(zmq.LINGER, 0)
+    port = free_udp_port()
+    bridge.bind(f"tcp://127.0.0.1:{port}")
+    try:
+        async with running_relay(compat=True, compat_commands=f"tcp://127.0.0.1:{port}") as h:
+            # --- vision: raw datagram, one frame, no topic
+            vsub = ctx.socket(zmq.SUB)
+            vsub.setsockopt(zmq.LINGER, 0)
+            vsub.setsockopt(zmq.SUBSCRIBE, b"")
+            vsub.connect(h.relay.compat_vision_address)
+            probe = make_detection_wrapper(0)
+            first = await subscribed(vsub, lambda: h.send_vision(probe))
+            assert first == [probe]
+            frame = make_detection_wrapper(77, camera=3)
+            h.send_vision(frame)
+            while True:
+                msg = await asyncio.wait_for(vsub.recv_multipart(), 2.0)
+                assert len(msg) == 1
+                if msg[0] == frame:
+                    break
+
+            # --- referee JSON
+            rsub = ctx.socket(zmq.SUB)
+            rsub.setsockopt(zmq.LINGER, 0)
+            rsub.setsockopt(zmq.SUBSCRIBE, b"")
+            rsub.connect(h.relay.compat_referee_address)
+            halt = make_referee(Ref.HALT, 1)
+            msg = await subscribed(rsub, lambda: h.send_referee(halt))
+            assert len(msg) == 1
+            assert json.loads(msg[0]) == {"state": 0, "team": 0, "is_left": 1}
+
+            async def next_json(data: bytes) -> dict[str, int]:
+                h.send_referee(data)
+                while True:
+                    (raw,) = await asyncio.wait_for(rsub.recv_multipart(), 2.0)
+                    out: dict[str, int] = json.loads(raw)
+                    if out != {"state": 0, "team": 0, "is_left": 1}:
+                        return out
+
+            kick = make_referee(Ref.PREPARE_KICKOFF_BLUE, 2, blue_positive=True)
+            assert await next_json(kick) == {"state": 5, "team": 1, "is_left": 0}
+            start = make_referee(Ref.NORMAL_START, 3, blue_positive=True)
+            assert await next_json(start) == {"state": 6, "team": 1, "is_left": 0}
+            free = make_referee(Ref.DIRECT_FREE_YELLOW, 4)
+            assert await next_json(free) == {"state": 9, "team": 2, "is_left": 1}
+
+            # --- commands: 32x13 float64 matrix, row 3 valid
+            m = np.zeros((32, 13), dtype=np.float64)
+            m[3, :12] = [1, 40, -20, 25, 0, 1, 0, 8, 1, 3, 1, 0]
+            counter = h.relay.streams["compat_commands"]
+            deadline = time.monotonic() + 3.0
+            while counter.packets == 0:  # slow joiner: repeat like the bridge does each cycle
+                assert time.monotonic() < deadline, "relay never received the matrix"
+                await bridge.send(m.tobytes())
+                await asyncio.sleep(0.02)
+            data, _ = await recv_udp(h.sim_blue)
+            rc = ssl_simulation_robot_control_pb2.RobotControl.FromString(data).robot_commands
+            r = next(c for c in rc if c.id == 3)
+            lv = r.move_command.local_velocity
+            assert (lv.forward, lv.left, lv.angular) == (2.0, -1.0, 5.0)
+            assert (r.kick_speed, r.kick_angle, r.dribbler_speed) == (4.0, 0.0, 3000.0)
+
+            # --- a wrong-size matrix is an error, not fatal
+            before = counter.errors
+            await bridge.send(b"\x00" * 100)
+            await wait_for(lambda: counter.errors == before + 1, what="size error")
+            await bridge.send(m.tobytes())
+            packets = counter.packets
+            await wait_for(lambda: counter.packets > packets, what="relay still alive")
+    finally:
+        ctx.destroy(linger=0)
