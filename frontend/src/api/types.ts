@@ -86,6 +86,8 @@ export interface World {
   cameras: RawCamera[];
   referee: Referee | null;
   estop: boolean;
+  /** Not in docs/api.md yet: why the station holds every robot ("emergency stop", "HALT", "no vision"), or "". */
+  halt_reason?: string;
 }
 
 export interface FieldLine {

@@ -17,7 +17,14 @@ const Row = memo(function Row({ r, selected }: { r: Robot; selected: boolean }) 
       data-selected={selected ? "true" : "false"}
       aria-selected={selected}
       className={`${selected ? "selected" : ""} ${r.visible ? "" : "invisible"}`}
+      tabIndex={0}
       onClick={() => selectRobot({ team: r.team, id: r.id })}
+      onKeyDown={(ev) => {
+        if (ev.key === "Enter" || ev.key === " ") {
+          ev.preventDefault();
+          selectRobot({ team: r.team, id: r.id });
+        }
+      }}
     >
       <td className="c-team">
         <span className={`chip chip-${r.team}`} aria-hidden="true" />

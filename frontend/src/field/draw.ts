@@ -65,6 +65,10 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
 
   let slot = 0;
   if (world?.estop) drawBanner(ctx, t, "EMERGENCY STOP ACTIVE", COLORS.estop, "#ffffff", slot++);
+  const halt = world?.halt_reason;
+  if (world && !world.estop && typeof halt === "string" && halt) {
+    drawBanner(ctx, t, `robots held: ${halt}`, "rgba(146,64,14,0.92)", "#fef3c7", slot++);
+  }
   if (input.stale && world) {
     drawBanner(ctx, t, "connection lost: showing the last data received", "rgba(120,53,15,0.92)", "#fef3c7", slot++);
   }

@@ -1,0 +1,92 @@
+// @vitest-environment jsdom
+import { act } from "react";
+import { createRoot, type Root } from "react-dom/client";
+import { afterEach, beforeEach, describe, expect, it } from "vitest";
+import { robot } from "../field/testRobots";
+import { appStore, initialAppState } from "../store/appStore";
+import { health, world } from "../ws/fixtures";
+import { RobotDetails } from "./RobotDetails";
+import { RobotTable } from "./RobotTable";
+import { TopBar } from "./TopBar";
+
+(globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
+
+let host: HTMLDivElement;
+let root: Root;
+
+beforeEach(() => {
+  appStore.setState(initialAppState());
+  host = document.createElement("div");
+  document.body.appendChild(host);
+  root = createRoot(host);
+});
+
+afterEach(() => {
+  act(() => root.unmount());
+  host.remove();
+});
+
+const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
+
+describe("RobotTable", () => {
+  const robots = [
+    robot("yellow", 2, 1000.4, -250.6, { visible: false }),
+    robot("blue", 3, -1234.5, 987.2, { target: { x: 10, y: -20, orientation: null, source: "operator" } }),
+  ];
+
+  it("renders one row per robot with the stable test ids, blue first", () => {
+    act(() => root.render(<RobotTable robots={robots} selected={{ team: "blue", id: 3 }} />));
+    expect(q("robot-table")).not.toBeNull();
+    const rows = host.querySelectorAll('[data-testid^="robot-row-"]');
+    expect([...rows].map((r) => r.getAttribute("data-testid"))).toEqual(["robot-row-blue-3", "robot-row-yellow-2"]);
+    const blue = q("robot-row-blue-3")!;
+    expect(blue.getAttribute("data-visible")).toBe("true");
+    expect(blue.getAttribute("data-selected")).toBe("true");
+    expect(blue.querySelector('[data-testid="robot-x"]')?.textContent).toBe("-1234");
+    expect(blue.querySelector('[data-testid="robot-y"]')?.textContent).toBe("987");
+    expect(blue.querySelector('[data-testid="robot-target"]')?.textContent).toBe("10, -20");
+    const yellow = q("robot-row-yellow-2")!;
+    expect(yellow.getAttribute("data-visible")).toBe("false");
+    expect(yellow.querySelector('[data-testid="robot-x"]')?.textContent).toBe("1000");
+    expect(yellow.querySelector('[data-testid="robot-y"]')?.textContent).toBe("-251");
+  });
+
+  it("selects a robot when its row is clicked", () => {
+    act(() => root.render(<RobotTable robots={robots} selected={null} />));
+    act(() => (q("robot-row-yellow-2") as HTMLElement).click());
+    expect(appStore.getState().selected).toEqual({ team: "yellow", id: 2 });
+  });
+});
+
+describe("RobotDetails", () => {
+  it("shows 'team id' for the selection", () => {
+    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robot("blue", 3, 0, 0)} />));
+    expect(q("selected-robot")?.textContent).toBe("blue 3");
+    act(() => root.render(<RobotDetails selected={null} robot={null} />));
+    expect(q("selected-robot")?.textContent).toBe("No robot selected");
+  });
+});
+
+describe("TopBar", () => {
+  it("shows connection, vision rate and the e-stop state from the store", () => {
+    act(() => root.render(<TopBar onRetryNow={() => {}} />));
+    expect(q("connection-status")?.textContent).not.toContain("connected");
+    expect(q("vision-rate")?.textContent).toBe("— Hz");
+    expect(q("estop-button")?.textContent).toBe("EMERGENCY STOP");
+    act(() =>
+      appStore.setState({
+        connection: { status: "connected", attempt: 0, retryAt: null, lastError: null },
+        health: health(59.66),
+        world: world(1, { estop: true }),
+      }),
+    );
+    expect(q("connection-status")?.textContent).toContain("connected");
+    expect(q("vision-rate")?.textContent).toBe("59.7 Hz");
+    expect(q("estop-button")?.textContent).toBe("Release");
+    act(() =>
+      appStore.setState({ connection: { status: "reconnecting", attempt: 2, retryAt: null, lastError: "closed" } }),
+    );
+    expect(q("connection-status")?.textContent).toContain("reconnecting");
+    expect(q("connection-status")?.textContent).not.toContain("connected");
+  });
+});
