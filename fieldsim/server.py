@@ -244,6 +244,7 @@ class FieldSim:
         next_capture = [world.t + ph for ph in vision.phases]
         next_geom = world.t
         next_truth = world.t
+        geometry_bytes = vision.geometry_packet().SerializeToString()  # never changes
         try:
             while True:
                 now = self._clock() - start_mono
@@ -277,7 +278,7 @@ class FieldSim:
                             self.frame_rates[k].add()
                 if now >= next_geom:
                     next_geom += geom_period * max(1, int((now - next_geom) / geom_period) + 1)
-                    if self._send(vision.geometry_packet().SerializeToString()):
+                    if self._send(geometry_bytes):
                         self.geometry_sent += 1
                 if self._truth_sock is not None and now >= next_truth:
                     next_truth += period * max(1, int((now - next_truth) / period) + 1)
