@@ -50,10 +50,12 @@ def open_multicast_sender(
 
 
 def open_udp_server(host: str, port: int) -> socket.socket:
-    """A non-blocking unicast UDP socket bound to ``host:port`` (simulator command ports)."""
+    """A non-blocking unicast UDP socket bound to ``host:port`` (simulator command ports).
+
+    No SO_REUSEADDR: on Linux it would let a second simulator bind the same UDP port and
+    silently share the commands; a clash must fail loudly instead."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
     try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))
         sock.setblocking(False)
     except OSError:
