@@ -66,8 +66,10 @@ describe("startWsClient", () => {
     expect(last().url).toBe("ws://station/api/ws");
     expect(store.getState().connection.status).toBe("connecting");
     last().open();
-    expect(store.getState().connection.status).toBe("connected");
+    // Open but no data yet: not reported as connected.
+    expect(store.getState().connection.status).toBe("connecting");
     last().send({ type: "snapshot", world: world(1), geometry: null, health: health(60) });
+    expect(store.getState().connection.status).toBe("connected");
     last().send({ type: "world", world: world(2) });
     expect(store.getState().world?.seq).toBe(2);
     expect(store.getState().health?.streams["vision"]?.rate_hz).toBe(60);
@@ -77,6 +79,7 @@ describe("startWsClient", () => {
   it("ignores garbage frames without dropping the connection", () => {
     const { store, last, client } = setup();
     last().open();
+    last().send({ type: "health", health: health() });
     last().onmessage?.({ data: "not json" });
     expect(store.getState().connection.status).toBe("connected");
     expect(last().closed).toBe(false);
@@ -117,6 +120,15 @@ describe("startWsClient", () => {
     expect(sockets.length).toBe(2);
     vi.advanceTimersByTime(5000);
     expect(sockets.length).toBe(2);
+    client.stop();
+  });
+
+  it("drops a socket that opens but never sends anything", () => {
+    const { store, sockets, last, client } = setup(2000);
+    last().open();
+    vi.advanceTimersByTime(2600);
+    expect(sockets[0]?.closed).toBe(true);
+    expect(store.getState().connection.status).toBe("reconnecting");
     client.stop();
   });
 

@@ -97,10 +97,13 @@ export function startWsClient(opts: WsClientOptions): WsClient {
       }
       scheduleReconnect(reason);
     };
+    let gotData = false;
     ws.onopen = () => {
       if (closed) return;
+      // "connected" is reported with the first message (the snapshot), so that a
+      // connected page always has data to show.
       lastMessageAt = now();
-      setConnection({ status: "connected", retryAt: null, lastError: null });
+      setConnection({ retryAt: null });
       clearWatchdog();
       watchdog = setInterval(() => {
         if (now() - lastMessageAt > staleMs) onGone(`no data for ${Math.round(staleMs / 1000)} s`);
@@ -115,9 +118,10 @@ export function startWsClient(opts: WsClientOptions): WsClient {
         return;
       }
       // A good message: the connection really works, reset the backoff.
-      if (attempt !== 0) {
+      if (!gotData) {
+        gotData = true;
         attempt = 0;
-        setConnection({ attempt: 0 });
+        setConnection({ status: "connected", attempt: 0, retryAt: null, lastError: null });
       }
       const prev = store.getState();
       const next = applyMessage(prev, parsed.msg);
