@@ -99,6 +99,7 @@ class Relay:
         self._compat_vision: zmq.Socket[bytes] | None = None
         self._compat_referee: zmq.Socket[bytes] | None = None
         self._udp_out: socket.socket | None = None
+        self._wake: asyncio.Future[None] | None = None
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -311,10 +312,13 @@ class Relay:
             for c in accepted:
                 self.table.update(c.zero(), now)
             self.table.stop_all(now)
+            self._wake_output()
             log.warning("stop_all received: every known robot zeroed")
             return
         for c in accepted:
             self.table.update(c, now)
+        if accepted:
+            self._wake_output()
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
 
@@ -366,22 +370,41 @@ class Relay:
                 self._command_error("compat_commands", err)
             for c in result.commands:
                 self.table.update(c, now)
+            if result.commands:
+                self._wake_output()
 
     # ------------------------------------------------------------------ output
 
     async def _output_loop(self) -> None:
+        """Cycles at the configured rate; a new command set triggers a cycle at once (so the
+        command is not delayed by up to a period), but never sooner than half a period after
+        the previous cycle, and the schedule is re-phased from there."""
+        loop = asyncio.get_running_loop()
         period = 1.0 / self.config.output_rate_hz
+        min_gap = period / 2.0
+        last = -math.inf
         next_t = time.monotonic()
         while True:
-            next_t += period
-            delay = next_t - time.monotonic()
-            if delay > 0:
-                await asyncio.sleep(delay)
-            else:
-                if delay < -period:  # fell behind by more than a cycle: do not burst
-                    next_t = time.monotonic()
-                await asyncio.sleep(0)
-            self.output_cycle(time.monotonic())
+            now = time.monotonic()
+            if now < next_t:
+                fut: asyncio.Future[None] = loop.create_future()
+                self._wake = fut
+                await asyncio.wait([fut], timeout=next_t - now)
+                self._wake = None
+                now = time.monotonic()
+                if now < next_t:  # woken early by a new command
+                    if now - last < min_gap:
+                        next_t = last + min_gap
+                        continue
+                    next_t = now
+            self.output_cycle(now)
+            last = now
+            next_t = next_t + period if now - next_t < period else now + period
+
+    def _wake_output(self) -> None:
+        fut = self._wake
+        if fut is not None and not fut.done():
+            fut.set_result(None)
 
     def output_cycle(self, now: float) -> None:
         """One output cycle: send every due command (public for tests and benchmarks)."""
