@@ -234,7 +234,10 @@ class Relay:
                 self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                 return
             receive_ns = time.time_ns()
-            reason = validate(data)
+            try:
+                reason = validate(data)
+            except Exception as exc:  # a decoder surprise must not kill the reader
+                reason = f"validation failed: {exc!r}"
             if reason is not None:
                 counter.error(reason)
                 self._ratelog.warning(
@@ -482,7 +485,7 @@ class Relay:
         while self._latencies and self._latencies[0][0] < t - 1.0:
             self._latencies.popleft()
         lat = [v for _, v in self._latencies]
-        latency = sum(lat) / len(lat) if lat else math.nan
+        latency = sum(lat) / len(lat) if lat else -1.0
         return touchline_pb2.RelayStats(
             time_ns=time.time_ns(),
             streams=[s.to_proto(t) for s in self.streams.values()],
