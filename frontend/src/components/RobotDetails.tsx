@@ -1,5 +1,6 @@
 import type { Robot, RobotKey } from "../api/types";
 import { clearTarget, selectRobot } from "../actions";
+import { HealthSummary } from "./HealthSummary";
 import { fmtDeg, fmtFixed, fmtHeading, fmtInt, speedMps } from "../format";
 
 function Field({ label, value, testId }: { label: string; value: string; testId?: string }) {
@@ -40,7 +41,12 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
         )}
       </div>
       {selected && !robot && <p className="muted">Not in the current world.</p>}
-      {!selected && <p className="muted">Click a robot on the field or in the table.</p>}
+      {!selected && (
+        <>
+          <p className="muted">Click a robot on the field or in the table.</p>
+          <HealthSummary />
+        </>
+      )}
       {robot && (
         <dl className="details-grid" data-testid="selected-robot-details">
           <Field label="x, y" value={`${fmtInt(robot.x)}, ${fmtInt(robot.y)} mm`} />

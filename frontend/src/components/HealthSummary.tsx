@@ -1,0 +1,32 @@
+import { useAppState } from "../store/hooks";
+import { fmtFixed } from "../format";
+
+/** Compact station health, shown in the details panel while no robot is selected. */
+export function HealthSummary() {
+  const health = useAppState((s) => s.health);
+  if (!health) return <p className="muted">No health data yet.</p>;
+  const order = (name: string) => (name === "vision" ? 0 : name === "referee" ? 1 : 2);
+  const streams = Object.entries(health.streams)
+    .sort(([a], [b]) => order(a) - order(b) || a.localeCompare(b))
+    .slice(0, 5);
+  return (
+    <dl className="details-grid health" data-testid="health-summary">
+      {streams.map(([name, s]) => (
+        <div className="health-row" key={name} title={s.last_error || undefined}>
+          <dt title={name}>{name}</dt>
+          <dd className={`num ${s.errors > 0 || (name === "vision" && s.rate_hz <= 0) ? "warn" : ""}`}>
+            {fmtFixed(s.rate_hz, 1)} Hz{s.errors > 0 ? ` · ${s.errors} err` : ""}
+          </dd>
+        </div>
+      ))}
+      {health.relay && (
+        <div className="health-row">
+          <dt>relay</dt>
+          <dd className={`num ${health.relay.alive ? "" : "warn"}`}>
+            {health.relay.alive ? `${health.relay.output_mode} ${fmtFixed(health.relay.output_rate_hz, 0)} Hz` : "down"}
+          </dd>
+        </div>
+      )}
+    </dl>
+  );
+}
