@@ -324,3 +324,28 @@ def test_decode_command_matrix() -> None:
     assert len(m.tobytes()) == MATRIX_BYTES
     with pytest.raises(ValueError):
         decode_command_matrix(b"\x00" * 100)
+
+
+# ----------------------------------------------------------------- properties
+
+from hypothesis import given  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+finite = st.floats(allow_nan=False, allow_infinity=False, width=32)
+
+
+@given(finite, finite, finite, st.floats(0, 100), st.booleans(), st.floats(0, 1e5))
+def test_robot_box_always_13_bytes_in_range(
+    fwd: float, left: float, ang: float, kick: float, chip: bool, rpm: float
+) -> None:
+    data = codecs.encode_robot_box(Command(BLUE, 5, fwd, left, ang, kick, chip, rpm))
+    assert len(data) == 13 and data[0] == 1 and data[1] == 5
+    sy, sx, sr = struct.unpack("3b", data[2:5])
+    assert all(-100 <= v <= 100 for v in (sx, sy, sr))
+    assert math.hypot(sx, sy) <= 101.5  # norm clipped to 100 before rounding
+
+
+@given(st.integers(-100, 100), st.integers(-100, 100), st.integers(-100, 100))
+def test_power_round_trip(px: int, py: int, pr: int) -> None:
+    if math.hypot(px, py) <= 100:
+        assert codecs.si_to_power(*codecs.power_to_si(px, py, pr)) == (px, py, pr)

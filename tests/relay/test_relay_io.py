@@ -367,3 +367,19 @@ async def test_robot_box_mode_datagram() -> None:
         data, _ = await recv_udp(h.out_box)
         expected = bytes([1, 9, 10, 256 - 20, 10, 0, 4, 1, 0, 0, 0, 1, 0])
         assert data == expected
+
+
+async def test_tracker_input_when_enabled() -> None:
+    from tests.relay.conftest import random_multicast_port
+
+    async with running_relay(tracker_enabled=True, tracker_port=random_multicast_port()) as h:
+        sub = h.subscriber(b"tracker")
+        payload = b"\x0a\x03abc\x12\x02ts"  # wire-valid: uuid "abc", source_name "ts"
+        dest = (h.config.tracker_group, h.config.tracker_port)
+        topic, body = await subscribed(sub, lambda: h.sender.sendto(payload, dest))
+        env = touchline_pb2.Envelope.FromString(body)
+        assert topic == b"tracker" and env.stream == touchline_pb2.STREAM_TRACKER
+        assert env.payload == payload
+        h.sender.sendto(b"\x0a\xff", dest)  # truncated length-delimited field
+        counter = h.relay.streams["tracker"]
+        await wait_for(lambda: counter.errors == 1, what="tracker error")
