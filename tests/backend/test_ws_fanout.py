@@ -1,0 +1,97 @@
+"""A stalled websocket client must not slow the loop or the other clients (real uvicorn)."""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import json
+import os
+import socket
+import threading
+import time
+
+import uvicorn
+from websockets.sync.client import connect
+
+from backend.api import create_app
+from backend.config import Settings
+from backend.station import Station
+from backend.world.state import RobotState, WorldState
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _big_world(k: int) -> WorldState:
+    robots = tuple(RobotState("blue" if i < 11 else "yellow", i % 11, float(k + i), 0.0, 0.0,
+                              t_seen=float(k)) for i in range(22))
+    return WorldState(float(k), k, None, robots)
+
+
+def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    port = _port()
+    settings = Settings(port=port, relay_pub=f"tcp://127.0.0.1:{_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path)
+    st = Station(settings)
+    server = uvicorn.Server(uvicorn.Config(create_app(settings, st), host="127.0.0.1", port=port,
+                                           ws_per_message_deflate=False, log_level="warning"))
+    loop_box: dict[str, asyncio.AbstractEventLoop] = {}
+
+    def serve() -> None:
+        loop = asyncio.new_event_loop()
+        loop_box["loop"] = loop
+        loop.run_until_complete(server.serve())
+
+    th = threading.Thread(target=serve, daemon=True)
+    th.start()
+    deadline = time.monotonic() + 10
+    while not server.started:
+        assert time.monotonic() < deadline, "server did not start"
+        time.sleep(0.01)
+    loop = loop_box["loop"]
+    stop = threading.Event()
+
+    def writer() -> None:  # the world model at 120 Hz
+        k = 0
+        while not stop.is_set():
+            k += 1
+            loop.call_soon_threadsafe(st.world_topic.write, _big_world(k))
+            stop.wait(1 / 120)
+
+    wt = threading.Thread(target=writer, daemon=True)
+    wt.start()
+    stalled = []
+    try:
+        # three clients that complete the handshake and then never read
+        for _ in range(3):
+            s = socket.socket()
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+            s.connect(("127.0.0.1", port))
+            keyb = base64.b64encode(os.urandom(16)).decode()
+            s.sendall((f"GET /api/ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+                       f"Connection: Upgrade\r\nSec-WebSocket-Key: {keyb}\r\n"
+                       "Sec-WebSocket-Version: 13\r\n\r\n").encode())
+            stalled.append(s)
+        with connect(f"ws://127.0.0.1:{port}/api/ws", max_size=None) as ws:
+            t_end = time.monotonic() + 4.0
+            stamps: list[float] = []
+            seqs: list[int] = []
+            while time.monotonic() < t_end:
+                msg = json.loads(ws.recv(timeout=2.0))
+                if msg["type"] == "world":
+                    stamps.append(time.monotonic())
+                    seqs.append(msg["world"]["seq"])
+        # the last 2 s, when the stalled clients' buffers are long full
+        late = [t for t in stamps if t > t_end - 2.0]
+        assert len(late) / 2.0 > 40, f"only {len(late) / 2.0:.0f} world messages/s"
+        assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)  # latest only, in order
+    finally:
+        stop.set()
+        wt.join()
+        for s in stalled:
+            s.close()
+        server.should_exit = True
+        th.join(timeout=10)
