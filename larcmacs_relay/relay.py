@@ -100,6 +100,8 @@ class Relay:
         self._compat_referee: zmq.Socket[bytes] | None = None
         self._udp_out: socket.socket | None = None
         self._wake: asyncio.Future[None] | None = None
+        self._sim_host = config.sim_host
+        self._box_host = config.robot_box_host
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -167,6 +169,9 @@ class Relay:
                 loop.add_reader(rx.fileno(), self._drain_input, rx, name, validate)
                 log.info("listening for %s on %s:%d via %s", name, group, port, cfg.interface)
 
+            # Resolve output hosts once: sendto() with a name would resolve on every datagram.
+            self._sim_host = socket.gethostbyname(cfg.sim_host)
+            self._box_host = socket.gethostbyname(cfg.robot_box_host)
             out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
             out.setblocking(False)
             udp.append(out)
@@ -327,7 +332,8 @@ class Relay:
 
     def _command_error(self, stream: str, reason: str) -> None:
         self.streams[stream].error(reason)
-        self._ratelog.warning(f"{stream}-bad:{reason[:24]}", "rejected %s: %s", stream, reason)
+        kind = " ".join(reason.split()[:3])  # bounded set of log keys, one per kind of error
+        self._ratelog.warning(f"{stream}-bad:{kind}", "rejected %s: %s", stream, reason)
 
     def _handle_sim_command(self, body: bytes) -> None:
         cfg = self.config
@@ -343,11 +349,11 @@ class Relay:
             return
         counter.packet(len(body))
         if cfg.output == "sim":
-            self._send(body, (cfg.sim_host, cfg.sim_control_port))
+            self._send(body, (self._sim_host, cfg.sim_control_port))
         elif cfg.output == "grsim":
             pkt = codecs.sim_command_to_grsim(cmd)
             if pkt is not None:
-                self._send(pkt, (cfg.sim_host, cfg.grsim_port))
+                self._send(pkt, (self._sim_host, cfg.grsim_port))
         else:
             self._command_error("sim_commands", "simulator commands unsupported in robot-box mode")
 
@@ -425,7 +431,7 @@ class Relay:
                         dribbler_rpm_per_unit=cfg.dribbler_rpm_per_unit,
                         charge=cfg.robot_box_charge,
                     ),
-                    (cfg.robot_box_host, cfg.robot_box_port),
+                    (self._box_host, cfg.robot_box_port),
                 )
         else:
             for team in codecs.TEAMS:
@@ -435,12 +441,12 @@ class Relay:
                 if cfg.output == "sim":
                     port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
                     data = codecs.encode_sim_robot_control(cmds, cfg.chip_angle_deg)
-                    self._send(data, (cfg.sim_host, port))
+                    self._send(data, (self._sim_host, port))
                 else:
                     data = codecs.encode_grsim_commands(
                         cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg
                     )
-                    self._send(data, (cfg.sim_host, cfg.grsim_port))
+                    self._send(data, (self._sim_host, cfg.grsim_port))
         if self._pending_latency_ns:
             sent_ns = time.time_ns()
             for src in self._pending_latency_ns:
