@@ -32,6 +32,7 @@ from sslpb import ssl_simulation_control_pb2, touchline_pb2
 log = logging.getLogger("larcmacs_relay")
 
 MAX_DATAGRAM = 65536
+MAX_BATCH = 512
 
 
 class StreamCounter:
@@ -221,7 +222,9 @@ class Relay:
     def _drain_input(
         self, sock: socket.socket, name: str, validate: Callable[[bytes], str | None]
     ) -> None:
-        """Read every datagram waiting on ``sock`` (never just one per wakeup)."""
+        """Read every datagram waiting on ``sock`` (never just one per wakeup); after
+        MAX_BATCH in a row it yields to the loop (the reader is level-triggered and comes back
+        at once), so a flood cannot starve the command output."""
         counter = self.streams[name]
         topic = name.encode()
         stream = {
@@ -229,7 +232,7 @@ class Relay:
             "referee": touchline_pb2.STREAM_REFEREE,
             "tracker": touchline_pb2.STREAM_TRACKER,
         }[name]
-        while True:
+        for _ in range(MAX_BATCH):
             try:
                 data, addr = sock.recvfrom(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):

@@ -383,3 +383,19 @@ async def test_tracker_input_when_enabled() -> None:
         h.sender.sendto(b"\x0a\xff", dest)  # truncated length-delimited field
         counter = h.relay.streams["tracker"]
         await wait_for(lambda: counter.errors == 1, what="tracker error")
+
+
+async def test_burst_is_forwarded_completely_in_order() -> None:
+    async with running_relay() as h:
+        sub = h.subscriber(b"vision")
+        await subscribed(sub, lambda: h.send_vision(make_detection_wrapper(0)))
+        frames = [make_detection_wrapper(1000 + i, camera=i % 8) for i in range(600)]
+        for f in frames:  # > MAX_BATCH back to back
+            h.send_vision(f)
+        got: list[bytes] = []
+        while len(got) < len(frames):
+            _, body = await asyncio.wait_for(sub.recv_multipart(), 2.0)
+            payload = touchline_pb2.Envelope.FromString(body).payload
+            if payload in frames:
+                got.append(payload)
+        assert got == frames
