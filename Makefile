@@ -60,7 +60,7 @@ test-e2e: build multicast chromium
 	npm run test:e2e
 
 bench: setup multicast
-	for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+	for b in bench/*.py; do echo "== $$b"; PYTHONPATH=. $(PY) $$b || exit 1; done
 
 clean:
 	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report

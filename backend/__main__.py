@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+from pathlib import Path
 
 import uvicorn
 
@@ -18,16 +19,20 @@ def main() -> None:
     p.add_argument("--port", type=int, default=d.port)
     p.add_argument("--relay-pub", default=d.relay_pub, help="relay PUB endpoint to subscribe to")
     p.add_argument("--relay-sub", default=d.relay_sub, help="relay SUB endpoint to publish to")
-    p.add_argument("--our-team", choices=["blue", "yellow"], default=d.our_team)
-    p.add_argument("--our-side", type=int, choices=[-1, 1], default=d.our_side,
-                   help="-1: our goal at negative x")
-    p.add_argument("--no-demo", action="store_true", help="do not drive the formation demo")
+    p.add_argument("--our-team", choices=["blue", "yellow"], default=None,
+                   help="override the stored parameter team.our_team")
+    p.add_argument("--our-side", type=int, choices=[-1, 1], default=None,
+                   help="override team.our_side: -1 our goal at negative x")
+    p.add_argument("--no-demo", action="store_true", help="switch the formation demo off")
+    p.add_argument("--state-dir", type=Path, default=d.state_dir,
+                   help="where parameters and presets are kept (default %(default)s)")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
-                        our_team=a.our_team, our_side=a.our_side, demo=not a.no_demo)
+                        our_team=a.our_team, our_side=a.our_side, demo=False if a.no_demo else None,
+                        state_dir=a.state_dir)
     app = create_app(settings)
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,
                 log_level=a.log_level.lower(), access_log=False)

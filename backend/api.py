@@ -21,6 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from .config import Settings
+from .params.store import ParamError, diff
 from .station import Station, _finite
 
 log = logging.getLogger("touchline.api")
@@ -125,15 +126,115 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         await ws.accept()
         st.ws_clients += 1
         try:
-            await _serve_client(ws, st, settings.ws_max_hz)
+            await _serve_client(ws, st)
         except (WebSocketDisconnect, RuntimeError, ConnectionError):
             pass
         finally:
             st.ws_clients -= 1
 
+    _params_routes(api, st)
     app.include_router(api)
     _mount_frontend(app, settings.static_dir)
     return app
+
+
+def _params_routes(api: APIRouter, st: Station) -> None:
+    store = st.params
+
+    def _state() -> dict[str, Any]:
+        return {"version": store.version, "values": store.values()}
+
+    def _refused(exc: ParamError) -> JSONResponse:
+        return JSONResponse(status_code=422, content={"detail": exc.errors})
+
+    @api.get("/params/schema")
+    async def params_schema() -> dict[str, Any]:
+        return store.schema()
+
+    @api.get("/params")
+    async def params_get() -> dict[str, Any]:
+        return _state()
+
+    @api.patch("/params", response_model=None)
+    async def params_patch(request: Request) -> dict[str, Any] | JSONResponse:
+        try:
+            body = json.loads(await request.body())
+        except ValueError as exc:
+            return _refused(ParamError([{"loc": ["body"], "msg": f"invalid JSON: {exc}",
+                                         "type": "json_invalid"}]))
+        try:
+            store.patch(body)
+        except ParamError as exc:
+            return _refused(exc)
+        log.info("parameters changed to version %d", store.version)
+        return _state()
+
+    @api.get("/params/diff")
+    async def params_diff() -> dict[str, Any]:
+        return {"version": store.version, "changes": store.diff_from_defaults()}
+
+    @api.get("/params/export")
+    async def params_export() -> JSONResponse:
+        return JSONResponse({"touchline_params": 1, "values": store.values()}, headers={
+            "content-disposition": 'attachment; filename="touchline-params.json"'})
+
+    @api.post("/params/import", response_model=None)
+    async def params_import(request: Request) -> dict[str, Any] | JSONResponse:
+        try:
+            body = json.loads(await request.body())
+            values = body["values"] if isinstance(body, dict) and "values" in body else body
+        except ValueError as exc:
+            return _refused(ParamError([{"loc": ["body"], "msg": f"invalid JSON: {exc}",
+                                         "type": "json_invalid"}]))
+        try:
+            store.replace(values)
+        except ParamError as exc:
+            return _refused(exc)
+        return _state()
+
+    @api.get("/presets")
+    async def presets_list() -> dict[str, Any]:
+        return {"presets": store.list_presets()}
+
+    @api.put("/presets/{name}", response_model=None)
+    async def preset_save(name: str) -> dict[str, Any] | JSONResponse:
+        try:
+            store.save_preset(name)
+        except ParamError as exc:
+            return _refused(exc)
+        return {"presets": store.list_presets()}
+
+    @api.get("/presets/{name}", response_model=None)
+    async def preset_get(name: str) -> dict[str, Any] | JSONResponse:
+        try:
+            values = store.read_preset(name)
+        except ParamError as exc:
+            return _refused(exc)
+        except KeyError:
+            raise HTTPException(404, f"no preset named {name!r}") from None
+        return {"name": name, "values": values,
+                "diff_from_defaults": diff(store.defaults.model_dump(mode="json"), values),
+                "diff_from_current": diff(store.values(), values)}
+
+    @api.post("/presets/{name}/load", response_model=None)
+    async def preset_load(name: str) -> dict[str, Any] | JSONResponse:
+        try:
+            store.load_preset(name)
+        except ParamError as exc:
+            return _refused(exc)
+        except KeyError:
+            raise HTTPException(404, f"no preset named {name!r}") from None
+        return _state()
+
+    @api.delete("/presets/{name}", response_model=None)
+    async def preset_delete(name: str) -> dict[str, Any] | JSONResponse:
+        try:
+            store.delete_preset(name)
+        except ParamError as exc:
+            return _refused(exc)
+        except KeyError:
+            raise HTTPException(404, f"no preset named {name!r}") from None
+        return {"presets": store.list_presets()}
 
 
 def _origin_allowed(origin: str, host: str, allowed: list[str]) -> bool:
@@ -143,11 +244,12 @@ def _origin_allowed(origin: str, host: str, allowed: list[str]) -> bool:
     return urlsplit(origin).netloc == host
 
 
-async def _serve_client(ws: WebSocket, st: Station, max_hz: float) -> None:
-    """Sends a snapshot, then the latest world at up to ``max_hz``; a slow client only
-    delays itself: it always gets the newest world, never a backlog."""
-    min_period = 1.0 / max_hz
+async def _serve_client(ws: WebSocket, st: Station) -> None:
+    """Sends a snapshot, then the latest world at up to ``stream.ws_max_hz``; a slow client
+    only delays itself: it always gets the newest world, never a backlog. Parameter changes
+    are pushed as they happen."""
     world_ev = st.world_topic.subscribe_event()
+    st.params_topic.add_waiter(world_ev)
     closed = asyncio.Event()
 
     async def receive() -> None:
@@ -161,10 +263,13 @@ async def _serve_client(ws: WebSocket, st: Station, max_hz: float) -> None:
 
     rx = asyncio.create_task(receive())
     try:
-        await ws.send_text(json.dumps(_finite({"type": "snapshot", "world": st.world_dict(),
-                                               "geometry": st.geometry(),
-                                               "health": st.health()})))
+        await ws.send_text(json.dumps(_finite({
+            "type": "snapshot", "world": st.world_dict(), "geometry": st.geometry(),
+            "health": st.health(),
+            "params": {"version": st.params.version, "values": st.params.values()},
+        })))
         geo_seq = st.geometry_topic.seq
+        params_version = st.params.version
         last_health = time.monotonic()
         last_sent = 0.0
         sent_key = -1
@@ -172,6 +277,11 @@ async def _serve_client(ws: WebSocket, st: Station, max_hz: float) -> None:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(world_ev.wait(), 0.5)
             world_ev.clear()
+            if st.params.version != params_version:
+                params_version = st.params.version
+                await ws.send_text(json.dumps({"type": "params", "version": params_version,
+                                               "values": st.params.values()}))
+            min_period = 1.0 / st.params.current.stream.ws_max_hz
             now = time.monotonic()
             if now - last_sent < min_period:
                 await asyncio.sleep(min_period - (now - last_sent))
@@ -192,6 +302,7 @@ async def _serve_client(ws: WebSocket, st: Station, max_hz: float) -> None:
     finally:
         rx.cancel()
         st.world_topic.unsubscribe_event(world_ev)
+        st.params_topic.unsubscribe_event(world_ev)
 
 
 def _mount_frontend(app: FastAPI, static_dir: Path) -> None:

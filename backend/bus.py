@@ -88,6 +88,10 @@ class Topic(Generic[T]):
         self._waiters.append(ev)
         return ev
 
+    def add_waiter(self, ev: asyncio.Event) -> None:
+        """Also set ``ev`` on every write (one event can watch several topics)."""
+        self._waiters.append(ev)
+
     def unsubscribe_event(self, ev: asyncio.Event) -> None:
         if ev in self._waiters:
             self._waiters.remove(ev)

@@ -16,13 +16,12 @@ class Settings(BaseModel):
     port: int = defaults.BACKEND_PORT
     relay_pub: str = defaults.RELAY_PUB  # the relay's PUB we subscribe to
     relay_sub: str = defaults.RELAY_SUB  # the relay's SUB we publish commands to
-    our_team: str = Field(default="blue", pattern="^(blue|yellow)$")
-    our_side: int = -1  # -1: our goal at negative x
-    demo: bool = True  # drive our robots between formation points until given targets
-    control_rate_max_wait_s: float = 0.05  # control runs at least this often
-    vision_stale_s: float = 0.3  # no vision for this long: command zero
-    ws_max_hz: float = 60.0
+    # start-up overrides of the persisted parameters (None: keep what is stored)
+    our_team: str | None = Field(default=None, pattern="^(blue|yellow)$")
+    our_side: int | None = None  # -1: our goal at negative x
+    demo: bool | None = None
     static_dir: Path = ROOT / "frontend" / "dist"
+    state_dir: Path | None = ROOT / "var"  # parameters and presets; None: not persisted
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

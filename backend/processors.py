@@ -255,7 +255,7 @@ class StrategyProcessor(Processor):
 
     name = "strategy"
 
-    def __init__(self, bus: DataBus, our_team: Team, demo: DemoConfig | None,
+    def __init__(self, bus: DataBus, our_team: Team, demo: DemoConfig,
                  hz: float = 20.0) -> None:
         super().__init__(Every(hz))
         self.world = bus.typed("world", WorldState)
@@ -264,6 +264,7 @@ class StrategyProcessor(Processor):
         self.targets = bus.typed("targets", dict)
         self.our_team: Team = our_team
         self.demo = demo
+        self.demo_enabled = True
         self.operator_targets: dict[tuple[Team, int], Target] = {}
         self._t0 = time.monotonic()
 
@@ -277,7 +278,7 @@ class StrategyProcessor(Processor):
             k: TargetEntry(t, "operator") for k, t in self.operator_targets.items()
         }
         world = self.world.latest_value()
-        if self.demo is not None and world is not None:
+        if self.demo_enabled and world is not None:
             geo = self.geometry.latest_value()
             if geo is not None:
                 self.demo.field_length_mm = float(geo["field_length"])
@@ -306,6 +307,7 @@ class ControlProcessor(Processor):
         self.estop = bus.typed("estop", bool)
         self.commands = bus.typed("robot-commands", CommandSet)
         self.vision_stale_s = vision_stale_s
+        self.stop_speed_mps = 1.5
         self.goto_config = goto or GoToConfig()
         self.controllers: dict[tuple[Team, int], GoToController] = {}
         self.last_commands: dict[tuple[Team, int], Command] = {}
@@ -351,11 +353,16 @@ class ControlProcessor(Processor):
                 ctrl = self.controllers[key] = GoToController(self.goto_config)
             vel = ctrl.step(robot.x, robot.y, robot.orientation, targets[key].target, dt)
             if ref is not None and ref.stopped:  # STOP: at most 1.5 m/s
-                vel = _limit_speed(vel, 1.5)
+                vel = _limit_speed(vel, self.stop_speed_mps)
             out.append(Command(key[0], key[1], vel))
         cmds = tuple(out)
         self.last_commands = {(c.team, c.id): c for c in cmds}
         self.commands.write(CommandSet(created, world.receive_time_ns, cmds))
+
+    def set_goto_config(self, cfg: GoToConfig) -> None:
+        self.goto_config = cfg
+        for c in self.controllers.values():
+            c.config = cfg
 
     def _reset_all(self) -> None:
         for c in self.controllers.values():

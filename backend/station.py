@@ -15,7 +15,9 @@ import zmq.asyncio
 
 from .bus import DataBus
 from .config import Settings
-from .control.goto import Target
+from .control.goto import GoToConfig, Target
+from .params.model import StationParams
+from .params.store import ParamStore
 from .processor import Every, OnTopic, Runner
 from .processors import (
     CommandPublisher,
@@ -40,14 +42,22 @@ log = logging.getLogger("touchline.station")
 class Station:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
-        self.bus = DataBus(settings.topic_sizes)
         self.ctx: zmq.asyncio.Context | None = None
         self.runner = Runner()
         self.started_mono = time.monotonic()
         self._world_json_cache: tuple[int, str] = (-1, "")
         self.ws_clients = 0
-        our: Team = "blue" if settings.our_team == "blue" else "yellow"
-        self.our_team: Team = our
+        self.params = ParamStore(settings.state_dir)
+        overrides: dict[str, Any] = {}
+        if settings.our_team is not None:
+            overrides["our_team"] = settings.our_team
+        if settings.our_side is not None:
+            overrides["our_side"] = "negative-x" if settings.our_side < 0 else "positive-x"
+        if settings.demo is not None:
+            overrides["demo"] = settings.demo
+        if overrides:
+            self.params.patch({"team": overrides})
+        self.bus = DataBus(self.params.current.bus.sizes())
         # topics the API writes to
         self.operator_targets = self.bus.typed("operator-targets", OperatorTarget)
         self.estop_topic = self.bus.typed("estop", bool)
@@ -57,6 +67,7 @@ class Station:
         self.referee_topic = self.bus.typed("referee", RefereeState)
         self.targets_topic = self.bus.typed("targets", dict)
         self.relay_stats = self.bus.typed("relay-stats", dict)
+        self.params_topic = self.bus.typed("params", int, capacity=4)
         for name in settings.topic_sizes:
             self.bus.topic(name)
 
@@ -65,20 +76,48 @@ class Station:
         self.ctx = zmq.asyncio.Context()
         sub = sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"])
         pub = pub_socket(self.ctx, s.relay_sub)
-        demo = DemoConfig(own_half_sign=s.our_side) if s.demo else None
+        prm = self.params.current
         self.ingest = RelayIngest(self.bus, sub)
         self.vision = VisionIngest(self.bus)
         self.referee = RefereeIngest(self.bus)
         self.world = WorldProcessor(self.bus)
-        self.strategy = StrategyProcessor(self.bus, self.our_team, demo)
-        self.control = ControlProcessor(self.bus, s.control_rate_max_wait_s, s.vision_stale_s)
+        self.strategy = StrategyProcessor(self.bus, prm.team.our_team, DemoConfig())
+        self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
+                                        prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus, pub)
+        self.apply_params(prm, self.params.version)
+        self.params.subscribe(self.apply_params)
         for p in (self.ingest, self.vision, self.referee, self.world, self.strategy,
                   self.control, self.publisher):
             self.runner.add(p)
         await self.runner.start()
-        log.info("station started: relay pub %s, relay sub %s, our team %s", s.relay_pub,
-                 s.relay_sub, s.our_team)
+        log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
+                 s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
+
+    def apply_params(self, p: StationParams, version: int) -> None:
+        """Applies a validated parameter set to every part at once (between two ticks: the
+        event loop runs one thing at a time), then tells the clients."""
+        self.strategy.our_team = p.team.our_team
+        self.strategy.demo_enabled = p.team.demo
+        self.strategy.demo.own_half_sign = -1 if p.team.our_side == "negative-x" else 1
+        self.strategy.demo.period_s = p.team.demo_period_s
+        self.strategy.set_rate(p.processors.strategy_hz)
+        g = p.goto
+        self.control.set_goto_config(GoToConfig(
+            kp_per_s=g.kp_per_s, max_speed_mps=g.max_speed_mps, max_accel_mps2=g.max_accel_mps2,
+            kp_angle_per_s=g.kp_angle_per_s, max_angular_radps=g.max_angular_radps,
+            position_tolerance_mm=g.position_tolerance_mm))
+        self.control.vision_stale_s = p.safety.vision_stale_s
+        self.control.stop_speed_mps = p.safety.stop_speed_mps
+        self.control.trigger = OnTopic(self.world_topic, max_wait_s=p.processors.control_max_wait_s)
+        wc = self.world.model.config
+        wc.merge_window_s = p.world.merge_window_s
+        wc.visible_timeout_s = p.world.visible_timeout_s
+        wc.drop_timeout_s = p.world.drop_timeout_s
+        wc.velocity_smoothing = p.world.velocity_smoothing
+        for name, size in p.bus.sizes().items():
+            self.bus.topic(name).resize(size)
+        self.params_topic.write(version)
 
     async def stop(self) -> None:
         # a last stop to every robot we drive, then shut down

@@ -16,6 +16,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import urllib.request
 from dataclasses import asdict, dataclass, field
@@ -109,7 +110,8 @@ def build_children(a: argparse.Namespace, ports: Ports) -> list[Child]:
     children.append(Child("backend", [
         py, "-m", "backend", "--host", a.host, "--port", str(ports.http),
         "--relay-pub", ports.relay_pub, "--relay-sub", ports.relay_sub,
-        "--our-team", a.our_team,
+        *(["--our-team", a.our_team] if a.our_team else []),
+        *(["--state-dir", a.state_dir] if a.state_dir else []),
         *a.backend_args,
     ]))
     return children
@@ -143,7 +145,10 @@ def main() -> int:
                    help="interface address for multicast (vision, referee)")
     p.add_argument("--output", choices=["sim", "grsim", "robot-box"], default="sim")
     p.add_argument("--sim-host", default="127.0.0.1", help="simulator address for commands")
-    p.add_argument("--our-team", choices=["blue", "yellow"], default="blue")
+    p.add_argument("--our-team", choices=["blue", "yellow"], default=None,
+                   help="override the stored team parameter")
+    p.add_argument("--state-dir", default=None,
+                   help="parameters and presets folder (default var/; --isolated: a temp dir)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--isolated", action="store_true",
                    help="free non-standard ports for everything (tests)")
@@ -165,6 +170,8 @@ def main() -> int:
         return 2
 
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
+    if a.isolated and a.state_dir is None:
+        a.state_dir = tempfile.mkdtemp(prefix="touchline-state-")
     if a.vision_port:
         ports.vision = a.vision_port
     children = build_children(a, ports)

@@ -22,7 +22,8 @@ def _port() -> int:
 @pytest.fixture
 def client(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
     settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path)
+                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+                        state_dir=tmp_path / "state")
     st = Station(settings)
     with TestClient(create_app(settings, st)) as c:
         yield c, st
@@ -127,3 +128,58 @@ def test_geometry_404_before_first_packet(client) -> None:  # type: ignore[no-un
     c, _ = client
     r = c.get("/api/geometry")
     assert r.status_code == 404 and "geometry" in r.json()["detail"]
+
+
+def test_params_patch_applies_live_and_reaches_every_client(client) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    with c.websocket_connect("/api/ws") as a, c.websocket_connect("/api/ws") as b:
+        for ws in (a, b):
+            snap = ws.receive_json()
+            assert snap["params"]["values"]["processors"]["strategy_hz"] == 20.0
+        r = c.patch("/api/params", json={"processors": {"strategy_hz": 5},
+                                         "bus": {"world": 7}})
+        assert r.status_code == 200, r.text
+        version = r.json()["version"]
+        for ws in (a, b):
+            for _ in range(50):
+                msg = ws.receive_json()
+                if msg["type"] == "params":
+                    break
+            else:
+                raise AssertionError("no params message")
+            assert msg["version"] == version
+            assert msg["values"]["processors"]["strategy_hz"] == 5
+    # applied to the running processors and the bus
+    assert st.strategy.trigger.hz == 5
+    assert st.bus.topic("world").capacity == 7
+    assert c.get("/api/params").json()["values"]["bus"]["world"] == 7
+
+
+def test_params_bad_value_422_names_field_and_reason(client) -> None:  # type: ignore[no-untyped-def]
+    c, st = client
+    v0 = c.get("/api/params").json()["version"]
+    r = c.patch("/api/params", content='{"goto": {"kp_per_s": NaN}}',
+                headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    d = r.json()["detail"][0]
+    assert d["loc"] == ["body", "goto", "kp_per_s"] and "finite" in d["msg"]
+    r = c.patch("/api/params", json={"goto": {"max_speed_mps": 40}})
+    assert r.status_code == 422 and "less than or equal" in r.json()["detail"][0]["msg"]
+    assert c.get("/api/params").json()["version"] == v0
+
+
+def test_schema_preset_and_export_routes(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    schema = c.get("/api/params/schema").json()
+    assert "goto" in schema["properties"]
+    c.patch("/api/params", json={"goto": {"kp_per_s": 4.0}})
+    assert c.put("/api/presets/match day").json() == {"presets": ["match day"]}
+    p = c.get("/api/presets/match day").json()
+    assert p["diff_from_defaults"] == [{"path": "goto.kp_per_s", "from": 2.5, "to": 4.0}]
+    exported = c.get("/api/params/export")
+    assert "attachment" in exported.headers["content-disposition"]
+    c.patch("/api/params", json={"goto": {"kp_per_s": 1.0}})
+    assert c.post("/api/params/import", json=exported.json()).json()["values"]["goto"][
+        "kp_per_s"] == 4.0
+    assert c.post("/api/presets/nope/load").status_code == 404
+    assert c.put("/api/presets/..%2Fx").status_code in (404, 422)

@@ -34,7 +34,8 @@ def _big_world(k: int) -> WorldState:
 def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ignore[no-untyped-def]
     port = _port()
     settings = Settings(port=port, relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path)
+                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+                        state_dir=tmp_path / "state")
     st = Station(settings)
     server = uvicorn.Server(uvicorn.Config(create_app(settings, st), host="127.0.0.1", port=port,
                                            ws_per_message_deflate=False, log_level="warning"))

@@ -1,0 +1,214 @@
+"""The parameter store: one current value, validated as a whole, versioned, persisted with
+atomic writes, and named presets. The API is its only writer."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import re
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from .model import StationParams
+
+log = logging.getLogger("touchline.params")
+PRESET_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.-]{0,63}$")
+
+
+class ParamError(ValueError):
+    """A change that was refused; ``errors`` has one ``{"loc", "msg", "type"}`` per field."""
+
+    def __init__(self, errors: list[dict[str, Any]]) -> None:
+        super().__init__("; ".join(f"{'.'.join(e['loc'])}: {e['msg']}" for e in errors))
+        self.errors = errors
+
+
+def _errors(exc: ValidationError, prefix: tuple[str, ...] = ("body",)) -> list[dict[str, Any]]:
+    out = []
+    for e in exc.errors():
+        msg = str(e.get("msg", "invalid"))
+        if e.get("type") == "finite_number":
+            msg = "must be a finite number (NaN and Infinity are not allowed)"
+        out.append({"loc": [*prefix, *(str(p) for p in e.get("loc", ()))], "msg": msg,
+                    "type": str(e.get("type", ""))})
+    return out
+
+
+def deep_merge(base: dict[str, Any], patch: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in patch.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = deep_merge(out[k], v)
+        else:
+            out[k] = v
+    return out
+
+
+def diff(a: dict[str, Any], b: dict[str, Any], path: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+    """Leaves that differ between two parameter trees: ``{"path", "from", "to"}``."""
+    out: list[dict[str, Any]] = []
+    for k in sorted(set(a) | set(b)):
+        va, vb = a.get(k), b.get(k)
+        if isinstance(va, dict) and isinstance(vb, dict):
+            out += diff(va, vb, (*path, k))
+        elif va != vb:
+            out.append({"path": ".".join((*path, k)), "from": va, "to": vb})
+    return out
+
+
+def atomic_write_json(path: Path, data: Any) -> None:
+    """Write-then-rename: a crash leaves either the old file or the new one, never half."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(data, f, indent=2, sort_keys=True)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+        dfd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+class ParamStore:
+    def __init__(self, state_dir: Path | None) -> None:
+        self.state_dir = state_dir
+        self.defaults = StationParams()
+        self.current = StationParams()
+        self.version = 0
+        self._listeners: list[Callable[[StationParams, int], None]] = []
+        if state_dir is not None:
+            self._load()
+
+    @property
+    def file(self) -> Path | None:
+        return None if self.state_dir is None else self.state_dir / "params.json"
+
+    @property
+    def presets_dir(self) -> Path | None:
+        return None if self.state_dir is None else self.state_dir / "presets"
+
+    def _load(self) -> None:
+        f = self.file
+        if f is None or not f.exists():
+            return
+        try:
+            data = json.loads(f.read_text())
+            values = data.get("values", {})
+            # unknown or removed keys from an older version are dropped, not fatal
+            merged = _known_only(self.defaults.model_dump(), values)
+            self.current = StationParams.model_validate(merged)
+            self.version = int(data.get("version", 0))
+            log.info("parameters loaded from %s (version %d)", f, self.version)
+        except (ValueError, ValidationError, OSError) as exc:
+            bad = f.with_suffix(".invalid.json")
+            log.error("parameters in %s are invalid (%s); using defaults, file kept as %s",
+                      f, exc, bad)
+            os.replace(f, bad)
+
+    def subscribe(self, fn: Callable[[StationParams, int], None]) -> None:
+        self._listeners.append(fn)
+
+    def values(self) -> dict[str, Any]:
+        return self.current.model_dump(mode="json")
+
+    def schema(self) -> dict[str, Any]:
+        return StationParams.model_json_schema()
+
+    def patch(self, changes: dict[str, Any]) -> StationParams:
+        """Validates the whole result, then applies it at once; nothing applied on error."""
+        if not isinstance(changes, dict):
+            raise ParamError([{"loc": ["body"], "msg": "expected an object of changes",
+                               "type": "type_error"}])
+        merged = deep_merge(self.values(), changes)
+        try:
+            new = StationParams.model_validate(merged)
+        except ValidationError as exc:
+            raise ParamError(_errors(exc)) from None
+        return self._set(new)
+
+    def replace(self, values: dict[str, Any]) -> StationParams:
+        """Whole-tree import: missing keys take their defaults."""
+        return self.patch_from(self.defaults.model_dump(mode="json"), values)
+
+    def patch_from(self, base: dict[str, Any], values: dict[str, Any]) -> StationParams:
+        try:
+            new = StationParams.model_validate(deep_merge(base, values))
+        except ValidationError as exc:
+            raise ParamError(_errors(exc)) from None
+        return self._set(new)
+
+    def _set(self, new: StationParams) -> StationParams:
+        if new == self.current:
+            return new
+        self.current = new
+        self.version += 1
+        if self.file is not None:
+            atomic_write_json(self.file, {"version": self.version, "values": self.values()})
+        for fn in self._listeners:
+            fn(new, self.version)
+        return new
+
+    def diff_from_defaults(self) -> list[dict[str, Any]]:
+        return diff(self.defaults.model_dump(mode="json"), self.values())
+
+    # ---- presets ----
+
+    def _preset_path(self, name: str) -> Path:
+        if not PRESET_NAME.match(name):
+            raise ParamError([{"loc": ["path", "name"], "type": "value_error",
+                               "msg": "preset names are 1-64 letters, digits, space, _ . -"}])
+        d = self.presets_dir
+        if d is None:
+            raise ParamError([{"loc": ["path", "name"], "type": "value_error",
+                               "msg": "presets need a state directory"}])
+        return d / f"{name}.json"
+
+    def list_presets(self) -> list[str]:
+        d = self.presets_dir
+        if d is None or not d.exists():
+            return []
+        return sorted(p.stem for p in d.glob("*.json"))
+
+    def save_preset(self, name: str) -> None:
+        atomic_write_json(self._preset_path(name), {"values": self.values()})
+
+    def read_preset(self, name: str) -> dict[str, Any]:
+        p = self._preset_path(name)
+        if not p.exists():
+            raise KeyError(name)
+        values: dict[str, Any] = json.loads(p.read_text())["values"]
+        return values
+
+    def load_preset(self, name: str) -> StationParams:
+        return self.replace(self.read_preset(name))
+
+    def delete_preset(self, name: str) -> None:
+        p = self._preset_path(name)
+        if not p.exists():
+            raise KeyError(name)
+        p.unlink()
+
+
+def _known_only(template: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in template.items():
+        if k not in values:
+            out[k] = v
+        elif isinstance(v, dict) and isinstance(values[k], dict) and v:
+            out[k] = _known_only(v, values[k])
+        else:
+            out[k] = values[k]
+    return out

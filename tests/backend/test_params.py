@@ -1,0 +1,113 @@
+import json
+import math
+import os
+from pathlib import Path
+
+import pytest
+
+from backend.params.model import StationParams
+from backend.params.store import ParamError, ParamStore
+
+
+def _leaves(schema: dict, node: dict, path: str = "") -> list[tuple[str, dict]]:  # type: ignore[type-arg]
+    out = []
+    if "$ref" in node:
+        node = schema["$defs"][node["$ref"].split("/")[-1]]
+    for name, prop in node.get("properties", {}).items():
+        if "$ref" in prop or "properties" in prop:
+            out += _leaves(schema, prop, f"{path}{name}.")
+        else:
+            out.append((f"{path}{name}", prop))
+    return out
+
+
+def test_every_number_has_range_unit_step_and_description() -> None:
+    schema = StationParams.model_json_schema()
+    leaves = _leaves(schema, schema)
+    assert len(leaves) > 20
+    for path, prop in leaves:
+        assert prop.get("description"), path
+        if prop.get("type") in ("number", "integer"):
+            assert "minimum" in prop and "maximum" in prop, path
+            assert "unit" in prop and "step" in prop, path
+
+
+def test_patch_is_validated_applied_versioned_and_persisted(tmp_path: Path) -> None:
+    store = ParamStore(tmp_path)
+    seen: list[int] = []
+    store.subscribe(lambda p, v: seen.append(v))
+    store.patch({"goto": {"kp_per_s": 3.5}})
+    assert store.current.goto.kp_per_s == 3.5 and store.version == 1 and seen == [1]
+    on_disk = json.loads((tmp_path / "params.json").read_text())
+    assert on_disk["version"] == 1 and on_disk["values"]["goto"]["kp_per_s"] == 3.5
+    again = ParamStore(tmp_path)  # a restart
+    assert again.current.goto.kp_per_s == 3.5 and again.version == 1
+
+
+@pytest.mark.parametrize("change,loc", [
+    ({"goto": {"kp_per_s": math.nan}}, ["body", "goto", "kp_per_s"]),
+    ({"goto": {"kp_per_s": math.inf}}, ["body", "goto", "kp_per_s"]),
+    ({"goto": {"max_speed_mps": 99}}, ["body", "goto", "max_speed_mps"]),
+    ({"goto": {"max_speed_mps": "fast"}}, ["body", "goto", "max_speed_mps"]),
+    ({"team": {"our_team": "green"}}, ["body", "team", "our_team"]),
+    ({"goto": {"no_such": 1}}, ["body", "goto", "no_such"]),
+])
+def test_bad_changes_are_refused_whole(tmp_path: Path, change: dict, loc: list) -> None:  # type: ignore[type-arg]
+    store = ParamStore(tmp_path)
+    store.patch({"processors": {"strategy_hz": 10}})
+    before = (tmp_path / "params.json").read_text()
+    # a good field next to a bad one: neither is applied
+    with pytest.raises(ParamError) as exc:
+        store.patch({**change, "world": {"merge_window_s": 0.01}})
+    assert any(e["loc"] == loc for e in exc.value.errors), exc.value.errors
+    assert all(e["msg"] for e in exc.value.errors)
+    assert store.version == 1 and store.current.world.merge_window_s == 0.025
+    assert (tmp_path / "params.json").read_text() == before
+
+
+def test_a_crash_while_writing_leaves_the_old_file(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    store = ParamStore(tmp_path)
+    store.patch({"goto": {"kp_per_s": 1.0}})
+    good = (tmp_path / "params.json").read_text()
+
+    def boom(src: str, dst: str) -> None:
+        raise OSError("disk gone")
+
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(OSError):
+        store.patch({"goto": {"kp_per_s": 2.0}})
+    monkeypatch.undo()
+    assert (tmp_path / "params.json").read_text() == good
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+    assert ParamStore(tmp_path).current.goto.kp_per_s == 1.0
+
+
+def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None:
+    (tmp_path / "params.json").write_text('{"version": 3, "values": {"goto": {"kp_per_s": -5}}}')
+    store = ParamStore(tmp_path)
+    assert store.current == StationParams()
+    assert (tmp_path / "params.invalid.json").exists()
+
+
+def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
+    store = ParamStore(tmp_path)
+    store.patch({"goto": {"kp_per_s": 4.0}})
+    store.save_preset("fast robots")
+    store.patch({"goto": {"kp_per_s": 1.0}})
+    assert store.list_presets() == ["fast robots"]
+    store.load_preset("fast robots")
+    assert store.current.goto.kp_per_s == 4.0
+    assert store.diff_from_defaults() == [{"path": "goto.kp_per_s", "from": 2.5, "to": 4.0}]
+    store.delete_preset("fast robots")
+    assert store.list_presets() == []
+    with pytest.raises(ParamError):
+        store.save_preset("../escape")
+    with pytest.raises(KeyError):
+        store.load_preset("missing")
+
+
+def test_import_fills_missing_keys_with_defaults(tmp_path: Path) -> None:
+    store = ParamStore(tmp_path)
+    store.patch({"goto": {"kp_per_s": 4.0}, "world": {"merge_window_s": 0.01}})
+    store.replace({"goto": {"kp_per_s": 3.0}})
+    assert store.current.goto.kp_per_s == 3.0 and store.current.world.merge_window_s == 0.025
