@@ -85,3 +85,9 @@ class GoToController:
                             min(cfg.max_angular_radps, cfg.kp_angle_per_s * err))
         fwd, left = global_to_local(vx, vy, heading)
         return LocalVelocity(fwd, left, omega)
+
+
+def set_last_velocity(ctrl: GoToController, vx_mps: float, vy_mps: float) -> None:
+    """Seed the acceleration limit of ``ctrl`` with a field-frame velocity that was really
+    commanded last (used when another controller hands a robot over to this one)."""
+    ctrl._last_v = (vx_mps, vy_mps)
