@@ -96,6 +96,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=d.our_team,
         help="our colour, for the compat referee is_left",
     )
+    a("--referee-out", action=argparse.BooleanOptionalAction, default=None,
+      help="multicast the internal referee's messages (default: only on a loopback interface)")
     a("--log-level", default="INFO")
     return p
 
@@ -128,6 +130,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         compat_referee_pub=args.compat_referee_pub,
         compat_commands=args.compat_commands,
         our_team=args.our_team,
+        referee_out=args.referee_out,
     )
     if args.tracker is not None:
         cfg = dataclasses.replace(

@@ -58,6 +58,17 @@ class RelayConfig:
 
     stats_interval_s: float = 1.0
     log_interval_s: float = 5.0
+    # Referee messages from the station's internal referee ("referee-out" topic) are
+    # multicast to the referee group. None: only when the interface is loopback, so a station
+    # on a venue network never competes with the real game controller unless told to.
+    referee_out: bool | None = None
+    referee_out_ttl: int = 1
+
+    @property
+    def referee_out_enabled(self) -> bool:
+        if self.referee_out is None:
+            return self.interface.startswith("127.")
+        return self.referee_out
 
     def validate(self) -> None:
         """Raise ValueError for settings the relay cannot run safely with."""

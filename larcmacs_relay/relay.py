@@ -24,7 +24,7 @@ from larcmacs_relay.codecs import Command, CommandError
 from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
-from sslnet.multicast import open_multicast_receiver
+from sslnet.multicast import open_multicast_receiver, open_multicast_sender
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
 from sslpb import ssl_simulation_control_pb2, touchline_pb2
@@ -79,7 +79,7 @@ class Relay:
         self.config = config
         self.table = CommandTable(config.command_timeout_s, config.hold_time_s)
         names = ["vision", "referee", "tracker", "commands", "output", "sim_responses"]
-        names += ["sim_commands"]
+        names += ["sim_commands", "referee_out"]
         if config.compat:
             names.append("compat_commands")
         self.streams = {n: StreamCounter(n) for n in names}
@@ -100,6 +100,7 @@ class Relay:
         self._compat_vision: zmq.Socket[bytes] | None = None
         self._compat_referee: zmq.Socket[bytes] | None = None
         self._udp_out: socket.socket | None = None
+        self._referee_out: socket.socket | None = None
         self._wake: asyncio.Future[None] | None = None
         self._sim_host = config.sim_host
         self._box_host = config.robot_box_host
@@ -140,6 +141,7 @@ class Relay:
             sub = asock(zmq.SUB)
             sub.setsockopt(zmq.SUBSCRIBE, b"commands")
             sub.setsockopt(zmq.SUBSCRIBE, b"sim")
+            sub.setsockopt(zmq.SUBSCRIBE, b"referee-out")
             sub.bind(cfg.sub_endpoint)
             self.sub_address = _endpoint(sub)
             compat_sub: zmq.asyncio.Socket | None = None
@@ -179,6 +181,10 @@ class Relay:
             self._udp_out = out
             if cfg.output == "sim":
                 loop.add_reader(out.fileno(), self._drain_responses, out)
+            if cfg.referee_out_enabled:
+                rout = open_multicast_sender(cfg.interface, ttl=cfg.referee_out_ttl)
+                udp.append(rout)
+                self._referee_out = rout
 
             tasks.append(asyncio.create_task(self._command_loop(sub)))
             if compat_sub is not None:
@@ -211,6 +217,7 @@ class Relay:
                 s.close()
             self._pub = self._compat_vision = self._compat_referee = None
             self._udp_out = None
+            self._referee_out = None
             for z in zsockets:
                 z.close(linger=0)
             ctx.term()
@@ -302,6 +309,9 @@ class Relay:
         if topic == b"sim":
             self._handle_sim_command(body)
             return
+        if topic == b"referee-out":
+            self._handle_referee_out(body)
+            return
         if topic != b"commands":
             self._command_error("commands", f"unknown topic {topic[:32]!r}")
             return
@@ -359,6 +369,24 @@ class Relay:
                 self._send(pkt, (self._sim_host, cfg.grsim_port))
         else:
             self._command_error("sim_commands", "simulator commands unsupported in robot-box mode")
+
+    def _handle_referee_out(self, body: bytes) -> None:
+        """The internal referee's messages go out as real Referee multicast."""
+        cfg = self.config
+        if self._referee_out is None:
+            self._command_error("referee_out", "referee output is off (interface is not "
+                                "loopback; start with --referee-out to allow it)")
+            return
+        reason = codecs.validate_referee(body)
+        if reason is not None:
+            self._command_error("referee_out", f"Referee rejected: {reason}")
+            return
+        try:
+            self._referee_out.sendto(body, (cfg.referee_group, cfg.referee_port))
+        except OSError as exc:
+            self._command_error("referee_out", f"send failed: {exc}")
+            return
+        self.streams["referee_out"].packet(len(body))
 
     async def _compat_loop(self, sub: zmq.asyncio.Socket) -> None:
         cfg = self.config

@@ -9,6 +9,7 @@ import time
 import pytest
 import zmq
 
+from larcmacs_relay import RelayConfig
 from sslnet.multicast import open_multicast_receiver
 from sslpb import (
     grsim_packet_pb2,
@@ -399,3 +400,37 @@ async def test_burst_is_forwarded_completely_in_order() -> None:
             if payload in frames:
                 got.append(payload)
         assert got == frames
+
+
+# ----------------------------------------------------------------- internal referee out
+
+
+async def test_referee_out_is_multicast_and_comes_back_as_referee_input() -> None:
+    async with running_relay() as h:
+        listener = open_multicast_receiver(h.config.referee_group, h.config.referee_port,
+                                           "127.0.0.1")
+        try:
+            sub = h.subscriber(b"referee")
+            pub = h.publisher()
+            ref = make_referee(Ref.FORCE_START, 3)
+            first = await subscribed(sub, lambda: asyncio.ensure_future(
+                pub.send_multipart([b"referee-out", ref])))
+            assert first[0] == b"referee"
+            assert touchline_pb2.Envelope.FromString(first[1]).payload == ref
+            loop = asyncio.get_running_loop()
+            assert await asyncio.wait_for(loop.sock_recv(listener, 65536), 2.0) == ref
+            # an incomplete Referee is refused, counted, and not sent
+            sent = h.relay.streams["referee_out"].packets
+            await pub.send_multipart([b"referee-out", b"\x08\x01"])
+            await wait_for(lambda: h.relay.streams["referee_out"].errors == 1,
+                           what="referee-out error")
+            assert h.relay.streams["referee_out"].packets == sent
+        finally:
+            listener.close()
+
+
+async def test_referee_out_is_off_on_a_non_loopback_interface_unless_asked() -> None:
+    cfg = RelayConfig(interface="192.0.2.10")
+    assert not cfg.referee_out_enabled
+    assert RelayConfig(interface="192.0.2.10", referee_out=True).referee_out_enabled
+    assert RelayConfig().referee_out_enabled
