@@ -86,7 +86,8 @@ def intercept_x(point: ArrayLike, direction: ArrayLike, x: ArrayLike) -> Array:
     xx = as_scalars(x)
     ok = d[..., 0] != 0.0
     safe = np.where(ok, d[..., 0], 1.0)
-    y = p[..., 1] + (xx - p[..., 0]) * d[..., 1] / safe
+    with np.errstate(over="ignore"):  # a nearly vertical direction gives +-inf, not a warning
+        y = p[..., 1] + (xx - p[..., 0]) * d[..., 1] / safe
     return np.asarray(np.where(ok, y, np.nan), dtype=np.float64)
 
 

@@ -54,8 +54,11 @@ def normalise(v: ArrayLike, eps: float = 0.0) -> Array:
     pv = as_points(v)
     n = norm(pv)
     ok = n > eps
-    safe = np.where(ok, n, 1.0)
-    out = pv / safe[..., None]
+    # scale by the larger component first so subnormal vectors still come out unit length
+    big = np.maximum(np.abs(pv[..., 0]), np.abs(pv[..., 1]))
+    scaled = pv / np.where(ok, big, 1.0)[..., None]
+    sn = norm(scaled)
+    out = scaled / np.where(ok, sn, 1.0)[..., None]
     return np.asarray(np.where(ok[..., None], out, 0.0), dtype=np.float64)
 
 
