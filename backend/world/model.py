@@ -1,57 +1,189 @@
-"""Merges detection frames from several unsynchronised cameras into one world state.
+"""Merges detection frames from several unsynchronised cameras into one filtered world state.
 
-One object per robot (team, id) and one ball. Cameras overlap: detections of the same object
-by several cameras at about the same capture time are averaged. This is the plain merge of
-the end-to-end loop; filtering proper plugs in behind ``update``.
+One object per robot (team, id) and one ball. Per object:
+
+* Detections by several cameras at the same instant (capture times within
+  ``merge_window_s``) are one measurement, their mean (circular mean for the orientation); a
+  detection at a new instant is a new filter step. Out-of-order older frames are ignored.
+* The measurement goes through the object's filter (``backend.filters``: raw, median, paper,
+  kalman; chosen per object class and per robot by :class:`FilterSettings`). The state carries
+  both the filtered value (``x``, ``y``, ``orientation``) and the latest merged measurement
+  (``raw_x``, ``raw_y``, ``raw_orientation``), and the filter's velocity.
+* An object not seen for ``predict_after_s`` is extrapolated with its velocity
+  (``predicted``), after ``visible_timeout_s`` it is ``lost`` (not visible, frozen, velocity zero),
+  after ``drop_timeout_s`` removed.
+
+Ball association among false detections: detections inside a robot's footprint (a false "ball
+on top of a robot") are rejected; the remaining candidates are compared with the ball's
+prediction from its recent raw track, and the nearest one within the distance the ball can
+have travelled at ``ball_max_speed_mm_s`` is taken. Candidates not taken feed hypotheses; a
+hypothesis confirmed by ``ball_recover_count`` consistent detections while the tracked ball has
+not been seen for ``ball_recover_after_s`` replaces it (teleport, fast kick, wrong start).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
+
+from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_filter
+from backend.filters.params import FilterKind, FilterSettings
 
 from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
 
 
 @dataclass
 class WorldModelConfig:
-    merge_window_s: float = 0.025  # detections this close in capture time are one observation
-    visible_timeout_s: float = 0.25  # not seen for this long: visible = False
-    drop_timeout_s: float = 3.0  # not seen for this long: removed
-    velocity_smoothing: float = 0.3  # weight of a new finite-difference velocity
-    ball_max_jump_mm: float = 1000.0  # farther from the prediction: take the most confident
+    # detections of different cameras this close in capture time are one measurement
+    merge_window_s: float = 0.005
+    camera_window_s: float = 0.05  # a camera counts as seeing an object for this long
+    predict_after_s: float = 0.05  # not seen for longer: position extrapolated (predicted)
+    visible_timeout_s: float = 0.2  # not seen for longer: lost (visible = False)
+    drop_timeout_s: float = 3.0  # not seen for longer: removed
     camera_timeout_s: float = 1.0
-
-
-def _wrap(a: float) -> float:
-    return math.atan2(math.sin(a), math.cos(a))
+    history: int = 12  # merged measurements kept per object (re-initialising a new filter)
+    robot_radius_mm: float = 90.0  # a ball detection this close to a robot centre is false
+    ball_max_speed_mm_s: float = 10000.0  # faster than this is not the ball
+    ball_gate_slack_mm: float = 60.0  # noise allowance added to the travel distance
+    ball_assoc_window_s: float = 0.1  # unseen longer: only a confirmed hypothesis is taken
+    ball_recover_count: int = 3  # consistent detections that confirm a hypothesis
+    ball_recover_after_s: float = 0.05  # tracked ball unseen this long before switching
+    ball_hypothesis_timeout_s: float = 0.1  # a hypothesis not confirmed again is forgotten
+    ball_max_hypotheses: int = 16
+    velocity_smoothing: float = 0.3  # unused since the filters give velocities (kept for params)
 
 
 @dataclass
-class _Obs:
+class _Meas:
     t: float
     x: float
     y: float
-    orientation: float
-    camera: int
+    o: float
+
+
+@dataclass
+class _Track:
+    kind: FilterKind
+    key: object  # (kind, params) the filters were built from
+    pos: PositionFilter
+    ang: AngleFilter | None
+    t_meas: float = -math.inf  # capture time of the latest measurement instant
+    raw: _Meas = field(default_factory=lambda: _Meas(0.0, 0.0, 0.0, 0.0))
+    # running sums of the detections at the current instant
+    n: int = 0
+    sx: float = 0.0
+    sy: float = 0.0
+    ss: float = 0.0
+    sc: float = 0.0
+    instant_cams: set[int] = field(default_factory=set)
+    cam_seen: dict[int, float] = field(default_factory=dict)
+    history: deque[_Meas] = field(default_factory=deque)
+    raw_vel: VelocityFit = field(default_factory=lambda: VelocityFit(0.1, 16))
+
+
+@dataclass
+class _Hypothesis:
+    x: float
+    y: float
+    t: float
+    count: int
+    points: list[tuple[float, float, float]]
 
 
 class WorldModel:
-    def __init__(self, config: WorldModelConfig | None = None) -> None:
+    def __init__(self, config: WorldModelConfig | None = None,
+                 filters: FilterSettings | None = None) -> None:
         self.config = config or WorldModelConfig()
-        self._robot_obs: dict[tuple[Team, int], dict[int, _Obs]] = {}
-        self._robots: dict[tuple[Team, int], RobotState] = {}
-        self._ball: BallState | None = None
+        self._settings = filters or FilterSettings()
+        self._robots: dict[tuple[Team, int], _Track] = {}
+        self._ball: _Track | None = None
+        self._hyps: list[_Hypothesis] = []
         self._cameras: dict[int, CameraFrame] = {}
         self._t_latest = 0.0
         self._recv_latest = 0
+        self.ball_rejected_on_robot = 0  # counters for health/experiments
+        self.ball_rejected_gate = 0
+        self.ball_recoveries = 0
+
+    # -- filters ---------------------------------------------------------------------------
+
+    @property
+    def settings(self) -> FilterSettings:
+        return self._settings
+
+    def _new_track(self, kind: FilterKind, with_angle: bool) -> _Track:
+        params = self._settings.params_for(kind)
+        ang = AngleFilter(make_filter(kind, params, angle=True)) if with_angle else None
+        return _Track(kind, (kind, params), make_filter(kind, params), ang,
+                      history=deque(maxlen=self.config.history))
+
+    def configure(self, settings: FilterSettings) -> None:
+        """Use new filter settings from now on. An object whose filter kind or parameters
+        change gets a new filter, initialised from its latest measurements."""
+        self._settings = settings
+        for (team, rid), tr in self._robots.items():
+            self._rebuild(tr, settings.robot_kind(team, rid))
+        if self._ball is not None:
+            self._rebuild(self._ball, settings.ball)
+
+    def _rebuild(self, tr: _Track, kind: FilterKind) -> None:
+        params = self._settings.params_for(kind)
+        if tr.key == (kind, params):
+            return
+        tr.kind, tr.key = kind, (kind, params)
+        tr.pos = make_filter(kind, params)
+        tr.ang = AngleFilter(make_filter(kind, params, angle=True)) if tr.ang else None
+        for m in tr.history:
+            tr.pos.update(m.t, m.x, m.y)
+            if tr.ang is not None:
+                tr.ang.update(m.t, m.o)
+
+    # -- measurements ----------------------------------------------------------------------
+
+    def _measure(self, tr: _Track, t: float, cam: int, x: float, y: float, o: float) -> bool:
+        """Feed one detection; False if it was ignored (older than the latest instant)."""
+        cfg = self.config
+        if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
+            # another camera at the same instant: one measurement, the mean
+            tr.instant_cams.add(cam)
+            tr.n += 1
+            tr.sx += x
+            tr.sy += y
+            tr.ss += math.sin(o)
+            tr.sc += math.cos(o)
+            mx, my = tr.sx / tr.n, tr.sy / tr.n
+            mo = math.atan2(tr.ss, tr.sc)
+            tr.pos.revise(mx, my)
+            if tr.ang is not None:
+                tr.ang.revise(mo)
+            tr.raw = _Meas(tr.raw.t, mx, my, mo)
+            if tr.history:
+                tr.history[-1] = tr.raw
+            tr.raw_vel.replace_last(mx, my)
+            tr.cam_seen[cam] = t
+            return True
+        if t <= tr.t_meas:
+            return False  # older than (or a duplicate of) the latest instant
+        tr.t_meas = t
+        tr.n, tr.sx, tr.sy = 1, x, y
+        tr.ss, tr.sc = math.sin(o), math.cos(o)
+        tr.instant_cams = {cam}
+        tr.pos.update(t, x, y)
+        if tr.ang is not None:
+            tr.ang.update(t, o)
+        tr.raw = _Meas(t, x, y, o)
+        tr.history.append(tr.raw)
+        tr.raw_vel.add(t, x, y)
+        tr.cam_seen[cam] = t
+        return True
 
     def update(self, frame: CameraFrame) -> None:
         """Merge one camera frame."""
-        cfg = self.config
         self._cameras[frame.camera_id] = frame
-        if frame.t_capture > self._t_latest:
-            self._t_latest = frame.t_capture
+        t = frame.t_capture
+        if t > self._t_latest:
+            self._t_latest = t
             self._recv_latest = frame.receive_time_ns
         seen: set[tuple[Team, int]] = set()
         for det in frame.robots:
@@ -59,77 +191,136 @@ class WorldModel:
             if key in seen:  # a duplicate id in one frame: keep the first
                 continue
             seen.add(key)
-            obs = self._robot_obs.setdefault(key, {})
-            obs[frame.camera_id] = _Obs(frame.t_capture, det.x, det.y, det.orientation,
-                                        frame.camera_id)
-            recent = [o for o in obs.values() if frame.t_capture - o.t <= cfg.merge_window_s]
-            x = sum(o.x for o in recent) / len(recent)
-            y = sum(o.y for o in recent) / len(recent)
-            ori = math.atan2(sum(math.sin(o.orientation) for o in recent),
-                             sum(math.cos(o.orientation) for o in recent))
-            cams = tuple(sorted(o.camera for o in recent))
-            prev = self._robots.get(key)
-            if prev is None:
-                self._robots[key] = RobotState(det.team, det.id, x, y, ori, t_seen=frame.t_capture,
-                                               cameras=cams)
-                continue
-            dt = frame.t_capture - prev.t_seen
-            if dt > 0.004:
-                a = cfg.velocity_smoothing
-                prev.vx = (1 - a) * prev.vx + a * (x - prev.x) / dt
-                prev.vy = (1 - a) * prev.vy + a * (y - prev.y) / dt
-                prev.omega = (1 - a) * prev.omega + a * _wrap(ori - prev.orientation) / dt
-                if dt > 0.5:  # after a long gap the old velocity means nothing
-                    prev.vx = prev.vy = prev.omega = 0.0
-            if dt >= 0 or len(recent) > 1:
-                prev.x, prev.y, prev.orientation = x, y, ori
-                prev.t_seen = max(prev.t_seen, frame.t_capture)
-                prev.cameras = cams
-            prev.visible = True
+            tr = self._robots.get(key)
+            if tr is None:
+                tr = self._new_track(self._settings.robot_kind(det.team, det.id), True)
+                self._robots[key] = tr
+            self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation)
         self._update_ball(frame)
+
+    # -- ball ------------------------------------------------------------------------------
+
+    def _on_robot(self, b: RawBall, frame: CameraFrame) -> bool:
+        r2 = self.config.robot_radius_mm ** 2
+        for d in frame.robots:
+            if (b.x - d.x) ** 2 + (b.y - d.y) ** 2 <= r2:
+                return True
+        lost = self.config.visible_timeout_s
+        for tr in self._robots.values():
+            if frame.t_capture - tr.t_meas <= lost:
+                e = tr.pos.estimate()
+                if e is not None and (b.x - e[0]) ** 2 + (b.y - e[1]) ** 2 <= r2:
+                    return True
+        return False
+
+    def _gate(self, dt: float) -> float:
+        return self.config.ball_gate_slack_mm + self.config.ball_max_speed_mm_s * max(0.0, dt)
 
     def _update_ball(self, frame: CameraFrame) -> None:
         if not frame.balls:
             return
-        ball = self._ball
-        best: RawBall
-        if ball is None or frame.t_capture - ball.t_seen > self.config.visible_timeout_s:
-            best = max(frame.balls, key=lambda b: b.confidence)
+        cfg = self.config
+        t, cam = frame.t_capture, frame.camera_id
+        cands: list[RawBall] = []
+        for b in frame.balls:
+            if self._on_robot(b, frame):
+                self.ball_rejected_on_robot += 1
+            else:
+                cands.append(b)
+        if not cands:
+            return
+        bt = self._ball
+        if bt is None:  # nothing known: start from the most confident detection
+            best = max(cands, key=lambda b: b.confidence)
+            bt = self._new_track(self._settings.ball, False)
+            self._ball = bt
+            self._measure(bt, t, cam, best.x, best.y, 0.0)
+            self._hyps.clear()
+            return
+        dt = t - bt.t_meas
+        if dt < -cfg.merge_window_s or (dt <= 0 and cam in bt.instant_cams):
+            return  # an older frame than the ball's latest measurement
+        same_instant = abs(dt) <= cfg.merge_window_s and cam not in bt.instant_cams
+        if same_instant:
+            ref: tuple[float, float] = (bt.raw.x, bt.raw.y)
+            gate = cfg.ball_gate_slack_mm
         else:
-            # predicted position, then the nearest detection
-            dt = max(0.0, frame.t_capture - ball.t_seen)
-            px, py = ball.x + ball.vx * dt, ball.y + ball.vy * dt
-            best = min(frame.balls, key=lambda b: (b.x - px) ** 2 + (b.y - py) ** 2)
-            if math.hypot(best.x - px, best.y - py) > self.config.ball_max_jump_mm:
-                best = max(frame.balls, key=lambda b: b.confidence)
-        if ball is None:
-            self._ball = BallState(best.x, best.y, t_seen=frame.t_capture,
-                                   cameras=(frame.camera_id,))
-            return
-        dt = frame.t_capture - ball.t_seen
-        if dt < -0.004:  # an older frame from another camera: don't move backwards in time
-            return
-        same_moment = (
-            abs(dt) <= self.config.merge_window_s / 2
-            and frame.camera_id not in ball.cameras
-            and math.hypot(best.x - ball.x, best.y - ball.y) < 100
-        )
-        if same_moment:
-            n = len(ball.cameras)
-            ball.x = (ball.x * n + best.x) / (n + 1)
-            ball.y = (ball.y * n + best.y) / (n + 1)
-            ball.cameras = (*ball.cameras, frame.camera_id)
-            return
-        if dt > 0.004:
-            a = self.config.velocity_smoothing
-            ball.vx = (1 - a) * ball.vx + a * (best.x - ball.x) / dt
-            ball.vy = (1 - a) * ball.vy + a * (best.y - ball.y) / dt
-            if dt > 0.5:
-                ball.vx = ball.vy = 0.0
-        ball.x, ball.y = best.x, best.y
-        ball.t_seen = max(ball.t_seen, frame.t_capture)
-        ball.cameras = (frame.camera_id,)
-        ball.visible = True
+            vx, vy = bt.raw_vel.velocity()
+            ref = (bt.raw.x + vx * dt, bt.raw.y + vy * dt)
+            gate = self._gate(dt) if dt <= cfg.ball_assoc_window_s else -1.0
+        best_i, best_d2 = -1, gate * gate if gate >= 0 else -1.0
+        for i, b in enumerate(cands):
+            d2 = (b.x - ref[0]) ** 2 + (b.y - ref[1]) ** 2
+            if d2 <= best_d2:
+                best_i, best_d2 = i, d2
+        if best_i >= 0:
+            b = cands[best_i]
+            self._measure(bt, t, cam, b.x, b.y, 0.0)
+            rest = cands[:best_i] + cands[best_i + 1:]
+        else:
+            rest = cands
+        self.ball_rejected_gate += len(rest)
+        self._hypothesise(rest, t)
+        if best_i < 0 and dt >= cfg.ball_recover_after_s:
+            confirmed = [h for h in self._hyps
+                         if h.t == t and h.count >= cfg.ball_recover_count]
+            if confirmed:
+                h = max(confirmed, key=lambda h: h.count)
+                self._jump(h)
+
+    def _hypothesise(self, cands: list[RawBall], t: float) -> None:
+        cfg = self.config
+        self._hyps = [h for h in self._hyps if t - h.t <= cfg.ball_hypothesis_timeout_s]
+        for b in cands:
+            match: _Hypothesis | None = None
+            best = math.inf
+            for h in self._hyps:
+                if h.points[-1][0] == t:
+                    continue  # one detection per hypothesis and instant
+                d = math.hypot(b.x - h.x, b.y - h.y)
+                if d <= self._gate(t - h.t) and d < best:
+                    match, best = h, d
+            if match is None:
+                if len(self._hyps) < cfg.ball_max_hypotheses:
+                    self._hyps.append(_Hypothesis(b.x, b.y, t, 1, [(t, b.x, b.y)]))
+            else:
+                match.x, match.y, match.t = b.x, b.y, t
+                match.count += 1
+                match.points.append((t, b.x, b.y))
+                del match.points[:-8]
+
+    def _jump(self, h: _Hypothesis) -> None:
+        """The ball is where a confirmed hypothesis says: a new track from its detections."""
+        old = self._ball
+        bt = self._new_track(self._settings.ball, False)
+        if old is not None:
+            bt.cam_seen = old.cam_seen
+        for tp, xp, yp in h.points:
+            self._measure(bt, tp, -1 - len(bt.history), xp, yp, 0.0)
+        self._ball = bt
+        self._hyps = [k for k in self._hyps if k is not h]
+        self.ball_recoveries += 1
+
+    # -- output ----------------------------------------------------------------------------
+
+    def _where(self, tr: _Track, t_now: float) -> tuple[float, float, float, float, bool, bool]:
+        """x, y, vx, vy, predicted, lost."""
+        cfg = self.config
+        age = t_now - tr.t_meas
+        est = tr.pos.estimate() or (tr.raw.x, tr.raw.y)
+        vx, vy = tr.pos.velocity()
+        if age <= cfg.predict_after_s:
+            return est[0], est[1], vx, vy, False, False
+        if age <= cfg.visible_timeout_s:
+            p = tr.pos.predict(t_now) or est
+            return p[0], p[1], vx, vy, True, False
+        p = tr.pos.predict(tr.t_meas + cfg.visible_timeout_s) or est
+        return p[0], p[1], 0.0, 0.0, False, True
+
+    def _cams(self, tr: _Track) -> tuple[int, ...]:
+        w = self.config.camera_window_s
+        return tuple(sorted(c for c, tc in tr.cam_seen.items()
+                            if c >= 0 and tr.t_meas - tc <= w))
 
     def snapshot(self, now: float | None = None) -> WorldState:
         """The current world. ``now`` (Unix s) defaults to the newest capture time."""
@@ -137,24 +328,37 @@ class WorldModel:
         t_now = self._t_latest if now is None else now
         robots: list[RobotState] = []
         for key in sorted(self._robots):
-            r = self._robots[key]
-            age = t_now - r.t_seen
+            tr = self._robots[key]
+            age = t_now - tr.t_meas
             if age > cfg.drop_timeout_s:
                 del self._robots[key]
-                self._robot_obs.pop(key, None)
                 continue
-            r.visible = age <= cfg.visible_timeout_s
-            robots.append(RobotState(r.team, r.id, r.x, r.y, r.orientation, r.vx, r.vy, r.omega,
-                                     r.t_seen, r.visible, r.cameras))
+            x, y, vx, vy, predicted, lost = self._where(tr, t_now)
+            ang = tr.ang
+            o = tr.raw.o
+            omega = 0.0
+            if ang is not None:
+                eo = ang.estimate()
+                o = eo if eo is not None else tr.raw.o
+                if not lost:
+                    omega = ang.rate()
+                if predicted:
+                    po = ang.predict(t_now)
+                    o = po if po is not None else o
+            robots.append(RobotState(
+                key[0], key[1], x, y, o, vx, vy, omega, tr.t_meas, not lost, self._cams(tr),
+                raw_x=tr.raw.x, raw_y=tr.raw.y, raw_orientation=tr.raw.o,
+                predicted=predicted, lost=lost, filter=tr.kind))
         ball = None
         if self._ball is not None:
-            b = self._ball
-            age = t_now - b.t_seen
-            if age > cfg.drop_timeout_s:
+            tr = self._ball
+            if t_now - tr.t_meas > cfg.drop_timeout_s:
                 self._ball = None
             else:
-                b.visible = age <= cfg.visible_timeout_s
-                ball = BallState(b.x, b.y, b.vx, b.vy, b.t_seen, b.visible, b.cameras)
+                x, y, vx, vy, predicted, lost = self._where(tr, t_now)
+                ball = BallState(x, y, vx, vy, tr.t_meas, not lost, self._cams(tr),
+                                 raw_x=tr.raw.x, raw_y=tr.raw.y, predicted=predicted,
+                                 lost=lost, filter=tr.kind)
         cams = tuple(
             self._cameras[c] for c in sorted(self._cameras)
             if t_now - self._cameras[c].t_capture <= cfg.camera_timeout_s

@@ -20,19 +20,31 @@ class RobotState:
     vy: float = 0.0  # mm/s
     omega: float = 0.0  # rad/s
     t_seen: float = 0.0  # t_capture (Unix s) of the newest detection merged
-    visible: bool = True
-    cameras: tuple[int, ...] = ()
+    visible: bool = True  # False once lost (not seen for WorldModelConfig.lost_after_s)
+    cameras: tuple[int, ...] = ()  # cameras that saw it recently
+    # latest merged measurement, before filtering (None when not from the world model)
+    raw_x: float | None = None  # mm
+    raw_y: float | None = None  # mm
+    raw_orientation: float | None = None  # rad
+    predicted: bool = False  # not seen for a while: x, y, orientation extrapolated
+    lost: bool = False  # not seen for too long: frozen, velocity zero, visible False
+    filter: str = ""  # filter kind in use: "raw", "median", "paper", "kalman"
 
 
 @dataclass(slots=True)
 class BallState:
-    x: float
-    y: float
-    vx: float = 0.0
-    vy: float = 0.0
+    x: float  # mm, filtered
+    y: float  # mm, filtered
+    vx: float = 0.0  # mm/s
+    vy: float = 0.0  # mm/s
     t_seen: float = 0.0
     visible: bool = True
     cameras: tuple[int, ...] = ()
+    raw_x: float | None = None  # mm, latest associated detection (merged over cameras)
+    raw_y: float | None = None
+    predicted: bool = False
+    lost: bool = False
+    filter: str = ""
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,0 +1,409 @@
+"""Per-object position filters with one interface (pure, synchronous, no I/O).
+
+Every filter takes measurements in time order: ``update(t_s, x, y) -> (x, y)`` returns the
+estimate after the measurement. ``revise(x, y)`` replaces the last measurement (same instant,
+e.g. a second camera's detection of the same object merged into it) without a new time step.
+``predict(t_s)`` extrapolates the estimate with the filter's velocity; ``velocity()`` is in
+units per second. ``reset()`` forgets everything.
+
+Orientation goes through :class:`AngleFilter`, which unwraps the angle before any of these
+filters and wraps the estimate again.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Protocol
+
+from .params import FilterKind, KalmanParams, MedianParams, PaperParams, RawParams
+
+Vec = tuple[float, float]
+
+
+def wrap_angle(a: float) -> float:
+    """Angle in [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _median(vals: list[float]) -> float:
+    s = sorted(vals)
+    n = len(s)
+    h = n // 2
+    return s[h] if n % 2 else 0.5 * (s[h - 1] + s[h])
+
+
+class PositionFilter(Protocol):
+    kind: FilterKind
+
+    @property
+    def t_last(self) -> float | None: ...
+
+    def update(self, t_s: float, x: float, y: float) -> Vec: ...
+
+    def revise(self, x: float, y: float) -> Vec: ...
+
+    def estimate(self) -> Vec | None: ...
+
+    def velocity(self) -> Vec: ...
+
+    def predict(self, t_s: float) -> Vec | None: ...
+
+    def reset(self) -> None: ...
+
+
+class VelocityFit:
+    """Velocity as the slope of a least-squares line through the points of the last
+    ``window_s`` seconds (at least the last two points)."""
+
+    __slots__ = ("_pts", "window_s")
+
+    def __init__(self, window_s: float = 0.1, max_points: int = 48) -> None:
+        self.window_s = window_s
+        self._pts: deque[tuple[float, float, float]] = deque(maxlen=max_points)
+
+    def add(self, t: float, x: float, y: float) -> None:
+        self._pts.append((t, x, y))
+
+    def replace_last(self, x: float, y: float) -> None:
+        if self._pts:
+            t = self._pts[-1][0]
+            self._pts[-1] = (t, x, y)
+
+    def clear(self) -> None:
+        self._pts.clear()
+
+    def velocity(self) -> Vec:
+        pts = self._pts
+        if len(pts) < 2:
+            return (0.0, 0.0)
+        t_end = pts[-1][0]
+        sel = [p for p in pts if t_end - p[0] <= self.window_s]
+        if len(sel) < 2:
+            sel = [pts[-2], pts[-1]]
+        n = len(sel)
+        tm = sum(p[0] for p in sel) / n
+        xm = sum(p[1] for p in sel) / n
+        ym = sum(p[2] for p in sel) / n
+        stt = sum((p[0] - tm) ** 2 for p in sel)
+        if stt < 1e-9:
+            return (0.0, 0.0)
+        vx = sum((p[0] - tm) * (p[1] - xm) for p in sel) / stt
+        vy = sum((p[0] - tm) * (p[2] - ym) for p in sel) / stt
+        return (vx, vy)
+
+
+class MedianWeighted:
+    """Median of the last ``window`` measurements per coordinate, then
+    ``est = (1 - w_new) * est_prev + w_new * median`` (the paper's filter). Re-initialises to
+    the median after a gap longer than ``gap_s`` or when the median is more than ``jump`` away
+    from the estimate. ``window=1, w_new=1`` is no filter; ``w_new=1`` is the median alone."""
+
+    __slots__ = (
+        "_est",
+        "_hist",
+        "_last_median",
+        "_prev_est",
+        "_t",
+        "_vel",
+        "gap_s",
+        "jump",
+        "kind",
+        "w_new",
+        "window",
+    )
+
+    def __init__(self, kind: FilterKind, window: int, w_new: float, gap_s: float, jump: float,
+                 velocity_window_s: float) -> None:
+        self.kind = kind
+        self.window = window
+        self.w_new = w_new
+        self.gap_s = gap_s
+        self.jump = jump
+        self._hist: deque[Vec] = deque(maxlen=window)
+        self._est: Vec | None = None
+        self._prev_est: Vec | None = None
+        self._t: float | None = None
+        self._vel = VelocityFit(velocity_window_s)
+        self._last_median: Vec | None = None
+
+    @property
+    def t_last(self) -> float | None:
+        return self._t
+
+    @property
+    def last_median(self) -> Vec | None:
+        return self._last_median
+
+    def reset(self) -> None:
+        self._hist.clear()
+        self._est = self._prev_est = self._t = self._last_median = None
+        self._vel.clear()
+
+    def _step(self, prev: Vec | None) -> Vec:
+        h = self._hist
+        m = h[0] if len(h) == 1 else (_median([p[0] for p in h]), _median([p[1] for p in h]))
+        self._last_median = m
+        if prev is None or self.w_new >= 1.0:
+            est = m
+        else:
+            dx, dy = m[0] - prev[0], m[1] - prev[1]
+            if dx * dx + dy * dy > self.jump * self.jump:
+                est = m
+            else:
+                w = self.w_new
+                est = (prev[0] + w * dx, prev[1] + w * dy)
+        self._est = est
+        return est
+
+    def update(self, t_s: float, x: float, y: float) -> Vec:
+        if self._t is not None and t_s - self._t > self.gap_s:
+            self.reset()
+        self._hist.append((x, y))
+        self._prev_est = self._est
+        self._t = t_s if self._t is None else max(self._t, t_s)
+        est = self._step(self._prev_est)
+        m = self._last_median
+        assert m is not None
+        self._vel.add(t_s, m[0], m[1])
+        return est
+
+    def revise(self, x: float, y: float) -> Vec:
+        if not self._hist or self._t is None:
+            return self.update(0.0, x, y)
+        self._hist[-1] = (x, y)
+        est = self._step(self._prev_est)
+        m = self._last_median
+        assert m is not None
+        self._vel.replace_last(m[0], m[1])
+        return est
+
+    def estimate(self) -> Vec | None:
+        return self._est
+
+    def velocity(self) -> Vec:
+        return self._vel.velocity()
+
+    def predict(self, t_s: float) -> Vec | None:
+        if self._est is None or self._t is None:
+            return None
+        vx, vy = self.velocity()
+        dt = t_s - self._t
+        return (self._est[0] + vx * dt, self._est[1] + vy * dt)
+
+
+class RawFilter(MedianWeighted):
+    """No filtering: the estimate is the latest measurement."""
+
+    def __init__(self, params: RawParams | None = None) -> None:
+        p = params or RawParams()
+        super().__init__("raw", 1, 1.0, math.inf, math.inf, p.velocity_window_s)
+
+
+class MedianFilter(MedianWeighted):
+    """The median of the last N measurements per coordinate."""
+
+    def __init__(self, params: MedianParams | None = None) -> None:
+        p = params or MedianParams()
+        super().__init__("median", p.window, 1.0, p.gap_s, math.inf, p.velocity_window_s)
+
+
+class PaperFilter(MedianWeighted):
+    """URoboRus 2022: median of the last N, then the weighted average with the previous
+    estimate; re-initialised after a gap or a jump."""
+
+    def __init__(self, params: PaperParams | None = None, angle: bool = False) -> None:
+        p = params or PaperParams()
+        super().__init__("paper", p.window, p.w_new, p.gap_s,
+                         p.jump_rad if angle else p.jump_mm, p.velocity_window_s)
+
+
+class KalmanCV:
+    """Constant-velocity Kalman filter, state (x, y, vx, vy), white-noise acceleration of std
+    ``accel_noise`` (units/s^2), position measurements of std ``meas_noise``. The axes are
+    independent (diagonal noise), so each is a 2x2 filter; this is exact for this model.
+    Optional gate: a measurement farther than ``gate`` from the prediction is not used; after
+    5 rejections in a row the filter re-initialises at the measurement."""
+
+    __slots__ = (
+        "_n_rej",
+        "_prior",
+        "_s",
+        "_t",
+        "gap_s",
+        "gate",
+        "init_speed_std",
+        "kind",
+        "q",
+        "r",
+        "rejected",
+    )
+
+    def __init__(self, accel_noise: float = 4000.0, meas_noise: float = 3.0, gate: float = 0.0,
+                 gap_s: float = 1.0, init_speed_std: float = 3000.0) -> None:
+        self.kind: FilterKind = "kalman"
+        self.q = accel_noise * accel_noise
+        self.r = meas_noise * meas_noise
+        self.gate = gate
+        self.gap_s = gap_s
+        self.init_speed_std = init_speed_std
+        self.rejected = 0
+        # per axis: [p, v, Ppp, Ppv, Pvv]
+        self._s: list[list[float]] | None = None
+        self._prior: list[list[float]] | None = None
+        self._t: float | None = None
+        self._n_rej = 0
+
+    @classmethod
+    def from_params(cls, params: KalmanParams | None = None, angle: bool = False) -> KalmanCV:
+        p = params or KalmanParams()
+        if angle:
+            return cls(p.angle_accel_noise_rad_s2, p.angle_meas_noise_rad, 0.0, p.gap_s, 10.0)
+        return cls(p.accel_noise_mm_s2, p.meas_noise_mm, p.gate_mm, p.gap_s)
+
+    @property
+    def t_last(self) -> float | None:
+        return self._t
+
+    def reset(self) -> None:
+        self._s = self._prior = self._t = None
+        self._n_rej = 0
+
+    def _init(self, t: float, x: float, y: float) -> Vec:
+        v0 = self.init_speed_std ** 2
+        self._s = [[x, 0.0, self.r, 0.0, v0], [y, 0.0, self.r, 0.0, v0]]
+        self._prior = None
+        self._t = t
+        self._n_rej = 0
+        return (x, y)
+
+    def _correct(self, axes: list[list[float]], z: Vec) -> list[list[float]]:
+        out = []
+        for ax, zi in zip(axes, z, strict=True):
+            p, v, a, b, c = ax
+            s = a + self.r
+            k0, k1 = a / s, b / s
+            inn = zi - p
+            out.append([p + k0 * inn, v + k1 * inn, (1 - k0) * a, (1 - k0) * b, c - k1 * b])
+        return out
+
+    def update(self, t_s: float, x: float, y: float) -> Vec:
+        if self._s is None or self._t is None or t_s - self._t > self.gap_s:
+            return self._init(t_s, x, y)
+        dt = max(0.0, t_s - self._t)
+        q = self.q
+        pri = []
+        for p, v, a, b, c in self._s:
+            pri.append([p + v * dt,
+                        v,
+                        a + 2 * dt * b + dt * dt * c + q * dt ** 4 / 4,
+                        b + dt * c + q * dt ** 3 / 2,
+                        c + q * dt * dt])
+        self._t = t_s
+        if self.gate > 0:
+            ex, ey = x - pri[0][0], y - pri[1][0]
+            if ex * ex + ey * ey > self.gate * self.gate:
+                self._n_rej += 1
+                self.rejected += 1
+                if self._n_rej >= 5:
+                    return self._init(t_s, x, y)
+                self._s = pri
+                self._prior = None
+                return (pri[0][0], pri[1][0])
+        self._n_rej = 0
+        self._prior = pri
+        self._s = self._correct(pri, (x, y))
+        return (self._s[0][0], self._s[1][0])
+
+    def revise(self, x: float, y: float) -> Vec:
+        if self._s is None or self._t is None:
+            return self.update(0.0, x, y)
+        if self._prior is None:  # the last step initialised (or gated): start from this one
+            return self._init(self._t, x, y)
+        self._s = self._correct(self._prior, (x, y))
+        return (self._s[0][0], self._s[1][0])
+
+    def estimate(self) -> Vec | None:
+        if self._s is None:
+            return None
+        return (self._s[0][0], self._s[1][0])
+
+    def velocity(self) -> Vec:
+        if self._s is None:
+            return (0.0, 0.0)
+        return (self._s[0][1], self._s[1][1])
+
+    def predict(self, t_s: float) -> Vec | None:
+        if self._s is None or self._t is None:
+            return None
+        dt = t_s - self._t
+        return (self._s[0][0] + self._s[0][1] * dt, self._s[1][0] + self._s[1][1] * dt)
+
+
+class AngleFilter:
+    """Orientation through any position filter: the measurement is unwrapped against the
+    previous one (so a turn through +-pi is continuous), filtered as the x coordinate, and the
+    estimate wrapped back to [-pi, pi)."""
+
+    __slots__ = ("_u", "_u_before", "inner")
+
+    def __init__(self, inner: PositionFilter) -> None:
+        self.inner = inner
+        self._u: float | None = None  # unwrapped last measurement
+        self._u_before: float | None = None  # unwrapped measurement before the last
+
+    @property
+    def kind(self) -> FilterKind:
+        return self.inner.kind
+
+    @property
+    def t_last(self) -> float | None:
+        return self.inner.t_last
+
+    def reset(self) -> None:
+        self.inner.reset()
+        self._u = self._u_before = None
+
+    def _unwrap(self, ref: float | None, a: float) -> float:
+        return a if ref is None else ref + wrap_angle(a - ref)
+
+    def update(self, t_s: float, a: float) -> float:
+        t0 = self.inner.t_last
+        if t0 is not None and self._u is not None and self.inner.estimate() is None:
+            self._u = None
+        self._u_before = self._u
+        u = self._unwrap(self._u, a)
+        self._u = u
+        return wrap_angle(self.inner.update(t_s, u, 0.0)[0])
+
+    def revise(self, a: float) -> float:
+        u = self._unwrap(self._u_before, a)
+        self._u = u
+        return wrap_angle(self.inner.revise(u, 0.0)[0])
+
+    def estimate(self) -> float | None:
+        e = self.inner.estimate()
+        return None if e is None else wrap_angle(e[0])
+
+    def rate(self) -> float:
+        return self.inner.velocity()[0]
+
+    def predict(self, t_s: float) -> float | None:
+        p = self.inner.predict(t_s)
+        return None if p is None else wrap_angle(p[0])
+
+
+AnyParams = RawParams | MedianParams | PaperParams | KalmanParams
+
+
+def make_filter(kind: FilterKind, params: AnyParams | None = None,
+                angle: bool = False) -> PositionFilter:
+    """A new filter of ``kind``; ``params`` must be that kind's model (None: defaults).
+    ``angle=True`` picks the orientation parameters (rad) where a kind has them."""
+    if kind == "raw":
+        return RawFilter(params if isinstance(params, RawParams) else None)
+    if kind == "median":
+        return MedianFilter(params if isinstance(params, MedianParams) else None)
+    if kind == "paper":
+        return PaperFilter(params if isinstance(params, PaperParams) else None, angle=angle)
+    return KalmanCV.from_params(params if isinstance(params, KalmanParams) else None, angle)
