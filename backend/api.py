@@ -22,6 +22,7 @@ from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from .config import Settings
 from .params.store import ParamError, diff
+from .referee.internal import RefereeCommandError
 from .station import Station, _finite
 
 log = logging.getLogger("touchline.api")
@@ -35,6 +36,39 @@ class TargetIn(BaseModel):
     x: float = Field(description="target x in mm (vision frame)")
     y: float = Field(description="target y in mm")
     orientation: float | None = Field(default=None, description="target heading in rad")
+
+
+class Point(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+
+
+class RefereeCommandIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
+    designated_position: Point | None = Field(default=None, description="for ball placement")
+
+
+class EnableIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    enabled: bool
+
+
+class TeleportBallIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+    vx: float = Field(default=0.0, ge=-10, le=10, description="m/s")
+    vy: float = Field(default=0.0, ge=-10, le=10, description="m/s")
+
+
+class TeleportRobotIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+    orientation: float | None = Field(default=None, description="rad")
+    present: bool = True
 
 
 class EstopIn(BaseModel):
@@ -108,6 +142,61 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     async def clear_target(team: TeamParam, rid: IdParam) -> dict[str, Any]:
         st.clear_target(team, rid)
         return {"team": team, "id": rid, "target": None}
+
+    def _check_on_field(x: float, y: float) -> None:
+        geo = st.geometry()
+        half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
+        half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
+        if abs(x) > half_l or abs(y) > half_w:
+            raise HTTPException(422, [{
+                "loc": ["body", "x" if abs(x) > half_l else "y"],
+                "msg": f"({x:.0f}, {y:.0f}) mm is outside the field "
+                       f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
+                "type": "outside_field"}])
+
+    @api.post("/sim/ball")
+    async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
+        _check_on_field(body.x, body.y)
+        st.teleport_ball(body.x, body.y, body.vx, body.vy)
+        return {"ball": body.model_dump()}
+
+    @api.post("/sim/robots/{team}/{rid}")
+    async def teleport_robot(team: TeamParam, rid: IdParam,
+                             body: TeleportRobotIn) -> dict[str, Any]:
+        _check_on_field(body.x, body.y)
+        st.teleport_robot(team, rid, body.x, body.y, body.orientation, body.present)
+        return {"team": team, "id": rid, **body.model_dump()}
+
+    @api.get("/referee")
+    async def referee_get() -> dict[str, Any]:
+        return {**st.referee_view(), "active": st.world_dict()["referee"]}
+
+    @api.post("/referee/internal/enabled", response_model=None)
+    async def referee_enable(body: EnableIn) -> dict[str, Any] | JSONResponse:
+        try:
+            st.internal_referee.enable(body.enabled)
+        except RefereeCommandError as exc:
+            return JSONResponse(status_code=409, content={"detail": str(exc)})
+        return st.referee_view()
+
+    @api.post("/referee/internal/command", response_model=None)
+    async def referee_command(body: RefereeCommandIn) -> dict[str, Any] | JSONResponse:
+        dp = body.designated_position
+        if dp is not None:
+            _check_on_field(dp.x, dp.y)
+        other = st.internal_referee.foreign_active()
+        if other is not None:
+            return JSONResponse(status_code=409, content={
+                "detail": f"a game controller is active ({other}): the internal referee "
+                          "stays off"})
+        try:
+            st.referee_state.give(body.command, None if dp is None else (dp.x, dp.y))
+        except RefereeCommandError as exc:
+            return JSONResponse(status_code=422, content={"detail": [
+                {"loc": ["body", "command"], "msg": str(exc), "type": "value_error"}]})
+        st.internal_referee.enable(True)
+        log.info("internal referee: %s", body.command)
+        return st.referee_view()
 
     @api.post("/estop")
     async def estop(body: EstopIn) -> dict[str, bool]:

@@ -23,6 +23,7 @@ from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 from .bus import DataBus, Reader
 from .control.goto import GoToConfig, GoToController, LocalVelocity, Target
 from .processor import Every, OnTopic, Processor
+from .referee.internal import InternalReferee, RefereeCommandError
 from .strategy.demo import DemoConfig, demo_targets
 from .world.decode import decode_detection, geometry_to_dict
 from .world.model import WorldModel
@@ -377,6 +378,50 @@ def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:
     return LocalVelocity(v.forward_mps * k, v.left_mps * k, v.angular_radps)
 
 
+class InternalRefereeProcessor(Processor):
+    """Sends the internal referee's state at 20 Hz while it is on; steps aside as soon as
+    another referee source (the official game controller) is heard."""
+
+    name = "internal-referee"
+    foreign_hold_s = 3.0
+
+    def __init__(self, bus: DataBus, referee: InternalReferee, hz: float = 20.0) -> None:
+        super().__init__(Every(hz))
+        self.referee = referee
+        self.enabled = False
+        self.disabled_reason = ""
+        self.last_foreign: tuple[float, str] | None = None
+        self.out = bus.typed("referee-out", bytes)
+        self.reader = Reader(bus.typed("referee", RefereeState))
+
+    def foreign_active(self) -> str | None:
+        """The source id of another referee heard recently, if any."""
+        if self.last_foreign and time.monotonic() - self.last_foreign[0] < self.foreign_hold_s:
+            return self.last_foreign[1] or "(no source identifier)"
+        return None
+
+    def enable(self, on: bool) -> None:
+        if on:
+            other = self.foreign_active()
+            if other is not None:
+                raise RefereeCommandError(
+                    f"a game controller is active ({other}): the internal referee stays off")
+            self.disabled_reason = ""
+        self.enabled = on
+
+    async def tick(self) -> None:
+        for r in self.reader.read_new():
+            if r.source_identifier != self.referee.source_identifier:
+                self.last_foreign = (time.monotonic(), r.source_identifier)
+                if self.enabled:
+                    self.enabled = False
+                    self.disabled_reason = (f"switched off: a game controller is active "
+                                            f"({r.source_identifier or 'no source identifier'})")
+                    log.warning("internal referee %s", self.disabled_reason)
+        if self.enabled:
+            self.out.write(self.referee.encode())
+
+
 class CommandPublisher(Processor):
     """Sends each command set and simulator command to the relay."""
 
@@ -388,6 +433,7 @@ class CommandPublisher(Processor):
         self.sock = sock
         self.reader = Reader(cmds)
         self.sim_reader = Reader(bus.typed("sim-commands", bytes))
+        self.referee_out_reader = Reader(bus.typed("referee-out", bytes))
         self.seq = 0
         self.latency_ms: deque[float] = deque(maxlen=500)  # vision arrival -> command sent
         self.sent = RateCounter()
@@ -418,6 +464,8 @@ class CommandPublisher(Processor):
                 self.latency_ms.append((time.time_ns() - cs.source_receive_time_ns) / 1e6)
         for raw in self.sim_reader.read_new():
             await self.sock.send_multipart([b"sim", raw])
+        for raw in self.referee_out_reader.read_new():
+            await self.sock.send_multipart([b"referee-out", raw])
 
     def latency_summary(self) -> dict[str, float]:
         vals = sorted(self.latency_ms)

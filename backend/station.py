@@ -13,6 +13,9 @@ from typing import Any
 import zmq
 import zmq.asyncio
 
+from sslpb import ssl_gc_common_pb2
+from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
+
 from .bus import DataBus
 from .config import Settings
 from .control.goto import GoToConfig, Target
@@ -23,6 +26,7 @@ from .processors import (
     CommandPublisher,
     CommandSet,
     ControlProcessor,
+    InternalRefereeProcessor,
     OperatorTarget,
     RefereeIngest,
     RelayIngest,
@@ -31,6 +35,7 @@ from .processors import (
     VisionIngest,
     WorldProcessor,
 )
+from .referee.internal import OPERATOR_COMMANDS, InternalReferee
 from .strategy.demo import DemoConfig
 from .world.referee import RefereeState
 from .world.state import Team, WorldState
@@ -68,6 +73,7 @@ class Station:
         self.targets_topic = self.bus.typed("targets", dict)
         self.relay_stats = self.bus.typed("relay-stats", dict)
         self.params_topic = self.bus.typed("params", int, capacity=4)
+        self.referee_state = InternalReferee()
         for name in settings.topic_sizes:
             self.bus.topic(name)
 
@@ -85,10 +91,11 @@ class Station:
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
                                         prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus, pub)
+        self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.apply_params(prm, self.params.version)
         self.params.subscribe(self.apply_params)
         for p in (self.ingest, self.vision, self.referee, self.world, self.strategy,
-                  self.control, self.publisher):
+                  self.control, self.internal_referee, self.publisher):
             self.runner.add(p)
         await self.runner.start()
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
@@ -102,6 +109,8 @@ class Station:
         self.strategy.demo.own_half_sign = -1 if p.team.our_side == "negative-x" else 1
         self.strategy.demo.period_s = p.team.demo_period_s
         self.strategy.set_rate(p.processors.strategy_hz)
+        self.referee_state.blue_team_on_positive_half = (
+            (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         g = p.goto
         self.control.set_goto_config(GoToConfig(
             kp_per_s=g.kp_per_s, max_speed_mps=g.max_speed_mps, max_accel_mps2=g.max_accel_mps2,
@@ -141,6 +150,46 @@ class Station:
     def set_estop(self, active: bool) -> None:
         self.estop_topic.write(active)
 
+    def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
+                      vy_mps: float = 0.0) -> None:
+        """Through the simulator (SSL simulation protocol, metres)."""
+        cmd = SimulatorCommand()
+        b = cmd.control.teleport_ball
+        b.x, b.y, b.z = x_mm / 1000.0, y_mm / 1000.0, 0.0
+        b.vx, b.vy, b.vz = vx_mps, vy_mps, 0.0
+        self.sim_commands.write(cmd.SerializeToString())
+
+    def teleport_robot(self, team: Team, rid: int, x_mm: float, y_mm: float,
+                       orientation: float | None, present: bool = True) -> None:
+        cmd = SimulatorCommand()
+        t = cmd.control.teleport_robot.add()
+        t.id.id = rid
+        t.id.team = ssl_gc_common_pb2.BLUE if team == "blue" else ssl_gc_common_pb2.YELLOW
+        t.x, t.y = x_mm / 1000.0, y_mm / 1000.0
+        if orientation is not None:
+            t.orientation = orientation
+        t.v_x = t.v_y = t.v_angular = 0.0
+        t.present = present
+        self.sim_commands.write(cmd.SerializeToString())
+
+    def referee_view(self) -> dict[str, Any]:
+        ir = self.internal_referee
+        st = self.referee_state
+        return {
+            "internal": {
+                "enabled": ir.enabled,
+                "disabled_reason": ir.disabled_reason,
+                "foreign_source": ir.foreign_active(),
+                "command": st.command,
+                "stage": st.stage,
+                "command_counter": st.command_counter,
+                "designated_position": None if st.designated_position is None else {
+                    "x": st.designated_position[0], "y": st.designated_position[1]},
+                "score": {"blue": st.blue.score, "yellow": st.yellow.score},
+                "commands": list(OPERATOR_COMMANDS),
+            },
+        }
+
     @property
     def estop(self) -> bool:
         return bool(self.estop_topic.latest_value())
@@ -166,6 +215,8 @@ class Station:
         if ref is not None:
             rd = ref.value.to_dict()
             rd["age_s"] = time.monotonic() - ref.time_mono
+            if ref.value.source_identifier == self.referee_state.source_identifier:
+                rd["source"] = "internal"
             out["referee"] = rd
         if world is None:
             return out

@@ -19,6 +19,7 @@ class RefereeState:
     designated_position: tuple[float, float] | None
     blue_team_on_positive_half: bool | None
     packet_timestamp_us: int
+    source_identifier: str = ""
     source: str = "game-controller"
 
     @property
@@ -33,6 +34,7 @@ class RefereeState:
     def to_dict(self) -> dict[str, Any]:
         return {
             "source": self.source,
+            "source_identifier": self.source_identifier,
             "command": self.command,
             "stage": self.stage,
             "command_counter": self.command_counter,
@@ -75,4 +77,5 @@ def decode_referee(msg: Referee) -> RefereeState:
             msg.blue_team_on_positive_half if msg.HasField("blue_team_on_positive_half") else None
         ),
         packet_timestamp_us=msg.packet_timestamp,
+        source_identifier=msg.source_identifier,
     )

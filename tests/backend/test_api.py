@@ -156,7 +156,7 @@ def test_params_patch_applies_live_and_reaches_every_client(client) -> None:  # 
 
 
 def test_params_bad_value_422_names_field_and_reason(client) -> None:  # type: ignore[no-untyped-def]
-    c, st = client
+    c, _ = client
     v0 = c.get("/api/params").json()["version"]
     r = c.patch("/api/params", content='{"goto": {"kp_per_s": NaN}}',
                 headers={"content-type": "application/json"})
@@ -183,3 +183,31 @@ def test_schema_preset_and_export_routes(client) -> None:  # type: ignore[no-unt
         "kp_per_s"] == 4.0
     assert c.post("/api/presets/nope/load").status_code == 404
     assert c.put("/api/presets/..%2Fx").status_code in (404, 422)
+
+
+def test_internal_referee_commands_and_validation(client) -> None:  # type: ignore[no-untyped-def]
+    c, _ = client
+    r = c.post("/api/referee/internal/command", json={"command": "STOP"})
+    assert r.status_code == 200, r.text
+    assert r.json()["internal"]["enabled"] is True and r.json()["internal"]["command"] == "STOP"
+    bad = c.post("/api/referee/internal/command", json={"command": "BALL_PLACEMENT_BLUE"})
+    assert bad.status_code == 422 and "designated position" in bad.json()["detail"][0]["msg"]
+    far = c.post("/api/referee/internal/command", json={
+        "command": "BALL_PLACEMENT_BLUE", "designated_position": {"x": 1e6, "y": 0}})
+    assert far.status_code == 422
+    assert c.get("/api/referee").json()["internal"]["command"] == "STOP"
+
+
+def test_teleport_goes_to_the_simulator_in_metres(client) -> None:  # type: ignore[no-untyped-def]
+    from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
+
+    c, st = client
+    assert c.post("/api/sim/ball", json={"x": 1500, "y": -250}).status_code == 200
+    cmd = SimulatorCommand.FromString(st.sim_commands.latest_value())
+    assert (cmd.control.teleport_ball.x, cmd.control.teleport_ball.y) == (1.5, -0.25)
+    assert c.post("/api/sim/robots/yellow/2", json={"x": 0, "y": 1000, "orientation": 1}
+                  ).status_code == 200
+    cmd = SimulatorCommand.FromString(st.sim_commands.latest_value())
+    t = cmd.control.teleport_robot[0]
+    assert (t.id.id, t.id.team, t.y, t.orientation, t.present) == (2, 1, 1.0, 1.0, True)
+    assert c.post("/api/sim/ball", json={"x": "NaN", "y": 0}).status_code == 422

@@ -162,3 +162,31 @@ def test_emergency_stop_stops_every_robot(station: StationHandle) -> None:
         assert station.get("/api/world")["estop"] is True
     finally:
         httpx.post(station.url + "/api/estop", json={"active": False})
+
+
+def test_internal_referee_halt_travels_as_real_multicast_and_stops_robots(
+        station: StationHandle) -> None:
+    # refused (409) while another referee source was heard in the last seconds
+    wait_until(lambda: httpx.post(station.url + "/api/referee/internal/command",
+                                  json={"command": "HALT"}).status_code == 200, 10,
+               what="internal referee accepted once no other game controller is heard")
+    try:
+        ref = wait_until(lambda: (lambda w: w["referee"] if w["referee"] and
+                                  w["referee"]["source"] == "internal" and
+                                  w["referee"]["command"] == "HALT" else None)(
+            station.get("/api/world")), 10, what="internal HALT received back from multicast")
+        assert ref["stage"] == "NORMAL_FIRST_HALF_PRE"
+        wait_until(lambda: _all_blue_still(station), 5, what="all blue robots stopped")
+        h = station.get("/api/health")
+        assert h["streams"]["relay.referee_out"]["packets"] > 0
+        assert h["streams"]["referee"]["rate_hz"] > 5
+    finally:
+        httpx.post(station.url + "/api/referee/internal/command", json={"command": "FORCE_START"})
+        httpx.post(station.url + "/api/referee/internal/enabled", json={"enabled": False})
+
+
+def test_teleport_ball_through_the_simulation_protocol(station: StationHandle) -> None:
+    assert httpx.post(station.url + "/api/sim/ball",
+                      json={"x": 2500, "y": -2000}).status_code == 200
+    wait_until(lambda: (lambda b: b and math.hypot(b["x"] - 2500, b["y"] + 2000) < 50)(
+        station.get("/api/world")["ball"]), 5, what="ball at the teleported position")

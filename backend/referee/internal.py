@@ -1,0 +1,96 @@
+"""An internal referee that produces real Referee messages (pure: no I/O).
+
+When no game controller is present, a class needs nothing else: the operator clicks HALT,
+STOP, FORCE START, kickoff/free kick/penalty per team, ball placement at a clicked point, and
+the station's robots obey it exactly as they obey the official game controller."""
+
+from __future__ import annotations
+
+import time
+import uuid
+from dataclasses import dataclass, field
+
+from sslpb.ssl_gc_referee_message_pb2 import Referee
+
+# Commands the operator may give, and the stage the game is in afterwards.
+OPERATOR_COMMANDS = (
+    "HALT", "STOP", "NORMAL_START", "FORCE_START",
+    "PREPARE_KICKOFF_BLUE", "PREPARE_KICKOFF_YELLOW",
+    "PREPARE_PENALTY_BLUE", "PREPARE_PENALTY_YELLOW",
+    "DIRECT_FREE_BLUE", "DIRECT_FREE_YELLOW",
+    "TIMEOUT_BLUE", "TIMEOUT_YELLOW",
+    "BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW",
+)
+
+
+class RefereeCommandError(ValueError):
+    pass
+
+
+@dataclass
+class _Team:
+    name: str
+    score: int = 0
+    yellow_cards: int = 0
+    red_cards: int = 0
+    timeouts: int = 4
+    timeout_time_us: int = 300_000_000
+    goalkeeper: int = 0
+
+
+@dataclass
+class InternalReferee:
+    source_identifier: str = field(default_factory=lambda: f"touchline-{uuid.uuid4()}")
+    command: str = "HALT"
+    stage: str = "NORMAL_FIRST_HALF_PRE"
+    command_counter: int = 0
+    command_timestamp_us: int = field(default_factory=lambda: int(time.time() * 1e6))
+    designated_position: tuple[float, float] | None = None
+    blue_team_on_positive_half: bool = False
+    blue: _Team = field(default_factory=lambda: _Team("Blue"))
+    yellow: _Team = field(default_factory=lambda: _Team("Yellow"))
+
+    def give(self, command: str, designated_position: tuple[float, float] | None = None,
+             now_us: int | None = None) -> None:
+        """The operator's command. Ball placement needs a designated position (mm)."""
+        if command not in OPERATOR_COMMANDS:
+            raise RefereeCommandError(
+                f"unknown command {command!r}; one of {', '.join(OPERATOR_COMMANDS)}")
+        placement = command.startswith("BALL_PLACEMENT")
+        if placement and designated_position is None:
+            raise RefereeCommandError(f"{command} needs a designated position")
+        if command == "NORMAL_START" and not self.command.startswith("PREPARE_"):
+            raise RefereeCommandError("NORMAL_START follows a PREPARE_KICKOFF or PREPARE_PENALTY")
+        self.command = command
+        self.designated_position = designated_position if placement else None
+        self.command_counter += 1
+        self.command_timestamp_us = int(time.time() * 1e6) if now_us is None else now_us
+        if command in ("NORMAL_START", "FORCE_START") and self.stage.endswith("_PRE"):
+            self.stage = self.stage[: -len("_PRE")]
+
+    def goal(self, team: str) -> None:
+        (self.blue if team == "blue" else self.yellow).score += 1
+        self.give("STOP")
+
+    def message(self, now_us: int | None = None) -> Referee:
+        now = int(time.time() * 1e6) if now_us is None else now_us
+        m = Referee(
+            source_identifier=self.source_identifier,
+            packet_timestamp=now,
+            stage=Referee.Stage.Value(self.stage),
+            command=Referee.Command.Value(self.command),
+            command_counter=self.command_counter,
+            command_timestamp=self.command_timestamp_us,
+            blue_team_on_positive_half=self.blue_team_on_positive_half,
+        )
+        for info, t in ((m.blue, self.blue), (m.yellow, self.yellow)):
+            info.name, info.score = t.name, t.score
+            info.red_cards, info.yellow_cards = t.red_cards, t.yellow_cards
+            info.timeouts, info.timeout_time = t.timeouts, t.timeout_time_us
+            info.goalkeeper = t.goalkeeper
+        if self.designated_position is not None:
+            m.designated_position.x, m.designated_position.y = self.designated_position
+        return m
+
+    def encode(self, now_us: int | None = None) -> bytes:
+        return self.message(now_us).SerializeToString()
