@@ -204,10 +204,12 @@ class LineController:
                 self._holding = False
         elif dist_b <= tol and self._may_hold():
             self._holding = True
-        vx, vy = self._command(px, py, x, lat, state.orientation_rad, dt)
         if self._holding:
-            vx = vy = 0.0
+            along = self._hold_speed(dt)
+            vx, vy = self._ux * along, self._uy * along
             self._phase = PHASE_HOLD
+        else:
+            vx, vy = self._command(px, py, x, lat, state.orientation_rad, dt)
         if self._blocked_now:
             self._phase = PHASE_BLOCKED
         vx, vy = self._limit(vx, vy, dt)
@@ -247,6 +249,11 @@ class LineController:
     def _may_hold(self) -> bool:
         return True
 
+    def _hold_speed(self, dt: float) -> float:
+        """Speed along the line while holding inside the tolerance (zero, rate-limited by the
+        algorithm where it has its own acceleration limit)."""
+        return 0.0
+
     def _retarget_mm(self) -> float:
         return 0.0
 
@@ -259,8 +266,9 @@ class LineController:
     def _reference(self) -> float | None:
         return None
 
-    def _command(self, px: float, py: float, x: float, lat: float, heading: float,
-                 dt: float) -> tuple[float, float]:
+    def _command(
+        self, px: float, py: float, x: float, lat: float, heading: float, dt: float
+    ) -> tuple[float, float]:
         along = self._along(x, dt)
         lp = self.params.lateral
         side = _clamp(-lp.kp_per_s * lat, -lp.max_mps, lp.max_mps) * self._lateral_scale()
@@ -419,8 +427,7 @@ class Algorithm1(LineController):
         if self._int_u >= max(p.c_min_integral_m, 1e-6) and x > 0.0 and not stalled:
             measured = _clamp(x / self._int_u, p.c_min, p.c_max)
             s = p.c_smoothing
-            self.c_estimate = _clamp(s * self.c_estimate + (1.0 - s) * measured,
-                                     p.c_min, p.c_max)
+            self.c_estimate = _clamp(s * self.c_estimate + (1.0 - s) * measured, p.c_min, p.c_max)
         ref = self._profile.sample(self._t)
         self._ref = ref
         prof = self._profile
@@ -439,6 +446,10 @@ class Algorithm2(LineController):
     """V = sqrt(2 a S), capped by v, changed by at most w dt from the last step's speed."""
 
     algorithm: AlgorithmName = "algorithm2"
+
+    def _hold_speed(self, dt: float) -> float:
+        step = self.params.algorithm2.w_mps2 * dt
+        return _clamp(0.0, self._cmd_along - step, self._cmd_along + step)
 
     def _along(self, x: float, dt: float) -> float:
         p = self.params.algorithm2
@@ -482,12 +493,18 @@ class Proportional(LineController):
         super().set_params(params)
         self._goto.config = self._goto_config()
 
-    def _command(self, px: float, py: float, x: float, lat: float, heading: float,
-                 dt: float) -> tuple[float, float]:
+    def _command(
+        self, px: float, py: float, x: float, lat: float, heading: float, dt: float
+    ) -> tuple[float, float]:
         assert self._target is not None
         set_last_velocity(self._goto, self._vx, self._vy)
-        v = self._goto.step(px * 1000.0, py * 1000.0, heading,
-                            Target(self._bx * 1000.0, self._by * 1000.0, None), dt)
+        v = self._goto.step(
+            px * 1000.0,
+            py * 1000.0,
+            heading,
+            Target(self._bx * 1000.0, self._by * 1000.0, None),
+            dt,
+        )
         c, s = math.cos(heading), math.sin(heading)
         vx = v.forward_mps * c - v.left_mps * s
         vy = v.forward_mps * s + v.left_mps * c
@@ -502,8 +519,9 @@ _CLASSES: dict[AlgorithmName, type[LineController]] = {
 }
 
 
-def make_controller(algorithm: AlgorithmName,
-                    params: ControllerParams | None = None) -> LineController:
+def make_controller(
+    algorithm: AlgorithmName, params: ControllerParams | None = None
+) -> LineController:
     return _CLASSES[algorithm](params)
 
 
@@ -512,8 +530,9 @@ class RobotMotion:
     takes over the last command (so the command changes by at most max_accel * dt) and the
     estimate of C; the move restarts from where the robot is."""
 
-    def __init__(self, algorithm: AlgorithmName = "algorithm2",
-                 params: ControllerParams | None = None) -> None:
+    def __init__(
+        self, algorithm: AlgorithmName = "algorithm2", params: ControllerParams | None = None
+    ) -> None:
         self._ctrl = make_controller(algorithm, params)
 
     @property
@@ -559,8 +578,9 @@ class MotionBank:
         key = (team, rid)
         motion = self.robots.get(key)
         if motion is None:
-            motion = RobotMotion(self.settings.algorithm_for(team, rid),
-                                 self.settings.params_for(team, rid))
+            motion = RobotMotion(
+                self.settings.algorithm_for(team, rid), self.settings.params_for(team, rid)
+            )
             self.robots[key] = motion
         return motion
 

@@ -14,8 +14,9 @@ STOP_SPEED_MPS = 1.5
 _SLOW_COMMANDS = frozenset({"STOP", "GOAL_BLUE", "GOAL_YELLOW"})
 
 
-def referee_limits(velocity: LocalVelocity, command: str | None,
-                   our_team: str | None = None) -> LocalVelocity:
+def referee_limits(
+    velocity: LocalVelocity, command: str | None, our_team: str | None = None
+) -> LocalVelocity:
     """Limit ``velocity`` for the referee ``command`` (proto enum name, e.g. "STOP").
 
     HALT -> zero. STOP -> speed at most 1.5 m/s (direction kept, angular kept).
