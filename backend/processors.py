@@ -52,6 +52,29 @@ class StreamCounter:
         }
 
 
+class LatencyStage:
+    """Milliseconds from a vision datagram's arrival at the relay to one point of the
+    pipeline, over the last few hundred samples."""
+
+    def __init__(self, maxlen: int = 500) -> None:
+        self.samples: deque[float] = deque(maxlen=maxlen)
+
+    def add_since(self, receive_time_ns: int) -> None:
+        if receive_time_ns > 0:
+            self.samples.append((time.time_ns() - receive_time_ns) / 1e6)
+
+    def summary(self) -> dict[str, float]:
+        vals = sorted(self.samples)
+        if not vals:
+            return {"mean_ms": 0.0, "p50_ms": 0.0, "p99_ms": 0.0, "n": 0}
+        return {
+            "mean_ms": sum(vals) / len(vals),
+            "p50_ms": vals[len(vals) // 2],
+            "p99_ms": vals[min(len(vals) - 1, int(0.99 * len(vals)))],
+            "n": len(vals),
+        }
+
+
 @dataclass(frozen=True, slots=True)
 class Command:
     team: Team
@@ -180,6 +203,7 @@ class VisionIngest(Processor):
         self.detections = bus.typed("vision-detections", CameraFrame)
         self.geometry = bus.typed("geometry", dict)
         self.counter = StreamCounter()
+        self.latency = LatencyStage()  # relay arrival -> decoded on the bus
         self._last_geometry_bytes = b""
 
     async def tick(self) -> None:
@@ -197,6 +221,7 @@ class VisionIngest(Processor):
                 continue
             if pkt.HasField("detection"):
                 self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
+                self.latency.add_since(env.receive_time_ns)
             if pkt.HasField("geometry"):
                 raw = pkt.geometry.field.SerializeToString()
                 if raw != self._last_geometry_bytes:  # only a change goes on the bus
@@ -241,6 +266,7 @@ class WorldProcessor(Processor):
         self.reader = Reader(detections)
         self.world = bus.typed("world", WorldState)
         self.model = model or WorldModel()
+        self.latency = LatencyStage()  # relay arrival -> world written
 
     async def tick(self) -> None:
         frames = self.reader.read_new()
@@ -249,6 +275,8 @@ class WorldProcessor(Processor):
         for f in frames:
             self.model.update(f)
         self.world.write(self.model.snapshot())
+        for f in frames:
+            self.latency.add_since(f.receive_time_ns)
 
 
 class StrategyProcessor(Processor):
@@ -435,7 +463,7 @@ class CommandPublisher(Processor):
         self.sim_reader = Reader(bus.typed("sim-commands", bytes))
         self.referee_out_reader = Reader(bus.typed("referee-out", bytes))
         self.seq = 0
-        self.latency_ms: deque[float] = deque(maxlen=500)  # vision arrival -> command sent
+        self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
         self.sent = RateCounter()
 
     async def tick(self) -> None:
@@ -460,19 +488,11 @@ class CommandPublisher(Processor):
                 )
             await self.sock.send_multipart([b"commands", msg.SerializeToString()])
             self.sent.add()
-            if cs.source_receive_time_ns:
-                self.latency_ms.append((time.time_ns() - cs.source_receive_time_ns) / 1e6)
+            self.latency.add_since(cs.source_receive_time_ns)
         for raw in self.sim_reader.read_new():
             await self.sock.send_multipart([b"sim", raw])
         for raw in self.referee_out_reader.read_new():
             await self.sock.send_multipart([b"referee-out", raw])
 
     def latency_summary(self) -> dict[str, float]:
-        vals = sorted(self.latency_ms)
-        if not vals:
-            return {"mean_ms": 0.0, "p50_ms": 0.0, "p99_ms": 0.0}
-        return {
-            "mean_ms": sum(vals) / len(vals),
-            "p50_ms": vals[len(vals) // 2],
-            "p99_ms": vals[min(len(vals) - 1, int(0.99 * len(vals)))],
-        }
+        return self.latency.summary()

@@ -254,6 +254,21 @@ class Station:
         } for c in world.cameras]
         return out
 
+    def _latency_stages(self) -> list[dict[str, Any]]:
+        """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
+        if not hasattr(self, "publisher"):
+            return []
+        stages: list[dict[str, Any]] = [
+            {"stage": "decoded (vision ingest)", **self.vision.latency.summary()},
+            {"stage": "world model written", **self.world.latency.summary()},
+            {"stage": "commands sent to relay", **self.publisher.latency.summary()},
+        ]
+        rs = self.relay_stats.latest_value()
+        if rs is not None and rs.get("command_latency_ms", -1) >= 0:
+            stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
+                           "p50_ms": None, "p99_ms": None, "n": None})
+        return stages
+
     def world_json(self) -> str:
         """The world as JSON, encoded once per world update and shared by every client."""
         key = self.world_topic.seq * 2 + (1 if self.estop else 0)
@@ -307,6 +322,7 @@ class Station:
             "topics": topics,
             "relay": relay,
             "latency": self.publisher.latency_summary() if hasattr(self, "publisher") else None,
+            "latency_stages": self._latency_stages(),
             "websocket_clients": self.ws_clients,
         })
         return out

@@ -52,6 +52,12 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
     assert procs["world-model"]["measured_hz"] > 40
     assert procs["control"]["measured_hz"] > 40
     assert procs["world-model"]["errors"] == 0 and procs["control"]["errors"] == 0
+    # latency of each stage since the datagram reached the relay, in pipeline order
+    stages = h["latency_stages"]
+    assert [s["stage"] for s in stages[:3]] == [
+        "decoded (vision ingest)", "world model written", "commands sent to relay"]
+    assert all(s["n"] > 0 for s in stages[:3])
+    assert 0 < stages[0]["p50_ms"] <= stages[1]["p50_ms"] <= stages[2]["p50_ms"] < 100
     assert procs["strategy"]["configured_hz"] == 20.0
 
 
