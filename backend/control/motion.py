@@ -204,12 +204,13 @@ class LineController:
                 self._holding = False
         elif dist_b <= tol and self._may_hold():
             self._holding = True
+        # always run the algorithm (Algorithm 1 keeps integrating u and refining C while it
+        # holds: at rest the ratio distance / integral(u) is free of the latency bias)
+        vx, vy = self._command(px, py, x, lat, state.orientation_rad, dt)
         if self._holding:
             along = self._hold_speed(dt)
             vx, vy = self._ux * along, self._uy * along
             self._phase = PHASE_HOLD
-        else:
-            vx, vy = self._command(px, py, x, lat, state.orientation_rad, dt)
         if self._blocked_now:
             self._phase = PHASE_BLOCKED
         vx, vy = self._limit(vx, vy, dt)
