@@ -54,7 +54,11 @@ function [fn, exports] = tl_resolve(name, exports)
     if ~any(exist(file) == [2 3 5])
       error("touchline:engine", "no function file %s.m on the path", file);
     end
-    refs = feval(file);
+    try
+      refs = feval(file);
+    catch err
+      error("touchline:engine", "%s.%s: calling %s() for the functions it exports failed: %s", file, fname, file, err.message);
+    end
     table = struct();
     if iscell(refs)
       for k = 1:numel(refs)

@@ -1,0 +1,4 @@
+function spin()
+  while true
+  end
+end
