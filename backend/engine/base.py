@@ -138,6 +138,7 @@ class PoolEngine(ABC):
         self.stats = EngineStats()
         self._idle: asyncio.Queue[Worker] = asyncio.Queue()
         self._all: set[Worker] = set()
+        self._dying: set[Worker] = set()  # killed, not yet reaped
         self._busy = 0
         self._bg: set[asyncio.Task[None]] = set()
         self._running = False
@@ -186,8 +187,9 @@ class PoolEngine(ABC):
         """Discard a worker (killing it) and start a new one in the background."""
         self._all.discard(dead)
         dead.kill()
-        if self._running:  # after close() the process is reaped by close()
-            self._spawn_bg(self._reap(dead))
+        self._dying.add(dead)
+        self._spawn_bg(self._reap(dead))
+        if self._running:
             self.stats.restarts += 1
             self._spawn_bg(self._restart())
 
@@ -199,6 +201,7 @@ class PoolEngine(ABC):
     async def _reap(self, w: Worker) -> None:
         with contextlib.suppress(Exception):
             await w.wait_closed()
+        self._dying.discard(w)
 
     async def _restart(self) -> None:
         delay = 0.2
@@ -293,8 +296,9 @@ class PoolEngine(ABC):
         for task in list(self._bg):
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
-        workers = list(self._all)
+        workers = list(self._all) + list(self._dying)
         self._all.clear()
+        self._dying.clear()
         while not self._idle.empty():
             self._idle.get_nowait()
         await asyncio.gather(*(w.close() for w in workers), return_exceptions=True)
