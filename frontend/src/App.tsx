@@ -1,46 +1,91 @@
 import { useEffect } from "react";
 import { sameRobot } from "./api/types";
-import { selectRobot } from "./actions";
 import { FieldView } from "./components/FieldView";
+import { HealthPanel } from "./components/HealthPanel";
+import { HelpOverlay } from "./components/HelpOverlay";
+import { ParamsPanel } from "./components/ParamsPanel";
+import { PlotsPanel } from "./components/PlotsPanel";
+import { RefereePanel } from "./components/RefereePanel";
 import { RobotDetails } from "./components/RobotDetails";
 import { RobotTable } from "./components/RobotTable";
 import { Toasts } from "./components/Toasts";
 import { TopBar } from "./components/TopBar";
+import { installShortcuts } from "./shortcuts";
 import { useAppState, useThrottledWorld } from "./store/hooks";
+import { setTab, TABS, useUi } from "./store/uiStore";
 
-export function App({ onRetryNow }: { onRetryNow: () => void }) {
+function RobotsTab() {
   const world = useThrottledWorld(200);
   const selected = useAppState((s) => s.selected);
   const robot = selected ? (world?.robots.find((r) => sameRobot(r, selected)) ?? null) : null;
+  return (
+    <>
+      <RobotDetails selected={selected} robot={robot} />
+      <RobotTable robots={world?.robots ?? []} selected={selected} />
+    </>
+  );
+}
 
+function Hint() {
+  const selected = useAppState((s) => s.selected);
+  const placing = useUi((s) => s.placing);
+  let text: string;
+  if (placing) text = `Click the field where the ball should be placed (${placing.replace(/_/g, " ").toLowerCase()}) · Esc to cancel`;
+  else if (selected)
+    text = `Click or drag (sets the heading) on the field to send ${selected.team} ${selected.id} · right-click: teleport · Esc deselects`;
+  else text = "Click a robot, then a point to send it · wheel zoom, drag pans, F fits · right-click: teleport · ? for keys";
+  return (
+    <div className="hint" data-testid="hint">
+      {text}
+    </div>
+  );
+}
+
+export function App({ onRetryNow }: { onRetryNow: () => void }) {
+  const tab = useUi((s) => s.tab);
+  const largeText = useUi((s) => s.largeText);
+  useEffect(() => installShortcuts(), []);
   useEffect(() => {
-    const onKey = (ev: KeyboardEvent) => {
-      if (ev.key !== "Escape") return;
-      const el = ev.target as HTMLElement | null;
-      if (el && (el.tagName === "INPUT" || el.tagName === "TEXTAREA" || el.isContentEditable)) return;
-      selectRobot(null);
-    };
-    window.addEventListener("keydown", onKey);
-    return () => window.removeEventListener("keydown", onKey);
-  }, []);
+    document.documentElement.classList.toggle("large-text", largeText);
+  }, [largeText]);
 
   return (
-    <div className="app">
+    <div className={`app tab-${tab}`}>
       <TopBar onRetryNow={onRetryNow} />
       <main className="main">
         <div className="field-col">
           <FieldView />
-          <div className="hint" data-testid="hint">
-            {selected
-              ? `Click a point on the field to send ${selected.team} ${selected.id} there · click another robot to switch · Esc to deselect`
-              : "Click a robot, then a point to send it there"}
-          </div>
+          <Hint />
         </div>
         <aside className="panel">
-          <RobotDetails selected={selected} robot={robot} />
-          <RobotTable robots={world?.robots ?? []} selected={selected} />
+          <nav className="tabs" role="tablist" aria-label="Panels">
+            {TABS.map((t) => (
+              <button
+                key={t.key}
+                type="button"
+                role="tab"
+                aria-selected={tab === t.key}
+                className={`tab ${tab === t.key ? "tab-active" : ""}`}
+                data-testid={`tab-${t.key}`}
+                onClick={() => setTab(t.key)}
+              >
+                {t.label}
+              </button>
+            ))}
+          </nav>
+          <div className="tab-body" role="tabpanel">
+            {tab === "robots" && <RobotsTab />}
+            {tab === "params" && <ParamsPanel />}
+            {/* Plots stay mounted (hidden) so their buffers and uPlot instances survive tab switches. */}
+            <div className="plots-host" hidden={tab !== "plots"}>
+              <PlotsPanel visible={tab === "plots"} />
+            </div>
+            {tab === "referee" && <RefereePanel />}
+            {tab === "health" && <HealthPanel />}
+          </div>
         </aside>
       </main>
+      <HelpOverlay />
       <Toasts />
     </div>
   );

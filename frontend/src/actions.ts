@@ -15,9 +15,9 @@ export function selectRobot(key: RobotKey | null): void {
   appStore.setState({ selected: key });
 }
 
-export async function sendTarget(robot: RobotKey, p: Point): Promise<boolean> {
+export async function sendTarget(robot: RobotKey, p: Point, orientation?: number): Promise<boolean> {
   try {
-    await postTarget(robot.team, robot.id, { x: p.x, y: p.y });
+    await postTarget(robot.team, robot.id, orientation === undefined ? { x: p.x, y: p.y } : { x: p.x, y: p.y, orientation });
     return true;
   } catch (e) {
     pushToast("error", `Target for ${robot.team} ${robot.id} rejected: ${errorText(e)}`);

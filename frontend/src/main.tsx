@@ -3,6 +3,7 @@ import { createRoot } from "react-dom/client";
 import { App } from "./App";
 import { appStore } from "./store/appStore";
 import { installTestHooks } from "./testHooks";
+import { startSampler } from "./plots/sampler";
 import { defaultWsUrl, startWsClient } from "./ws/client";
 import "./styles.css";
 
@@ -18,6 +19,7 @@ document.addEventListener("visibilitychange", () => {
   if (document.visibilityState === "visible") client.reconnectNow();
 });
 
+startSampler(appStore);
 installTestHooks();
 
 const rootEl = document.getElementById("root");

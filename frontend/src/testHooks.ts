@@ -4,6 +4,9 @@ import type { World } from "./api/types";
 import { canvasToWorld, worldToCanvas, type Point } from "./field/transform";
 import { currentTransform } from "./field/viewState";
 import { appStore } from "./store/appStore";
+import { fieldStats } from "./components/FieldView";
+import { plotInfo, plotStats } from "./components/PlotsPanel";
+import { samples } from "./plots/sampler";
 
 export interface TouchlineTestApi {
   /** World mm -> CSS px relative to the field canvas's top-left corner. */
@@ -12,6 +15,12 @@ export interface TouchlineTestApi {
   screenToWorld(x_px: number, y_px: number): Point;
   getWorld(): World | null;
   getSelected(): { team: string; id: number } | null;
+  /** Frame counters: field rAF callbacks and draws, plot loop frames and draws. */
+  stats(): { t: number; fieldRafs: number; fieldDraws: number; plotFrames: number; plotDraws: number; sampleRows: number };
+  /** What each live plot shows: its signals, the newest x drawn (Unix s) and the point count. */
+  plots(): { id: number; keys: string[]; lastX: number; points: number }[];
+  /** Every signal name the plots can show. */
+  signals(): string[];
 }
 
 declare global {
@@ -34,6 +43,16 @@ export function installTestHooks(): void {
     },
     getWorld: () => appStore.getState().world,
     getSelected: () => appStore.getState().selected,
+    stats: () => ({
+      t: performance.now(),
+      fieldRafs: fieldStats.rafs,
+      fieldDraws: fieldStats.draws,
+      plotFrames: plotStats.frames,
+      plotDraws: plotStats.draws,
+      sampleRows: samples.rows,
+    }),
+    plots: () => plotInfo(),
+    signals: () => samples.keys(),
   });
   Object.defineProperty(window, "__touchline", {
     value: api,

@@ -4,10 +4,13 @@ import type { Team } from "./types";
 
 export class ApiError extends Error {
   readonly status: number;
-  constructor(status: number, message: string) {
+  /** The parsed error body (e.g. FastAPI's `{"detail": ...}`), when there was one. */
+  readonly body: unknown;
+  constructor(status: number, message: string, body: unknown = null) {
     super(message);
     this.name = "ApiError";
     this.status = status;
+    this.body = body;
   }
 }
 
@@ -38,13 +41,13 @@ export function errorMessageFromBody(status: number, body: unknown, fallback = "
   return fallback || `HTTP ${status}`;
 }
 
-async function request<T>(method: string, path: string, body?: unknown): Promise<T> {
+export async function request<T>(method: string, path: string, body?: unknown, rawBody?: string): Promise<T> {
   let res: Response;
   try {
     res = await fetch(path, {
       method,
-      headers: body === undefined ? {} : { "Content-Type": "application/json" },
-      body: body === undefined ? undefined : JSON.stringify(body),
+      headers: body === undefined && rawBody === undefined ? {} : { "Content-Type": "application/json" },
+      body: rawBody !== undefined ? rawBody : body === undefined ? undefined : JSON.stringify(body),
     });
   } catch (e) {
     throw new ApiError(0, `cannot reach the station: ${(e as Error).message}`);
@@ -59,7 +62,7 @@ async function request<T>(method: string, path: string, body?: unknown): Promise
     }
   }
   if (!res.ok) {
-    throw new ApiError(res.status, errorMessageFromBody(res.status, parsed, `${res.status} ${res.statusText}`));
+    throw new ApiError(res.status, errorMessageFromBody(res.status, parsed, `${res.status} ${res.statusText}`), parsed);
   }
   return parsed as T;
 }
@@ -68,6 +71,10 @@ export interface TargetReply {
   team: Team;
   id: number;
   target: { x: number; y: number; orientation: number | null };
+}
+
+export function postTargetWithOrientation(team: Team, id: number, x: number, y: number, orientation: number): Promise<TargetReply> {
+  return postTarget(team, id, { x, y, orientation });
 }
 
 export function postTarget(
@@ -90,3 +97,62 @@ export function deleteTarget(team: Team, id: number): Promise<unknown> {
 export function postEstop(active: boolean): Promise<{ estop: boolean }> {
   return request<{ estop: boolean }>("POST", "/api/estop", { active });
 }
+
+// ---- parameters and presets ----
+
+export interface ParamsReply {
+  version: number;
+  values: Record<string, unknown>;
+}
+
+export interface DiffEntry {
+  path: string;
+  from: unknown;
+  to: unknown;
+}
+
+export const getParamsSchema = () => request<Record<string, unknown>>("GET", "/api/params/schema");
+export const getParams = () => request<ParamsReply>("GET", "/api/params");
+export const patchParams = (patch: Record<string, unknown>) => request<ParamsReply>("PATCH", "/api/params", patch);
+export const getParamsDiff = () => request<{ version: number; changes: DiffEntry[] }>("GET", "/api/params/diff");
+export const importParams = (text: string) => request<ParamsReply>("POST", "/api/params/import", undefined, text);
+export const listPresets = () => request<{ presets: string[] }>("GET", "/api/presets");
+export const savePreset = (name: string) => request<{ presets: string[] }>("PUT", `/api/presets/${encodeURIComponent(name)}`);
+export const getPreset = (name: string) =>
+  request<{ name: string; values: Record<string, unknown>; diff_from_defaults: DiffEntry[]; diff_from_current: DiffEntry[] }>(
+    "GET",
+    `/api/presets/${encodeURIComponent(name)}`,
+  );
+export const loadPreset = (name: string) => request<ParamsReply>("POST", `/api/presets/${encodeURIComponent(name)}/load`);
+export const deletePreset = (name: string) => request<{ presets: string[] }>("DELETE", `/api/presets/${encodeURIComponent(name)}`);
+
+// ---- referee and simulator ----
+
+export interface InternalReferee {
+  enabled: boolean;
+  disabled_reason: string;
+  foreign_source: string | null;
+  command: string;
+  stage: string;
+  command_counter: number;
+  designated_position: { x: number; y: number } | null;
+  score: { blue: number; yellow: number };
+  commands: string[];
+}
+
+export const getReferee = () => request<{ internal: InternalReferee; active: unknown }>("GET", "/api/referee");
+export const postRefereeCommand = (command: string, designated_position?: { x: number; y: number }) =>
+  request<InternalReferee>(
+    "POST",
+    "/api/referee/internal/command",
+    designated_position ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } } : { command },
+  );
+export const postRefereeEnabled = (enabled: boolean) => request<InternalReferee>("POST", "/api/referee/internal/enabled", { enabled });
+
+export const teleportBall = (x: number, y: number) => request<unknown>("POST", "/api/sim/ball", { x: Math.round(x), y: Math.round(y) });
+export const teleportRobot = (team: Team, id: number, x: number, y: number, orientation?: number) =>
+  request<unknown>(
+    "POST",
+    `/api/sim/robots/${team}/${id}`,
+    orientation === undefined ? { x: Math.round(x), y: Math.round(y) } : { x: Math.round(x), y: Math.round(y), orientation },
+  );

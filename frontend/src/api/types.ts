@@ -66,7 +66,8 @@ export interface RefereeTeam {
 }
 
 export interface Referee {
-  source: "game-controller" | "none";
+  /** "game-controller" (a real one on the network), "internal" (the station's own), or "none". */
+  source: string;
   command: string;
   stage: string;
   command_counter: number;
@@ -160,7 +161,14 @@ export interface RelayHealth {
   command_latency_ms: number;
 }
 
+export interface LatencyHealth {
+  mean_ms: number;
+  p50_ms: number;
+  p99_ms: number;
+}
+
 export interface Health {
+  latency?: LatencyHealth | null;
   ok: boolean;
   streams: Record<string, StreamHealth>;
   processors: ProcessorHealth[];
@@ -169,11 +177,20 @@ export interface Health {
   websocket_clients: number;
 }
 
+/** Parameter values: nested groups of leaves (numbers, strings, booleans). */
+export type ParamValues = { [key: string]: unknown };
+
+export interface ParamsState {
+  version: number;
+  values: ParamValues;
+}
+
 export type ServerMessage =
   | { type: "snapshot"; world: World; geometry: Geometry | null; health: Health }
   | { type: "world"; world: World }
   | { type: "geometry"; geometry: Geometry }
-  | { type: "health"; health: Health };
+  | { type: "health"; health: Health }
+  | { type: "params"; version: number; values: ParamValues };
 
 export interface RobotKey {
   team: Team;

@@ -1,6 +1,10 @@
 import type { Robot, RobotKey } from "../api/types";
 import { clearTarget, selectRobot } from "../actions";
 import { HealthSummary } from "./HealthSummary";
+import { ParamField } from "./ParamField";
+import { useParamForm } from "../params/paramsStore";
+import { chooserFields, getAt } from "../params/schema";
+import { useAppState } from "../store/hooks";
 import { fmtDeg, fmtFixed, fmtHeading, fmtInt, speedMps } from "../format";
 
 function Field({ label, value, testId }: { label: string; value: string; testId?: string }) {
@@ -11,6 +15,48 @@ function Field({ label, value, testId }: { label: string; value: string; testId?
         {value}
       </dd>
     </>
+  );
+}
+
+const KNOWN = new Set(["team", "id", "x", "y", "orientation", "vx", "vy", "omega", "visible", "age_s", "cameras", "target", "controlled", "command"]);
+
+function fmtAny(v: unknown): string {
+  if (typeof v === "number") return Number.isInteger(v) ? String(v) : Math.abs(v) >= 100 ? fmtInt(v) : fmtFixed(v, 3);
+  if (typeof v === "boolean") return v ? "yes" : "no";
+  if (v === null || v === undefined) return "—";
+  if (typeof v === "string") return v;
+  if (Array.isArray(v)) return v.map(fmtAny).join(", ");
+  return Object.entries(v as Record<string, unknown>)
+    .map(([k, x]) => `${k} ${fmtAny(x)}`)
+    .join("  ");
+}
+
+/** Fields the backend adds to robots later (raw_x, filter, controller, estimated C, ...), shown as they come. */
+function ExtraFields({ robot }: { robot: Robot }) {
+  const extra = Object.entries(robot as unknown as Record<string, unknown>).filter(([k]) => !KNOWN.has(k));
+  if (extra.length === 0) return null;
+  return (
+    <>
+      {extra.map(([k, v]) => (
+        <Field key={k} label={k.replace(/_/g, " ")} value={fmtAny(v)} testId={`robot-extra-${k}`} />
+      ))}
+    </>
+  );
+}
+
+/** Filter / controller choices from the parameter schema (any enum whose path names one). */
+function Choosers() {
+  const form = useParamForm();
+  const values = useAppState((s) => s.params?.values);
+  if (!form.groups || !values) return null;
+  const fields = chooserFields(form.groups);
+  if (fields.length === 0) return null;
+  return (
+    <div className="choosers">
+      {fields.map((f) => (
+        <ParamField key={f.id} f={f} value={getAt(values, f.path)} compact />
+      ))}
+    </div>
   );
 }
 
@@ -69,6 +115,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
             }
             testId="selected-target"
           />
+          <ExtraFields robot={robot} />
           <Field
             label="command"
             value={
@@ -79,6 +126,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
           />
         </dl>
       )}
+      {robot && <Choosers />}
     </section>
   );
 }

@@ -1,6 +1,7 @@
 import { setEstop } from "../actions";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
+import { uiStore, useUi } from "../store/uiStore";
 
 interface Props {
   onRetryNow: () => void;
@@ -78,6 +79,27 @@ function RefereeInfo() {
   );
 }
 
+function ViewOptions() {
+  const large = useUi((s) => s.largeText);
+  return (
+    <div className="viewopts">
+      <button
+        type="button"
+        className={`btn btn-small ${large ? "btn-on" : ""}`}
+        aria-pressed={large}
+        title="Large text for a projector (L)"
+        onClick={() => uiStore.setState({ largeText: !large })}
+        data-testid="large-text"
+      >
+        A+
+      </button>
+      <button type="button" className="btn btn-small" title="Keyboard shortcuts (?)" onClick={() => uiStore.setState({ help: true })} data-testid="help-button">
+        ?
+      </button>
+    </div>
+  );
+}
+
 function EstopButton() {
   const estop = useAppState((s) => s.world?.estop ?? false);
   return (
@@ -106,6 +128,7 @@ export function TopBar({ onRetryNow }: Props) {
       <VisionRate />
       <RefereeInfo />
       <div className="spacer" />
+      <ViewOptions />
       <EstopButton />
     </header>
   );

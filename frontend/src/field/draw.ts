@@ -29,7 +29,32 @@ export function teamColor(team: Team): string {
   return team === "blue" ? COLORS.blue : COLORS.yellow;
 }
 
+/** Camera colours for raw detections: distinct from the team colours and the ball. */
+export const CAMERA_COLORS = ["#f472b6", "#22d3ee", "#a3e635", "#c084fc", "#fb7185", "#2dd4bf", "#fde68a", "#93c5fd"];
+
+export function cameraColor(id: number): string {
+  return CAMERA_COLORS[((id % CAMERA_COLORS.length) + CAMERA_COLORS.length) % CAMERA_COLORS.length] as string;
+}
+
+export interface DrawLayers {
+  raw: boolean;
+  filtered: boolean;
+  velocity: boolean;
+  targets: boolean;
+  trails: boolean;
+  referee: boolean;
+}
+
+export const ALL_LAYERS: DrawLayers = { raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true };
+
 export interface DrawInput {
+  layers?: DrawLayers;
+  /** Trails: per object key, world points oldest first. */
+  trails?: ReadonlyMap<string, readonly { x: number; y: number }[]>;
+  /** Arrow being dragged to set a target with a heading (world mm). */
+  drag?: { from: { x: number; y: number }; to: { x: number; y: number } } | null;
+  /** Ball placement waiting for a click. */
+  placing?: string | null;
   t: FieldTransform;
   geometry: Geometry;
   /** True when `geometry` is the default (no packet received yet). */
@@ -51,17 +76,29 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
   drawMarkings(ctx, t, g);
   drawGoals(ctx, t, g, world?.referee?.blue_team_on_positive_half ?? null);
 
+  const L = input.layers ?? ALL_LAYERS;
   if (world) {
     const robots = world.robots;
+    const ref = world.referee;
+    if (L.referee && ref && ref.source !== "none" && ref.designated_position) drawDesignated(ctx, t, ref.designated_position, ref.command);
+    if (L.trails && input.trails) drawTrails(ctx, t, input.trails);
+    if (L.raw) drawRaw(ctx, t, world);
     // Targets under robots, robots over them, the selected robot last.
-    for (const r of robots) if (r.target) drawTarget(ctx, t, r, sameRobot(r, input.selected));
-    for (const r of robots) {
-      if (!sameRobot(r, input.selected)) drawRobot(ctx, t, r, false, sameRobot(r, input.hovered));
+    if (L.targets) for (const r of robots) if (r.target) drawTarget(ctx, t, r, sameRobot(r, input.selected));
+    if (L.filtered) {
+      for (const r of robots) {
+        if (!sameRobot(r, input.selected)) drawRobot(ctx, t, r, false, sameRobot(r, input.hovered));
+      }
     }
     const sel = input.selected ? robots.find((r) => sameRobot(r, input.selected)) : undefined;
     if (sel) drawRobot(ctx, t, sel, true, false);
-    if (world.ball) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (L.velocity) {
+      for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
+      if (world.ball?.visible) drawVelocity(ctx, t, world.ball.x, world.ball.y, world.ball.vx, world.ball.vy, COLORS.ball);
+    }
   }
+  if (input.drag) drawDrag(ctx, t, input.drag.from, input.drag.to);
 
   let slot = 0;
   if (world?.estop) drawBanner(ctx, t, "EMERGENCY STOP ACTIVE", COLORS.estop, "#ffffff", slot++);
@@ -71,6 +108,9 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
   }
   if (input.stale && world) {
     drawBanner(ctx, t, "connection lost: showing the last data received", "rgba(120,53,15,0.92)", "#fef3c7", slot++);
+  }
+  if (input.placing) {
+    drawBanner(ctx, t, `click where the ball goes: ${input.placing.replace(/_/g, " ").toLowerCase()}`, "rgba(30,64,175,0.92)", "#e0e7ff", slot++);
   }
   if (input.waitingForGeometry) {
     drawBanner(ctx, t, "waiting for geometry", "rgba(15,23,42,0.8)", "#e2e8f0", slot++);
@@ -289,4 +329,107 @@ function drawBanner(
   ctx.textBaseline = "middle";
   ctx.fillText(text, t.width / 2, y + h / 2);
   ctx.restore();
+}
+
+function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World) {
+  ctx.save();
+  ctx.lineWidth = 1.5;
+  for (const cam of world.cameras ?? []) {
+    const color = cameraColor(cam.camera_id);
+    ctx.strokeStyle = color;
+    ctx.fillStyle = color;
+    for (const r of cam.robots) {
+      const c = worldToCanvas(t, r.x, r.y);
+      const rad = Math.max(6, ROBOT_RADIUS_MM * t.scale);
+      ctx.beginPath();
+      ctx.arc(c.x, c.y, rad, 0, 2 * Math.PI);
+      ctx.stroke();
+      const a = angleToCanvas(r.orientation);
+      ctx.beginPath();
+      ctx.moveTo(c.x, c.y);
+      ctx.lineTo(c.x + Math.cos(a) * rad, c.y + Math.sin(a) * rad);
+      ctx.stroke();
+    }
+    for (const b of cam.balls) {
+      const c = worldToCanvas(t, b.x, b.y);
+      const s = Math.max(4, 30 * t.scale);
+      ctx.beginPath();
+      ctx.moveTo(c.x - s, c.y);
+      ctx.lineTo(c.x + s, c.y);
+      ctx.moveTo(c.x, c.y - s);
+      ctx.lineTo(c.x, c.y + s);
+      ctx.stroke();
+    }
+  }
+  ctx.restore();
+}
+
+/** Arrow of 0.5 s of travel at the current velocity (mm/s). */
+function drawVelocity(ctx: CanvasRenderingContext2D, t: FieldTransform, x: number, y: number, vx: number, vy: number, color: string) {
+  if (!Number.isFinite(vx) || !Number.isFinite(vy) || Math.hypot(vx, vy) < 20) return;
+  const a = worldToCanvas(t, x, y);
+  const b = worldToCanvas(t, x + vx * 0.5, y + vy * 0.5);
+  arrow(ctx, a, b, color, 2);
+}
+
+function arrow(ctx: CanvasRenderingContext2D, a: { x: number; y: number }, b: { x: number; y: number }, color: string, width: number) {
+  const ang = Math.atan2(b.y - a.y, b.x - a.x);
+  const head = 8;
+  ctx.save();
+  ctx.strokeStyle = color;
+  ctx.fillStyle = color;
+  ctx.lineWidth = width;
+  ctx.beginPath();
+  ctx.moveTo(a.x, a.y);
+  ctx.lineTo(b.x, b.y);
+  ctx.stroke();
+  ctx.beginPath();
+  ctx.moveTo(b.x, b.y);
+  ctx.lineTo(b.x - head * Math.cos(ang - 0.4), b.y - head * Math.sin(ang - 0.4));
+  ctx.lineTo(b.x - head * Math.cos(ang + 0.4), b.y - head * Math.sin(ang + 0.4));
+  ctx.closePath();
+  ctx.fill();
+  ctx.restore();
+}
+
+function drawTrails(ctx: CanvasRenderingContext2D, t: FieldTransform, trails: ReadonlyMap<string, readonly { x: number; y: number }[]>) {
+  ctx.save();
+  ctx.lineWidth = 2;
+  ctx.lineJoin = "round";
+  for (const [key, pts] of trails) {
+    if (pts.length < 2) continue;
+    ctx.strokeStyle = key.startsWith("blue") ? "rgba(96,165,250,0.6)" : key.startsWith("yellow") ? "rgba(250,204,21,0.6)" : "rgba(249,115,22,0.7)";
+    ctx.beginPath();
+    pts.forEach((p, i) => {
+      const c = worldToCanvas(t, p.x, p.y);
+      if (i === 0) ctx.moveTo(c.x, c.y);
+      else ctx.lineTo(c.x, c.y);
+    });
+    ctx.stroke();
+  }
+  ctx.restore();
+}
+
+function drawDesignated(ctx: CanvasRenderingContext2D, t: FieldTransform, p: { x: number; y: number }, command: string) {
+  const c = worldToCanvas(t, p.x, p.y);
+  const r = Math.max(8, 150 * t.scale);
+  ctx.save();
+  ctx.strokeStyle = command.includes("YELLOW") ? COLORS.yellow : command.includes("BLUE") ? "#60a5fa" : "#f8fafc";
+  ctx.lineWidth = 2;
+  ctx.setLineDash([4, 4]);
+  ctx.beginPath();
+  ctx.arc(c.x, c.y, r, 0, 2 * Math.PI);
+  ctx.stroke();
+  ctx.setLineDash([]);
+  ctx.beginPath();
+  ctx.moveTo(c.x - r * 0.5, c.y);
+  ctx.lineTo(c.x + r * 0.5, c.y);
+  ctx.moveTo(c.x, c.y - r * 0.5);
+  ctx.lineTo(c.x, c.y + r * 0.5);
+  ctx.stroke();
+  ctx.restore();
+}
+
+function drawDrag(ctx: CanvasRenderingContext2D, t: FieldTransform, from: { x: number; y: number }, to: { x: number; y: number }) {
+  arrow(ctx, worldToCanvas(t, from.x, from.y), worldToCanvas(t, to.x, to.y), "#f8fafc", 2.5);
 }

@@ -72,3 +72,34 @@ export function lengthToCanvas(t: FieldTransform, mm: number): number {
 export function angleToCanvas(rad: number): number {
   return -rad;
 }
+
+/** The user's view: zoom relative to the fitted field and the world point at the centre. */
+export interface View {
+  zoom: number;
+  cx: number;
+  cy: number;
+}
+
+export const MIN_ZOOM = 0.5;
+export const MAX_ZOOM = 25;
+
+/** Apply a view to a fitted transform (whose origin is at the canvas centre). */
+export function applyView(base: FieldTransform, v: View): FieldTransform {
+  const scale = base.scale * v.zoom;
+  return {
+    ...base,
+    scale,
+    originX: base.width / 2 - v.cx * scale,
+    originY: base.height / 2 + v.cy * scale,
+  };
+}
+
+/** The view after zooming by `factor` about canvas pixel (px, py): that world point stays put. */
+export function zoomAround(base: FieldTransform, v: View, px: number, py: number, factor: number): View {
+  const before = applyView(base, v);
+  const p = canvasToWorld(before, px, py);
+  const zoom = Math.max(MIN_ZOOM, Math.min(MAX_ZOOM, v.zoom * factor));
+  const scale = base.scale * zoom;
+  // px = w/2 - cx*scale + p.x*scale  ->  cx = p.x - (px - w/2)/scale
+  return { zoom, cx: p.x - (px - base.width / 2) / scale, cy: p.y + (py - base.height / 2) / scale };
+}

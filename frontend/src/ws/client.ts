@@ -130,6 +130,7 @@ export function startWsClient(opts: WsClientOptions): WsClient {
           world: next.world,
           geometry: next.geometry,
           health: next.health,
+          params: next.params,
           messages: next.messages,
         });
       }

@@ -1,16 +1,18 @@
 // Pure handling of server -> client websocket messages (docs/api.md, "Websocket /api/ws").
 
-import type { Geometry, Health, World } from "../api/types";
+import type { Geometry, Health, ParamsState, World } from "../api/types";
 
 export interface LiveData {
   world: World | null;
   geometry: Geometry | null;
   health: Health | null;
+  /** Server-owned parameters: pushed on every change (null before the first snapshot). */
+  params: ParamsState | null;
   /** Number of messages applied (useful to detect activity). */
   messages: number;
 }
 
-export const emptyLiveData: LiveData = { world: null, geometry: null, health: null, messages: 0 };
+export const emptyLiveData: LiveData = { world: null, geometry: null, health: null, params: null, messages: 0 };
 
 export type ParseResult =
   | { ok: true; msg: { type: string; [k: string]: unknown } }
@@ -56,6 +58,11 @@ function asGeometry(v: unknown): Geometry | null | undefined {
   };
 }
 
+function asParams(v: unknown): ParamsState | undefined {
+  if (!isObject(v) || typeof v.version !== "number" || !isObject(v.values)) return undefined;
+  return { version: v.version, values: v.values as ParamsState["values"] };
+}
+
 function asHealth(v: unknown): Health | undefined {
   if (!isObject(v) || !isObject(v.streams)) return undefined;
   return v as unknown as Health;
@@ -78,6 +85,7 @@ export function applyMessage(state: LiveData, msg: { type: string; [k: string]: 
         world,
         geometry: geometry === undefined ? state.geometry : geometry,
         health: health ?? state.health,
+        params: asParams(msg.params) ?? state.params,
         messages: state.messages + 1,
       };
     }
@@ -96,6 +104,13 @@ export function applyMessage(state: LiveData, msg: { type: string; [k: string]: 
       const health = asHealth(msg.health);
       if (health === undefined) return state;
       return { ...state, health, messages: state.messages + 1 };
+    }
+    case "params": {
+      const params = asParams(msg);
+      if (params === undefined) return state;
+      // Versions only grow within a session; a restarted backend sends a snapshot first.
+      if (state.params !== null && params.version < state.params.version) return state;
+      return { ...state, params, messages: state.messages + 1 };
     }
     default:
       return state;

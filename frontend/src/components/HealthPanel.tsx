@@ -1,0 +1,171 @@
+import type { Health } from "../api/types";
+import { fmtFixed } from "../format";
+import { useAppState } from "../store/hooks";
+
+/** A horizontal bar: value/max filled, an optional marker (e.g. the configured rate). */
+function Bar({ value, max, marker, warn, label }: { value: number; max: number; marker?: number | null; warn?: boolean; label?: string }) {
+  const frac = max > 0 && Number.isFinite(value) ? Math.max(0, Math.min(1, value / max)) : 0;
+  const m = marker !== undefined && marker !== null && max > 0 ? Math.max(0, Math.min(1, marker / max)) : null;
+  return (
+    <div className="hbar" role="meter" aria-valuenow={value} aria-valuemax={max} aria-label={label}>
+      <div className={`hbar-fill ${warn ? "hbar-warn" : ""}`} style={{ width: `${frac * 100}%` }} />
+      {m !== null && <div className="hbar-mark" style={{ left: `${m * 100}%` }} title={`configured ${marker}`} />}
+    </div>
+  );
+}
+
+function niceMax(v: number): number {
+  if (!(v > 0)) return 1;
+  const p = 10 ** Math.floor(Math.log10(v));
+  for (const k of [1, 2, 2.5, 5, 10]) if (k * p >= v) return k * p;
+  return 10 * p;
+}
+
+function Processors({ h }: { h: Health }) {
+  const rateMax = niceMax(Math.max(...h.processors.map((p) => Math.max(p.measured_hz, p.configured_hz ?? 0)), 1));
+  const tickMax = niceMax(Math.max(...h.processors.map((p) => p.tick_p99_ms), 0.1));
+  return (
+    <section>
+      <h3>
+        Processors <span className="muted">rate (bar, | = configured) · tick mean / p99 (scale {tickMax} ms)</span>
+      </h3>
+      <table className="htable" data-testid="health-processors">
+        <tbody>
+          {h.processors.map((p) => {
+            const slow = p.configured_hz !== null && p.configured_hz > 0 && p.measured_hz < 0.8 * p.configured_hz;
+            return (
+              <tr key={p.name} title={`${p.trigger}${p.last_error ? ` · last error: ${p.last_error}` : ""}`}>
+                <td className="hname">{p.name}</td>
+                <td className="hbarcell">
+                  <Bar value={p.measured_hz} max={rateMax} marker={p.configured_hz} warn={slow} label={`${p.name} rate`} />
+                </td>
+                <td className="num hval">
+                  {fmtFixed(p.measured_hz, 0)}
+                  {p.configured_hz ? `/${fmtFixed(p.configured_hz, 0)}` : ""} Hz
+                </td>
+                <td className="hbarcell">
+                  <div className="hbar-stack">
+                    <Bar value={p.tick_mean_ms} max={tickMax} label={`${p.name} tick mean`} />
+                    <Bar value={p.tick_p99_ms} max={tickMax} warn={p.tick_p99_ms > 5} label={`${p.name} tick p99`} />
+                  </div>
+                </td>
+                <td className="num hval">
+                  {fmtFixed(p.tick_mean_ms, 2)}/{fmtFixed(p.tick_p99_ms, 2)} ms
+                </td>
+                <td className={`num hval ${p.overruns || p.errors ? "warn" : ""}`}>
+                  {p.overruns ? `${p.overruns} ovr` : ""}
+                  {p.errors ? ` ${p.errors} err` : ""}
+                  {!p.overruns && !p.errors ? "ok" : ""}
+                </td>
+              </tr>
+            );
+          })}
+        </tbody>
+      </table>
+    </section>
+  );
+}
+
+function Topics({ h }: { h: Health }) {
+  return (
+    <section>
+      <h3>
+        Data Bus topics <span className="muted">fill (size / capacity) · age of the newest record</span>
+      </h3>
+      <table className="htable" data-testid="health-topics">
+        <tbody>
+          {h.topics.map((t) => (
+            <tr key={t.name}>
+              <td className="hname">{t.name}</td>
+              <td className="hbarcell">
+                <Bar value={t.size} max={t.capacity} label={`${t.name} fill`} />
+              </td>
+              <td className="num hval">
+                {t.size}/{t.capacity}
+              </td>
+              <td className="num hval">{t.age_s < 0 ? "never" : t.age_s < 1 ? `${fmtFixed(t.age_s * 1000, 0)} ms` : `${fmtFixed(t.age_s, 1)} s`}</td>
+            </tr>
+          ))}
+        </tbody>
+      </table>
+    </section>
+  );
+}
+
+function Streams({ h }: { h: Health }) {
+  const entries = Object.entries(h.streams);
+  const max = niceMax(Math.max(...entries.map(([, s]) => s.rate_hz), 1));
+  return (
+    <section>
+      <h3>
+        Streams <span className="muted">packets per second (scale {max} Hz) · errors</span>
+      </h3>
+      <table className="htable" data-testid="health-streams">
+        <tbody>
+          {entries.map(([name, s]) => (
+            <tr key={name} title={s.last_error || undefined}>
+              <td className="hname">{name}</td>
+              <td className="hbarcell">
+                <Bar value={s.rate_hz} max={max} warn={s.errors > 0} label={`${name} rate`} />
+              </td>
+              <td className="num hval">{fmtFixed(s.rate_hz, 0)} Hz</td>
+              <td className={`num hval ${s.errors ? "warn" : ""}`}>{s.errors ? `${s.errors} err` : s.packets ? "ok" : "idle"}</td>
+            </tr>
+          ))}
+        </tbody>
+      </table>
+    </section>
+  );
+}
+
+function Latency({ h }: { h: Health }) {
+  const lat = h.latency;
+  const relay = h.relay;
+  const rows: [string, number | undefined][] = [
+    ["vision → command p50", lat?.p50_ms],
+    ["vision → command mean", lat?.mean_ms],
+    ["vision → command p99", lat?.p99_ms],
+    ["relay command latency", relay?.command_latency_ms],
+  ];
+  const max = niceMax(Math.max(...rows.map(([, v]) => v ?? 0), 1));
+  return (
+    <section>
+      <h3>
+        Latency <span className="muted">in the backend: vision arrival → command sent; relay: command in → out (scale {max} ms)</span>
+      </h3>
+      <table className="htable" data-testid="health-latency">
+        <tbody>
+          {rows.map(([name, v]) => (
+            <tr key={name}>
+              <td className="hname">{name}</td>
+              <td className="hbarcell">
+                <Bar value={v ?? 0} max={max} warn={(v ?? 0) > 20} label={name} />
+              </td>
+              <td className="num hval">{v === undefined ? "—" : `${fmtFixed(v, 2)} ms`}</td>
+            </tr>
+          ))}
+        </tbody>
+      </table>
+      {relay && (
+        <p className="muted">
+          relay {relay.alive ? "alive" : "DOWN"} · output {relay.output_mode} {fmtFixed(relay.output_rate_hz, 0)} Hz · {relay.active_robots} active,{" "}
+          {relay.stale_robots} stale robots · {h.websocket_clients} browser{h.websocket_clients === 1 ? "" : "s"}
+        </p>
+      )}
+    </section>
+  );
+}
+
+export function HealthPanel() {
+  const h = useAppState((s) => s.health);
+  if (!h) return <p className="muted">No health data yet.</p>;
+  return (
+    <div className="health-panel" data-testid="health-panel">
+      <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
+      <Latency h={h} />
+      <Processors h={h} />
+      <Streams h={h} />
+      <Topics h={h} />
+    </div>
+  );
+}

@@ -1,0 +1,112 @@
+// Keyboard shortcuts of the whole page (shown by the `?` overlay).
+
+import { selectRobot, setEstop } from "./actions";
+import { giveRefereeCommand } from "./components/RefereePanel";
+import { fitView } from "./field/viewState";
+import { togglePaused } from "./plots/sampler";
+import { setTab, TABS, uiStore } from "./store/uiStore";
+import { appStore } from "./store/appStore";
+
+export const SHORTCUTS: [string, string][] = [
+  ["E", "EMERGENCY STOP (one press, no confirmation)"],
+  ["Esc", "deselect robot / cancel ball placement / close menus"],
+  ["0 – 9", "select blue robot 0 – 9"],
+  ["Shift + 0 – 9", "select yellow robot 0 – 9"],
+  ["F", "fit the field into view"],
+  ["Space", "pause / resume plots"],
+  ["H", "internal referee HALT"],
+  ["S", "internal referee STOP"],
+  ["G", "internal referee FORCE START"],
+  ["Alt + 1 – 5", "switch panel: Robots, Params, Plots, Referee, Health"],
+  ["L", "large text (projector)"],
+  ["?", "this help"],
+  ["wheel", "zoom the field at the cursor"],
+  ["drag", "pan (middle button anywhere; left button on empty field with no robot selected)"],
+  ["click robot, click / drag field", "send it there; dragging sets the heading (direction of the drag)"],
+  ["right-click field", "teleport the ball (or the selected robot) there"],
+];
+
+function typing(ev: KeyboardEvent): boolean {
+  const el = ev.target as HTMLElement | null;
+  if (!el) return false;
+  const tag = el.tagName;
+  return tag === "INPUT" || tag === "TEXTAREA" || tag === "SELECT" || el.isContentEditable;
+}
+
+const DIGIT = /^Digit([0-9])$/;
+
+export function handleKey(ev: KeyboardEvent): boolean {
+  if (ev.ctrlKey || ev.metaKey) return false;
+  // The emergency stop works even while typing in a field? No: "e" is a letter. Outside inputs only.
+  if (typing(ev)) {
+    if (ev.key === "Escape") (ev.target as HTMLElement).blur();
+    return false;
+  }
+  const ui = uiStore.getState();
+  if (ev.altKey) {
+    const m = DIGIT.exec(ev.code);
+    const tab = m ? TABS[Number(m[1]) - 1] : undefined;
+    if (tab) {
+      setTab(tab.key);
+      return true;
+    }
+    return false;
+  }
+  const m = DIGIT.exec(ev.code);
+  if (m) {
+    const id = Number(m[1]);
+    const team = ev.shiftKey ? "yellow" : "blue";
+    const w = appStore.getState().world;
+    if (w?.robots.some((r) => r.team === team && r.id === id)) selectRobot({ team, id });
+    return true;
+  }
+  switch (ev.key) {
+    case "e":
+    case "E":
+      void setEstop(true);
+      return true;
+    case "Escape":
+      if (ui.help) uiStore.setState({ help: false });
+      else if (ui.placing) uiStore.setState({ placing: null });
+      else selectRobot(null);
+      window.dispatchEvent(new CustomEvent("touchline:escape"));
+      return true;
+    case "f":
+    case "F":
+      fitView();
+      return true;
+    case " ":
+      togglePaused();
+      return true;
+    case "h":
+    case "H":
+      void giveRefereeCommand("HALT");
+      return true;
+    case "s":
+    case "S":
+      void giveRefereeCommand("STOP");
+      return true;
+    case "g":
+    case "G":
+      void giveRefereeCommand("FORCE_START");
+      return true;
+    case "l":
+    case "L":
+      uiStore.setState({ largeText: !ui.largeText });
+      return true;
+    case "?":
+      uiStore.setState({ help: !ui.help });
+      return true;
+    default:
+      return false;
+  }
+}
+
+export function installShortcuts(): () => void {
+  const onKey = (ev: KeyboardEvent) => {
+    if (ev.repeat && ev.key !== "e" && ev.key !== "E") return;
+    if (handleKey(ev)) ev.preventDefault();
+  };
+  window.addEventListener("keydown", onKey);
+  return () => window.removeEventListener("keydown", onKey);
+}

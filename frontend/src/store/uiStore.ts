@@ -1,0 +1,88 @@
+// UI state that is not live data: the open tab, field layers, pending field actions, options.
+// Kept outside React like the app store, so the field canvas can read it every frame.
+
+import { useSyncExternalStore } from "react";
+import { createStore } from "./createStore";
+
+export type Tab = "robots" | "params" | "plots" | "referee" | "health";
+export const TABS: { key: Tab; label: string }[] = [
+  { key: "robots", label: "Robots" },
+  { key: "params", label: "Params" },
+  { key: "plots", label: "Plots" },
+  { key: "referee", label: "Referee" },
+  { key: "health", label: "Health" },
+];
+
+export interface Layers {
+  raw: boolean;
+  filtered: boolean;
+  velocity: boolean;
+  targets: boolean;
+  trails: boolean;
+  referee: boolean;
+}
+
+export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] = [
+  { key: "filtered", label: "Filtered objects", help: "robots and ball from the world model" },
+  { key: "raw", label: "Raw detections", help: "per camera, coloured by camera" },
+  { key: "velocity", label: "Velocity vectors", help: "0.5 s of travel at the current velocity" },
+  { key: "targets", label: "Targets & paths", help: "straight line to each target" },
+  { key: "trails", label: "Trails", help: "last 3 s of positions" },
+  { key: "referee", label: "Referee marks", help: "designated position of ball placement" },
+];
+
+export interface UiState {
+  tab: Tab;
+  layers: Layers;
+  largeText: boolean;
+  help: boolean;
+  /** Ball placement waiting for a click on the field: the referee command to give. */
+  placing: string | null;
+}
+
+const LS_KEY = "touchline.ui.v1";
+
+function load(): Partial<UiState> {
+  try {
+    const raw = typeof localStorage !== "undefined" ? localStorage.getItem(LS_KEY) : null;
+    return raw ? (JSON.parse(raw) as Partial<UiState>) : {};
+  } catch {
+    return {};
+  }
+}
+
+const saved = load();
+export const defaultLayers: Layers = { raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true };
+
+export const uiStore = createStore<UiState>({
+  tab: saved.tab ?? "robots",
+  layers: { ...defaultLayers, ...(saved.layers ?? {}) },
+  largeText: saved.largeText ?? false,
+  help: false,
+  placing: null,
+});
+
+uiStore.subscribe(() => {
+  const s = uiStore.getState();
+  try {
+    localStorage.setItem(LS_KEY, JSON.stringify({ tab: s.tab, layers: s.layers, largeText: s.largeText }));
+  } catch {
+    /* private mode */
+  }
+});
+
+export function useUi<T>(sel: (s: UiState) => T): T {
+  return useSyncExternalStore(
+    uiStore.subscribe,
+    () => sel(uiStore.getState()),
+    () => sel(uiStore.getState()),
+  );
+}
+
+export function setTab(tab: Tab): void {
+  uiStore.setState({ tab });
+}
+
+export function toggleLayer(k: keyof Layers): void {
+  uiStore.setState((s) => ({ layers: { ...s.layers, [k]: !s.layers[k] } }));
+}
