@@ -92,11 +92,11 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        await st.start()
+        await asyncio.to_thread(st.start_thread)
         try:
             yield
         finally:
-            await st.stop()
+            await asyncio.to_thread(st.stop_thread)
 
     app = FastAPI(title="Touchline", version="0.1.0", lifespan=lifespan)
     app.state.station = st
@@ -134,13 +134,13 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 "msg": f"target ({body.x:.0f}, {body.y:.0f}) mm is outside the field "
                        f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
                 "type": "outside_field"}])
-        st.set_target(team, rid, body.x, body.y, body.orientation)
+        await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
         return {"team": team, "id": rid,
                 "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
 
     @api.delete("/robots/{team}/{rid}/target")
     async def clear_target(team: TeamParam, rid: IdParam) -> dict[str, Any]:
-        st.clear_target(team, rid)
+        await st.call(st.clear_target, team, rid)
         return {"team": team, "id": rid, "target": None}
 
     def _check_on_field(x: float, y: float) -> None:
@@ -157,14 +157,15 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.post("/sim/ball")
     async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
         _check_on_field(body.x, body.y)
-        st.teleport_ball(body.x, body.y, body.vx, body.vy)
+        await st.call(st.teleport_ball, body.x, body.y, body.vx, body.vy)
         return {"ball": body.model_dump()}
 
     @api.post("/sim/robots/{team}/{rid}")
     async def teleport_robot(team: TeamParam, rid: IdParam,
                              body: TeleportRobotIn) -> dict[str, Any]:
         _check_on_field(body.x, body.y)
-        st.teleport_robot(team, rid, body.x, body.y, body.orientation, body.present)
+        await st.call(st.teleport_robot, team, rid, body.x, body.y, body.orientation,
+                      body.present)
         return {"team": team, "id": rid, **body.model_dump()}
 
     @api.get("/referee")
@@ -174,7 +175,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.post("/referee/internal/enabled", response_model=None)
     async def referee_enable(body: EnableIn) -> dict[str, Any] | JSONResponse:
         try:
-            st.internal_referee.enable(body.enabled)
+            await st.call(st.internal_referee.enable, body.enabled)
         except RefereeCommandError as exc:
             return JSONResponse(status_code=409, content={"detail": str(exc)})
         return st.referee_view()
@@ -190,17 +191,18 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 "detail": f"a game controller is active ({other}): the internal referee "
                           "stays off"})
         try:
-            st.referee_state.give(body.command, None if dp is None else (dp.x, dp.y))
+            await st.call(st.referee_state.give, body.command,
+                          None if dp is None else (dp.x, dp.y))
         except RefereeCommandError as exc:
             return JSONResponse(status_code=422, content={"detail": [
                 {"loc": ["body", "command"], "msg": str(exc), "type": "value_error"}]})
-        st.internal_referee.enable(True)
+        await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s", body.command)
         return st.referee_view()
 
     @api.post("/estop")
     async def estop(body: EstopIn) -> dict[str, bool]:
-        st.set_estop(body.active)
+        await st.call(st.set_estop, body.active)
         log.warning("emergency stop %s", "ACTIVE" if body.active else "released")
         return {"estop": body.active}
 
@@ -255,6 +257,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
             store.patch(body)
         except ParamError as exc:
             return _refused(exc)
+        await st.call(lambda: None)  # applied on the station loop before we answer
         log.info("parameters changed to version %d", store.version)
         return _state()
 
@@ -279,6 +282,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
             store.replace(values)
         except ParamError as exc:
             return _refused(exc)
+        await st.call(lambda: None)
         return _state()
 
     @api.get("/presets")
@@ -313,6 +317,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
             return _refused(exc)
         except KeyError:
             raise HTTPException(404, f"no preset named {name!r}") from None
+        await st.call(lambda: None)
         return _state()
 
     @api.delete("/presets/{name}", response_model=None)
@@ -336,9 +341,10 @@ def _origin_allowed(origin: str, host: str, allowed: list[str]) -> bool:
 async def _serve_client(ws: WebSocket, st: Station) -> None:
     """Sends a snapshot, then the latest world at up to ``stream.ws_max_hz``; a slow client
     only delays itself: it always gets the newest world, never a backlog. Parameter changes
-    are pushed as they happen."""
-    world_ev = st.world_topic.subscribe_event()
-    st.params_topic.add_waiter(world_ev)
+    and geometry are pushed when they change, health twice a second.
+
+    The bus lives on the station thread, so this loop looks at the world's sequence number
+    at the stream rate instead of waiting on the bus."""
     closed = asyncio.Event()
 
     async def receive() -> None:
@@ -360,38 +366,33 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
         geo_seq = st.geometry_topic.seq
         params_version = st.params.version
         last_health = time.monotonic()
-        last_sent = 0.0
-        sent_key = -1
+        sent_key = st.world_topic.seq
+        next_t = time.monotonic()
         while not closed.is_set():
+            next_t += 1.0 / st.params.current.stream.ws_max_hz
+            now = time.monotonic()
+            if next_t < now:  # this client is behind: skip, don't catch up
+                next_t = now
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(world_ev.wait(), 0.5)
-            world_ev.clear()
+                await asyncio.wait_for(closed.wait(), next_t - now)
+            if closed.is_set() or ws.application_state != WebSocketState.CONNECTED:
+                break
             if st.params.version != params_version:
                 params_version = st.params.version
                 await ws.send_text(json.dumps({"type": "params", "version": params_version,
                                                "values": st.params.values()}))
-            min_period = 1.0 / st.params.current.stream.ws_max_hz
-            now = time.monotonic()
-            if now - last_sent < min_period:
-                await asyncio.sleep(min_period - (now - last_sent))
-            if ws.application_state != WebSocketState.CONNECTED or closed.is_set():
-                break
             if st.geometry_topic.seq != geo_seq:
                 geo_seq = st.geometry_topic.seq
                 await ws.send_text(json.dumps({"type": "geometry", "geometry": st.geometry()}))
-            text = st.world_json()
-            key = hash(text)
+            key = st.world_topic.seq * 2 + (1 if st.estop else 0)
             if key != sent_key:
-                await ws.send_text(text)
                 sent_key = key
-                last_sent = time.monotonic()
+                await ws.send_text(st.world_json())
             if time.monotonic() - last_health >= 0.5:
                 last_health = time.monotonic()
                 await ws.send_text(json.dumps({"type": "health", "health": st.health()}))
     finally:
         rx.cancel()
-        st.world_topic.unsubscribe_event(world_ev)
-        st.params_topic.unsubscribe_event(world_ev)
 
 
 def _mount_frontend(app: FastAPI, static_dir: Path) -> None:

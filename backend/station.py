@@ -3,12 +3,17 @@ mirror order. The API reads through this object and writes only onto bus topics.
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
 import json
 import logging
 import math
+import sys
+import threading
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import zmq
 import zmq.asyncio
@@ -42,12 +47,16 @@ from .world.state import Team, WorldState
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
+T = TypeVar("T")
 
 
 class Station:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
         self.ctx: zmq.asyncio.Context | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._stop_event: asyncio.Event | None = None
         self.runner = Runner()
         self.started_mono = time.monotonic()
         self._world_json_cache: tuple[int, str] = (-1, "")
@@ -77,6 +86,83 @@ class Station:
         for name in settings.topic_sizes:
             self.bus.topic(name)
 
+    # ---- the station thread: the bus and every processor run on their own event loop, so
+    # web traffic (JSON encoding, websocket sends) never delays control ----
+
+    def start_thread(self) -> None:
+        """Starts the station loop in its own thread and returns once it runs."""
+        ready = threading.Event()
+        errors: list[BaseException] = []
+
+        def main() -> None:
+            loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
+            stop_event = asyncio.Event()
+            self._stop_event = stop_event
+
+            async def run() -> None:
+                try:
+                    await self.start()
+                except BaseException as exc:
+                    errors.append(exc)
+                    ready.set()
+                    raise
+                self._loop = loop
+                ready.set()
+                await stop_event.wait()
+                await self.stop()
+
+            try:
+                loop.run_until_complete(run())
+            except BaseException:
+                log.exception("station loop ended with an error")
+            finally:
+                self._loop = None
+                loop.close()
+
+        # control latency: let the station thread take the GIL back quickly from web work
+        sys.setswitchinterval(0.0005)
+        self._thread = threading.Thread(target=main, name="station", daemon=True)
+        self._thread.start()
+        if not ready.wait(30):
+            raise RuntimeError("station did not start within 30 s")
+        if errors:
+            raise RuntimeError(f"station failed to start: {errors[0]}") from errors[0]
+
+    def stop_thread(self) -> None:
+        loop, ev = self._loop, self._stop_event
+        if loop is not None and ev is not None:
+            loop.call_soon_threadsafe(ev.set)
+        if self._thread is not None:
+            self._thread.join(timeout=10)
+            self._thread = None
+
+    def _schedule(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
+        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
+
+        def run() -> None:
+            try:
+                fut.set_result(fn(*args))
+            except BaseException as exc:  # handed to the caller
+                fut.set_exception(exc)
+
+        loop = self._loop
+        if loop is None or threading.current_thread() is self._thread:
+            run()
+        else:
+            loop.call_soon_threadsafe(run)
+        return fut
+
+    def _apply_params_soon(self, p: StationParams, version: int) -> None:
+        self._schedule(self.apply_params, p, version)
+
+    async def call(self, fn: Callable[..., T], *args: Any) -> T:
+        """Runs ``fn(*args)`` on the station loop (between two ticks) and returns its result."""
+        return await asyncio.wrap_future(self._schedule(fn, *args))
+
+    def call_sync(self, fn: Callable[..., T], *args: Any, timeout_s: float = 5.0) -> T:
+        return self._schedule(fn, *args).result(timeout=timeout_s)
+
     async def start(self) -> None:
         s = self.settings
         self.ctx = zmq.asyncio.Context()
@@ -93,7 +179,8 @@ class Station:
         self.publisher = CommandPublisher(self.bus, pub)
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.apply_params(prm, self.params.version)
-        self.params.subscribe(self.apply_params)
+        # the store validates and persists in the web thread; the station applies on its loop
+        self.params.subscribe(self._apply_params_soon)
         for p in (self.ingest, self.vision, self.referee, self.world, self.strategy,
                   self.control, self.internal_referee, self.publisher):
             self.runner.add(p)
