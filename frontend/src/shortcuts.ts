@@ -37,11 +37,13 @@ const DIGIT = /^Digit([0-9])$/;
 
 export function handleKey(ev: KeyboardEvent): boolean {
   if (ev.ctrlKey || ev.metaKey) return false;
-  // The emergency stop works even while typing in a field? No: "e" is a letter. Outside inputs only.
+  // Outside text inputs only: "e" is a letter when typing (the E-stop button is always one click away).
   if (typing(ev)) {
     if (ev.key === "Escape") (ev.target as HTMLElement).blur();
     return false;
   }
+  // Space and Enter keep activating a focused button (keyboard users).
+  if ((ev.key === " " || ev.key === "Enter") && (ev.target as HTMLElement | null)?.tagName === "BUTTON") return false;
   const ui = uiStore.getState();
   if (ev.altKey) {
     const m = DIGIT.exec(ev.code);

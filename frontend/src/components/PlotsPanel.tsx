@@ -103,28 +103,33 @@ function PlotCard({ def, width }: { def: PlotDef; width: number }) {
   useEffect(() => {
     const host = hostRef.current;
     if (!host || def.keys.length === 0 || width <= 0) return;
+    // One y scale per unit: the first unit on the left axis, the second on the right,
+    // further units share the right axis's scale range only if they have the same unit.
+    const units = def.keys.map((k) => unitOf(k) || "value");
+    const scaleUnits = [...new Set(units)];
+    const axisStyle = { stroke: "#94a3b8", grid: { stroke: "rgba(148,163,184,0.15)" }, ticks: { stroke: "rgba(148,163,184,0.3)" } };
+    const yAxes: uPlot.Axis[] = scaleUnits.slice(0, 2).map((u, i) => ({
+      ...axisStyle,
+      scale: u,
+      side: i === 0 ? 3 : 1,
+      size: 56,
+      label: u === "value" ? undefined : u,
+      labelSize: 14,
+      grid: i === 0 ? axisStyle.grid : { show: false },
+    }));
     const opts: uPlot.Options = {
       width: Math.max(200, width),
       height: 150,
       pxAlign: false,
       cursor: { sync: { key: "touchline", setSeries: false }, drag: { x: false, y: false } },
-      scales: { x: { time: true } },
+      scales: { x: { time: true }, ...Object.fromEntries(scaleUnits.map((u) => [u, { auto: true }])) },
       legend: { show: true, live: true },
-      axes: [
-        { stroke: "#94a3b8", grid: { stroke: "rgba(148,163,184,0.15)" }, ticks: { stroke: "rgba(148,163,184,0.3)" } },
-        {
-          stroke: "#94a3b8",
-          size: 56,
-          grid: { stroke: "rgba(148,163,184,0.15)" },
-          ticks: { stroke: "rgba(148,163,184,0.3)" },
-          label: [...new Set(def.keys.map(unitOf))].filter(Boolean).join(", ") || undefined,
-          labelSize: 14,
-        },
-      ],
+      axes: [axisStyle, ...yAxes],
       series: [
         { label: "time" },
         ...def.keys.map((k, i) => ({
           label: k,
+          scale: units[i],
           stroke: SERIES_COLORS[i % SERIES_COLORS.length] as string,
           width: 1.5,
           spanGaps: true,
@@ -230,7 +235,7 @@ export function PlotsPanel({ visible }: { visible: boolean }) {
     if (!el) return;
     const ro = new ResizeObserver(() => {
       const w = Math.floor(el.getBoundingClientRect().width);
-      if (w > 0) setWidth(w - 2);
+      if (w > 0) setWidth(w - 20); // body padding + card border
     });
     ro.observe(el);
     return () => ro.disconnect();
