@@ -21,7 +21,10 @@ from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
 from .bus import DataBus, Reader
-from .control.goto import GoToConfig, GoToController, LocalVelocity, Target
+from .control.goto import LocalVelocity, Target
+from .control.motion import PHASE_NAMES, MotionBank, RobotMotionState
+from .control.params import ALGORITHMS, ControlSettings
+from .control.referee_limits import referee_limits
 from .processor import Every, OnTopic, Processor
 from .referee.internal import InternalReferee, RefereeCommandError
 from .strategy.demo import DemoConfig, demo_targets
@@ -321,13 +324,15 @@ class StrategyProcessor(Processor):
 
 
 class ControlProcessor(Processor):
-    """Turns targets into robot commands on every world update, with the safety rules:
-    emergency stop and HALT zero every robot; robots not seen and a stale world get zero."""
+    """Turns targets into robot commands on every world update with each robot's chosen
+    controller (the paper's Algorithm 1 or 2, or the proportional baseline), then the safety
+    rules: emergency stop and HALT zero every robot; a stale world zeroes every robot, a robot
+    not seen gets zero; STOP and the other team's ball placement cap the speed."""
 
     name = "control"
 
     def __init__(self, bus: DataBus, max_wait_s: float, vision_stale_s: float,
-                 goto: GoToConfig | None = None) -> None:
+                 settings: ControlSettings | None = None) -> None:
         world = bus.typed("world", WorldState)
         super().__init__(OnTopic(world, max_wait_s=max_wait_s))
         self.world = world
@@ -337,11 +342,27 @@ class ControlProcessor(Processor):
         self.commands = bus.typed("robot-commands", CommandSet)
         self.vision_stale_s = vision_stale_s
         self.stop_speed_mps = 1.5
-        self.goto_config = goto or GoToConfig()
-        self.controllers: dict[tuple[Team, int], GoToController] = {}
+        self.our_team: Team = "blue"
+        self.motion = MotionBank(settings or ControlSettings())
         self.last_commands: dict[tuple[Team, int], Command] = {}
+        self.telemetry: dict[str, dict[str, Any]] = {}
+        self.internal: InternalRefereeProcessor | None = None
         self._last_tick = time.monotonic()
         self.halt_reason = ""
+
+    def active_referee(self) -> RefereeState | None:
+        """The referee the robots obey: the newest state, except the internal referee's own
+        once the operator switched it off (then there is no referee until one is heard)."""
+        ref = self.referee.latest_value()
+        ir = self.internal
+        if (ref is not None and ir is not None and not ir.enabled
+                and ref.source_identifier == ir.referee.source_identifier):
+            return None
+        return ref
+
+    def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
+        self.motion.apply_settings(settings)
+        self.our_team = our_team
 
     async def tick(self) -> None:
         now = time.monotonic()
@@ -349,19 +370,20 @@ class ControlProcessor(Processor):
         self._last_tick = now
         rec = self.world.latest()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets.latest_value() or {}
-        ref = self.referee.latest_value()
+        ref = self.active_referee()
         estop = bool(self.estop.latest_value())
         created = time.time_ns()
         if estop:
             self.halt_reason = "emergency stop"
-            self._reset_all()
+            self.motion.reset_all()
             self.commands.write(CommandSet(created, 0, (), stop_all=True))
+            self.last_commands = {}
             return
         keys = sorted(targets)
         zero = LocalVelocity.zero()
         if rec is None or now - rec.time_mono > self.vision_stale_s or (ref and ref.halted):
             self.halt_reason = "HALT" if ref and ref.halted else "no vision"
-            self._reset_all()
+            self.motion.reset_all()
             cmds = tuple(Command(t, i, zero) for t, i in keys)
             self.commands.write(CommandSet(created, 0, cmds))
             self.last_commands = {(c.team, c.id): c for c in cmds}
@@ -369,33 +391,36 @@ class ControlProcessor(Processor):
         self.halt_reason = ""
         world = rec.value
         out: list[Command] = []
+        command = ref.command if ref is not None else None
         for key in keys:
             robot = world.robot(*key)
+            m = self.motion.get(key[0], key[1])
             if robot is None or not robot.visible:
-                ctrl = self.controllers.get(key)
-                if ctrl:
-                    ctrl.reset()
+                m.step(_UNSEEN, targets[key].target, dt)  # zero, and restart when seen again
                 out.append(Command(key[0], key[1], zero))
                 continue
-            ctrl = self.controllers.get(key)
-            if ctrl is None:
-                ctrl = self.controllers[key] = GoToController(self.goto_config)
-            vel = ctrl.step(robot.x, robot.y, robot.orientation, targets[key].target, dt)
-            if ref is not None and ref.stopped:  # STOP: at most 1.5 m/s
+            vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
+                         targets[key].target, dt)
+            vel = referee_limits(vel, command, our_team=self.our_team)
+            if command == "STOP":  # the operator may set a lower cap than the rules' 1.5 m/s
                 vel = _limit_speed(vel, self.stop_speed_mps)
             out.append(Command(key[0], key[1], vel))
         cmds = tuple(out)
         self.last_commands = {(c.team, c.id): c for c in cmds}
+        self.telemetry = self._telemetry()
         self.commands.write(CommandSet(created, world.receive_time_ns, cmds))
 
-    def set_goto_config(self, cfg: GoToConfig) -> None:
-        self.goto_config = cfg
-        for c in self.controllers.values():
-            c.config = cfg
+    def _telemetry(self) -> dict[str, dict[str, Any]]:
+        out: dict[str, dict[str, Any]] = {}
+        for key, tel in self.motion.telemetry().items():
+            entry: dict[str, Any] = dict(tel)
+            entry["algorithm"] = ALGORITHMS[int(tel["algorithm"])]
+            entry["phase"] = PHASE_NAMES[int(tel["phase"])]
+            out[key] = entry
+        return out
 
-    def _reset_all(self) -> None:
-        for c in self.controllers.values():
-            c.reset()
+
+_UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
 
 
 def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:

@@ -23,7 +23,7 @@ from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
 from .bus import DataBus
 from .config import Settings
-from .control.goto import GoToConfig, Target
+from .control.goto import Target
 from .params.model import StationParams
 from .params.store import ParamStore
 from .processor import Every, OnTopic, Runner
@@ -178,6 +178,7 @@ class Station:
                                         prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus, pub)
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
+        self.control.internal = self.internal_referee
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
@@ -198,19 +199,16 @@ class Station:
         self.strategy.set_rate(p.processors.strategy_hz)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
-        g = p.goto
-        self.control.set_goto_config(GoToConfig(
-            kp_per_s=g.kp_per_s, max_speed_mps=g.max_speed_mps, max_accel_mps2=g.max_accel_mps2,
-            kp_angle_per_s=g.kp_angle_per_s, max_angular_radps=g.max_angular_radps,
-            position_tolerance_mm=g.position_tolerance_mm))
+        self.control.apply_settings(p.control, p.team.our_team)
         self.control.vision_stale_s = p.safety.vision_stale_s
         self.control.stop_speed_mps = p.safety.stop_speed_mps
         self.control.trigger = OnTopic(self.world_topic, max_wait_s=p.processors.control_max_wait_s)
         wc = self.world.model.config
         wc.merge_window_s = p.world.merge_window_s
+        wc.predict_after_s = p.world.predict_after_s
         wc.visible_timeout_s = p.world.visible_timeout_s
         wc.drop_timeout_s = p.world.drop_timeout_s
-        wc.velocity_smoothing = p.world.velocity_smoothing
+        self.world.model.configure(p.filters)
         for name, size in p.bus.sizes().items():
             self.bus.topic(name).resize(size)
         self.params_topic.write(version)
@@ -287,7 +285,10 @@ class Station:
         world = self.world_topic.latest_value()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets_topic.latest_value() or {}
         ref = self.referee_topic.latest()
+        if ref is not None and hasattr(self, "control") and self.control.active_referee() is None:
+            ref = None  # the internal referee's own state after it was switched off
         commands = self.control.last_commands if hasattr(self, "control") else {}
+        telemetry = self.control.telemetry if hasattr(self, "control") else {}
         now_unix = time.time()
         out: dict[str, Any] = {
             "seq": self.world_topic.seq,
@@ -311,7 +312,9 @@ class Station:
         if world.ball is not None:
             b = world.ball
             out["ball"] = {"x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
-                           "age_s": t_ref - b.t_seen, "cameras": list(b.cameras)}
+                           "age_s": t_ref - b.t_seen, "cameras": list(b.cameras),
+                           "raw_x": b.raw_x, "raw_y": b.raw_y, "predicted": b.predicted,
+                           "lost": b.lost, "filter": b.filter}
         robots = []
         for r in world.robots:
             entry = targets.get((r.team, r.id))
@@ -325,6 +328,9 @@ class Station:
                     "orientation": entry.target.orientation, "source": entry.source,
                 },
                 "controlled": entry is not None,
+                "raw_x": r.raw_x, "raw_y": r.raw_y, "raw_orientation": r.raw_orientation,
+                "predicted": r.predicted, "lost": r.lost, "filter": r.filter,
+                "control": telemetry.get(f"{r.team}/{r.id}") if entry is not None else None,
                 "command": None if cmd is None else {
                     "forward_mps": cmd.velocity.forward_mps,
                     "left_mps": cmd.velocity.left_mps,

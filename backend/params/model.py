@@ -7,6 +7,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..control.params import ControlSettings
+from ..filters.params import FilterSettings
+
 
 def num(default: float, ge: float, le: float, unit: str, step: float, description: str) -> Any:
     """A tunable number: its bounds, unit and step travel in the schema to the UI."""
@@ -30,28 +33,17 @@ class TeamParams(Group):
     demo_period_s: float = num(5.0, 1.0, 60.0, "s", 0.5, "time on each demo formation")
 
 
-class GoToParams(Group):
-    """The proportional go-to controller (baseline)."""
-
-    kp_per_s: float = num(2.5, 0.1, 10.0, "1/s", 0.1, "speed per metre of position error")
-    max_speed_mps: float = num(2.0, 0.1, 4.0, "m/s", 0.05, "speed limit")
-    max_accel_mps2: float = num(3.0, 0.2, 10.0, "m/s²", 0.1, "acceleration limit")
-    kp_angle_per_s: float = num(4.0, 0.1, 20.0, "1/s", 0.1, "turn rate per radian of error")
-    max_angular_radps: float = num(4.0, 0.2, 15.0, "rad/s", 0.1, "turn rate limit")
-    position_tolerance_mm: float = num(15.0, 1.0, 200.0, "mm", 1.0,
-                                       "closer than this counts as arrived")
-
-
 class WorldParams(Group):
     """How camera frames are merged into objects."""
 
-    merge_window_s: float = num(0.025, 0.001, 0.1, "s", 0.001,
-                                "detections this close in capture time are one observation")
-    visible_timeout_s: float = num(0.25, 0.05, 2.0, "s", 0.05,
+    merge_window_s: float = num(0.005, 0.0, 0.008, "s", 0.001,
+                                "detections of different cameras this close in capture time "
+                                "are one measurement")
+    predict_after_s: float = num(0.05, 0.0, 1.0, "s", 0.01,
+                                 "not seen for longer: position extrapolated (predicted)")
+    visible_timeout_s: float = num(0.2, 0.05, 2.0, "s", 0.05,
                                    "not seen for this long: marked lost")
     drop_timeout_s: float = num(3.0, 0.5, 30.0, "s", 0.5, "not seen for this long: removed")
-    velocity_smoothing: float = num(0.3, 0.01, 1.0, "", 0.01,
-                                    "weight of a new finite-difference velocity")
 
 
 class SafetyParams(Group):
@@ -95,8 +87,11 @@ class StationParams(Group):
     """All parameters, grouped by the part of the station that uses them."""
 
     team: TeamParams = Field(default_factory=TeamParams, description="Team and side")
-    goto: GoToParams = Field(default_factory=GoToParams, description="Go-to controller")
     world: WorldParams = Field(default_factory=WorldParams, description="World model")
+    filters: FilterSettings = Field(default_factory=FilterSettings,
+                                    description="Vision filters (paper section 5.1)")
+    control: ControlSettings = Field(default_factory=ControlSettings,
+                                     description="Motion control (paper section 5.2)")
     safety: SafetyParams = Field(default_factory=SafetyParams, description="Safety")
     processors: ProcessorParams = Field(default_factory=ProcessorParams,
                                         description="Processors")

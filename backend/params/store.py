@@ -39,11 +39,18 @@ def _errors(exc: ValidationError, prefix: tuple[str, ...] = ("body",)) -> list[d
     return out
 
 
-def deep_merge(base: dict[str, Any], patch: dict[str, Any]) -> dict[str, Any]:
+# Maps keyed by robot ("blue/3"): in a patch, ``null`` for a key removes that override.
+OVERRIDE_MAPS = frozenset({"robots", "robot_overrides"})
+
+
+def deep_merge(base: dict[str, Any], patch: dict[str, Any],
+               deletable: bool = False) -> dict[str, Any]:
     out = dict(base)
     for k, v in patch.items():
-        if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = deep_merge(out[k], v)
+        if deletable and v is None:
+            out.pop(k, None)
+        elif isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = deep_merge(out[k], v, deletable=k in OVERRIDE_MAPS)
         else:
             out[k] = v
     return out

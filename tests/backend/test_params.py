@@ -36,21 +36,21 @@ def test_patch_is_validated_applied_versioned_and_persisted(tmp_path: Path) -> N
     store = ParamStore(tmp_path)
     seen: list[int] = []
     store.subscribe(lambda p, v: seen.append(v))
-    store.patch({"goto": {"kp_per_s": 3.5}})
-    assert store.current.goto.kp_per_s == 3.5 and store.version == 1 and seen == [1]
+    store.patch({"team": {"demo_period_s": 3.5}})
+    assert store.current.team.demo_period_s == 3.5 and store.version == 1 and seen == [1]
     on_disk = json.loads((tmp_path / "params.json").read_text())
-    assert on_disk["version"] == 1 and on_disk["values"]["goto"]["kp_per_s"] == 3.5
+    assert on_disk["version"] == 1 and on_disk["values"]["team"]["demo_period_s"] == 3.5
     again = ParamStore(tmp_path)  # a restart
-    assert again.current.goto.kp_per_s == 3.5 and again.version == 1
+    assert again.current.team.demo_period_s == 3.5 and again.version == 1
 
 
 @pytest.mark.parametrize("change,loc", [
-    ({"goto": {"kp_per_s": math.nan}}, ["body", "goto", "kp_per_s"]),
-    ({"goto": {"kp_per_s": math.inf}}, ["body", "goto", "kp_per_s"]),
-    ({"goto": {"max_speed_mps": 99}}, ["body", "goto", "max_speed_mps"]),
-    ({"goto": {"max_speed_mps": "fast"}}, ["body", "goto", "max_speed_mps"]),
+    ({"team": {"demo_period_s": math.nan}}, ["body", "team", "demo_period_s"]),
+    ({"team": {"demo_period_s": math.inf}}, ["body", "team", "demo_period_s"]),
+    ({"team": {"demo_period_s": 99}}, ["body", "team", "demo_period_s"]),
+    ({"control": {"default_algorithm": "fast"}}, ["body", "control", "default_algorithm"]),
     ({"team": {"our_team": "green"}}, ["body", "team", "our_team"]),
-    ({"goto": {"no_such": 1}}, ["body", "goto", "no_such"]),
+    ({"world": {"no_such": 1}}, ["body", "world", "no_such"]),
 ])
 def test_bad_changes_are_refused_whole(tmp_path: Path, change: dict, loc: list) -> None:  # type: ignore[type-arg]
     store = ParamStore(tmp_path)
@@ -58,16 +58,16 @@ def test_bad_changes_are_refused_whole(tmp_path: Path, change: dict, loc: list) 
     before = (tmp_path / "params.json").read_text()
     # a good field next to a bad one: neither is applied
     with pytest.raises(ParamError) as exc:
-        store.patch({**change, "world": {"merge_window_s": 0.01}})
+        store.patch({**change, "processors": {"control_max_wait_s": 0.02}})
     assert any(e["loc"] == loc for e in exc.value.errors), exc.value.errors
     assert all(e["msg"] for e in exc.value.errors)
-    assert store.version == 1 and store.current.world.merge_window_s == 0.025
+    assert store.version == 1 and store.current.processors.control_max_wait_s == 0.05
     assert (tmp_path / "params.json").read_text() == before
 
 
 def test_a_crash_while_writing_leaves_the_old_file(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     store = ParamStore(tmp_path)
-    store.patch({"goto": {"kp_per_s": 1.0}})
+    store.patch({"team": {"demo_period_s": 1.0}})
     good = (tmp_path / "params.json").read_text()
 
     def boom(src: str, dst: str) -> None:
@@ -75,15 +75,16 @@ def test_a_crash_while_writing_leaves_the_old_file(tmp_path: Path, monkeypatch) 
 
     monkeypatch.setattr(os, "replace", boom)
     with pytest.raises(OSError):
-        store.patch({"goto": {"kp_per_s": 2.0}})
+        store.patch({"team": {"demo_period_s": 2.0}})
     monkeypatch.undo()
     assert (tmp_path / "params.json").read_text() == good
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
-    assert ParamStore(tmp_path).current.goto.kp_per_s == 1.0
+    assert ParamStore(tmp_path).current.team.demo_period_s == 1.0
 
 
 def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None:
-    (tmp_path / "params.json").write_text('{"version": 3, "values": {"goto": {"kp_per_s": -5}}}')
+    (tmp_path / "params.json").write_text(
+        '{"version": 3, "values": {"team": {"demo_period_s": -5}}}')
     store = ParamStore(tmp_path)
     assert store.current == StationParams()
     assert (tmp_path / "params.invalid.json").exists()
@@ -91,13 +92,13 @@ def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None
 
 def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
     store = ParamStore(tmp_path)
-    store.patch({"goto": {"kp_per_s": 4.0}})
+    store.patch({"team": {"demo_period_s": 4.0}})
     store.save_preset("fast robots")
-    store.patch({"goto": {"kp_per_s": 1.0}})
+    store.patch({"team": {"demo_period_s": 1.0}})
     assert store.list_presets() == ["fast robots"]
     store.load_preset("fast robots")
-    assert store.current.goto.kp_per_s == 4.0
-    assert store.diff_from_defaults() == [{"path": "goto.kp_per_s", "from": 2.5, "to": 4.0}]
+    assert store.current.team.demo_period_s == 4.0
+    assert store.diff_from_defaults() == [{"path": "team.demo_period_s", "from": 5.0, "to": 4.0}]
     store.delete_preset("fast robots")
     assert store.list_presets() == []
     with pytest.raises(ParamError):
@@ -108,6 +109,24 @@ def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
 
 def test_import_fills_missing_keys_with_defaults(tmp_path: Path) -> None:
     store = ParamStore(tmp_path)
-    store.patch({"goto": {"kp_per_s": 4.0}, "world": {"merge_window_s": 0.01}})
-    store.replace({"goto": {"kp_per_s": 3.0}})
-    assert store.current.goto.kp_per_s == 3.0 and store.current.world.merge_window_s == 0.025
+    store.patch({"team": {"demo_period_s": 4.0}, "world": {"merge_window_s": 0.002}})
+    store.replace({"team": {"demo_period_s": 3.0}})
+    assert store.current.team.demo_period_s == 3.0 and store.current.world.merge_window_s == 0.005
+
+
+def test_groups_of_an_older_version_are_dropped_on_load(tmp_path: Path) -> None:
+    (tmp_path / "params.json").write_text(json.dumps({"version": 4, "values": {
+        "goto": {"kp_per_s": 3.0}, "team": {"demo_period_s": 9.0}}}))
+    store = ParamStore(tmp_path)
+    assert store.current.team.demo_period_s == 9.0 and store.version == 4
+
+
+def test_null_removes_a_per_robot_override(tmp_path: Path) -> None:
+    store = ParamStore(tmp_path)
+    store.patch({"control": {"robots": {"blue/3": {"algorithm": "algorithm1"}}},
+                 "filters": {"robot_overrides": {"blue/3": "paper"}}})
+    assert store.current.control.algorithm_for("blue", 3) == "algorithm1"
+    assert store.current.filters.robot_kind("blue", 3) == "paper"
+    store.patch({"control": {"robots": {"blue/3": None}},
+                 "filters": {"robot_overrides": {"blue/3": None}}})
+    assert store.current.control.robots == {} and store.current.filters.robot_overrides == {}

@@ -189,6 +189,11 @@ def test_internal_referee_halt_travels_as_real_multicast_and_stops_robots(
     finally:
         httpx.post(station.url + "/api/referee/internal/command", json={"command": "FORCE_START"})
         httpx.post(station.url + "/api/referee/internal/enabled", json={"enabled": False})
+    # switched off, its last command no longer binds the robots
+    wait_until(lambda: station.get("/api/world")["referee"] is None, 5,
+               what="no referee once the internal one is off")
+    wait_until(lambda: any(_speed(r) > 200 for r in _visible(station.get("/api/world"), "blue")),
+               15, what="robots moving again")
 
 
 def test_teleport_ball_through_the_simulation_protocol(station: StationHandle) -> None:
@@ -196,3 +201,46 @@ def test_teleport_ball_through_the_simulation_protocol(station: StationHandle) -
                       json={"x": 2500, "y": -2000}).status_code == 200
     wait_until(lambda: (lambda b: b and math.hypot(b["x"] - 2500, b["y"] + 2000) < 50)(
         station.get("/api/world")["ball"]), 5, what="ball at the teleported position")
+
+
+def _robot(station: StationHandle, team: str, rid: int) -> dict[str, Any]:
+    return next(r for r in station.get("/api/world")["robots"]
+                if r["team"] == team and r["id"] == rid)
+
+
+def test_per_robot_algorithm1_drives_to_a_point_and_reports_its_gain(
+        station: StationHandle) -> None:
+    r = httpx.patch(station.url + "/api/params",
+                    json={"control": {"robots": {"blue/2": {"algorithm": "algorithm1"}}}})
+    assert r.status_code == 200, r.text
+    target = {"x": -800.0, "y": 2000.0, "orientation": 0.0}
+    try:
+        assert httpx.post(station.url + "/api/robots/blue/2/target", json=target).status_code == 200
+        wait_until(lambda: (lambda c: c and c["algorithm"] == "algorithm1")(
+            _robot(station, "blue", 2)["control"]), 5, what="algorithm1 telemetry")
+        rb = wait_until(lambda: (lambda rb: rb if math.hypot(rb["x"] - target["x"],
+                                                             rb["y"] - target["y"]) < 60
+                                 and _speed(rb) < 100 else None)(_robot(station, "blue", 2)),
+                        20, what="blue 2 at its target under algorithm1")
+        tel = rb["control"]
+        # fieldsim's generation-2 robots have C = 1: the estimate must be near it by now
+        assert 0.7 < tel["c_estimate"] < 1.3, tel
+        assert tel["path_length_m"] > 0.3
+    finally:
+        httpx.delete(station.url + "/api/robots/blue/2/target")
+        httpx.patch(station.url + "/api/params", json={"control": {"robots": {"blue/2": None}}})
+
+
+def test_filter_switched_live_per_robot(station: StationHandle) -> None:
+    assert _robot(station, "yellow", 1)["filter"] == "kalman"
+    r = httpx.patch(station.url + "/api/params",
+                    json={"filters": {"robot_overrides": {"yellow/1": "paper"}}})
+    assert r.status_code == 200, r.text
+    try:
+        wait_until(lambda: _robot(station, "yellow", 1)["filter"] == "paper", 5,
+                   what="yellow 1 on the paper filter")
+        rb = _robot(station, "yellow", 1)
+        assert rb["visible"] and abs(rb["x"] - rb["raw_x"]) < 30  # standing robot: no lag
+    finally:
+        httpx.patch(station.url + "/api/params",
+                    json={"filters": {"robot_overrides": {"yellow/1": None}}})
