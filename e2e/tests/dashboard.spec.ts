@@ -130,8 +130,9 @@ test("select a robot, drag on the field: it drives there with the dragged headin
   await page.mouse.move(p.x, p.y - 60, { steps: 4 });
   await page.mouse.up();
   try {
-    await expect.poll(async () => (await world(page)).robots.find((r) => r.team === "blue" && r.id === 4)?.target?.orientation ?? null)
-      .not.toBeNull();
+    // the demo gives robot 4 a target too: wait for the operator's one
+    await expect.poll(async () => (await world(page)).robots.find((r) => r.team === "blue" && r.id === 4)?.target?.source ?? null)
+      .toBe("operator");
     const t = (await world(page)).robots.find((r) => r.team === "blue" && r.id === 4)!.target!;
     expect(Math.abs(t.orientation! - Math.PI / 2)).toBeLessThan(0.15);
     expect(Math.hypot(t.x - target.x, t.y - target.y)).toBeLessThan(40);
