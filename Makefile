@@ -7,13 +7,13 @@ SIM ?= builtin
 PORT ?= 8000
 RUN_ARGS ?=
 
-.PHONY: run test setup proto build multicast chromium lint typecheck test-py test-ts test-e2e \
-        bench clean
+.PHONY: run test setup proto build multicast chromium octave lint typecheck test-py test-ts \
+        test-e2e bench experiments clean
 
 run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
 
-test: build multicast chromium lint typecheck test-py test-ts test-e2e
+test: build multicast chromium octave lint typecheck test-py test-ts test-e2e
 
 setup: .venv/.ok node_modules/.ok sslpb/__init__.py
 
@@ -43,6 +43,9 @@ multicast: .venv/.ok
 chromium:
 	@scripts/ensure-chromium.sh
 
+octave:
+	@scripts/ensure-octave.sh
+
 lint: setup
 	$(PY) -m ruff check .
 
@@ -50,7 +53,7 @@ typecheck: setup
 	$(PY) -m mypy
 	npm run typecheck
 
-test-py: setup multicast
+test-py: setup multicast octave
 	$(PY) -m pytest -q
 
 test-ts: setup
@@ -61,6 +64,11 @@ test-e2e: build multicast chromium
 
 bench: setup multicast
 	for b in bench/*.py; do echo "== $$b"; PYTHONPATH=. $(PY) $$b || exit 1; done
+
+# The paper's experiments (filters, speed controllers), regenerated with fixed seeds.
+experiments: setup multicast
+	$(PY) -m experiments.filters.run --out docs/experiments/filters
+	$(PY) -m experiments.controllers.run --out docs/experiments/controllers
 
 clean:
 	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report
