@@ -16,6 +16,33 @@ export interface Ball {
   visible: boolean;
   age_s: number;
   cameras: number[];
+  /** Latest merged measurement (mm), null without one. */
+  raw_x?: number | null;
+  raw_y?: number | null;
+  /** Position extrapolated (no fresh detection) / dropped from the world soon. */
+  predicted?: boolean;
+  lost?: boolean;
+  /** Filter of the ball ("raw" | "median" | "paper" | "kalman"). */
+  filter?: string;
+}
+
+export type ControlAlgorithm = "algorithm1" | "algorithm2" | "proportional";
+
+/** Telemetry of a robot's controller (when the station commands it). */
+export interface RobotControl {
+  algorithm: ControlAlgorithm | string;
+  phase: string;
+  t_s: number;
+  ref_x_m: number;
+  has_reference: number;
+  x_m: number;
+  path_length_m: number;
+  lateral_m: number;
+  cmd_speed_mps: number;
+  meas_speed_mps: number;
+  c_estimate: number;
+  heading_error_rad: number;
+  restarts: number;
 }
 
 export interface RobotTarget {
@@ -46,6 +73,14 @@ export interface Robot {
   target: RobotTarget | null;
   controlled: boolean;
   command: RobotCommand | null;
+  raw_x?: number | null;
+  raw_y?: number | null;
+  raw_orientation?: number | null;
+  predicted?: boolean;
+  lost?: boolean;
+  /** Filter of this robot: "raw" | "median" | "paper" | "kalman". */
+  filter?: string;
+  control?: RobotControl | null;
 }
 
 export interface RawCamera {

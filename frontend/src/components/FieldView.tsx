@@ -49,8 +49,15 @@ function LayersPanel() {
       {open && (
         <div className="layers-list">
           {LAYER_LABELS.map((l) => (
-            <label key={l.key} title={l.help}>
-              <input type="checkbox" checked={layers[l.key]} onChange={() => toggleLayer(l.key)} data-testid={`layer-${l.key}`} /> {l.label}
+            <label key={l.key} title={l.help} data-testid={`layer-${l.key}`}>
+              <input
+                type="checkbox"
+                checked={layers[l.key]}
+                onChange={() => toggleLayer(l.key)}
+                data-testid={`layer-toggle-${l.key}`}
+                aria-label={l.label}
+              />{" "}
+              {l.label}
             </label>
           ))}
           {layers.raw && cams && (

@@ -2,6 +2,7 @@ import type { Robot, RobotKey } from "../api/types";
 import { clearTarget, selectRobot } from "../actions";
 import { HealthSummary } from "./HealthSummary";
 import { ParamField } from "./ParamField";
+import { RobotControlPanel } from "./RobotControlPanel";
 import { useParamForm } from "../params/paramsStore";
 import { chooserFields, getAt } from "../params/schema";
 import { useAppState } from "../store/hooks";
@@ -18,7 +19,11 @@ function Field({ label, value, testId }: { label: string; value: string; testId?
   );
 }
 
-const KNOWN = new Set(["team", "id", "x", "y", "orientation", "vx", "vy", "omega", "visible", "age_s", "cameras", "target", "controlled", "command"]);
+const KNOWN = new Set([
+  "team", "id", "x", "y", "orientation", "vx", "vy", "omega", "visible", "age_s", "cameras", "target", "controlled", "command",
+  // shown by RobotControlPanel
+  "raw_x", "raw_y", "raw_orientation", "predicted", "lost", "filter", "control",
+]);
 
 function fmtAny(v: unknown): string {
   if (typeof v === "number") return Number.isInteger(v) ? String(v) : Math.abs(v) >= 100 ? fmtInt(v) : fmtFixed(v, 3);
@@ -53,6 +58,7 @@ function Choosers() {
   if (fields.length === 0) return null;
   return (
     <div className="choosers">
+      <h3 className="choosers-title">Station defaults (all robots)</h3>
       {fields.map((f) => (
         <ParamField key={f.id} f={f} value={getAt(values, f.path)} compact />
       ))}
@@ -126,6 +132,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
           />
         </dl>
       )}
+      {robot && selected && <RobotControlPanel robotKey={selected} robot={robot} />}
       {robot && <Choosers />}
     </section>
   );

@@ -23,7 +23,20 @@ export const COLORS = {
   selected: "#ffffff",
   target: "#f8fafc",
   estop: "rgba(220,38,38,0.9)",
+  lost: "#9ca3af",
 } as const;
+
+/** Opacity of a predicted object (no fresh detection, position extrapolated). */
+export const PREDICTED_ALPHA = 0.45;
+
+/** How an object is drawn: measured (solid), predicted (semi-transparent), lost (hollow grey outline). */
+export type TrackStyle = "measured" | "predicted" | "lost";
+
+export function trackStyle(o: { visible?: boolean; predicted?: boolean; lost?: boolean }): TrackStyle {
+  if (o.lost) return "lost";
+  if (o.predicted || o.visible === false) return "predicted";
+  return "measured";
+}
 
 export function teamColor(team: Team): string {
   return team === "blue" ? COLORS.blue : COLORS.yellow;
@@ -210,8 +223,9 @@ function drawRobot(
   const heading = angleToCanvas(Number.isFinite(r.orientation) ? r.orientation : 0);
   const alpha = Math.acos(FRONT_CUT);
 
+  const style = trackStyle(r);
   ctx.save();
-  if (!r.visible) ctx.globalAlpha = 0.4;
+  if (style === "predicted") ctx.globalAlpha = PREDICTED_ALPHA;
 
   if (selected || hovered) {
     ctx.beginPath();
@@ -229,6 +243,21 @@ function drawRobot(
   ctx.beginPath();
   ctx.arc(c.x, c.y, rad, heading + alpha, heading - alpha + 2 * Math.PI, false);
   ctx.closePath();
+  if (style === "lost") {
+    // Hollow grey outline: the world model no longer tracks it.
+    ctx.lineWidth = Math.max(1.5, Math.min(3, rad * 0.14));
+    ctx.strokeStyle = COLORS.lost;
+    ctx.setLineDash([4, 3]);
+    ctx.stroke();
+    ctx.setLineDash([]);
+    ctx.font = `600 ${Math.max(9, Math.round(rad * 0.9))}px system-ui, -apple-system, "Segoe UI", Roboto, sans-serif`;
+    ctx.textAlign = "center";
+    ctx.textBaseline = "middle";
+    ctx.fillStyle = COLORS.lost;
+    ctx.fillText(String(r.id), c.x, c.y);
+    ctx.restore();
+    return;
+  }
   ctx.fillStyle = teamColor(r.team);
   ctx.fill();
   ctx.lineWidth = Math.max(1.5, Math.min(3, rad * 0.12));
@@ -293,8 +322,18 @@ function drawBall(
 ) {
   const c = worldToCanvas(t, ball.x, ball.y);
   const rad = Math.max(4, radiusMm * t.scale);
+  const style = trackStyle(ball);
   ctx.save();
-  if (!ball.visible) ctx.globalAlpha = 0.45;
+  if (style === "lost") {
+    ctx.beginPath();
+    ctx.arc(c.x, c.y, rad, 0, 2 * Math.PI);
+    ctx.lineWidth = 1.5;
+    ctx.strokeStyle = COLORS.lost;
+    ctx.stroke();
+    ctx.restore();
+    return;
+  }
+  if (style === "predicted") ctx.globalAlpha = PREDICTED_ALPHA;
   ctx.beginPath();
   ctx.arc(c.x, c.y, rad, 0, 2 * Math.PI);
   ctx.fillStyle = COLORS.ball;
