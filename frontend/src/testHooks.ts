@@ -16,7 +16,11 @@ export interface TouchlineTestApi {
   getWorld(): World | null;
   getSelected(): { team: string; id: number } | null;
   /** Frame counters: field rAF callbacks and draws, plot loop frames and draws. */
-  stats(): { t: number; fieldRafs: number; fieldDraws: number; plotFrames: number; plotDraws: number; sampleRows: number };
+  stats(): {
+    t: number; fieldRafs: number; fieldDraws: number; plotFrames: number; plotDraws: number; sampleRows: number;
+    /** Filtered robots and raw detections (robots + balls) the last field frame drew. */
+    robotsDrawn: number; rawDrawn: number;
+  };
   /** What each live plot shows: its signals, the newest x drawn (Unix s) and the point count. */
   plots(): { id: number; keys: string[]; lastX: number; points: number }[];
   /** Every signal name the plots can show. */
@@ -50,6 +54,8 @@ export function installTestHooks(): void {
       plotFrames: plotStats.frames,
       plotDraws: plotStats.draws,
       sampleRows: samples.rows,
+      robotsDrawn: fieldStats.robotsDrawn,
+      rawDrawn: fieldStats.rawDrawn,
     }),
     plots: () => plotInfo(),
     signals: () => samples.keys(),

@@ -17,7 +17,7 @@ import { pushToast } from "../store/toasts";
 import { LAYER_LABELS, toggleLayer, uiStore, useUi, type UiState } from "../store/uiStore";
 
 /** Frames the field drew (for window.__touchline.stats and bench/page_fps.mjs). */
-export const fieldStats = { rafs: 0, draws: 0 };
+export const fieldStats = { rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0 };
 
 /** Pixels a press may move and still count as a click. */
 const CLICK_SLOP_PX = 6;
@@ -159,7 +159,7 @@ export function FieldView() {
       transform = transformFor(cssW, cssH, state.geometry);
       if (!ctx) return;
       ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-      drawField(ctx, {
+      const counts = drawField(ctx, {
         t: transform,
         geometry: effectiveGeometry(state.geometry),
         waitingForGeometry: state.geometry === null,
@@ -173,6 +173,8 @@ export function FieldView() {
         placing: ui.placing,
       });
       fieldStats.draws++;
+      fieldStats.robotsDrawn = counts.robots;
+      fieldStats.rawDrawn = counts.raw;
     };
     raf = requestAnimationFrame(frame);
 

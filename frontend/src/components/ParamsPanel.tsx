@@ -244,6 +244,7 @@ export function ParamsPanel() {
           onChange={(ev) => setFilter(ev.target.value)}
           onKeyDown={(ev) => ev.stopPropagation()}
           aria-label="Filter parameters"
+          data-testid="params-filter"
         />
         <span className="muted num" title="Server parameter version">
           v{params.version}

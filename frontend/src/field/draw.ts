@@ -79,7 +79,14 @@ export interface DrawInput {
   hovered: RobotKey | null;
 }
 
-export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void {
+/** What one frame drew (for window.__touchline.stats). */
+export interface DrawCounts {
+  robots: number;
+  raw: number;
+}
+
+export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
+  const counts: DrawCounts = { robots: 0, raw: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -95,16 +102,22 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
     const ref = world.referee;
     if (L.referee && ref && ref.source !== "none" && ref.designated_position) drawDesignated(ctx, t, ref.designated_position, ref.command);
     if (L.trails && input.trails) drawTrails(ctx, t, input.trails);
-    if (L.raw) drawRaw(ctx, t, world);
+    if (L.raw) counts.raw = drawRaw(ctx, t, world);
     // Targets under robots, robots over them, the selected robot last.
     if (L.targets) for (const r of robots) if (r.target) drawTarget(ctx, t, r, sameRobot(r, input.selected));
     if (L.filtered) {
       for (const r of robots) {
-        if (!sameRobot(r, input.selected)) drawRobot(ctx, t, r, false, sameRobot(r, input.hovered));
+        if (!sameRobot(r, input.selected)) {
+          drawRobot(ctx, t, r, false, sameRobot(r, input.hovered));
+          counts.robots++;
+        }
       }
     }
     const sel = input.selected ? robots.find((r) => sameRobot(r, input.selected)) : undefined;
-    if (sel) drawRobot(ctx, t, sel, true, false);
+    if (sel) {
+      drawRobot(ctx, t, sel, true, false);
+      counts.robots++;
+    }
     if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
@@ -129,6 +142,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): void
     drawBanner(ctx, t, "waiting for geometry", "rgba(15,23,42,0.8)", "#e2e8f0", slot++);
   }
   ctx.restore();
+  return counts;
 }
 
 function drawSurface(ctx: CanvasRenderingContext2D, t: FieldTransform, g: Geometry) {
@@ -370,13 +384,15 @@ function drawBanner(
   ctx.restore();
 }
 
-function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World) {
+function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World): number {
+  let n = 0;
   ctx.save();
   ctx.lineWidth = 1.5;
   for (const cam of world.cameras ?? []) {
     const color = cameraColor(cam.camera_id);
     ctx.strokeStyle = color;
     ctx.fillStyle = color;
+    n += cam.robots.length + cam.balls.length;
     for (const r of cam.robots) {
       const c = worldToCanvas(t, r.x, r.y);
       const rad = Math.max(6, ROBOT_RADIUS_MM * t.scale);
@@ -401,6 +417,7 @@ function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World)
     }
   }
   ctx.restore();
+  return n;
 }
 
 /** Arrow of 0.5 s of travel at the current velocity (mm/s). */
