@@ -19,77 +19,16 @@ from fieldsim.vision import Vision
 from fieldsim.world import Team, World
 from sslnet.multicast import loopback_multicast_ok, open_multicast_receiver
 from sslpb import ssl_simulation_robot_feedback_pb2 as fb_pb
+from tests.wire import f32, key, ld, read_fields, varint
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def key(field: int, wire: int) -> bytes:
-    return varint(field << 3 | wire)
-
-
-def length_delimited(field: int, payload: bytes) -> bytes:
-    return key(field, 2) + varint(len(payload)) + payload
-
-
-def f32(field: int, value: float) -> bytes:
-    return key(field, 5) + struct.pack("<f", value)
-
-
-def read_fields(buf: bytes) -> list[tuple[int, int, object]]:
-    """A tiny protobuf reader: (field, wire type, value) with raw bytes for wire type 2."""
-    out: list[tuple[int, int, object]] = []
-    i = 0
-
-    def read_varint() -> int:
-        nonlocal i
-        shift = result = 0
-        while True:
-            b = buf[i]
-            i += 1
-            result |= (b & 0x7F) << shift
-            shift += 7
-            if not b & 0x80:
-                return result
-
-    while i < len(buf):
-        k = read_varint()
-        field, wire = k >> 3, k & 7
-        value: object
-        if wire == 0:
-            value = read_varint()
-        elif wire == 1:
-            value = buf[i:i + 8]
-            i += 8
-        elif wire == 2:
-            n = read_varint()
-            value = buf[i:i + n]
-            i += n
-        elif wire == 5:
-            value = buf[i:i + 4]
-            i += 4
-        else:
-            raise ValueError(f"wire type {wire}")
-        out.append((field, wire, value))
-    return out
-
-
 def test_hand_built_robot_control_is_accepted() -> None:
     local = f32(1, 1.0) + f32(2, 0.0) + f32(3, 0.0)  # MoveLocalVelocity forward/left/angular
-    move = length_delimited(2, local)  # RobotMoveCommand.local_velocity = 2
-    command = key(1, 0) + varint(3) + length_delimited(2, move)  # RobotCommand id=3, move=2
-    data = length_delimited(1, command)  # RobotControl.robot_commands = 1
+    move = ld(2, local)  # RobotMoveCommand.local_velocity = 2
+    command = key(1, 0) + varint(3) + ld(2, move)  # RobotCommand id=3, move=2
+    data = ld(1, command)  # RobotControl.robot_commands = 1
     world = World(SimConfig())
     handler = CommandHandler(world)
     reply = fb_pb.RobotControlResponse()
@@ -103,7 +42,7 @@ def test_hand_built_robot_control_is_accepted() -> None:
     ids = [read_fields(v)[0][2] for f, w, v in fields if f == 2 and isinstance(v, bytes)]
     assert 3 in ids and len(ids) == 6
     # missing required id: rejected
-    bad = length_delimited(1, length_delimited(2, move))
+    bad = ld(1, ld(2, move))
     reply.ParseFromString(handler.robot_control(Team.BLUE, bad))
     assert reply.errors and handler.stats.malformed["blue"] == 1
 

@@ -5,45 +5,13 @@ the browser agree with the league's definitions byte for byte."""
 
 from __future__ import annotations
 
-import struct
-
 from sslpb import touchline_pb2 as tl
 from sslpb.grsim_packet_pb2 import grSim_Packet
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
-
-
-def varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        out.append(b | (0x80 if n else 0))
-        if not n:
-            return bytes(out)
-
-
-def key(field: int, wire: int) -> bytes:
-    return varint(field << 3 | wire)
-
-
-def f32(field: int, v: float) -> bytes:
-    return key(field, 5) + struct.pack("<f", v)
-
-
-def f64(field: int, v: float) -> bytes:
-    return key(field, 1) + struct.pack("<d", v)
-
-
-def uv(field: int, v: int) -> bytes:
-    return key(field, 0) + varint(v)
-
-
-def ld(field: int, body: bytes) -> bytes:
-    return key(field, 2) + varint(len(body)) + body
-
+from tests.wire import f32, f64, ld, uv
 
 # SSL_WrapperPacket{detection{frame_number=7, t_capture=1.5, t_sent=1.75, camera_id=2,
 #   balls[{confidence=0.5, x=100, y=-200, pixel_x=1, pixel_y=2}],

@@ -22,40 +22,10 @@ from sslpb import (
     ssl_vision_wrapper_pb2,
     touchline_pb2,
 )
+from tests.wire import f32, ld, uv
 
 BLUE, YELLOW = touchline_pb2.TEAM_BLUE, touchline_pb2.TEAM_YELLOW
 Ref = ssl_gc_referee_message_pb2.Referee
-
-
-# ----------------------------------------------------------------- tiny protobuf wire writer
-
-
-def varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def tag(field: int, wire: int) -> bytes:
-    return varint(field << 3 | wire)
-
-
-def f32(field: int, v: float) -> bytes:
-    return tag(field, 5) + struct.pack("<f", v)
-
-
-def vint(field: int, v: int) -> bytes:
-    return tag(field, 0) + varint(v)
-
-
-def ld(field: int, body: bytes) -> bytes:
-    return tag(field, 2) + varint(len(body)) + body
 
 
 def make_detection_wrapper(frame: int = 1, camera: int = 0) -> bytes:
@@ -104,7 +74,7 @@ def test_validation_accepts_good_and_rejects_bad() -> None:
     assert reason is not None and "required" in reason
     assert codecs.validate_vision(b"") is not None
     assert codecs.validate_referee(make_referee(Ref.HALT, 1)) is None
-    assert codecs.validate_referee(vint(1, 5)) is not None  # only packet_timestamp
+    assert codecs.validate_referee(uv(1, 5)) is not None  # only packet_timestamp
 
 
 # ----------------------------------------------------------------- wire compatibility
@@ -124,7 +94,7 @@ def test_sim_robot_control_matches_hand_built_wire_bytes() -> None:
     got = codecs.encode_sim_robot_control([cmd], chip_angle_deg=45.0)
     local = f32(1, 1.5) + f32(2, -0.25) + f32(3, 2.0)  # MoveLocalVelocity forward, left, angular
     move = ld(2, local)  # RobotMoveCommand.local_velocity = 2
-    robot = vint(1, 2) + ld(2, move) + f32(3, 4.0) + f32(4, 45.0) + f32(5, 1000.0)
+    robot = uv(1, 2) + ld(2, move) + f32(3, 4.0) + f32(4, 45.0) + f32(5, 1000.0)
     expected = ld(1, robot)  # RobotControl.robot_commands = 1
     assert got == expected
 
