@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from .config import Settings
-from .params.store import ParamError, diff
+from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
 from .station import Station, _finite
 
@@ -76,17 +76,6 @@ class EstopIn(BaseModel):
     active: bool
 
 
-def _error_list(exc: RequestValidationError) -> list[dict[str, Any]]:
-    out = []
-    for e in exc.errors():
-        msg = str(e.get("msg", "invalid"))
-        if e.get("type") == "finite_number":
-            msg = "must be a finite number (NaN and Infinity are not allowed)"
-        out.append({"loc": [str(p) for p in e.get("loc", ())], "msg": msg,
-                    "type": str(e.get("type", ""))})
-    return out
-
-
 def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     st = station or Station(settings)
 
@@ -104,7 +93,15 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @app.exception_handler(RequestValidationError)
     async def validation_handler(_req: Request, exc: RequestValidationError) -> JSONResponse:
         # The default handler echoes the input, and a NaN input makes it fail with a 500.
-        return JSONResponse(status_code=422, content={"detail": _error_list(exc)})
+        return JSONResponse(status_code=422, content={"detail": format_errors(exc.errors())})
+
+    @app.exception_handler(ParamError)
+    async def param_error_handler(_req: Request, exc: ParamError) -> JSONResponse:
+        return JSONResponse(status_code=422, content={"detail": exc.errors})
+
+    @app.exception_handler(PresetNotFound)
+    async def preset_not_found_handler(_req: Request, exc: PresetNotFound) -> JSONResponse:
+        return JSONResponse(status_code=404, content={"detail": f"no preset named {exc.args[0]!r}"})
 
     api = APIRouter(prefix="/api")
 
@@ -123,17 +120,20 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             raise HTTPException(404, "no geometry packet received yet")
         return JSONResponse(geo)
 
-    @api.post("/robots/{team}/{rid}/target")
-    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> dict[str, Any]:
+    def _check_on_field(x: float, y: float, what: str = "point") -> None:
         geo = st.geometry()
         half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
         half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
-        if abs(body.x) > half_l or abs(body.y) > half_w:
+        if abs(x) > half_l or abs(y) > half_w:
             raise HTTPException(422, [{
-                "loc": ["body", "x" if abs(body.x) > half_l else "y"],
-                "msg": f"target ({body.x:.0f}, {body.y:.0f}) mm is outside the field "
+                "loc": ["body", "x" if abs(x) > half_l else "y"],
+                "msg": f"{what} ({x:.0f}, {y:.0f}) mm is outside the field "
                        f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
                 "type": "outside_field"}])
+
+    @api.post("/robots/{team}/{rid}/target")
+    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> dict[str, Any]:
+        _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
         return {"team": team, "id": rid,
                 "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
@@ -142,17 +142,6 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     async def clear_target(team: TeamParam, rid: IdParam) -> dict[str, Any]:
         await st.call(st.clear_target, team, rid)
         return {"team": team, "id": rid, "target": None}
-
-    def _check_on_field(x: float, y: float) -> None:
-        geo = st.geometry()
-        half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
-        half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
-        if abs(x) > half_l or abs(y) > half_w:
-            raise HTTPException(422, [{
-                "loc": ["body", "x" if abs(x) > half_l else "y"],
-                "msg": f"({x:.0f}, {y:.0f}) mm is outside the field "
-                       f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
-                "type": "outside_field"}])
 
     @api.post("/sim/ball")
     async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
@@ -229,14 +218,22 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     return app
 
 
+async def _json_body(request: Request) -> Any:
+    try:
+        return json.loads(await request.body())
+    except ValueError as exc:
+        raise ParamError([{"loc": ["body"], "msg": f"invalid JSON: {exc}",
+                           "type": "json_invalid"}]) from None
+
+
 def _params_routes(api: APIRouter, st: Station) -> None:
+    """Parameter and preset routes. A refused change raises ParamError (422 with field and
+    reason) and a missing preset PresetNotFound (404), both answered by the app's handlers."""
     store = st.params
 
-    def _state() -> dict[str, Any]:
+    async def _applied() -> dict[str, Any]:
+        await st.call(lambda: None)  # the station loop has applied it before we answer
         return {"version": store.version, "values": store.values()}
-
-    def _refused(exc: ParamError) -> JSONResponse:
-        return JSONResponse(status_code=422, content={"detail": exc.errors})
 
     @api.get("/params/schema")
     async def params_schema() -> dict[str, Any]:
@@ -244,22 +241,13 @@ def _params_routes(api: APIRouter, st: Station) -> None:
 
     @api.get("/params")
     async def params_get() -> dict[str, Any]:
-        return _state()
+        return {"version": store.version, "values": store.values()}
 
-    @api.patch("/params", response_model=None)
-    async def params_patch(request: Request) -> dict[str, Any] | JSONResponse:
-        try:
-            body = json.loads(await request.body())
-        except ValueError as exc:
-            return _refused(ParamError([{"loc": ["body"], "msg": f"invalid JSON: {exc}",
-                                         "type": "json_invalid"}]))
-        try:
-            store.patch(body)
-        except ParamError as exc:
-            return _refused(exc)
-        await st.call(lambda: None)  # applied on the station loop before we answer
+    @api.patch("/params")
+    async def params_patch(request: Request) -> dict[str, Any]:
+        store.patch(await _json_body(request))
         log.info("parameters changed to version %d", store.version)
-        return _state()
+        return await _applied()
 
     @api.get("/params/diff")
     async def params_diff() -> dict[str, Any]:
@@ -270,64 +258,36 @@ def _params_routes(api: APIRouter, st: Station) -> None:
         return JSONResponse({"touchline_params": 1, "values": store.values()}, headers={
             "content-disposition": 'attachment; filename="touchline-params.json"'})
 
-    @api.post("/params/import", response_model=None)
-    async def params_import(request: Request) -> dict[str, Any] | JSONResponse:
-        try:
-            body = json.loads(await request.body())
-            values = body["values"] if isinstance(body, dict) and "values" in body else body
-        except ValueError as exc:
-            return _refused(ParamError([{"loc": ["body"], "msg": f"invalid JSON: {exc}",
-                                         "type": "json_invalid"}]))
-        try:
-            store.replace(values)
-        except ParamError as exc:
-            return _refused(exc)
-        await st.call(lambda: None)
-        return _state()
+    @api.post("/params/import")
+    async def params_import(request: Request) -> dict[str, Any]:
+        body = await _json_body(request)
+        store.replace(body["values"] if isinstance(body, dict) and "values" in body else body)
+        return await _applied()
 
     @api.get("/presets")
     async def presets_list() -> dict[str, Any]:
         return {"presets": store.list_presets()}
 
-    @api.put("/presets/{name}", response_model=None)
-    async def preset_save(name: str) -> dict[str, Any] | JSONResponse:
-        try:
-            store.save_preset(name)
-        except ParamError as exc:
-            return _refused(exc)
+    @api.put("/presets/{name}")
+    async def preset_save(name: str) -> dict[str, Any]:
+        store.save_preset(name)
         return {"presets": store.list_presets()}
 
-    @api.get("/presets/{name}", response_model=None)
-    async def preset_get(name: str) -> dict[str, Any] | JSONResponse:
-        try:
-            values = store.read_preset(name)
-        except ParamError as exc:
-            return _refused(exc)
-        except KeyError:
-            raise HTTPException(404, f"no preset named {name!r}") from None
+    @api.get("/presets/{name}")
+    async def preset_get(name: str) -> dict[str, Any]:
+        values = store.read_preset(name)
         return {"name": name, "values": values,
                 "diff_from_defaults": diff(store.defaults.model_dump(mode="json"), values),
                 "diff_from_current": diff(store.values(), values)}
 
-    @api.post("/presets/{name}/load", response_model=None)
-    async def preset_load(name: str) -> dict[str, Any] | JSONResponse:
-        try:
-            store.load_preset(name)
-        except ParamError as exc:
-            return _refused(exc)
-        except KeyError:
-            raise HTTPException(404, f"no preset named {name!r}") from None
-        await st.call(lambda: None)
-        return _state()
+    @api.post("/presets/{name}/load")
+    async def preset_load(name: str) -> dict[str, Any]:
+        store.load_preset(name)
+        return await _applied()
 
-    @api.delete("/presets/{name}", response_model=None)
-    async def preset_delete(name: str) -> dict[str, Any] | JSONResponse:
-        try:
-            store.delete_preset(name)
-        except ParamError as exc:
-            return _refused(exc)
-        except KeyError:
-            raise HTTPException(404, f"no preset named {name!r}") from None
+    @api.delete("/presets/{name}")
+    async def preset_delete(name: str) -> dict[str, Any]:
+        store.delete_preset(name)
         return {"presets": store.list_presets()}
 
 

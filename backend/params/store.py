@@ -8,7 +8,7 @@ import logging
 import os
 import re
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +20,10 @@ log = logging.getLogger("touchline.params")
 PRESET_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.-]{0,63}$")
 
 
+class PresetNotFound(KeyError):
+    """No preset of that name."""
+
+
 class ParamError(ValueError):
     """A change that was refused; ``errors`` has one ``{"loc", "msg", "type"}`` per field."""
 
@@ -28,15 +32,21 @@ class ParamError(ValueError):
         self.errors = errors
 
 
-def _errors(exc: ValidationError, prefix: tuple[str, ...] = ("body",)) -> list[dict[str, Any]]:
+def format_errors(errors: Sequence[Any], prefix: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+    """Pydantic errors as ``{"loc", "msg", "type"}`` that JSON can carry: the input (which may
+    be NaN) is left out, and a non-finite number gets a clear reason."""
     out = []
-    for e in exc.errors():
+    for e in errors:
         msg = str(e.get("msg", "invalid"))
         if e.get("type") == "finite_number":
             msg = "must be a finite number (NaN and Infinity are not allowed)"
         out.append({"loc": [*prefix, *(str(p) for p in e.get("loc", ()))], "msg": msg,
                     "type": str(e.get("type", ""))})
     return out
+
+
+def _errors(exc: ValidationError) -> list[dict[str, Any]]:
+    return format_errors(exc.errors(), ("body",))
 
 
 # Maps keyed by robot ("blue/3"): in a patch, ``null`` for a key removes that override.
@@ -195,7 +205,7 @@ class ParamStore:
     def read_preset(self, name: str) -> dict[str, Any]:
         p = self._preset_path(name)
         if not p.exists():
-            raise KeyError(name)
+            raise PresetNotFound(name)
         values: dict[str, Any] = json.loads(p.read_text())["values"]
         return values
 
@@ -205,7 +215,7 @@ class ParamStore:
     def delete_preset(self, name: str) -> None:
         p = self._preset_path(name)
         if not p.exists():
-            raise KeyError(name)
+            raise PresetNotFound(name)
         p.unlink()
 
 
