@@ -1,42 +1,8 @@
-import { expect, test, type Page } from "@playwright/test";
+import { expect, test } from "@playwright/test";
+import { open, robot, stats, toScreen, world } from "./helpers";
 
 // Per-robot controller and filter choices, field layers and filter parameters, against the
 // real station. The station is shared by every spec: each test puts back what it changed.
-
-interface Control { algorithm: string; phase: string; c_estimate: number }
-interface Robot { team: string; id: number; x: number; y: number; visible: boolean; filter?: string;
-  control?: Control | null; target: { x: number; y: number; source: string } | null }
-interface World { robots: Robot[] }
-
-type Hooks = {
-  worldToScreen(x: number, y: number): { x: number; y: number };
-  stats(): { fieldDraws: number; rawDrawn: number; robotsDrawn: number };
-};
-
-async function world(page: Page): Promise<World> {
-  const r = await page.request.get("/api/world");
-  expect(r.ok()).toBeTruthy();
-  return (await r.json()) as World;
-}
-
-async function robot(page: Page, team: string, id: number): Promise<Robot> {
-  return (await world(page)).robots.find((r) => r.team === team && r.id === id)!;
-}
-
-async function open(page: Page): Promise<void> {
-  await page.goto("/");
-  await expect(page.getByTestId("connection-status")).toContainText("connected");
-  await expect.poll(async () => (await world(page)).robots.filter((r) => r.visible).length, { timeout: 30_000 })
-    .toBeGreaterThanOrEqual(12);
-}
-
-async function toScreen(page: Page, x: number, y: number): Promise<{ x: number; y: number }> {
-  const box = (await page.getByTestId("field-canvas").boundingBox())!;
-  const p = await page.evaluate(([xx, yy]) => (window as unknown as { __touchline: Hooks }).__touchline.worldToScreen(xx, yy), [x, y]);
-  return { x: box.x + p.x, y: box.y + p.y };
-}
-
-const stats = (page: Page) => page.evaluate(() => (window as unknown as { __touchline: Hooks }).__touchline.stats());
 
 test("Algorithm 1 chosen in the robot panel drives a robot to a clicked point; the panel shows its C", async ({ page }) => {
   await open(page);

@@ -1,37 +1,8 @@
 import { expect, test, type Page } from "@playwright/test";
+import { open, toScreen, world, type Hooks } from "./helpers";
 
 // The control-station dashboard against the real station. The station is shared by every
 // spec of the run: each test puts back what it changed (parameters, e-stop, referee, targets).
-
-interface Robot { team: string; id: number; x: number; y: number; vx: number; vy: number; visible: boolean;
-  target: { x: number; y: number; orientation: number | null; source: string } | null }
-interface World { robots: Robot[]; ball: { x: number; y: number } | null; estop: boolean;
-  referee: { source: string; command: string } | null }
-
-type Hooks = {
-  worldToScreen(x: number, y: number): { x: number; y: number };
-  plots(): { id: number; keys: string[]; lastX: number; points: number }[];
-  signals(): string[];
-};
-
-async function world(page: Page): Promise<World> {
-  const r = await page.request.get("/api/world");
-  expect(r.ok()).toBeTruthy();
-  return (await r.json()) as World;
-}
-
-async function open(page: Page): Promise<void> {
-  await page.goto("/");
-  await expect(page.getByTestId("connection-status")).toContainText("connected");
-  await expect.poll(async () => (await world(page)).robots.filter((r) => r.visible).length, { timeout: 30_000 })
-    .toBeGreaterThanOrEqual(12);
-}
-
-async function toScreen(page: Page, x: number, y: number): Promise<{ x: number; y: number }> {
-  const box = (await page.getByTestId("field-canvas").boundingBox())!;
-  const p = await page.evaluate(([xx, yy]) => (window as unknown as { __touchline: Hooks }).__touchline.worldToScreen(xx, yy), [x, y]);
-  return { x: box.x + p.x, y: box.y + p.y };
-}
 
 /**
  * Fastest visible robot in mm/s, from the positions of two worlds 0.4 s apart: the reported

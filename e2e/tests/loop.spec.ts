@@ -1,16 +1,8 @@
 import { expect, test, type Page } from "@playwright/test";
-
-interface Robot { team: string; id: number; x: number; y: number; visible: boolean }
-interface World { robots: Robot[]; ball: { x: number; y: number } | null }
-
-async function world(page: Page): Promise<World> {
-  const r = await page.request.get("/api/world");
-  expect(r.ok()).toBeTruthy();
-  return (await r.json()) as World;
-}
+import { world, type World } from "./helpers";
 
 async function waitForRobots(page: Page, n: number): Promise<World> {
-  let w: World = { robots: [], ball: null };
+  let w: World = { robots: [], ball: null, estop: false, referee: null };
   await expect
     .poll(async () => {
       w = await world(page);
