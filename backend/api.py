@@ -350,7 +350,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                 await ws.send_text(st.world_json())
             if time.monotonic() - last_health >= 0.5:
                 last_health = time.monotonic()
-                await ws.send_text(json.dumps({"type": "health", "health": st.health()}))
+                await ws.send_text(st.health_json())
     finally:
         rx.cancel()
 

@@ -60,6 +60,7 @@ class Station:
         self.runner = Runner()
         self.started_mono = time.monotonic()
         self._world_json_cache: tuple[int, str] = (-1, "")
+        self._health_json_cache: tuple[float, str] = (-1e9, "")
         self.ws_clients = 0
         self.params = ParamStore(settings.state_dir)
         overrides: dict[str, Any] = {}
@@ -369,6 +370,15 @@ class Station:
             self._world_json_cache = (key, json.dumps({"type": "world",
                                                        "world": _finite(self.world_dict())}))
         return self._world_json_cache[1]
+
+    def health_json(self, max_age_s: float = 0.25) -> str:
+        """The health message, encoded at most every ``max_age_s`` and shared by every client
+        (like the world), instead of once per client."""
+        now = time.monotonic()
+        if now - self._health_json_cache[0] > max_age_s:
+            self._health_json_cache = (now, json.dumps({"type": "health",
+                                                        "health": self.health()}))
+        return self._health_json_cache[1]
 
     def geometry(self) -> dict[str, Any] | None:
         return self.geometry_topic.latest_value()
