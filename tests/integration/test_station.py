@@ -183,8 +183,10 @@ def test_internal_referee_halt_travels_as_real_multicast_and_stops_robots(
             station.get("/api/world")), 10, what="internal HALT received back from multicast")
         assert ref["stage"] == "NORMAL_FIRST_HALF_PRE"
         wait_until(lambda: _all_blue_still(station), 5, what="all blue robots stopped")
-        h = station.get("/api/health")
-        assert h["streams"]["relay.referee_out"]["packets"] > 0
+        # the relay reports its counters once a second
+        h = wait_until(lambda: (lambda h: h if h["streams"].get("relay.referee_out", {}).get(
+            "packets", 0) > 0 else None)(station.get("/api/health")), 5,
+            what="relay counting referee-out packets")
         assert h["streams"]["referee"]["rate_hz"] > 5
     finally:
         httpx.post(station.url + "/api/referee/internal/command", json={"command": "FORCE_START"})
