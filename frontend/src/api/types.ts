@@ -81,6 +81,18 @@ export interface Robot {
   /** Filter of this robot: "raw" | "median" | "paper" | "kalman". */
   filter?: string;
   control?: RobotControl | null;
+  /** Strategy role of one of our robots ("goalkeeper", "attacker", ...; null when none). */
+  role?: string | null;
+  /** Planned waypoints (mm) from the robot's position to its target; the last one is the target. */
+  path?: Vec[] | null;
+  /** Kicker armed: the kick speed and whether it chips. */
+  kick?: RobotKick | null;
+  dribbler?: boolean;
+}
+
+export interface RobotKick {
+  speed_mps: number;
+  chip: boolean;
 }
 
 export interface RawCamera {
@@ -124,6 +136,36 @@ export interface World {
   estop: boolean;
   /** Not in docs/api.md yet: why the station holds every robot ("emergency stop", "HALT", "no vision"), or "". */
   halt_reason?: string;
+  /** The strategy's view of the game (absent before the strategy runs). */
+  strategy?: StrategyState | null;
+}
+
+export type Side = "negative-x" | "positive-x";
+
+export interface StrategyState {
+  play: string;
+  situation: string;
+  situation_text: string;
+  our_team: Team;
+  our_side: Side;
+  /** True when our side comes from the referee (blue_team_on_positive_half), not the parameter. */
+  side_from_referee: boolean;
+  tick_ms: number;
+}
+
+/** One play the strategy offers (GET /api/strategy). */
+export interface PlayInfo {
+  name: string;
+  title: string;
+  description: string;
+}
+
+/** GET /api/strategy. */
+export interface StrategyInfo {
+  play: string;
+  plays: PlayInfo[];
+  situation: string;
+  situation_text: string;
 }
 
 export interface FieldLine {
@@ -202,8 +244,31 @@ export interface LatencyHealth {
   p99_ms: number;
 }
 
+/** The compute engine the strategy calls (null/absent when off). */
+export interface EngineHealth {
+  kind: "numpy" | "octave" | string;
+  function: string;
+  calls_per_s: number;
+  latency_mean_ms: number;
+  latency_p99_ms: number;
+  calls: number;
+  ok: number;
+  errors: number;
+  timeouts: number;
+  crashes: number;
+  restarts: number;
+  start_failures: number;
+  last_error: string;
+  workers: number;
+  busy: number;
+  idle: number;
+  /** Strategy ticks that used the built-in numpy code because the engine call failed or timed out. */
+  fallbacks: number;
+}
+
 export interface Health {
   latency?: LatencyHealth | null;
+  engine?: EngineHealth | null;
   ok: boolean;
   streams: Record<string, StreamHealth>;
   processors: ProcessorHealth[];

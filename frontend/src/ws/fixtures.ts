@@ -1,5 +1,5 @@
 // Test fixtures (only imported by tests).
-import type { Geometry, Health, World } from "../api/types";
+import type { EngineHealth, Geometry, Health, World } from "../api/types";
 import { DEFAULT_GEOMETRY } from "../field/defaultGeometry";
 import { robot } from "../field/testRobots";
 
@@ -28,3 +28,24 @@ export function health(rate = 60): Health {
 }
 
 export const geometry: Geometry = { ...DEFAULT_GEOMETRY, field_length: 12000, field_width: 9000 };
+
+export const engineHealth = (extra: Partial<EngineHealth> = {}): EngineHealth => ({
+  kind: "octave",
+  function: "goalkeeper",
+  calls_per_s: 19.96,
+  latency_mean_ms: 3.214,
+  latency_p99_ms: 11.5,
+  calls: 1200,
+  ok: 1190,
+  errors: 0,
+  timeouts: 0,
+  crashes: 0,
+  restarts: 0,
+  start_failures: 0,
+  last_error: "",
+  workers: 2,
+  busy: 1,
+  idle: 1,
+  fallbacks: 0,
+  ...extra,
+});

@@ -1,0 +1,48 @@
+import { describe, expect, it } from "vitest";
+import { ROLE_TAGS, roleColor, roleName, roleTag } from "./roles";
+
+describe("roleTag", () => {
+  it("gives the short tag of every role of the contract", () => {
+    expect(roleTag("goalkeeper")).toBe("GK");
+    expect(roleTag("attacker")).toBe("ATK");
+    expect(roleTag("supporter")).toBe("SUP");
+    expect(roleTag("defender")).toBe("DEF");
+    expect(roleTag("formation")).toBe("FRM");
+    expect(roleTag("placer")).toBe("PLC");
+    expect(roleTag("kicker")).toBe("KCK");
+    expect(roleTag("waiting")).toBe("WAIT");
+    expect(roleTag("parked")).toBe("PRK");
+    expect(roleTag("operator")).toBe("OP");
+  });
+  it("is case and space tolerant", () => {
+    expect(roleTag(" Goalkeeper ")).toBe("GK");
+    expect(roleTag("DEFENDER")).toBe("DEF");
+  });
+  it("falls back to the first three letters of an unknown role", () => {
+    expect(roleTag("interceptor")).toBe("INT");
+    expect(roleTag("wall_left")).toBe("WAL");
+    expect(roleTag("x")).toBe("X");
+  });
+  it("is null without a role", () => {
+    expect(roleTag(null)).toBeNull();
+    expect(roleTag(undefined)).toBeNull();
+    expect(roleTag("")).toBeNull();
+    expect(roleTag("  ")).toBeNull();
+  });
+  it("keeps every known tag at most 4 characters (they sit next to a robot)", () => {
+    for (const tag of Object.values(ROLE_TAGS)) expect(tag.length).toBeLessThanOrEqual(4);
+  });
+});
+
+describe("roleName and roleColor", () => {
+  it("humanises role names", () => {
+    expect(roleName("goalkeeper")).toBe("Goalkeeper");
+    expect(roleName("ball_placer")).toBe("Ball placer");
+    expect(roleName("free-kick-taker")).toBe("Free kick taker");
+    expect(roleName(null)).toBe("—");
+  });
+  it("colours attack and defence differently and has a default", () => {
+    expect(roleColor("attacker")).not.toBe(roleColor("defender"));
+    expect(roleColor("something-new")).toBe(roleColor(null));
+  });
+});
