@@ -23,7 +23,13 @@ def main() -> None:
                    help="override the stored parameter team.our_team")
     p.add_argument("--our-side", type=int, choices=[-1, 1], default=None,
                    help="override team.our_side: -1 our goal at negative x")
-    p.add_argument("--no-demo", action="store_true", help="switch the formation demo off")
+    p.add_argument("--play", default=None,
+                   help="override strategy.play (match, defend, attack-drill, formation, "
+                        "simple, idle)")
+    p.add_argument("--no-demo", action="store_true", help="same as --play idle")
+    p.add_argument("--set", dest="set_params", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a parameter, e.g. --set strategy.engine=octave (VALUE is "
+                        "JSON, or text); repeatable")
     p.add_argument("--state-dir", type=Path, default=d.state_dir,
                    help="where parameters and presets are kept (default %(default)s)")
     p.add_argument("--log-level", default="INFO")
@@ -31,7 +37,8 @@ def main() -> None:
     logging.basicConfig(level=a.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
-                        our_team=a.our_team, our_side=a.our_side, demo=False if a.no_demo else None,
+                        our_team=a.our_team, our_side=a.our_side,
+                        play="idle" if a.no_demo else a.play, set_params=a.set_params,
                         state_dir=a.state_dir)
     app = create_app(settings)
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,

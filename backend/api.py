@@ -157,6 +157,12 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                       body.present)
         return {"team": team, "id": rid, **body.model_dump()}
 
+    @api.get("/strategy")
+    async def strategy_get() -> dict[str, Any]:
+        """The play, the plays to choose from (choose with PATCH /api/params
+        {"strategy": {"play": name}}), the referee situation as our team sees it, roles."""
+        return await st.call(st.strategy_view)
+
     @api.get("/referee")
     async def referee_get() -> dict[str, Any]:
         return {**st.referee_view(), "active": st.world_dict()["referee"]}

@@ -19,7 +19,8 @@ class Settings(BaseModel):
     # start-up overrides of the persisted parameters (None: keep what is stored)
     our_team: str | None = Field(default=None, pattern="^(blue|yellow)$")
     our_side: int | None = None  # -1: our goal at negative x
-    demo: bool | None = None
+    play: str | None = None  # strategy.play
+    set_params: list[str] = Field(default_factory=list)  # "group.key=value" (value JSON or text)
     static_dir: Path = ROOT / "frontend" / "dist"
     state_dir: Path | None = ROOT / "var"  # parameters and presets; None: not persisted
     allowed_origins: list[str] = Field(

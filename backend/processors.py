@@ -7,9 +7,11 @@ import logging
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import zmq
 import zmq.asyncio
 from google.protobuf.message import DecodeError, Message
@@ -25,9 +27,11 @@ from .control.goto import LocalVelocity, Target
 from .control.motion import PHASE_NAMES, MotionBank, RobotMotionState
 from .control.params import ALGORITHMS, ControlSettings
 from .control.referee_limits import referee_limits
+from .engine import EngineError, PoolEngine
+from .params.model import StrategyParams
 from .processor import Every, OnTopic, Processor
 from .referee.internal import InternalReferee, RefereeCommandError
-from .strategy.demo import DemoConfig, demo_targets
+from .strategy.core import Prepared, StrategyCore
 from .world.decode import decode_detection, geometry_to_dict
 from .world.model import WorldModel
 from .world.referee import RefereeState, decode_referee
@@ -98,15 +102,23 @@ class CommandSet:
 
 @dataclass(frozen=True, slots=True)
 class TargetEntry:
+    """Where one robot goes and what it does, as strategy (or an operator) decided."""
+
     target: Target
-    source: str  # "operator" or "demo"
+    source: str  # "operator" or "strategy"
+    role: str = ""
+    path: tuple[tuple[float, float], ...] = ()  # waypoints (mm) after the robot; last = target
+    kick_speed_mps: float = 0.0
+    chip: bool = False
+    dribbler_rpm: float = 0.0
+    max_speed_mps: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
 class OperatorTarget:
     team: Team
     id: int
-    target: Target | None  # None: release the robot back to the demo
+    target: Target | None  # None: release the robot back to the strategy
 
 
 class RelayIngest(Processor):
@@ -283,21 +295,30 @@ class WorldProcessor(Processor):
 
 
 class StrategyProcessor(Processor):
-    """Decides targets: operator targets first, the formation demo for the rest of our team."""
+    """Decides targets: operator targets first, the selected play for the rest of our team
+    (roles, referee-driven behaviour, planned paths). The keeper's spot may come from the
+    compute engine; a failed or late engine call falls back to the built-in code."""
 
     name = "strategy"
 
-    def __init__(self, bus: DataBus, our_team: Team, demo: DemoConfig,
+    def __init__(self, bus: DataBus, our_team: Team, params: StrategyParams | None = None,
                  hz: float = 20.0) -> None:
         super().__init__(Every(hz))
         self.world = bus.typed("world", WorldState)
         self.geometry = bus.typed("geometry", dict)
+        self.referee = bus.typed("referee", RefereeState)
         self.operator = Reader(bus.typed("operator-targets", OperatorTarget))
         self.targets = bus.typed("targets", dict)
         self.our_team: Team = our_team
-        self.demo = demo
-        self.demo_enabled = True
+        self.our_side_negative = True
+        self.side_from_referee = True
+        self.params = params or StrategyParams()
+        self.core = StrategyCore()
+        self.referee_source: Callable[[], RefereeState | None] = self.referee.latest_value
         self.operator_targets: dict[tuple[Team, int], Target] = {}
+        self.engine: PoolEngine | None = None
+        self.engine_fallbacks = 0
+        self.engine_last_error = ""
         self._t0 = time.monotonic()
 
     async def tick(self) -> None:
@@ -307,20 +328,52 @@ class StrategyProcessor(Processor):
             else:
                 self.operator_targets[(op.team, op.id)] = op.target
         out: dict[tuple[Team, int], TargetEntry] = {
-            k: TargetEntry(t, "operator") for k, t in self.operator_targets.items()
+            k: TargetEntry(t, "operator", role="operator")
+            for k, t in self.operator_targets.items()
         }
         world = self.world.latest_value()
-        if self.demo_enabled and world is not None:
-            geo = self.geometry.latest_value()
-            if geo is not None:
-                self.demo.field_length_mm = float(geo["field_length"])
-                self.demo.field_width_mm = float(geo["field_width"])
-            free = {r.id: (r.x, r.y) for r in world.robots
-                    if r.team == self.our_team and (r.team, r.id) not in self.operator_targets}
-            t = time.monotonic() - self._t0
-            for rid, tgt in demo_targets(t, free, self.demo).items():
-                out[(self.our_team, rid)] = TargetEntry(tgt, "demo")
+        if world is not None and self.params.play != "idle":
+            now = time.monotonic() - self._t0
+            prep = self.core.prepare(world, self.geometry.latest_value(), self.referee_source(),
+                                     self.params, self.our_team, self.our_side_negative,
+                                     self.side_from_referee, now)
+            keeper = await self._engine_keeper(prep)
+            for rid, mv in self.core.decide(prep, keeper).items():
+                key = (self.our_team, rid)
+                if key in out:
+                    continue
+                out[key] = TargetEntry(
+                    Target(mv.x, mv.y, mv.orientation), "strategy", role=mv.role,
+                    path=mv.path, kick_speed_mps=mv.kick_speed_mps, chip=mv.chip,
+                    dribbler_rpm=DRIBBLER_RPM if mv.dribbler else 0.0,
+                    max_speed_mps=mv.max_speed_mps)
         self.targets.write(out)
+
+    async def _engine_keeper(self, prep: Prepared) -> tuple[float, float] | None:
+        """The keeper's spot (field frame) from the compute engine, or None (built-in)."""
+        eng = self.engine
+        if eng is None or prep.ball_field is None or self.params.play in ("formation", "idle"):
+            return None
+        p = self.params
+        try:
+            res = await eng.call(p.goalkeeper_function,
+                                 np.array([prep.ball_field], dtype=np.float64),
+                                 np.array([prep.ball_velocity_field], dtype=np.float64),
+                                 prep.goal_x_field, prep.inp.fs.goal_width,
+                                 45.0, p.keeper_min_speed_mmps, timeout_s=p.engine_timeout_s)
+            arr = np.asarray(res, dtype=np.float64).reshape(-1)
+            if arr.size < 2 or not np.all(np.isfinite(arr[:2])):
+                raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]")
+            return (float(arr[0]), float(arr[1]))
+        except (EngineError, ValueError, TypeError) as exc:
+            self.engine_fallbacks += 1
+            self.engine_last_error = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            _badlog.warning("engine-keeper", "engine keeper call failed, built-in code used: "
+                            "%s", self.engine_last_error)
+            return None
+
+
+DRIBBLER_RPM = 3000.0
 
 
 class ControlProcessor(Processor):
@@ -399,12 +452,19 @@ class ControlProcessor(Processor):
                 m.step(_UNSEEN, targets[key].target, dt)  # zero, and restart when seen again
                 out.append(Command(key[0], key[1], zero))
                 continue
+            entry = targets[key]
             vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
-                         targets[key].target, dt)
+                         next_waypoint(entry, robot.x, robot.y), dt)
             vel = referee_limits(vel, command, our_team=self.our_team)
             if command == "STOP":  # the operator may set a lower cap than the rules' 1.5 m/s
                 vel = _limit_speed(vel, self.stop_speed_mps)
-            out.append(Command(key[0], key[1], vel))
+            if entry.max_speed_mps is not None:
+                vel = _limit_speed(vel, entry.max_speed_mps)
+            kick_ok = command is None or command not in _NO_KICK
+            out.append(Command(key[0], key[1], vel,
+                               kick_speed_mps=entry.kick_speed_mps if kick_ok else 0.0,
+                               chip=entry.chip and kick_ok,
+                               dribbler_rpm=entry.dribbler_rpm))
         cmds = tuple(out)
         self.last_commands = {(c.team, c.id): c for c in cmds}
         self.telemetry = self._telemetry()
@@ -421,6 +481,25 @@ class ControlProcessor(Processor):
 
 
 _UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
+
+# No kicking while the referee has the game stopped (STOP, placements, timeouts).
+_NO_KICK = frozenset({"HALT", "STOP", "GOAL_BLUE", "GOAL_YELLOW", "BALL_PLACEMENT_BLUE",
+                      "BALL_PLACEMENT_YELLOW", "TIMEOUT_BLUE", "TIMEOUT_YELLOW"})
+
+#: a waypoint closer than this counts as passed: the robot heads for the next one
+WAYPOINT_REACHED_MM = 120.0
+
+
+def next_waypoint(entry: TargetEntry, x_mm: float, y_mm: float) -> Target:
+    """Where the controller steers now: the first waypoint of the planned path not yet
+    reached (with the final heading), or the target itself."""
+    path = entry.path
+    if len(path) <= 1:
+        return entry.target
+    for px, py in path[:-1]:
+        if math.hypot(px - x_mm, py - y_mm) > WAYPOINT_REACHED_MM:
+            return Target(px, py, entry.target.orientation)
+    return entry.target
 
 
 def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:

@@ -13,6 +13,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
 import zmq
@@ -22,10 +23,11 @@ from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
 from .bus import DataBus
-from .config import Settings
+from .config import ROOT, Settings
 from .control.goto import Target
-from .params.model import StationParams
-from .params.store import ParamStore
+from .engine import NumpyEngine, OctaveEngine, PoolEngine
+from .params.model import PLAYS, StationParams, StrategyParams
+from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Every, OnTopic, Runner
 from .processors import (
     CommandPublisher,
@@ -41,7 +43,7 @@ from .processors import (
     WorldProcessor,
 )
 from .referee.internal import OPERATOR_COMMANDS, InternalReferee
-from .strategy.demo import DemoConfig
+from .strategy.plays import PLAY_INFO
 from .world.referee import RefereeState
 from .world.state import Team, WorldState
 from .zmqio import pub_socket, sub_socket
@@ -68,10 +70,13 @@ class Station:
             overrides["our_team"] = settings.our_team
         if settings.our_side is not None:
             overrides["our_side"] = "negative-x" if settings.our_side < 0 else "positive-x"
-        if settings.demo is not None:
-            overrides["demo"] = settings.demo
-        if overrides:
-            self.params.patch({"team": overrides})
+        changes: dict[str, Any] = {"team": overrides} if overrides else {}
+        if settings.play is not None:
+            changes["strategy"] = {"play": settings.play}
+        for item in settings.set_params:
+            changes = deep_merge(changes, parse_setting(item))
+        if changes:
+            self.params.patch(changes)
         self.bus = DataBus(self.params.current.bus.sizes())
         # topics the API writes to
         self.operator_targets = self.bus.typed("operator-targets", OperatorTarget)
@@ -84,6 +89,10 @@ class Station:
         self.relay_stats = self.bus.typed("relay-stats", dict)
         self.params_topic = self.bus.typed("params", int, capacity=4)
         self.referee_state = InternalReferee()
+        self._engine_key: tuple[str, str] | None = None
+        self._engine_gen = 0
+        self._engine_tasks: set[asyncio.Task[None]] = set()
+        self.engine_error = ""
         for name in settings.topic_sizes:
             self.bus.topic(name)
 
@@ -174,12 +183,13 @@ class Station:
         self.vision = VisionIngest(self.bus)
         self.referee = RefereeIngest(self.bus)
         self.world = WorldProcessor(self.bus)
-        self.strategy = StrategyProcessor(self.bus, prm.team.our_team, DemoConfig())
+        self.strategy = StrategyProcessor(self.bus, prm.team.our_team, prm.strategy)
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
                                         prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus, pub)
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        self.strategy.referee_source = self.control.active_referee
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
@@ -194,10 +204,11 @@ class Station:
         """Applies a validated parameter set to every part at once (between two ticks: the
         event loop runs one thing at a time), then tells the clients."""
         self.strategy.our_team = p.team.our_team
-        self.strategy.demo_enabled = p.team.demo
-        self.strategy.demo.own_half_sign = -1 if p.team.our_side == "negative-x" else 1
-        self.strategy.demo.period_s = p.team.demo_period_s
+        self.strategy.our_side_negative = p.team.our_side == "negative-x"
+        self.strategy.side_from_referee = p.team.side_from_referee
+        self.strategy.params = p.strategy
         self.strategy.set_rate(p.processors.strategy_hz)
+        self._configure_engine(p.strategy)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         self.control.apply_settings(p.control, p.team.our_team)
@@ -214,12 +225,101 @@ class Station:
             self.bus.topic(name).resize(size)
         self.params_topic.write(version)
 
+    # ---- the compute engine (started and replaced in the background; strategy uses it
+    # once it runs and falls back to the built-in code meanwhile) ----
+
+    def _configure_engine(self, sp: StrategyParams) -> None:
+        key = (sp.engine, sp.scripts_dir)
+        if key == self._engine_key:
+            return
+        self._engine_key = key
+        self._engine_gen += 1
+        old, self.strategy.engine = self.strategy.engine, None
+        self.engine_error = ""
+        loop = asyncio.get_running_loop()
+        task = loop.create_task(self._swap_engine(old, sp, self._engine_gen))
+        self._engine_tasks.add(task)
+        task.add_done_callback(self._engine_tasks.discard)
+
+    async def _swap_engine(self, old: PoolEngine | None, sp: StrategyParams, gen: int) -> None:
+        if old is not None:
+            await old.close()
+        if sp.engine == "off":
+            return
+        eng: PoolEngine
+        if sp.engine == "numpy":
+            # the keeper's rule under the same name as the shipped .m example
+            eng = NumpyEngine(functions={"goalkeeper": "backend.geometry.fit:goalkeeper_target"},
+                              workers=1, default_timeout_s=sp.engine_timeout_s)
+        else:
+            scripts = Path(sp.scripts_dir)
+            if not scripts.is_absolute():
+                scripts = ROOT / scripts
+            eng = OctaveEngine(str(scripts), workers=1, default_timeout_s=sp.engine_timeout_s)
+        try:
+            await eng.start()
+        except Exception as exc:
+            self.engine_error = f"{sp.engine} engine did not start: {exc}"
+            log.error("%s", self.engine_error)
+            await eng.close()
+            return
+        if gen != self._engine_gen:  # configured again meanwhile
+            await eng.close()
+            return
+        self.strategy.engine = eng
+        log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
+                 sp.goalkeeper_function)
+
+    def engine_health(self) -> dict[str, Any] | None:
+        if not hasattr(self, "strategy"):
+            return None
+        sp = self.strategy.params
+        if sp.engine == "off":
+            return None
+        eng = self.strategy.engine
+        out: dict[str, Any] = dict(eng.health()) if eng is not None else {
+            "kind": sp.engine, "workers": 0, "busy": 0, "idle": 0, "calls": 0,
+            "calls_per_s": 0.0, "latency_mean_ms": 0.0, "latency_p99_ms": 0.0, "ok": 0,
+            "errors": 0, "timeouts": 0, "crashes": 0, "restarts": 0, "start_failures": 0,
+            "last_error": self.engine_error or "starting"}
+        out["function"] = sp.goalkeeper_function
+        out["fallbacks"] = self.strategy.engine_fallbacks
+        out["running"] = eng is not None
+        if not out.get("last_error") and self.strategy.engine_last_error:
+            out["last_error"] = self.strategy.engine_last_error
+        return out
+
+    def strategy_view(self) -> dict[str, Any]:
+        core = self.strategy.core if hasattr(self, "strategy") else None
+        sit = core.situation if core is not None else None
+        play = self.params.current.strategy.play
+        return {
+            "play": play,
+            "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
+                      for n in PLAYS],
+            "situation": sit.key if sit is not None else "running",
+            "situation_text": sit.text() if sit is not None else "",
+            "our_team": self.params.current.team.our_team,
+            "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
+            "side_from_referee": bool(core and core.side_from_referee),
+            "tick_ms": core.last_tick_ms if core is not None else 0.0,
+            "roles": {f"{self.params.current.team.our_team}/{rid}": role
+                      for rid, role in (core.strategy.roles.items() if core else [])},
+        }
+
     async def stop(self) -> None:
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and hasattr(self, "publisher"):
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
+        for task in list(self._engine_tasks):
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        if hasattr(self, "strategy") and self.strategy.engine is not None:
+            await self.strategy.engine.close()
+            self.strategy.engine = None
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None
@@ -300,7 +400,13 @@ class Station:
             "referee": None,
             "estop": self.estop,
             "halt_reason": self.control.halt_reason if hasattr(self, "control") else "",
+            "strategy": None,
         }
+        if hasattr(self, "strategy"):
+            sv = self.strategy_view()
+            out["strategy"] = {k: sv[k] for k in ("play", "situation", "situation_text",
+                                                   "our_team", "our_side", "side_from_referee",
+                                                   "tick_ms")}
         if ref is not None:
             rd = ref.value.to_dict()
             rd["age_s"] = time.monotonic() - ref.time_mono
@@ -328,6 +434,12 @@ class Station:
                     "x": entry.target.x, "y": entry.target.y,
                     "orientation": entry.target.orientation, "source": entry.source,
                 },
+                "role": entry.role if entry is not None and entry.role else None,
+                "path": None if entry is None or not entry.path else [
+                    {"x": px, "y": py} for px, py in entry.path],
+                "kick": None if entry is None or entry.kick_speed_mps <= 0 else {
+                    "speed_mps": entry.kick_speed_mps, "chip": entry.chip},
+                "dribbler": bool(entry is not None and entry.dribbler_rpm > 0),
                 "controlled": entry is not None,
                 "raw_x": r.raw_x, "raw_y": r.raw_y, "raw_orientation": r.raw_orientation,
                 "predicted": r.predicted, "lost": r.lost, "filter": r.filter,
@@ -427,6 +539,7 @@ class Station:
             "latency": self.publisher.latency_summary() if hasattr(self, "publisher") else None,
             "latency_stages": self._latency_stages(),
             "websocket_clients": self.ws_clients,
+            "engine": self.engine_health(),
         })
         return out
 

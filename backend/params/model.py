@@ -28,9 +28,57 @@ class TeamParams(Group):
         default="blue", description="the team the station controls")
     our_side: Literal["negative-x", "positive-x"] = Field(
         default="negative-x", description="the half our goal is on (vision frame)")
-    demo: bool = Field(default=True, description="drive our robots between formation points "
-                                                 "until an operator gives them targets")
-    demo_period_s: float = num(5.0, 1.0, 60.0, "s", 0.5, "time on each demo formation")
+    side_from_referee: bool = Field(
+        default=True, description="follow the referee's side (blue_team_on_positive_half) when "
+                                  "it sends one, e.g. after the half-time side switch")
+
+
+PlayName = Literal["match", "defend", "attack-drill", "formation", "simple", "idle"]
+PLAYS: tuple[PlayName, ...] = ("match", "defend", "attack-drill", "formation", "simple", "idle")
+
+
+class StrategyParams(Group):
+    """What our robots do on their own (operator targets always come first), and the compute
+    engine that may compute a role."""
+
+    play: PlayName = Field(
+        default="formation",
+        description="match: full game; defend: keeper + defenders only; attack-drill: go for "
+                    "the ball and score; formation: classroom formations; simple: the simple "
+                    "opponent; idle: robots only move on operator targets")
+    formation_period_s: float = num(5.0, 1.0, 60.0, "s", 0.5, "time on each formation")
+    kick_speed_mps: float = num(5.5, 1.0, 6.5, "m/s", 0.1, "shot speed (the rules allow 6.5)")
+    pass_speed_mps: float = num(3.0, 0.5, 6.5, "m/s", 0.1, "pass and free-kick speed")
+    stop_distance_mm: float = num(650.0, 500.0, 1500.0, "mm", 10.0,
+                                  "distance to the ball our robots keep during STOP and the "
+                                  "other team's set pieces (rules: 500 mm; includes margin)")
+    robot_margin_mm: float = num(60.0, 0.0, 500.0, "mm", 5.0,
+                                 "clearance kept from other robots when planning paths")
+    defense_margin_mm: float = num(120.0, 0.0, 500.0, "mm", 5.0,
+                                   "clearance kept from defence areas robots may not enter")
+    placement_speed_mps: float = num(0.8, 0.1, 1.5, "m/s", 0.05,
+                                     "speed while carrying the ball for ball placement")
+    keeper_min_speed_mmps: float = num(300.0, 0.0, 3000.0, "mm/s", 10.0,
+                                       "the keeper intercepts balls faster than this towards "
+                                       "our goal; slower ones it mirrors")
+    assignment: Literal["sum", "bottleneck"] = Field(
+        default="sum", description="role assignment: least total distance (sum) or soonest "
+                                   "last arrival (bottleneck)")
+    assignment_hysteresis_mm: float = num(400.0, 0.0, 3000.0, "mm", 10.0,
+                                          "a robot keeps its role unless a swap saves more")
+    engine: Literal["off", "numpy", "octave"] = Field(
+        default="off", description="compute engine for the goalkeeper: off (built-in code), "
+                                   "numpy (worker process) or octave (the .m scripts)")
+    scripts_dir: str = Field(default="engine_scripts",
+                             description="folder of .m files for the Octave engine (relative "
+                                         "to the project)")
+    goalkeeper_function: str = Field(
+        default="goalkeeper", pattern=r"^[A-Za-z]\w*(\.[A-Za-z]\w*)?$",
+        description="engine function computing the keeper's target, called as "
+                    "f(ball, velocity, goal_x, goal_width, margin, min_speed); file.function "
+                    "for multi-function files")
+    engine_timeout_s: float = num(0.03, 0.005, 1.0, "s", 0.005,
+                                  "a slower engine call is dropped and the built-in code used")
 
 
 class WorldParams(Group):
@@ -87,6 +135,8 @@ class StationParams(Group):
     """All parameters, grouped by the part of the station that uses them."""
 
     team: TeamParams = Field(default_factory=TeamParams, description="Team and side")
+    strategy: StrategyParams = Field(default_factory=StrategyParams,
+                                     description="Strategy and plays (paper section 5.3)")
     world: WorldParams = Field(default_factory=WorldParams, description="World model")
     filters: FilterSettings = Field(default_factory=FilterSettings,
                                     description="Vision filters (paper section 5.1)")

@@ -78,6 +78,23 @@ def diff(a: dict[str, Any], b: dict[str, Any], path: tuple[str, ...] = ()) -> li
     return out
 
 
+def parse_setting(item: str) -> dict[str, Any]:
+    """``"group.key=value"`` (a command-line override) as a patch ``{"group": {"key": value}}``.
+    The value is JSON when it parses (numbers, true, null, objects), else the text itself."""
+    key, sep, raw = item.partition("=")
+    parts = [p for p in key.strip().split(".") if p]
+    if not sep or not parts:
+        raise ValueError(f"expected group.key=value, got {item!r}")
+    try:
+        value: Any = json.loads(raw)
+    except ValueError:
+        value = raw
+    out: dict[str, Any] = {parts[-1]: value}
+    for p in reversed(parts[:-1]):
+        out = {p: out}
+    return out
+
+
 def atomic_write_json(path: Path, data: Any) -> None:
     """Write-then-rename: a crash leaves either the old file or the new one, never half."""
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,7 @@ async function maxSpeed(page: Page): Promise<number> {
   return max;
 }
 
-const FIELD = "team.demo_period_s";
+const FIELD = "strategy.formation_period_s";
 
 test("a parameter changed in one browser shows in another; a bad value shows the server's message", async ({ browser }) => {
   const ctxA = await browser.newContext();
@@ -30,7 +30,7 @@ test("a parameter changed in one browser shows in another; a bad value shows the
   const a = await ctxA.newPage();
   const b = await ctxB.newPage();
   const schema = await (await a.request.get("/api/params/schema")).json();
-  const def = schema.$defs.TeamParams.properties.demo_period_s.default as number;
+  const def = schema.$defs.StrategyParams.properties.formation_period_s.default as number;
   try {
     for (const p of [a, b]) {
       await p.goto("/");
@@ -43,7 +43,7 @@ test("a parameter changed in one browser shows in another; a bad value shows the
     await inA.fill("7.5");
     await inA.press("Enter");
     await expect(inB).toHaveValue("7.5");
-    expect((await (await a.request.get("/api/params")).json()).values.team.demo_period_s).toBe(7.5);
+    expect((await (await a.request.get("/api/params")).json()).values.strategy.formation_period_s).toBe(7.5);
 
     // above the maximum (60): the server refuses, its message shows, the field goes back
     await inA.fill("99");
@@ -51,7 +51,7 @@ test("a parameter changed in one browser shows in another; a bad value shows the
     await expect(a.getByTestId(`param-error-${FIELD}`)).toContainText(/less than or equal to 60/);
     await expect(inA).toHaveValue("7.5");
     // the API refuses NaN with a message too, and nothing changes
-    const nan = await a.request.patch("/api/params", { data: '{"team": {"demo_period_s": NaN}}', headers: { "content-type": "application/json" } });
+    const nan = await a.request.patch("/api/params", { data: '{"strategy": {"formation_period_s": NaN}}', headers: { "content-type": "application/json" } });
     expect(nan.status()).toBe(422);
     await expect(inB).toHaveValue("7.5");
 
@@ -59,7 +59,7 @@ test("a parameter changed in one browser shows in another; a bad value shows the
     await b.getByTestId(`param-reset-${FIELD}`).click();
     await expect(inA).toHaveValue(def.toFixed(1));
   } finally {
-    await a.request.patch("/api/params", { data: { team: { demo_period_s: def } } });
+    await a.request.patch("/api/params", { data: { strategy: { formation_period_s: def } } });
     await ctxA.close();
     await ctxB.close();
   }

@@ -158,12 +158,12 @@ def test_params_patch_applies_live_and_reaches_every_client(client) -> None:  # 
 def test_params_bad_value_422_names_field_and_reason(client) -> None:  # type: ignore[no-untyped-def]
     c, _ = client
     v0 = c.get("/api/params").json()["version"]
-    r = c.patch("/api/params", content='{"team": {"demo_period_s": NaN}}',
+    r = c.patch("/api/params", content='{"strategy": {"formation_period_s": NaN}}',
                 headers={"content-type": "application/json"})
     assert r.status_code == 422
     d = r.json()["detail"][0]
-    assert d["loc"] == ["body", "team", "demo_period_s"] and "finite" in d["msg"]
-    r = c.patch("/api/params", json={"team": {"demo_period_s": 400}})
+    assert d["loc"] == ["body", "strategy", "formation_period_s"] and "finite" in d["msg"]
+    r = c.patch("/api/params", json={"strategy": {"formation_period_s": 400}})
     assert r.status_code == 422 and "less than or equal" in r.json()["detail"][0]["msg"]
     assert c.get("/api/params").json()["version"] == v0
 
@@ -172,15 +172,16 @@ def test_schema_preset_and_export_routes(client) -> None:  # type: ignore[no-unt
     c, _ = client
     schema = c.get("/api/params/schema").json()
     assert {"team", "filters", "control"} <= set(schema["properties"])
-    c.patch("/api/params", json={"team": {"demo_period_s": 4.0}})
+    c.patch("/api/params", json={"strategy": {"formation_period_s": 4.0}})
     assert c.put("/api/presets/match day").json() == {"presets": ["match day"]}
     p = c.get("/api/presets/match day").json()
-    assert p["diff_from_defaults"] == [{"path": "team.demo_period_s", "from": 5.0, "to": 4.0}]
+    assert p["diff_from_defaults"] == [
+        {"path": "strategy.formation_period_s", "from": 5.0, "to": 4.0}]
     exported = c.get("/api/params/export")
     assert "attachment" in exported.headers["content-disposition"]
-    c.patch("/api/params", json={"team": {"demo_period_s": 1.0}})
-    assert c.post("/api/params/import", json=exported.json()).json()["values"]["team"][
-        "demo_period_s"] == 4.0
+    c.patch("/api/params", json={"strategy": {"formation_period_s": 1.0}})
+    assert c.post("/api/params/import", json=exported.json()).json()["values"]["strategy"][
+        "formation_period_s"] == 4.0
     assert c.post("/api/presets/nope/load").status_code == 404
     assert c.put("/api/presets/..%2Fx").status_code in (404, 422)
 

@@ -36,18 +36,18 @@ def test_patch_is_validated_applied_versioned_and_persisted(tmp_path: Path) -> N
     store = ParamStore(tmp_path)
     seen: list[int] = []
     store.subscribe(lambda p, v: seen.append(v))
-    store.patch({"team": {"demo_period_s": 3.5}})
-    assert store.current.team.demo_period_s == 3.5 and store.version == 1 and seen == [1]
+    store.patch({"strategy": {"formation_period_s": 3.5}})
+    assert store.current.strategy.formation_period_s == 3.5 and store.version == 1 and seen == [1]
     on_disk = json.loads((tmp_path / "params.json").read_text())
-    assert on_disk["version"] == 1 and on_disk["values"]["team"]["demo_period_s"] == 3.5
+    assert on_disk["version"] == 1 and on_disk["values"]["strategy"]["formation_period_s"] == 3.5
     again = ParamStore(tmp_path)  # a restart
-    assert again.current.team.demo_period_s == 3.5 and again.version == 1
+    assert again.current.strategy.formation_period_s == 3.5 and again.version == 1
 
 
 @pytest.mark.parametrize("change,loc", [
-    ({"team": {"demo_period_s": math.nan}}, ["body", "team", "demo_period_s"]),
-    ({"team": {"demo_period_s": math.inf}}, ["body", "team", "demo_period_s"]),
-    ({"team": {"demo_period_s": 99}}, ["body", "team", "demo_period_s"]),
+    ({"strategy": {"formation_period_s": math.nan}}, ["body", "strategy", "formation_period_s"]),
+    ({"strategy": {"formation_period_s": math.inf}}, ["body", "strategy", "formation_period_s"]),
+    ({"strategy": {"formation_period_s": 99}}, ["body", "strategy", "formation_period_s"]),
     ({"control": {"default_algorithm": "fast"}}, ["body", "control", "default_algorithm"]),
     ({"team": {"our_team": "green"}}, ["body", "team", "our_team"]),
     ({"world": {"no_such": 1}}, ["body", "world", "no_such"]),
@@ -67,7 +67,7 @@ def test_bad_changes_are_refused_whole(tmp_path: Path, change: dict, loc: list) 
 
 def test_a_crash_while_writing_leaves_the_old_file(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     store = ParamStore(tmp_path)
-    store.patch({"team": {"demo_period_s": 1.0}})
+    store.patch({"strategy": {"formation_period_s": 1.0}})
     good = (tmp_path / "params.json").read_text()
 
     def boom(src: str, dst: str) -> None:
@@ -75,16 +75,16 @@ def test_a_crash_while_writing_leaves_the_old_file(tmp_path: Path, monkeypatch) 
 
     monkeypatch.setattr(os, "replace", boom)
     with pytest.raises(OSError):
-        store.patch({"team": {"demo_period_s": 2.0}})
+        store.patch({"strategy": {"formation_period_s": 2.0}})
     monkeypatch.undo()
     assert (tmp_path / "params.json").read_text() == good
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
-    assert ParamStore(tmp_path).current.team.demo_period_s == 1.0
+    assert ParamStore(tmp_path).current.strategy.formation_period_s == 1.0
 
 
 def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None:
     (tmp_path / "params.json").write_text(
-        '{"version": 3, "values": {"team": {"demo_period_s": -5}}}')
+        '{"version": 3, "values": {"strategy": {"formation_period_s": -5}}}')
     store = ParamStore(tmp_path)
     assert store.current == StationParams()
     assert (tmp_path / "params.invalid.json").exists()
@@ -92,13 +92,13 @@ def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None
 
 def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
     store = ParamStore(tmp_path)
-    store.patch({"team": {"demo_period_s": 4.0}})
+    store.patch({"strategy": {"formation_period_s": 4.0}})
     store.save_preset("fast robots")
-    store.patch({"team": {"demo_period_s": 1.0}})
+    store.patch({"strategy": {"formation_period_s": 1.0}})
     assert store.list_presets() == ["fast robots"]
     store.load_preset("fast robots")
-    assert store.current.team.demo_period_s == 4.0
-    assert store.diff_from_defaults() == [{"path": "team.demo_period_s", "from": 5.0, "to": 4.0}]
+    assert store.current.strategy.formation_period_s == 4.0
+    assert store.diff_from_defaults() == [{"path": "strategy.formation_period_s", "from": 5.0, "to": 4.0}]
     store.delete_preset("fast robots")
     assert store.list_presets() == []
     with pytest.raises(ParamError):
@@ -109,16 +109,18 @@ def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
 
 def test_import_fills_missing_keys_with_defaults(tmp_path: Path) -> None:
     store = ParamStore(tmp_path)
-    store.patch({"team": {"demo_period_s": 4.0}, "world": {"merge_window_s": 0.002}})
-    store.replace({"team": {"demo_period_s": 3.0}})
-    assert store.current.team.demo_period_s == 3.0 and store.current.world.merge_window_s == 0.005
+    store.patch({"strategy": {"formation_period_s": 4.0}, "world": {"merge_window_s": 0.002}})
+    store.replace({"strategy": {"formation_period_s": 3.0}})
+    assert store.current.strategy.formation_period_s == 3.0 and store.current.world.merge_window_s == 0.005
 
 
 def test_groups_of_an_older_version_are_dropped_on_load(tmp_path: Path) -> None:
     (tmp_path / "params.json").write_text(json.dumps({"version": 4, "values": {
-        "goto": {"kp_per_s": 3.0}, "team": {"demo_period_s": 9.0}}}))
+        "goto": {"kp_per_s": 3.0}, "team": {"demo": False, "our_team": "yellow"},
+        "strategy": {"formation_period_s": 9.0}}}))
     store = ParamStore(tmp_path)
-    assert store.current.team.demo_period_s == 9.0 and store.version == 4
+    assert store.current.strategy.formation_period_s == 9.0 and store.version == 4
+    assert store.current.team.our_team == "yellow"  # a removed key does not lose the group
 
 
 def test_null_removes_a_per_robot_override(tmp_path: Path) -> None:

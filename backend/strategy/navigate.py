@@ -1,0 +1,91 @@
+"""Obstacle avoidance for every move: each robot's intent becomes a path around the other
+robots, the defence areas it may not enter, and the ball when it must keep clear of it.
+
+Obstacles (our frame): every other robot (a disc of the robot radius plus a margin), the
+opponents' defence area always and ours except for the keeper (grown by a margin), the ball
+(a disc of ``Intent.avoid_ball_mm`` around it), and during the other team's ball placement
+the whole corridor from the ball to the mark. ``plan_path`` inflates them by our robot's
+radius, so the planned centre line keeps the robot's body clear.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Frame, Intent, Move
+from .paths import Obstacles, plan_path
+
+R = ROBOT_RADIUS_MM
+
+
+def _rect_grow(r: tuple[float, float, float, float], g: float) -> list[float]:
+    return [r[0] - g, r[1] - g, r[2] + g, r[3] + g]
+
+
+def _inside(p: tuple[float, float], r: Sequence[float], g: float) -> bool:
+    return r[0] - g <= p[0] <= r[2] + g and r[1] - g <= p[1] <= r[3] + g
+
+
+def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[Bot],
+             ball: Ball | None, fs: FieldSize, frame: Frame, robot_margin_mm: float,
+             defense_margin_mm: float,
+             corridor: tuple[tuple[float, float], tuple[float, float], float] | None = None,
+             ) -> dict[int, Move]:
+    """Paths for every intent, returned as moves in the field frame.
+
+    ``corridor`` = (ball, mark, radius): keep clear of the capsule around that segment.
+    """
+    bots = {b.id: b for b in ours}
+    everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
+    all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
+                           dtype=np.float64).reshape(-1, 3)
+    their_def = _rect_grow(fs.their_defense(), defense_margin_mm)
+    own_def = _rect_grow(fs.own_defense(), defense_margin_mm)
+    extra_circles: list[list[float]] = []
+    if corridor is not None:
+        a, b, rad = corridor
+        n = max(1, int(math.dist(a, b) // 150.0) + 1)
+        for k in range(n + 1):
+            t = k / n
+            extra_circles.append([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t,
+                                  max(1.0, rad - R)])
+    bounds = (-fs.half_length - 150.0, -fs.half_width - 150.0,
+              fs.half_length + 150.0, fs.half_width + 150.0)
+    out: dict[int, Move] = {}
+    for idx, (kind, bot) in enumerate(everyone):
+        if kind != "o" or bot.id not in intents:
+            continue
+        it = intents[bot.id]
+        goal = (it.x, it.y)
+        rects = [their_def] if it.own_defense_ok else [their_def, own_def]
+        plan = it.plan
+        if not plan and any(_inside(goal, r, 0.0) for r in rects):
+            plan = True  # a straight drive would end in a forbidden area: plan instead
+        blocked = False
+        if plan:
+            circles = np.delete(all_circles, idx, axis=0)
+            extra = list(extra_circles)
+            if it.avoid_ball_mm > 0.0 and ball is not None:
+                extra.append([ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)])
+            if extra:
+                circles = np.vstack([circles, np.array(extra, dtype=np.float64)])
+            obstacles = Obstacles(circles=circles,
+                                  rects=np.array(rects, dtype=np.float64).reshape(-1, 4))
+            res = plan_path(bot.xy, goal, obstacles, R, bounds=bounds)
+            pts = tuple(res.points) if res.points else (goal,)
+            blocked = res.blocked
+        else:
+            pts = (goal,)
+        end = pts[-1]
+        field_pts = tuple(frame.point(x, y) for x, y in pts)
+        fx, fy = frame.point(end[0], end[1])
+        out[bot.id] = Move(
+            role=it.role, x=fx, y=fy,
+            orientation=None if it.orientation is None else frame.angle(it.orientation),
+            path=field_pts, kick_speed_mps=it.kick_speed_mps, chip=it.chip,
+            dribbler=it.dribbler, max_speed_mps=it.max_speed_mps, blocked=blocked)
+    del bots
+    return out

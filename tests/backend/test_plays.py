@@ -1,0 +1,200 @@
+"""Plays and referee-driven behaviour, on the pure strategy (our frame, no processes)."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import pytest
+
+from backend.strategy.model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize
+from backend.strategy.plays import Strategy, StrategyInput, Tuning
+from backend.strategy.situation import Situation
+
+FS = FieldSize()
+R = ROBOT_RADIUS_MM
+TU = Tuning()
+
+
+def team(n: int, seed: int = 1, x_range: tuple[float, float] = (-4000.0, 4000.0)) -> list[Bot]:
+    rnd = random.Random(seed)
+    return [Bot(i, rnd.uniform(*x_range), rnd.uniform(-2800.0, 2800.0), rnd.uniform(-3, 3))
+            for i in range(n)]
+
+
+BALL = Ball(500.0, 300.0)
+
+
+def decide(sit: Situation, ball: Ball | None = BALL, play: str = "match",
+           n: int = 6, seed: int = 1, keeper: int | None = None, t: float = 0.0,
+           strategy: Strategy | None = None, ours: list[Bot] | None = None):
+    s = strategy or Strategy()
+    inp = StrategyInput(t=t, ours=ours if ours is not None else team(n, seed),
+                        theirs=team(n, seed + 100), ball=ball, fs=FS, situation=sit,
+                        keeper_id=keeper, play=play, tuning=TU)
+    return s.decide(inp), inp
+
+
+RUNNING = Situation("running", None, "FORCE_START")
+
+
+def roles(intents) -> list[str]:
+    return sorted(it.role for it in intents.values())
+
+
+def test_match_has_one_keeper_one_attacker_defenders_and_supporters() -> None:
+    out, _ = decide(RUNNING)
+    assert roles(out) == ["attacker", "defender", "defender", "goalkeeper", "supporter",
+                          "supporter"]
+
+
+def test_the_referee_goalkeeper_id_keeps_the_goalkeeper_role() -> None:
+    out, _ = decide(RUNNING, keeper=4)
+    assert out[4].role == "goalkeeper"
+
+
+def test_eleven_robots_and_one_robot_get_sensible_roles() -> None:
+    out, _ = decide(RUNNING, n=11)
+    rs = roles(out)
+    assert rs.count("goalkeeper") == 1 and rs.count("attacker") == 1 and len(rs) == 11
+    one, _ = decide(RUNNING, n=1)
+    assert roles(one) == ["goalkeeper"]
+
+
+def test_defend_and_attack_drill_and_formation_plays() -> None:
+    d, _ = decide(RUNNING, play="defend")
+    assert "attacker" not in roles(d) and roles(d).count("defender") == 5
+    a, _ = decide(RUNNING, play="attack-drill")
+    assert roles(a).count("attacker") == 1 and "defender" not in roles(a)
+    f, _ = decide(RUNNING, play="formation")
+    assert set(roles(f)) == {"formation"}
+    for it in f.values():
+        assert it.x < 0  # formations stay on our half
+    i, _ = decide(RUNNING, play="idle")
+    assert i == {}
+
+
+def test_roles_stay_put_under_vision_noise() -> None:
+    s = Strategy()
+    ours = team(6)
+    rnd = random.Random(5)
+    first, _ = decide(RUNNING, strategy=s, ours=ours)
+    for _ in range(100):
+        noisy = [Bot(b.id, b.x + rnd.gauss(0, 20), b.y + rnd.gauss(0, 20), b.orientation)
+                 for b in ours]
+        ball = Ball(500.0 + rnd.gauss(0, 20), 300.0 + rnd.gauss(0, 20))
+        out, _ = decide(RUNNING, ball=ball, strategy=s, ours=noisy)
+        assert {k: v.role for k, v in out.items()} == {k: v.role for k, v in first.items()}
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("sit", [
+    Situation("stop", None, "STOP"),
+    Situation("free-kick", False, "DIRECT_FREE_YELLOW"),
+    Situation("kickoff-prepare", False, "PREPARE_KICKOFF_YELLOW"),
+])
+def test_stop_and_their_set_pieces_keep_every_target_away_from_the_ball(
+        seed: int, sit: Situation) -> None:
+    ball = Ball(0.0, 0.0) if sit.kind == "kickoff-prepare" else Ball(
+        random.Random(seed).uniform(-3000, 3000), random.Random(seed + 1).uniform(-2000, 2000))
+    out, _ = decide(sit, ball=ball, seed=seed)
+    for it in out.values():
+        assert math.dist((it.x, it.y), ball.xy) >= TU.stop_distance_mm - 1e-6
+        assert it.kick_speed_mps == 0.0
+        assert it.avoid_ball_mm >= 500.0 + 0 * R  # paths keep clear too
+    if sit.kind == "stop":
+        assert all(it.max_speed_mps is not None and it.max_speed_mps <= 1.5
+                   for it in out.values())
+        assert "blocker" in roles(out)
+
+
+@pytest.mark.parametrize("ours_kick", [True, False])
+def test_kickoff_positions_in_our_half_outside_the_centre_circle(ours_kick: bool) -> None:
+    sit = Situation("kickoff-prepare", ours_kick, "PREPARE_KICKOFF_X")
+    out, _ = decide(sit, ball=Ball(0.0, 0.0))
+    kickers = [it for it in out.values() if it.role == "kicker"]
+    assert len(kickers) == (1 if ours_kick else 0)
+    for it in out.values():
+        assert it.x <= -R + 1e-6, it  # in our half, the body included
+        if it.role != "kicker":
+            assert math.hypot(it.x, it.y) >= FS.center_radius + R, it
+
+
+def test_our_kickoff_kicker_kicks_after_normal_start() -> None:
+    s = Strategy()
+    ours = team(6)
+    kicker_pos = Bot(3, -R - 21.5 - 60.0, 0.0, 0.0)
+    ours[3] = kicker_pos
+    out, _ = decide(Situation("kickoff", True, "NORMAL_START"), ball=Ball(0.0, 0.0),
+                    strategy=s, ours=ours)
+    k = [it for it in out.values() if it.role == "kicker"]
+    assert len(k) == 1 and k[0].kick_speed_mps > 0
+
+
+@pytest.mark.parametrize("ours_pen", [True, False])
+def test_penalty_positions(ours_pen: bool) -> None:
+    ball = Ball(FS.half_length - 2000.0, 0.0) if ours_pen else Ball(-FS.half_length + 2000.0, 0.0)
+    out, _ = decide(Situation("penalty-prepare", ours_pen, "PREPARE_PENALTY_X"), ball=ball)
+    for it in out.values():
+        if it.role == "kicker":
+            assert ours_pen and it.x < ball.x
+            continue
+        if it.role == "goalkeeper":
+            if not ours_pen:
+                assert abs(it.x - (-FS.half_length)) <= R  # on the goal line
+            continue
+        if ours_pen:
+            assert it.x <= ball.x - 1000.0 - R
+        else:
+            assert it.x >= ball.x + 1000.0 + R
+
+
+def test_their_ball_placement_keeps_everyone_off_the_corridor() -> None:
+    dp = (-2000.0, 1500.0)
+    ball = Ball(1000.0, -500.0)
+    out, _ = decide(Situation("placement", False, "BALL_PLACEMENT_YELLOW", designated=dp),
+                    ball=ball)
+    ax, ay = ball.xy
+    vx, vy = dp[0] - ax, dp[1] - ay
+    for it in out.values():
+        t = max(0.0, min(1.0, ((it.x - ax) * vx + (it.y - ay) * vy) / (vx * vx + vy * vy)))
+        d = math.hypot(it.x - (ax + vx * t), it.y - (ay + vy * t))
+        assert d >= TU.stop_distance_mm - 1e-6
+
+
+def test_our_ball_placement_sends_one_placer_that_uses_the_dribbler_when_behind() -> None:
+    dp = (-1000.0, 0.0)
+    ball = Ball(0.0, 0.0)
+    ours = team(6)
+    ours[2] = Bot(2, R + 21.5 + 20.0, 0.0, math.pi)  # behind the ball, facing the mark
+    out, _ = decide(Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp),
+                    ball=ball, ours=ours)
+    placers = [k for k, it in out.items() if it.role == "placer"]
+    assert placers == [2]
+    it = out[2]
+    assert it.dribbler and it.kick_speed_mps == 0.0
+    assert math.dist((it.x, it.y), dp) < 150.0  # carries the ball towards the mark
+
+
+def test_timeout_parks_robots_along_our_touch_line_and_halt_freezes_targets() -> None:
+    out, _ = decide(Situation("timeout", True, "TIMEOUT_BLUE"))
+    for it in out.values():
+        assert it.role == "parked" and it.x < 0 and it.y < -FS.half_width + 400
+    ours = team(6)
+    h, _ = decide(Situation("halt", None, "HALT"), ours=ours)
+    for b in ours:
+        assert (h[b.id].x, h[b.id].y) == (b.x, b.y) and not h[b.id].plan
+
+
+def test_after_our_free_kick_the_kicker_does_not_take_the_ball_again_at_once() -> None:
+    s = Strategy()
+    ours = team(6, x_range=(-4000.0, -3000.0))  # everyone else far from the ball
+    ball = Ball(1000.0, 0.0)
+    ours[1] = Bot(1, 1000.0 - R - 60.0, 0.0, 0.0)  # right behind the ball
+    fk, _ = decide(Situation("free-kick", True, "DIRECT_FREE_BLUE"), ball=ball, strategy=s,
+                   ours=ours, t=0.0)
+    assert fk[1].role == "kicker"
+    run, _ = decide(RUNNING, ball=Ball(1500.0, 0.0), strategy=s, ours=ours, t=0.1)
+    assert run[1].role != "attacker"
+    later, _ = decide(RUNNING, ball=Ball(1500.0, 0.0), strategy=s, ours=ours, t=3.0)
+    assert later[1].role == "attacker"
