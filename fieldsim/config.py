@@ -39,6 +39,14 @@ class SimConfig:
     kicker_reach_m: float = 0.010  # extra reach beyond robot radius + ball radius
     gravity: float = 9.81
     chip_bounce_restitution: float = 0.5
+    goal_wall_thickness_m: float = 0.02  # back and side walls of the goals (depth: geometry)
+    goal_wall_restitution: float = 0.2  # the ball on the goal walls (and a scored ball's mouth)
+    dribbler_max_omega: float = 8.0  # rad/s: a robot spinning faster drops a held ball
+    dribbler_max_accel: float = 6.0  # m/s^2: a robot accelerating harder drops a held ball
+
+    # Events (goal, ball_out, collision) kept by the World and carried in the truth
+    events_kept: int = 256  # World.events holds at most this many (oldest dropped)
+    truth_events: int = 50  # the last this many go into every truth message
 
     # Vision
     cameras: int = 4  # 1, 2 or 4
@@ -90,3 +98,9 @@ class SimConfig:
             raise ValueError("need 0 < gain_min <= gain_max")
         if self.gains is not None and any(not g > 0 for g in self.gains):
             raise ValueError("gains must be > 0")
+        if not 0.0 <= self.goal_wall_restitution <= 1.0:
+            raise ValueError("goal_wall_restitution must be in [0, 1]")
+        if not self.goal_wall_thickness_m > 0:
+            raise ValueError("goal_wall_thickness_m must be > 0")
+        if not 1 <= self.truth_events <= self.events_kept:
+            raise ValueError("need 1 <= truth_events <= events_kept")

@@ -131,7 +131,7 @@ def test_ball_friction_decelerates() -> None:
 def test_ball_bounces_off_wall() -> None:
     w = lone_world()
     wall = w.geometry.wall_x / 1000.0
-    w.teleport_ball(wall - 0.3, 0.5, 3.0, 0.0)
+    w.teleport_ball(wall - 0.3, 1.5, 3.0, 0.0)  # beside the goal, not into it
     seen_reverse = False
     for _ in range(200):
         w.step()
