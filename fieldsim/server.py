@@ -294,6 +294,8 @@ class FieldSim:
             raise
 
     def _publish_truth(self, t_unix: float) -> None:
+        """``[b"truth", JSON of World.truth() + "t_unix"]``: state, last touch, ball in goal,
+        stats and the last events (goal / ball_out / collision, dedupe by ``seq``)."""
         import zmq
 
         truth = self.world.truth()
