@@ -1,0 +1,258 @@
+"""Referee-driven behaviour checked in simulation: the real station (fieldsim + relay +
+backend, through the launcher) plays the "match" play for blue; the internal referee sends
+real Referee multicast; fieldsim's ground truth (ZeroMQ) is the judge of distances, speeds
+and positions, not the station's own world model."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+import zmq
+
+from .conftest import wait_until
+
+ROOT = Path(__file__).resolve().parents[2]
+R = 90.0
+HL, HW = 4500.0, 3000.0  # division B
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+@dataclass
+class Sim:
+    url: str
+    truth_endpoint: str
+    ctx: zmq.Context[Any]
+
+    def post(self, path: str, body: dict[str, Any]) -> httpx.Response:
+        return httpx.post(self.url + path, json=body, timeout=5.0)
+
+    def patch(self, body: dict[str, Any]) -> None:
+        httpx.patch(self.url + "/api/params", json=body, timeout=5.0).raise_for_status()
+
+    def referee(self, command: str, designated: tuple[float, float] | None = None) -> None:
+        body: dict[str, Any] = {"command": command}
+        if designated is not None:
+            body["designated_position"] = {"x": designated[0], "y": designated[1]}
+        wait_until(lambda: self.post("/api/referee/internal/command", body).status_code == 200,
+                   10, what=f"internal referee accepts {command}")
+        wait_until(lambda: (self.world().get("referee") or {}).get("command") == command, 5,
+                   what=f"{command} back through multicast and the relay")
+
+    def world(self) -> dict[str, Any]:
+        r = httpx.get(self.url + "/api/world", timeout=5.0)
+        r.raise_for_status()
+        out: dict[str, Any] = r.json()
+        return out
+
+    def truths(self, duration_s: float) -> list[dict[str, Any]]:
+        """Every ground-truth message for ``duration_s`` (a measurement window)."""
+        sock = self.ctx.socket(zmq.SUB)
+        sock.setsockopt(zmq.SUBSCRIBE, b"truth")
+        sock.setsockopt(zmq.RCVTIMEO, 1000)
+        sock.connect(self.truth_endpoint)
+        out: list[dict[str, Any]] = []
+        end = time.monotonic() + duration_s
+        try:
+            while time.monotonic() < end:
+                try:
+                    _, body = sock.recv_multipart()
+                except zmq.Again:
+                    continue
+                out.append(json.loads(body))
+        finally:
+            sock.close(linger=0)
+        assert out, "no ground truth received"
+        return out
+
+    def truth(self) -> dict[str, Any]:
+        return self.truths(0.15)[-1]
+
+    def until(self, cond: Callable[[dict[str, Any]], bool], timeout_s: float,
+              what: str) -> dict[str, Any]:
+        """Waits (bounded) until the ground truth satisfies ``cond``."""
+        res: dict[str, Any] = wait_until(
+            lambda: (lambda t: t if cond(t) else None)(self.truth()), timeout_s,
+            interval_s=0.05, what=what)
+        return res
+
+
+def blue(t: dict[str, Any]) -> list[dict[str, Any]]:
+    return [r for r in t["robots"] if r["team"] == "blue"]
+
+
+def speed_mps(r: dict[str, Any]) -> float:
+    return math.hypot(r["vx"], r["vy"]) / 1000.0
+
+
+def ball_dist(r: dict[str, Any], t: dict[str, Any]) -> float:
+    return math.hypot(r["x"] - t["ball"]["x"], r["y"] - t["ball"]["y"])
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    truth = f"tcp://127.0.0.1:{_free_port()}"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "launcher", "--isolated", f"--sim-arg=--truth-pub={truth}",
+         "--backend-arg=--play", "--backend-arg=match"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    lines: list[str] = []
+    ready = threading.Event()
+    info: dict[str, str] = {}
+
+    def pump() -> None:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            lines.append(line.rstrip())
+            if line.startswith("TOUCHLINE_READY "):
+                info["url"] = line.split(" ", 1)[1].strip()
+                ready.set()
+
+    threading.Thread(target=pump, daemon=True).start()
+    if not ready.wait(90):
+        proc.kill()
+        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
+    ctx: zmq.Context[Any] = zmq.Context()
+    s = Sim(info["url"], truth, ctx)
+    try:
+        wait_until(lambda: len([r for r in s.world()["robots"] if r["team"] == "blue"
+                                and r.get("role")]) == 6, 20, what="roles for 6 blue robots")
+        yield s
+    finally:
+        httpx.post(info["url"] + "/api/referee/internal/enabled", json={"enabled": False})
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        ctx.term()
+
+
+def test_stop_keeps_half_a_metre_from_the_ball_at_walking_speed(sim: Sim) -> None:
+    sim.referee("FORCE_START")
+    sim.post("/api/sim/ball", {"x": -1500.0, "y": 300.0})  # among our robots
+    sim.referee("STOP")
+    sim.until(lambda t: all(ball_dist(r, t) >= 500.0 + R for r in blue(t)), 8,
+              "every blue robot 0.5 m (plus its body) from the ball")
+    window = sim.truths(2.0)
+    closest = min(ball_dist(r, t) for t in window for r in blue(t))
+    fastest = max(speed_mps(r) for t in window for r in blue(t))
+    assert closest >= 500.0 + R - 20.0, closest
+    assert fastest <= 1.5, fastest
+    kinds = {r["role"] for r in sim.world()["robots"] if r["team"] == "blue"}
+    assert "blocker" in kinds and "attacker" not in kinds
+
+
+def test_their_kickoff_puts_us_in_our_half_outside_the_centre_circle(sim: Sim) -> None:
+    sim.referee("STOP")
+    sim.post("/api/sim/ball", {"x": 0.0, "y": 0.0})
+    sim.referee("PREPARE_KICKOFF_YELLOW")
+
+    def placed(t: dict[str, Any]) -> bool:
+        return all(r["x"] <= -R + 10 and math.hypot(r["x"], r["y"]) >= 500.0 + R
+                   for r in blue(t))
+    sim.until(placed, 15, "kickoff positions")
+    assert all(placed(t) for t in sim.truths(1.0))
+
+
+def test_our_kickoff_kicker_inside_the_circle_then_kicks_after_normal_start(sim: Sim) -> None:
+    sim.referee("STOP")
+    sim.post("/api/sim/ball", {"x": 0.0, "y": 0.0})
+    sim.referee("PREPARE_KICKOFF_BLUE")
+
+    def placed(t: dict[str, Any]) -> bool:
+        inside = [r for r in blue(t) if math.hypot(r["x"], r["y"]) < 500.0 + R]
+        return all(r["x"] <= -R + 10 for r in blue(t)) and len(inside) == 1
+    sim.until(placed, 15, "our kickoff positions: one kicker at the ball")
+    sim.referee("NORMAL_START")
+    sim.until(lambda t: math.hypot(t["ball"]["x"], t["ball"]["y"]) > 300.0, 10,
+              "the kicker kicked off")
+
+
+def test_their_penalty_keeper_on_the_line_others_a_metre_behind(sim: Sim) -> None:
+    sim.referee("STOP")
+    mark = (-HL + 2000.0, 0.0)  # a penalty mark in front of our goal (ours: negative x)
+    sim.post("/api/sim/ball", {"x": mark[0], "y": mark[1]})
+    sim.referee("PREPARE_PENALTY_YELLOW")
+    keeper = 0  # the internal referee names robot 0
+
+    def placed(t: dict[str, Any]) -> bool:
+        ok = True
+        for r in blue(t):
+            if r["id"] == keeper:
+                ok &= abs(r["x"] - (-HL)) <= R and abs(r["y"]) <= 500.0
+            else:
+                ok &= r["x"] >= t["ball"]["x"] + 1000.0
+        return ok
+    sim.until(placed, 20, "penalty positions")
+
+
+def test_their_ball_placement_keeps_us_off_the_ball_to_mark_corridor(sim: Sim) -> None:
+    sim.referee("STOP")
+    sim.post("/api/sim/ball", {"x": 1500.0, "y": -1000.0})
+    mark = (-1000.0, 1000.0)
+    sim.referee("BALL_PLACEMENT_YELLOW", mark)
+
+    def corridor_dist(r: dict[str, Any], t: dict[str, Any]) -> float:
+        ax, ay = t["ball"]["x"], t["ball"]["y"]
+        vx, vy = mark[0] - ax, mark[1] - ay
+        k = max(0.0, min(1.0, ((r["x"] - ax) * vx + (r["y"] - ay) * vy) / (vx * vx + vy * vy)))
+        return math.hypot(r["x"] - ax - vx * k, r["y"] - ay - vy * k)
+    sim.until(lambda t: all(corridor_dist(r, t) >= 500.0 + R for r in blue(t)), 15,
+              "clear of the placement corridor")
+
+
+def test_timeout_parks_our_robots_and_halt_stops_them(sim: Sim) -> None:
+    sim.referee("STOP")
+    sim.referee("TIMEOUT_BLUE")
+    sim.until(lambda t: all(r["y"] < -HW + 500.0 and r["x"] < 0 for r in blue(t)), 25,
+              "robots parked along our touch line")
+    sim.referee("FORCE_START")
+    sim.until(lambda t: any(speed_mps(r) > 0.3 for r in blue(t)), 10, "robots play again")
+    sim.referee("HALT")
+    sim.until(lambda t: all(speed_mps(r) < 0.05 for r in blue(t)), 3, "every robot stopped")
+
+
+def test_side_switch_moves_our_keeper_to_the_other_goal(sim: Sim) -> None:
+    sim.referee("FORCE_START")
+    sim.post("/api/sim/ball", {"x": 0.0, "y": 0.0})
+    try:
+        # the internal referee tells the side through blue_team_on_positive_half
+        sim.patch({"team": {"our_side": "positive-x"}})
+        sim.until(lambda t: any(r["id"] == 0 and r["x"] > HL - 400 for r in blue(t)), 25,
+                  "our keeper at the goal on +x")
+        w = sim.world()
+        assert w["strategy"]["our_side"] == "positive-x" and w["strategy"]["side_from_referee"]
+    finally:
+        sim.patch({"team": {"our_side": "negative-x"}})
+
+
+def test_attack_drill_scores(sim: Sim) -> None:
+    sim.referee("FORCE_START")
+    sim.patch({"strategy": {"play": "attack-drill"}})
+    try:
+        sim.post("/api/sim/ball", {"x": 2000.0, "y": 600.0})
+        sim.until(lambda t: t["ball"]["x"] > HL and abs(t["ball"]["y"]) < 500.0, 25,
+                  "the ball over the goal line between the posts")
+    finally:
+        sim.patch({"strategy": {"play": "match"}})
