@@ -47,3 +47,20 @@ def chatty() -> int:
 
 def unpicklable() -> object:
     return lambda: None
+
+
+# keeper stand-ins with the goalkeeper function's signature, for the strategy fallback tests
+def keeper_fail(*args: object) -> None:
+    raise ValueError("boom")
+
+
+def keeper_hang(*args: object) -> None:
+    forever()
+
+
+def keeper_crash(*args: object) -> None:
+    crash()
+
+
+def keeper_scalar(*args: object) -> float:
+    return 1.0
