@@ -3,6 +3,7 @@ strategy (demo + operator targets), control, command publishing."""
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import time
@@ -319,6 +320,8 @@ class StrategyProcessor(Processor):
         self.engine: PoolEngine | None = None
         self.engine_fallbacks = 0
         self.engine_last_error = ""
+        self._engine_task: asyncio.Task[tuple[float, float]] | None = None
+        self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
 
     async def tick(self) -> None:
@@ -350,29 +353,71 @@ class StrategyProcessor(Processor):
         self.targets.write(out)
 
     async def _engine_keeper(self, prep: Prepared) -> tuple[float, float] | None:
-        """The keeper's spot (field frame) from the compute engine, or None (built-in)."""
+        """The keeper's spot (field frame) from the compute engine, or None (built-in code).
+
+        The tick never waits for the engine: one call is in flight at a time, and the tick
+        uses the newest answer if it is at most ``ENGINE_MAX_AGE_S`` old (the answer to the
+        previous tick's ball, normally). A failed, late or malformed answer is a fallback."""
         eng = self.engine
         if eng is None or prep.ball_field is None or self.params.play in ("formation", "idle"):
             return None
-        p = self.params
-        try:
-            res = await eng.call(p.goalkeeper_function,
-                                 np.array([prep.ball_field], dtype=np.float64),
-                                 np.array([prep.ball_velocity_field], dtype=np.float64),
-                                 prep.goal_x_field, prep.inp.fs.goal_width,
-                                 45.0, p.keeper_min_speed_mmps, timeout_s=p.engine_timeout_s)
-            arr = np.asarray(res, dtype=np.float64).reshape(-1)
-            if arr.size < 2 or not np.all(np.isfinite(arr[:2])):
-                raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]")
-            return (float(arr[0]), float(arr[1]))
-        except (EngineError, ValueError, TypeError) as exc:
-            self.engine_fallbacks += 1
-            self.engine_last_error = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            _badlog.warning("engine-keeper", "engine keeper call failed, built-in code used: "
-                            "%s", self.engine_last_error)
+        task = self._engine_task
+        if task is not None and task.done():
+            self._engine_task = None
+            try:
+                point = task.result()
+                self._engine_point = (time.monotonic(), point)
+            except Exception as exc:
+                self.engine_fallbacks += 1
+                msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                self.engine_last_error = msg
+                _badlog.warning("engine-keeper", "engine keeper call failed, built-in code "
+                                "used: %s", msg)
+                self._engine_point = None
+                return None
+        if self._engine_task is None:
+            self._engine_task = asyncio.get_running_loop().create_task(
+                self._call_keeper(eng, prep))
+        got = self._engine_point
+        if got is None or time.monotonic() - got[0] > ENGINE_MAX_AGE_S:
+            if got is not None:
+                self.engine_fallbacks += 1  # the engine is late: use the built-in code
             return None
+        return got[1]
+
+    async def _call_keeper(self, eng: PoolEngine, prep: Prepared) -> tuple[float, float]:
+        p = self.params
+        res = await eng.call(p.goalkeeper_function,
+                             np.array([prep.ball_field], dtype=np.float64),
+                             np.array([prep.ball_velocity_field], dtype=np.float64),
+                             prep.goal_x_field, prep.inp.fs.goal_width,
+                             45.0, p.keeper_min_speed_mmps, timeout_s=p.engine_timeout_s)
+        try:
+            arr = np.asarray(res, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]") \
+                from exc
+        if arr.size < 2 or not np.all(np.isfinite(arr[:2])):
+            raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]")
+        return (float(arr[0]), float(arr[1]))
+
+    async def engine_settled(self) -> None:
+        """Waits until the engine call in flight (if any) has finished (tests, shutdown)."""
+        task = self._engine_task
+        if task is not None:
+            await asyncio.wait([task])
+
+    def drop_engine(self) -> None:
+        """Forget the engine (being replaced): its answers no longer count."""
+        self.engine = None
+        self._engine_point = None
+        if self._engine_task is not None:
+            self._engine_task.cancel()
+            self._engine_task = None
 
 
+#: an engine answer older than this is not used (the built-in code is, as a fallback)
+ENGINE_MAX_AGE_S = 0.25
 DRIBBLER_RPM = 3000.0
 
 

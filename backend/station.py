@@ -234,7 +234,8 @@ class Station:
             return
         self._engine_key = key
         self._engine_gen += 1
-        old, self.strategy.engine = self.strategy.engine, None
+        old = self.strategy.engine
+        self.strategy.drop_engine()
         self.engine_error = ""
         loop = asyncio.get_running_loop()
         task = loop.create_task(self._swap_engine(old, sp, self._engine_gen))
@@ -250,7 +251,8 @@ class Station:
         if sp.engine == "numpy":
             # the keeper's rule under the same name as the shipped .m example
             eng = NumpyEngine(functions={"goalkeeper": "backend.geometry.fit:goalkeeper_target"},
-                              workers=1, default_timeout_s=sp.engine_timeout_s)
+                              preload=["backend.geometry.fit"], workers=1,
+                              default_timeout_s=sp.engine_timeout_s)
         else:
             scripts = Path(sp.scripts_dir)
             if not scripts.is_absolute():
@@ -317,9 +319,11 @@ class Station:
             task.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
-        if hasattr(self, "strategy") and self.strategy.engine is not None:
-            await self.strategy.engine.close()
-            self.strategy.engine = None
+        if hasattr(self, "strategy"):
+            eng = self.strategy.engine
+            self.strategy.drop_engine()
+            if eng is not None:
+                await eng.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None

@@ -77,8 +77,10 @@ class StrategyParams(Group):
         description="engine function computing the keeper's target, called as "
                     "f(ball, velocity, goal_x, goal_width, margin, min_speed); file.function "
                     "for multi-function files")
-    engine_timeout_s: float = num(0.03, 0.005, 1.0, "s", 0.005,
-                                  "a slower engine call is dropped and the built-in code used")
+    engine_timeout_s: float = num(0.2, 0.01, 2.0, "s", 0.01,
+                                  "an engine call slower than this is abandoned (its worker "
+                                  "restarted); the strategy never waits for the engine: it "
+                                  "uses the newest answer up to 0.25 s old, else built-in code")
 
 
 class WorldParams(Group):

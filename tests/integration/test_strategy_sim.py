@@ -256,3 +256,24 @@ def test_attack_drill_scores(sim: Sim) -> None:
                   "the ball over the goal line between the posts")
     finally:
         sim.patch({"strategy": {"play": "match"}})
+
+
+@pytest.mark.parametrize("kind", ["octave", "numpy"])
+def test_the_keeper_runs_on_the_compute_engine_and_its_health_shows(sim: Sim, kind: str) -> None:
+    sim.referee("FORCE_START")
+    sim.patch({"strategy": {"engine": kind}})
+    try:
+        def engine() -> dict[str, Any] | None:
+            e: dict[str, Any] | None = httpx.get(sim.url + "/api/health").json()["engine"]
+            return e if e and e["running"] and e["ok"] > 20 else None
+        e = wait_until(engine, 40, what=f"{kind} engine answering the keeper's calls")
+        assert e["kind"] == kind and e["function"] == "goalkeeper"
+        assert e["calls_per_s"] > 5 and e["errors"] == 0 and e["crashes"] == 0
+        assert e["fallbacks"] <= 3, e  # the first calls may be late while the engine warms
+        # the keeper still guards the goal
+        sim.until(lambda t: any(r["id"] == 0 and r["x"] < -HL + 300 for r in blue(t)), 10,
+                  "keeper in front of our goal")
+    finally:
+        sim.patch({"strategy": {"engine": "off"}})
+    wait_until(lambda: httpx.get(sim.url + "/api/health").json()["engine"] is None, 10,
+               what="engine off")

@@ -52,7 +52,9 @@ async def keeper_targets(engine: PoolEngine | None) -> list[tuple[float, float]]
     for ball in BALLS:
         p, bus = make_processor(engine)
         bus.typed("world", WorldState).write(world(ball))
-        await p.tick()
+        await p.tick()  # asks the engine (never waits for it)
+        await p.engine_settled()
+        await p.tick()  # uses its answer
         targets: dict[tuple[str, int], TargetEntry] = bus.typed("targets", dict).latest_value()
         keepers = [e for e in targets.values() if e.role == "goalkeeper"]
         assert len(keepers) == 1
@@ -67,10 +69,10 @@ async def test_octave_numpy_and_builtin_keepers_agree() -> None:
     async with NumpyEngine(functions={"goalkeeper": "backend.geometry.fit:goalkeeper_target"},
                            default_timeout_s=5.0) as npe:
         by_numpy = await keeper_targets(npe)
-        assert npe.stats.ok == len(BALLS)
+        assert npe.stats.ok >= len(BALLS)
     async with OctaveEngine(ROOT / "engine_scripts", default_timeout_s=10.0) as oct_engine:
         by_octave = await keeper_targets(oct_engine)
-        assert oct_engine.stats.ok == len(BALLS)
+        assert oct_engine.stats.ok >= len(BALLS)
     np.testing.assert_allclose(by_numpy, builtin, atol=1e-6)
     np.testing.assert_allclose(by_octave, builtin, atol=1e-6)
     # and the cases differ from each other, so agreement means something
@@ -89,7 +91,9 @@ async def test_a_failing_engine_falls_back_to_the_builtin_keeper(fn: str, expect
                            default_timeout_s=0.3) as eng:
         p, bus = make_processor(eng, fn, timeout_s=0.3)
         bus.typed("world", WorldState).write(world(BALLS[0]))
-        await p.tick()  # must not raise
+        await p.tick()
+        await p.engine_settled()
+        await p.tick()  # the failure arrives: must not raise
         targets = bus.typed("targets", dict).latest_value()
         keeper = next(e for e in targets.values() if e.role == "goalkeeper")
         assert (keeper.target.x, keeper.target.y) == pytest.approx(builtin[0])
