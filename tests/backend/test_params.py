@@ -98,7 +98,8 @@ def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
     assert store.list_presets() == ["fast robots"]
     store.load_preset("fast robots")
     assert store.current.strategy.formation_period_s == 4.0
-    assert store.diff_from_defaults() == [{"path": "strategy.formation_period_s", "from": 5.0, "to": 4.0}]
+    assert store.diff_from_defaults() == [
+        {"path": "strategy.formation_period_s", "from": 5.0, "to": 4.0}]
     store.delete_preset("fast robots")
     assert store.list_presets() == []
     with pytest.raises(ParamError):
@@ -111,7 +112,8 @@ def test_import_fills_missing_keys_with_defaults(tmp_path: Path) -> None:
     store = ParamStore(tmp_path)
     store.patch({"strategy": {"formation_period_s": 4.0}, "world": {"merge_window_s": 0.002}})
     store.replace({"strategy": {"formation_period_s": 3.0}})
-    assert store.current.strategy.formation_period_s == 3.0 and store.current.world.merge_window_s == 0.005
+    assert store.current.strategy.formation_period_s == 3.0
+    assert store.current.world.merge_window_s == 0.005
 
 
 def test_groups_of_an_older_version_are_dropped_on_load(tmp_path: Path) -> None:
