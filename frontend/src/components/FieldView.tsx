@@ -4,6 +4,7 @@ import { sameRobot } from "../api/types";
 import { teleportBall, teleportRobot } from "../api/http";
 import { selectRobot, sendTarget } from "../actions";
 import { giveRefereeCommand } from "./RefereePanel";
+import { SituationBanner } from "./SituationBanner";
 import { decideClick } from "../field/clickAction";
 import { effectiveGeometry } from "../field/defaultGeometry";
 import { cameraColor, drawField, MIN_ROBOT_PX } from "../field/draw";
@@ -17,7 +18,7 @@ import { pushToast } from "../store/toasts";
 import { LAYER_LABELS, toggleLayer, uiStore, useUi, type UiState } from "../store/uiStore";
 
 /** Frames the field drew (for window.__touchline.stats and bench/page_fps.mjs). */
-export const fieldStats = { rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0 };
+export const fieldStats = { rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0 };
 
 /** Pixels a press may move and still count as a click. */
 const CLICK_SLOP_PX = 6;
@@ -171,10 +172,13 @@ export function FieldView() {
         trails: trails.map,
         drag,
         placing: ui.placing,
+        largeText: ui.largeText,
       });
       fieldStats.draws++;
       fieldStats.robotsDrawn = counts.robots;
       fieldStats.rawDrawn = counts.raw;
+      fieldStats.pathsDrawn = counts.paths;
+      fieldStats.rolesDrawn = counts.roles;
     };
     raf = requestAnimationFrame(frame);
 
@@ -325,6 +329,7 @@ export function FieldView() {
         role="img"
       />
       <LayersPanel />
+      <SituationBanner />
       {menu && (
         <div className="ctxmenu" style={{ left: menu.x, top: menu.y }} role="menu" data-testid="field-menu" onPointerDown={(ev) => ev.stopPropagation()}>
           <div className="ctxmenu-title num">

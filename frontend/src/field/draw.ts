@@ -3,7 +3,9 @@
 
 import type { Geometry, Robot, RobotKey, Team, World } from "../api/types";
 import { sameRobot } from "../api/types";
+import { roleColor, roleTag } from "../strategy/roles";
 import { ROBOT_RADIUS_MM } from "./hitTest";
+import { pathPoints, tracePath } from "./paths";
 import { angleToCanvas, worldToCanvas, type FieldTransform } from "./transform";
 
 export const COLORS = {
@@ -24,6 +26,12 @@ export const COLORS = {
   target: "#f8fafc",
   estop: "rgba(220,38,38,0.9)",
   lost: "#9ca3af",
+  kick: "#f43f5e",
+  chip: "#c084fc",
+  dribbler: "#22d3ee",
+  bluePath: "rgba(147,197,253,0.9)",
+  yellowPath: "rgba(253,224,71,0.9)",
+  roleBg: "rgba(15,23,42,0.82)",
 } as const;
 
 /** Opacity of a predicted object (no fresh detection, position extrapolated). */
@@ -56,9 +64,15 @@ export interface DrawLayers {
   targets: boolean;
   trails: boolean;
   referee: boolean;
+  /** Planned paths of the strategy (dashed polylines through the waypoints). */
+  paths: boolean;
+  /** Role tags next to our robots. */
+  roles: boolean;
 }
 
-export const ALL_LAYERS: DrawLayers = { raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true };
+export const ALL_LAYERS: DrawLayers = {
+  raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
+};
 
 export interface DrawInput {
   layers?: DrawLayers;
@@ -77,16 +91,22 @@ export interface DrawInput {
   world: World | null;
   selected: RobotKey | null;
   hovered: RobotKey | null;
+  /** Large-text mode (projector): bigger role tags. */
+  largeText?: boolean;
 }
 
 /** What one frame drew (for window.__touchline.stats). */
 export interface DrawCounts {
   robots: number;
   raw: number;
+  /** Robots whose planned path was drawn. */
+  paths: number;
+  /** Role tags drawn. */
+  roles: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0 };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -103,8 +123,14 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
     if (L.referee && ref && ref.source !== "none" && ref.designated_position) drawDesignated(ctx, t, ref.designated_position, ref.command);
     if (L.trails && input.trails) drawTrails(ctx, t, input.trails);
     if (L.raw) counts.raw = drawRaw(ctx, t, world);
-    // Targets under robots, robots over them, the selected robot last.
-    if (L.targets) for (const r of robots) if (r.target) drawTarget(ctx, t, r, sameRobot(r, input.selected));
+    // Paths and targets under robots, robots over them, the selected robot last, role tags on top.
+    if (L.paths) counts.paths = drawPaths(ctx, t, robots, input.selected);
+    if (L.targets) {
+      for (const r of robots) {
+        // A drawn path already leads to the target: only its mark then, no straight line.
+        if (r.target) drawTarget(ctx, t, r, sameRobot(r, input.selected), !(L.paths && pathPoints(r.path)));
+      }
+    }
     if (L.filtered) {
       for (const r of robots) {
         if (!sameRobot(r, input.selected)) {
@@ -118,6 +144,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       drawRobot(ctx, t, sel, true, false);
       counts.robots++;
     }
+    if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
     if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
@@ -286,6 +313,8 @@ function drawRobot(
   ctx.strokeStyle = r.team === "blue" ? "rgba(255,255,255,0.55)" : "rgba(17,24,39,0.45)";
   ctx.stroke();
 
+  if (r.kick || r.dribbler) drawFrontMarks(ctx, c, heading, rad, r.kick ?? null, r.dribbler === true);
+
   // Id on top, upright.
   const fontPx = Math.max(10, Math.round(rad * 1.1));
   ctx.font = `700 ${fontPx}px system-ui, -apple-system, "Segoe UI", Roboto, sans-serif`;
@@ -296,20 +325,22 @@ function drawRobot(
   ctx.restore();
 }
 
-function drawTarget(ctx: CanvasRenderingContext2D, t: FieldTransform, r: Robot, selected: boolean) {
+function drawTarget(ctx: CanvasRenderingContext2D, t: FieldTransform, r: Robot, selected: boolean, line = true) {
   if (!r.target) return;
-  const from = worldToCanvas(t, r.x, r.y);
   const to = worldToCanvas(t, r.target.x, r.target.y);
   ctx.save();
   ctx.globalAlpha = selected ? 1 : 0.75;
   ctx.strokeStyle = r.target.source === "operator" ? COLORS.target : teamColor(r.team);
-  ctx.lineWidth = selected ? 2 : 1.5;
-  ctx.setLineDash([6, 5]);
-  ctx.beginPath();
-  ctx.moveTo(from.x, from.y);
-  ctx.lineTo(to.x, to.y);
-  ctx.stroke();
-  ctx.setLineDash([]);
+  if (line) {
+    const from = worldToCanvas(t, r.x, r.y);
+    ctx.lineWidth = selected ? 2 : 1.5;
+    ctx.setLineDash([6, 5]);
+    ctx.beginPath();
+    ctx.moveTo(from.x, from.y);
+    ctx.lineTo(to.x, to.y);
+    ctx.stroke();
+    ctx.setLineDash([]);
+  }
   const s = Math.max(5, 60 * t.scale);
   ctx.lineWidth = selected ? 3 : 2;
   ctx.beginPath();
@@ -488,4 +519,146 @@ function drawDesignated(ctx: CanvasRenderingContext2D, t: FieldTransform, p: { x
 
 function drawDrag(ctx: CanvasRenderingContext2D, t: FieldTransform, from: { x: number; y: number }, to: { x: number; y: number }) {
   arrow(ctx, worldToCanvas(t, from.x, from.y), worldToCanvas(t, to.x, to.y), "#f8fafc", 2.5);
+}
+
+/**
+ * Marks at the robot's front: an armed kicker is a bar just ahead of the flat front (rose for
+ * a flat kick, violet for a chip); the dribbler on is a cyan dot on the front edge.
+ */
+function drawFrontMarks(
+  ctx: CanvasRenderingContext2D,
+  c: { x: number; y: number },
+  heading: number,
+  rad: number,
+  kick: { speed_mps: number; chip: boolean } | null,
+  dribbler: boolean,
+) {
+  const hx = Math.cos(heading);
+  const hy = Math.sin(heading);
+  if (kick) {
+    const d = rad * (FRONT_CUT + 0.3);
+    const fx = c.x + hx * d;
+    const fy = c.y + hy * d;
+    const half = rad * 0.55;
+    ctx.beginPath();
+    ctx.moveTo(fx + hy * half, fy - hx * half);
+    ctx.lineTo(fx - hy * half, fy + hx * half);
+    ctx.lineWidth = Math.max(2.5, rad * 0.22);
+    ctx.lineCap = "round";
+    ctx.strokeStyle = kick.chip ? COLORS.chip : COLORS.kick;
+    ctx.stroke();
+    ctx.lineCap = "butt";
+  }
+  if (dribbler) {
+    ctx.beginPath();
+    ctx.arc(c.x + hx * rad * FRONT_CUT, c.y + hy * rad * FRONT_CUT, Math.max(2.5, rad * 0.2), 0, 2 * Math.PI);
+    ctx.fillStyle = COLORS.dribbler;
+    ctx.fill();
+    ctx.lineWidth = 1;
+    ctx.strokeStyle = COLORS.robotOutline;
+    ctx.stroke();
+  }
+}
+
+/**
+ * Every planned path as a dashed polyline robot -> waypoints: one stroke per team (cheap at
+ * 22 robots and 60 Hz), small squares on the waypoints, the selected robot's path on top in
+ * white. Returns the number of robots whose path was drawn.
+ */
+function drawPaths(ctx: CanvasRenderingContext2D, t: FieldTransform, robots: readonly Robot[], selected: RobotKey | null): number {
+  let n = 0;
+  let sel: Robot | null = null;
+  ctx.save();
+  ctx.lineWidth = 1.5;
+  ctx.lineJoin = "round";
+  ctx.setLineDash([7, 5]);
+  for (const team of ["blue", "yellow"] as const) {
+    ctx.beginPath();
+    let any = false;
+    for (const r of robots) {
+      if (r.team !== team || !r.path) continue;
+      if (sameRobot(r, selected)) {
+        sel = r;
+        continue;
+      }
+      if (tracePath(ctx, t, r, r.path) > 0) {
+        any = true;
+        n++;
+      }
+    }
+    if (!any) continue;
+    ctx.strokeStyle = team === "blue" ? COLORS.bluePath : COLORS.yellowPath;
+    ctx.stroke();
+  }
+  if (sel) {
+    ctx.beginPath();
+    if (tracePath(ctx, t, sel, sel.path) > 0) {
+      n++;
+      ctx.lineWidth = 2.5;
+      ctx.strokeStyle = COLORS.selected;
+      ctx.stroke();
+    }
+  }
+  ctx.setLineDash([]);
+  // Waypoint marks.
+  const s = Math.max(2, Math.min(4, 35 * t.scale));
+  for (const r of robots) {
+    const pts = r.path ? pathPoints(r.path) : null;
+    if (!pts) continue;
+    ctx.fillStyle = sameRobot(r, selected) ? COLORS.selected : r.team === "blue" ? COLORS.bluePath : COLORS.yellowPath;
+    for (const p of pts) ctx.fillRect(t.originX + p.x * t.scale - s, t.originY - p.y * t.scale - s, 2 * s, 2 * s);
+  }
+  ctx.restore();
+  return n;
+}
+
+const TAG_FONT = `system-ui, -apple-system, "Segoe UI", Roboto, sans-serif`;
+/** Text widths of role tags per font size (a handful of entries; measureText is not free). */
+const tagWidths = new Map<string, number>();
+
+/** Font size of role tags in CSS px: larger in large-text mode, growing a little with zoom. */
+export function roleTagPx(robotRadiusPx: number, largeText: boolean): number {
+  const base = largeText ? 15 : 11;
+  return Math.min(base + 8, Math.max(base, Math.round(robotRadiusPx * 0.75)));
+}
+
+/** Role tags (GK, ATK, ...) above-right of our robots. Returns the number drawn. */
+function drawRoleTags(
+  ctx: CanvasRenderingContext2D,
+  t: FieldTransform,
+  robots: readonly Robot[],
+  ourTeam: Team | null,
+  largeText: boolean,
+): number {
+  const rad = Math.max(MIN_ROBOT_PX, ROBOT_RADIUS_MM * t.scale);
+  const px = roleTagPx(rad, largeText);
+  const h = Math.round(px * 1.35);
+  let n = 0;
+  ctx.save();
+  ctx.font = `700 ${px}px ${TAG_FONT}`;
+  ctx.textAlign = "left";
+  ctx.textBaseline = "middle";
+  for (const r of robots) {
+    if (ourTeam !== null && r.team !== ourTeam) continue;
+    const tag = roleTag(r.role);
+    if (!tag) continue;
+    const key = `${px}|${tag}`;
+    let w = tagWidths.get(key);
+    if (w === undefined) {
+      w = ctx.measureText(tag).width;
+      if (tagWidths.size < 256) tagWidths.set(key, w);
+    }
+    const cx = t.originX + r.x * t.scale;
+    const cy = t.originY - r.y * t.scale;
+    const x = cx + rad * 0.7;
+    const y = cy - rad * 0.7 - h;
+    ctx.globalAlpha = r.lost ? 0.5 : 1;
+    ctx.fillStyle = COLORS.roleBg;
+    ctx.fillRect(x, y, w + px * 0.6, h);
+    ctx.fillStyle = roleColor(r.role);
+    ctx.fillText(tag, x + px * 0.3, y + h / 2 + px * 0.05);
+    n++;
+  }
+  ctx.restore();
+  return n;
 }

@@ -20,13 +20,17 @@ export interface Layers {
   targets: boolean;
   trails: boolean;
   referee: boolean;
+  paths: boolean;
+  roles: boolean;
 }
 
 export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] = [
   { key: "filtered", label: "Filtered objects", help: "robots and ball from the world model" },
   { key: "raw", label: "Raw detections", help: "per camera, coloured by camera" },
   { key: "velocity", label: "Velocity vectors", help: "0.5 s of travel at the current velocity" },
-  { key: "targets", label: "Targets & paths", help: "straight line to each target" },
+  { key: "targets", label: "Targets", help: "each robot's target (a straight line to it when no path is planned)" },
+  { key: "paths", label: "Planned paths", help: "the strategy's path of each robot through its waypoints, dashed" },
+  { key: "roles", label: "Role tags", help: "GK, ATK, DEF, ... next to our robots (full name in the robot panel)" },
   { key: "trails", label: "Trails", help: "last 3 s of positions" },
   { key: "referee", label: "Referee marks", help: "designated position of ball placement" },
 ];
@@ -52,7 +56,9 @@ function load(): Partial<UiState> {
 }
 
 const saved = load();
-export const defaultLayers: Layers = { raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true };
+export const defaultLayers: Layers = {
+  raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
+};
 
 export const uiStore = createStore<UiState>({
   tab: saved.tab ?? "robots",

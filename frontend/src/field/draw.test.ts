@@ -1,0 +1,119 @@
+import { describe, expect, it } from "vitest";
+import type { Robot, StrategyState } from "../api/types";
+import { geometry, world } from "../ws/fixtures";
+import { ALL_LAYERS, drawField, roleTagPx, type DrawInput } from "./draw";
+import { robot } from "./testRobots";
+import { makeTransform } from "./transform";
+
+/** A 2D context that records what is drawn: method calls with their arguments, text drawn. */
+function fakeCtx() {
+  const calls: { name: string; args: unknown[]; style: unknown; dash: number }[] = [];
+  // style: the stroke style for stroke calls, the fill style for everything else.
+  const state: Record<string | symbol, unknown> = {};
+  let dash = 0;
+  const ctx = new Proxy(state, {
+    get(target, prop) {
+      if (prop in target) return target[prop];
+      if (prop === "measureText") return (s: string) => ({ width: s.length * 7 });
+      if (prop === "setLineDash") return (d: number[]) => (dash = d.length);
+      return (...args: unknown[]) => {
+        const name = String(prop);
+        calls.push({ name, args, style: name === "stroke" ? target.strokeStyle : target.fillStyle, dash });
+      };
+    },
+    set(target, prop, value) {
+      target[prop] = value;
+      return true;
+    },
+  }) as unknown as CanvasRenderingContext2D;
+  return { ctx, calls };
+}
+
+const t = makeTransform(1200, 900, { halfX: 6300, halfY: 4800 });
+const strategy: StrategyState = {
+  play: "match",
+  situation: "running",
+  situation_text: "Game running",
+  our_team: "blue",
+  our_side: "negative-x",
+  side_from_referee: false,
+  tick_ms: 1.2,
+};
+
+function input(robots: Robot[], layers = ALL_LAYERS, extra: Partial<DrawInput> = {}): DrawInput {
+  return {
+    t,
+    geometry,
+    waitingForGeometry: false,
+    stale: false,
+    world: world(1, { robots, strategy }),
+    selected: null,
+    hovered: null,
+    layers,
+    ...extra,
+  };
+}
+
+const ours = [
+  robot("blue", 0, -4000, 0, { role: "goalkeeper", path: [{ x: -4300, y: 200 }] }),
+  robot("blue", 1, 0, 0, { role: "attacker", path: [{ x: 500, y: 500 }, { x: 1000, y: 0 }], kick: { speed_mps: 5, chip: false }, dribbler: true }),
+  robot("blue", 2, -1000, 1000, { role: "defender", path: null }),
+];
+const theirs = [robot("yellow", 0, 2000, 0, { role: "attacker" })];
+
+describe("drawField: strategy layers", () => {
+  it("draws the paths of the robots that have one and a role tag per robot of ours", () => {
+    const { ctx, calls } = fakeCtx();
+    const counts = drawField(ctx, input([...ours, ...theirs]));
+    expect(counts.paths).toBe(2);
+    expect(counts.roles).toBe(3); // not the yellow robot: not ours
+    const texts = calls.filter((c) => c.name === "fillText").map((c) => c.args[0]);
+    expect(texts).toEqual(expect.arrayContaining(["GK", "ATK", "DEF"]));
+    // dashed polylines: robot 1 -> two waypoints
+    const dashedLines = calls.filter((c) => c.name === "lineTo" && c.dash > 0);
+    expect(dashedLines.length).toBeGreaterThanOrEqual(3);
+  });
+
+  it("draws no path with the paths layer off and no tags with the roles layer off", () => {
+    const { ctx, calls } = fakeCtx();
+    const counts = drawField(ctx, input(ours, { ...ALL_LAYERS, paths: false, roles: false }));
+    expect(counts.paths).toBe(0);
+    expect(counts.roles).toBe(0);
+    expect(calls.filter((c) => c.name === "fillText").map((c) => c.args[0])).not.toContain("ATK");
+  });
+
+  it("tags every robot with a role when the station does not say which team is ours", () => {
+    const { ctx } = fakeCtx();
+    const counts = drawField(ctx, { ...input([...ours, ...theirs]), world: world(1, { robots: [...ours, ...theirs] }) });
+    expect(counts.roles).toBe(4);
+  });
+
+  it("renders a world without any strategy field (older backend)", () => {
+    const { ctx } = fakeCtx();
+    const counts = drawField(ctx, { ...input([]), world: world(1) });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0 });
+  });
+
+  it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
+    const flat = fakeCtx();
+    drawField(flat.ctx, input([ours[1]!]));
+    const strokes = flat.calls.filter((c) => c.name === "stroke").map((c) => c.style);
+    expect(strokes).toContain("#f43f5e");
+    expect(flat.calls.filter((c) => c.name === "fill").map((c) => c.style)).toContain("#22d3ee");
+    const chip = fakeCtx();
+    drawField(chip.ctx, input([{ ...ours[1]!, kick: { speed_mps: 3, chip: true }, dribbler: false }]));
+    expect(chip.calls.filter((c) => c.name === "stroke").map((c) => c.style)).toContain("#c084fc");
+    expect(chip.calls.filter((c) => c.name === "fill").map((c) => c.style)).not.toContain("#22d3ee");
+  });
+
+  it("uses larger role tags in large-text mode", () => {
+    expect(roleTagPx(10, true)).toBeGreaterThan(roleTagPx(10, false));
+    const small = fakeCtx();
+    const large = fakeCtx();
+    drawField(small.ctx, input(ours));
+    drawField(large.ctx, input(ours, ALL_LAYERS, { largeText: true }));
+    const tagHeight = (calls: { name: string; args: unknown[]; style: unknown }[]) =>
+      Math.max(...calls.filter((c) => c.name === "fillRect" && c.style === "rgba(15,23,42,0.82)").map((c) => Number(c.args[3])));
+    expect(tagHeight(large.calls)).toBeGreaterThan(tagHeight(small.calls));
+  });
+});
