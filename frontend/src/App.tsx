@@ -8,6 +8,7 @@ import { PlotsPanel } from "./components/PlotsPanel";
 import { RefereePanel } from "./components/RefereePanel";
 import { RobotDetails } from "./components/RobotDetails";
 import { RobotTable } from "./components/RobotTable";
+import { StrategyCard } from "./components/StrategyCard";
 import { Toasts } from "./components/Toasts";
 import { TopBar } from "./components/TopBar";
 import { installShortcuts } from "./shortcuts";
@@ -20,6 +21,7 @@ function RobotsTab() {
   const robot = selected ? (world?.robots.find((r) => sameRobot(r, selected)) ?? null) : null;
   return (
     <>
+      <StrategyCard />
       <RobotDetails selected={selected} robot={robot} />
       <RobotTable robots={world?.robots ?? []} selected={selected} />
     </>

@@ -1,6 +1,6 @@
 // HTTP calls to the backend (docs/api.md, "HTTP"). Errors carry the server's message.
 
-import type { Team } from "./types";
+import type { StrategyInfo, Team } from "./types";
 
 export class ApiError extends Error {
   readonly status: number;
@@ -125,6 +125,11 @@ export const getPreset = (name: string) =>
   );
 export const loadPreset = (name: string) => request<ParamsReply>("POST", `/api/presets/${encodeURIComponent(name)}/load`);
 export const deletePreset = (name: string) => request<{ presets: string[] }>("DELETE", `/api/presets/${encodeURIComponent(name)}`);
+
+// ---- strategy ----
+
+/** The plays the strategy offers and the current one. A play is chosen with PATCH /api/params. */
+export const getStrategy = () => request<StrategyInfo>("GET", "/api/strategy");
 
 // ---- referee and simulator ----
 

@@ -1,6 +1,7 @@
 import type { Health } from "../api/types";
 import { fmtFixed } from "../format";
 import { useAppState } from "../store/hooks";
+import { engineOf, engineRows } from "../strategy/engine";
 
 /** A horizontal bar: value/max filled, an optional marker (e.g. the configured rate). */
 function Bar({ value, max, marker, warn, label }: { value: number; max: number; marker?: number | null; warn?: boolean; label?: string }) {
@@ -156,6 +157,41 @@ function Latency({ h }: { h: Health }) {
   );
 }
 
+/** The compute engine the strategy calls: kind, function, rate, latency, failures, workers, fallbacks. */
+export function EnginePanel({ h }: { h: Health }) {
+  const e = engineOf(h);
+  return (
+    <section className="engine-panel" data-testid="engine-panel" data-engine={e ? String(e.kind) : "off"}>
+      <h3>
+        Engine <span className="muted">compute engine of the strategy (paper: MATLAB Engine)</span>
+      </h3>
+      {!e ? (
+        <p className="muted" data-testid="engine-off">
+          engine off: the strategy runs its built-in numpy code
+        </p>
+      ) : (
+        <>
+          <dl className="details-grid engine-grid" data-testid="engine-details">
+            {engineRows(e).map((r) => (
+              <div className="health-row" key={r.key}>
+                <dt>{r.label}</dt>
+                <dd className={`num ${r.warn ? "warn" : ""}`} data-testid={`engine-${r.key}`}>
+                  {r.value}
+                </dd>
+              </div>
+            ))}
+          </dl>
+          {e.last_error && (
+            <div className="engine-error" role="alert" data-testid="engine-last-error">
+              <b>last error</b> {e.last_error}
+            </div>
+          )}
+        </>
+      )}
+    </section>
+  );
+}
+
 export function HealthPanel() {
   const h = useAppState((s) => s.health);
   if (!h) return <p className="muted">No health data yet.</p>;
@@ -163,6 +199,7 @@ export function HealthPanel() {
     <div className="health-panel" data-testid="health-panel">
       <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
       <Latency h={h} />
+      <EnginePanel h={h} />
       <Processors h={h} />
       <Streams h={h} />
       <Topics h={h} />

@@ -1,5 +1,6 @@
 import { useAppState } from "../store/hooks";
 import { fmtFixed } from "../format";
+import { engineOf, engineSummary } from "../strategy/engine";
 
 /** Compact station health, shown in the details panel while no robot is selected. */
 export function HealthSummary() {
@@ -9,6 +10,8 @@ export function HealthSummary() {
   const streams = Object.entries(health.streams)
     .sort(([a], [b]) => order(a) - order(b) || a.localeCompare(b))
     .slice(0, 5);
+  const engine = engineOf(health);
+  const eng = engineSummary(engine);
   return (
     <dl className="details-grid health" data-testid="health-summary">
       {streams.map(([name, s]) => (
@@ -27,6 +30,12 @@ export function HealthSummary() {
           </dd>
         </div>
       )}
+      <div className="health-row" title={engine?.last_error || undefined}>
+        <dt>engine</dt>
+        <dd className={`num ${eng.warn ? "warn" : ""}`} data-testid="health-summary-engine">
+          {eng.text}
+        </dd>
+      </div>
     </dl>
   );
 }

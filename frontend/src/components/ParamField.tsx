@@ -110,11 +110,14 @@ export function ParamField({ f, value, compact = false }: { f: FieldDesc; value:
         {isNum || f.kind === "string" ? (
           <input
             id={`param-input-${f.id}`}
-            className="pfield-input num"
+            className={`pfield-input ${isNum ? "num" : "pfield-text"}`}
             data-testid={`param-input-${f.id}`}
-            inputMode="decimal"
+            type="text"
+            inputMode={isNum ? "decimal" : "text"}
+            spellCheck={isNum ? undefined : false}
+            autoComplete="off"
             value={draft}
-            size={compact ? 6 : 8}
+            size={isNum ? (compact ? 6 : 8) : compact ? 12 : 24}
             onFocus={() => {
               editing.current = true;
             }}

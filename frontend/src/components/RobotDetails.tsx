@@ -7,6 +7,8 @@ import { useParamForm } from "../params/paramsStore";
 import { chooserFields, getAt } from "../params/schema";
 import { useAppState } from "../store/hooks";
 import { fmtDeg, fmtFixed, fmtHeading, fmtInt, speedMps } from "../format";
+import { pathLengthMm, pathPoints } from "../field/paths";
+import { roleName, roleTag } from "../strategy/roles";
 
 function Field({ label, value, testId }: { label: string; value: string; testId?: string }) {
   return (
@@ -23,7 +25,37 @@ const KNOWN = new Set([
   "team", "id", "x", "y", "orientation", "vx", "vy", "omega", "visible", "age_s", "cameras", "target", "controlled", "command",
   // shown by RobotControlPanel
   "raw_x", "raw_y", "raw_orientation", "predicted", "lost", "filter", "control",
+  // shown by StrategyFields
+  "role", "path", "kick", "dribbler",
 ]);
+
+/** "Goalkeeper (GK)", "3 waypoints · 2.41 m", "armed 4.0 m/s chip". */
+export function strategyTexts(robot: Robot): { role: string; path: string; kick: string; dribbler: string } {
+  const tag = roleTag(robot.role);
+  const pts = pathPoints(robot.path);
+  return {
+    role: tag ? `${roleName(robot.role)} (${tag})` : "—",
+    path: pts
+      ? `${pts.length} waypoint${pts.length === 1 ? "" : "s"} · ${fmtFixed(pathLengthMm(robot, pts) / 1000, 2)} m`
+      : "—",
+    kick: robot.kick ? `armed ${fmtFixed(robot.kick.speed_mps, 1)} m/s ${robot.kick.chip ? "chip" : "flat"}` : "not armed",
+    dribbler: robot.dribbler ? "on" : "off",
+  };
+}
+
+/** Role, planned path, kicker and dribbler, as far as the station reports them. */
+function StrategyFields({ robot }: { robot: Robot }) {
+  if (robot.role === undefined && robot.path === undefined && robot.kick === undefined && robot.dribbler === undefined) return null;
+  const t = strategyTexts(robot);
+  return (
+    <>
+      <Field label="role" value={t.role} testId="robot-role-detail" />
+      <Field label="path" value={t.path} testId="robot-path" />
+      <Field label="kicker" value={t.kick} testId="robot-kick" />
+      {robot.dribbler !== undefined && <Field label="dribbler" value={t.dribbler} testId="robot-dribbler" />}
+    </>
+  );
+}
 
 function fmtAny(v: unknown): string {
   if (typeof v === "number") return Number.isInteger(v) ? String(v) : Math.abs(v) >= 100 ? fmtInt(v) : fmtFixed(v, 3);
@@ -110,6 +142,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
             value={robot.visible ? `yes (cam ${robot.cameras.join(", ") || "—"})` : `no, ${fmtFixed(robot.age_s, 1)} s ago`}
           />
           <Field label="controlled" value={robot.controlled ? "yes" : "no"} />
+          <StrategyFields robot={robot} />
           <Field
             label="target"
             value={

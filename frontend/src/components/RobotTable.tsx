@@ -3,6 +3,7 @@ import type { Robot, RobotKey } from "../api/types";
 import { sameRobot } from "../api/types";
 import { selectRobot } from "../actions";
 import { fmtFixed, fmtInt, speedMps } from "../format";
+import { roleColor, roleName, roleTag } from "../strategy/roles";
 
 export function sortRobots(robots: readonly Robot[]): Robot[] {
   return [...robots].sort((a, b) => (a.team === b.team ? a.id - b.id : a.team === "blue" ? -1 : 1));
@@ -37,6 +38,9 @@ const Row = memo(function Row({ r, selected }: { r: Robot; selected: boolean }) 
       <td className="c-num num" data-testid="robot-x">{fmtInt(r.x)}</td>
       <td className="c-num num" data-testid="robot-y">{fmtInt(r.y)}</td>
       <td className="c-num num" data-testid="robot-speed">{fmtFixed(speedMps(r.vx, r.vy), 2)}</td>
+      <td className="c-role" data-testid="robot-role" data-role={r.role ?? ""} title={roleName(r.role)} style={{ color: roleColor(r.role) }}>
+        {roleTag(r.role) ?? ""}
+      </td>
       <td className="c-target num" data-testid="robot-target" title={r.target ? `source: ${r.target.source}` : ""}>
         {target}
       </td>
@@ -57,6 +61,7 @@ export function RobotTable({ robots, selected }: { robots: readonly Robot[]; sel
             <th className="c-num">x mm</th>
             <th className="c-num">y mm</th>
             <th className="c-num" title="speed">m/s</th>
+            <th className="c-role" title="Strategy role">Role</th>
             <th className="c-target">Target</th>
           </tr>
         </thead>
@@ -66,7 +71,7 @@ export function RobotTable({ robots, selected }: { robots: readonly Robot[]; sel
           ))}
           {sorted.length === 0 && (
             <tr className="empty">
-              <td colSpan={7}>No robots yet</td>
+              <td colSpan={8}>No robots yet</td>
             </tr>
           )}
         </tbody>

@@ -2,6 +2,7 @@ import { setEstop } from "../actions";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
 import { uiStore, useUi } from "../store/uiStore";
+import { PlaySelector } from "./PlaySelector";
 
 interface Props {
   onRetryNow: () => void;
@@ -127,6 +128,7 @@ export function TopBar({ onRetryNow }: Props) {
       <ConnectionStatus onRetryNow={onRetryNow} />
       <VisionRate />
       <RefereeInfo />
+      <PlaySelector variant="bar" />
       <div className="spacer" />
       <ViewOptions />
       <EstopButton />
