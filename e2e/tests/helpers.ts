@@ -7,17 +7,28 @@ export interface Robot {
   team: string; id: number; x: number; y: number; vx: number; vy: number; visible: boolean;
   filter?: string; control?: Control | null;
   target: { x: number; y: number; orientation: number | null; source: string } | null;
+  /** Strategy (absent on a station without it): role, planned waypoints, kicker, dribbler. */
+  role?: string | null; path?: { x: number; y: number }[] | null;
+  kick?: { speed_mps: number; chip: boolean } | null; dribbler?: boolean;
+}
+export interface Strategy {
+  play: string; situation: string; situation_text: string; our_team: "blue" | "yellow";
+  our_side: "negative-x" | "positive-x"; side_from_referee: boolean; tick_ms: number;
 }
 export interface World {
   robots: Robot[]; ball: { x: number; y: number } | null; estop: boolean;
   referee: { source: string; command: string } | null;
+  strategy?: Strategy | null;
 }
 
 export interface Hooks {
   worldToScreen(x: number, y: number): { x: number; y: number };
   plots(): { id: number; keys: string[]; lastX: number; points: number }[];
   signals(): string[];
-  stats(): { fieldDraws: number; rawDrawn: number; robotsDrawn: number };
+  stats(): { fieldDraws: number; rawDrawn: number; robotsDrawn: number; pathsDrawn: number; rolesDrawn: number };
+  strategy(): Strategy | null;
+  roles(ours?: boolean): { team: string; id: number; role: string | null }[];
+  paths(): { team: string; id: number; path: { x: number; y: number }[] | null }[];
 }
 
 export async function world(page: Page): Promise<World> {
@@ -47,3 +58,7 @@ export async function toScreen(page: Page, x: number, y: number): Promise<{ x: n
 
 export const stats = (page: Page) =>
   page.evaluate(() => (window as unknown as { __touchline: Hooks }).__touchline.stats());
+
+/** Roles of our robots in the latest world the page holds (our team from the world's strategy). */
+export const ourRoles = (page: Page) =>
+  page.evaluate(() => (window as unknown as { __touchline: Hooks }).__touchline.roles(true).map((r) => r.role));

@@ -1,6 +1,6 @@
 // Read-only hooks for end-to-end tests: window.__touchline.
 
-import type { World } from "./api/types";
+import type { StrategyState, Team, Vec, World } from "./api/types";
 import { canvasToWorld, worldToCanvas, type Point } from "./field/transform";
 import { currentTransform } from "./field/viewState";
 import { appStore } from "./store/appStore";
@@ -20,7 +20,17 @@ export interface TouchlineTestApi {
     t: number; fieldRafs: number; fieldDraws: number; plotFrames: number; plotDraws: number; sampleRows: number;
     /** Filtered robots and raw detections (robots + balls) the last field frame drew. */
     robotsDrawn: number; rawDrawn: number;
+    /** Robots whose planned path / role tag the last field frame drew. */
+    pathsDrawn: number; rolesDrawn: number;
   };
+  /** The strategy's state in the latest world (null before the station reports one). */
+  strategy(): StrategyState | null;
+  /** Role of every robot in the latest world (null: none); `ours` keeps our team's only. */
+  roles(ours?: boolean): { team: Team; id: number; role: string | null }[];
+  /** Planned path of every robot in the latest world (null: none). */
+  paths(): { team: Team; id: number; path: Vec[] | null }[];
+  /** Kicker armed / dribbler on per robot in the latest world. */
+  actuators(): { team: Team; id: number; kick: { speed_mps: number; chip: boolean } | null; dribbler: boolean }[];
   /** What each live plot shows: its signals, the newest x drawn (Unix s) and the point count. */
   plots(): { id: number; keys: string[]; lastX: number; points: number }[];
   /** Every signal name the plots can show. */
@@ -56,7 +66,20 @@ export function installTestHooks(): void {
       sampleRows: samples.rows,
       robotsDrawn: fieldStats.robotsDrawn,
       rawDrawn: fieldStats.rawDrawn,
+      pathsDrawn: fieldStats.pathsDrawn,
+      rolesDrawn: fieldStats.rolesDrawn,
     }),
+    strategy: () => appStore.getState().world?.strategy ?? null,
+    roles: (ours = false) => {
+      const w = appStore.getState().world;
+      const team = w?.strategy?.our_team ?? null;
+      return (w?.robots ?? [])
+        .filter((r) => !ours || team === null || r.team === team)
+        .map((r) => ({ team: r.team, id: r.id, role: r.role ?? null }));
+    },
+    paths: () => (appStore.getState().world?.robots ?? []).map((r) => ({ team: r.team, id: r.id, path: r.path ?? null })),
+    actuators: () =>
+      (appStore.getState().world?.robots ?? []).map((r) => ({ team: r.team, id: r.id, kick: r.kick ?? null, dribbler: r.dribbler === true })),
     plots: () => plotInfo(),
     signals: () => samples.keys(),
   });
