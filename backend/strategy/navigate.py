@@ -47,11 +47,12 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
     extra_circles: list[list[float]] = []
     if corridor is not None:
         a, b, rad = corridor
-        n = max(1, int(math.dist(a, b) // 150.0) + 1)
+        r = max(1.0, rad - R)
+        # discs half a radius apart: the capsule's edge is covered to 3 % of the radius
+        n = max(1, math.ceil(math.dist(a, b) / (0.5 * r)))
         for k in range(n + 1):
             t = k / n
-            extra_circles.append([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t,
-                                  max(1.0, rad - R)])
+            extra_circles.append([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, r])
     bounds = (-fs.half_length - 150.0, -fs.half_width - 150.0,
               fs.half_length + 150.0, fs.half_width + 150.0)
     out: dict[int, Move] = {}
