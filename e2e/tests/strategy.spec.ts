@@ -38,6 +38,12 @@ test.describe("strategy", () => {
   test.beforeEach(async ({ page }) => {
     const p = await params(page);
     original = { play: p.strategy.play, engine: p.strategy.engine };
+    // A robot under an operator's target is the operator's, not the play's (role "operator"):
+    // earlier specs may leave one behind, so give every robot back to the strategy.
+    for (const r of (await world(page)).robots) {
+      if (r.target?.source === "operator") await page.request.delete(`/api/robots/${r.team}/${r.id}/target`);
+    }
+    await expect.poll(async () => (await world(page)).robots.filter((r) => r.target?.source === "operator").length).toBe(0);
   });
 
   test.afterEach(async ({ page }) => {
@@ -68,14 +74,14 @@ test.describe("strategy", () => {
     await choosePlay(page, "formation");
     await expect.poll(async () => {
       const rs = await roles(page);
-      return rs.length > 0 && rs.every((x) => x === "formation");
-    }, { timeout: 15_000 }).toBe(true);
+      return rs.length > 0 && rs.every((x) => x === "formation") ? "all formation" : rs.join(",");
+    }, { timeout: 15_000 }).toBe("all formation");
 
     await choosePlay(page, "match");
     await expect.poll(async () => {
       const rs = await roles(page);
-      return rs.filter((x) => x === "goalkeeper").length === 1 && rs.includes("attacker");
-    }, { timeout: 15_000 }).toBe(true);
+      return rs.filter((x) => x === "goalkeeper").length === 1 && rs.includes("attacker") ? "one keeper, attackers" : rs.join(",");
+    }, { timeout: 15_000 }).toBe("one keeper, attackers");
     r = await roles(page);
     expect(r.filter((x) => x === "goalkeeper")).toHaveLength(1);
 
