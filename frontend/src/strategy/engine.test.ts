@@ -22,15 +22,16 @@ describe("engine health", () => {
     expect(rows.fallbacks!.value).toBe("0");
     expect(Object.values(rows).some((r) => r.warn)).toBe(false);
   });
-  it("flags failures, fallbacks and a pool with no idle worker", () => {
+  it("flags failures, fallbacks and a pool without workers, not a busy one", () => {
     const rows = Object.fromEntries(
       engineRows(engineHealth({ timeouts: 3, crashes: 1, fallbacks: 4, busy: 2, idle: 0 })).map((r) => [r.key, r]),
     );
     expect(rows.timeouts!.warn).toBe(true);
     expect(rows.crashes!.warn).toBe(true);
     expect(rows.fallbacks!.warn).toBe(true);
-    expect(rows.workers!.warn).toBe(true);
+    expect(rows.workers!.warn).toBe(false);
     expect(rows.errors!.warn).toBe(false);
+    expect(engineRows(engineHealth({ workers: 0, busy: 0, idle: 0 })).find((r) => r.key === "workers")!.warn).toBe(true);
   });
   it("shows a dash for numbers a backend leaves out", () => {
     const partial = { kind: "numpy", function: "" } as unknown as EngineHealth;

@@ -8,7 +8,7 @@ export interface EngineRow {
   key: string;
   label: string;
   value: string;
-  /** Worth a look: errors, timeouts, crashes, fallbacks, no idle worker... */
+  /** Worth a look: errors, timeouts, crashes, fallbacks, no worker running... */
   warn: boolean;
 }
 
@@ -54,7 +54,8 @@ export function engineRows(e: EngineHealth): EngineRow[] {
       key: "workers",
       label: "workers busy / idle",
       value: `${count(e.workers)}: ${count(e.busy)} busy / ${count(e.idle)} idle`,
-      warn: n(e.workers) === 0 || (positive(e.workers) && n(e.idle) === 0),
+      // All busy is normal (the strategy keeps one call in flight); no worker at all is not.
+      warn: n(e.workers) === 0,
     },
     { key: "fallbacks", label: "fallbacks to numpy", value: count(e.fallbacks), warn: positive(e.fallbacks) },
   ];
