@@ -439,6 +439,7 @@ class ControlProcessor(Processor):
         self.estop = bus.typed("estop", bool)
         self.commands = bus.typed("robot-commands", CommandSet)
         self.vision_stale_s = vision_stale_s
+        self.strategy_stale_s = 0.5  # no targets for this long: the strategy is stuck, stop
         self.stop_speed_mps = 1.5
         self.our_team: Team = "blue"
         self.motion = MotionBank(settings or ControlSettings())
@@ -479,8 +480,14 @@ class ControlProcessor(Processor):
             return
         keys = sorted(targets)
         zero = LocalVelocity.zero()
-        if rec is None or now - rec.time_mono > self.vision_stale_s or (ref and ref.halted):
-            self.halt_reason = "HALT" if ref and ref.halted else "no vision"
+        targets_age = self.targets.age_s(now)
+        stalled = targets_age > self.strategy_stale_s
+        if (rec is None or now - rec.time_mono > self.vision_stale_s or (ref and ref.halted)
+                or stalled):
+            self.halt_reason = ("HALT" if ref and ref.halted else
+                                "no vision" if rec is None
+                                or now - rec.time_mono > self.vision_stale_s
+                                else f"strategy stalled ({targets_age:.1f} s)")
             self.motion.reset_all()
             cmds = tuple(Command(t, i, zero) for t, i in keys)
             self.commands.write(CommandSet(created, 0, cmds))
@@ -541,10 +548,18 @@ def next_waypoint(entry: TargetEntry, x_mm: float, y_mm: float) -> Target:
     path = entry.path
     if len(path) <= 1:
         return entry.target
-    for px, py in path[:-1]:
-        if math.hypot(px - x_mm, py - y_mm) > WAYPOINT_REACHED_MM:
-            return Target(px, py, entry.target.orientation)
-    return entry.target
+    # the nearest waypoint; the next one once it is reached or already passed (the path
+    # was planned a strategy tick ago, the robot has moved along it since)
+    k = min(range(len(path)), key=lambda i: math.hypot(path[i][0] - x_mm, path[i][1] - y_mm))
+    if k < len(path) - 1:
+        px, py = path[k]
+        nx, ny = path[k + 1]
+        passed = (x_mm - px) * (nx - px) + (y_mm - py) * (ny - py) > 0.0
+        if passed or math.hypot(px - x_mm, py - y_mm) <= WAYPOINT_REACHED_MM:
+            k += 1
+    if k == len(path) - 1:
+        return entry.target
+    return Target(path[k][0], path[k][1], entry.target.orientation)
 
 
 def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:

@@ -213,6 +213,9 @@ class Station:
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         self.control.apply_settings(p.control, p.team.our_team)
         self.control.vision_stale_s = p.safety.vision_stale_s
+        # a slow strategy rate must not look like a stall: at least 2.5 of its periods
+        self.control.strategy_stale_s = max(p.safety.strategy_stale_s,
+                                            2.5 / p.processors.strategy_hz)
         self.control.stop_speed_mps = p.safety.stop_speed_mps
         self.control.trigger = OnTopic(self.world_topic, max_wait_s=p.processors.control_max_wait_s)
         wc = self.world.model.config

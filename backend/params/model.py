@@ -101,6 +101,9 @@ class SafetyParams(Group):
 
     vision_stale_s: float = num(0.3, 0.05, 2.0, "s", 0.05,
                                 "no vision for this long: every robot gets zero")
+    strategy_stale_s: float = num(0.5, 0.1, 5.0, "s", 0.1,
+                                  "no new targets from the strategy for this long (stalled "
+                                  "or crashed): every robot gets zero")
     stop_speed_mps: float = num(1.5, 0.1, 1.5, "m/s", 0.05,
                                 "speed cap during STOP (the rules allow 1.5 m/s)")
 

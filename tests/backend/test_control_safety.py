@@ -1,0 +1,71 @@
+"""The control processor's own safety: a stalled strategy stops every robot; kicks are never
+sent while the referee has the game stopped; speed caps from the strategy hold."""
+
+from __future__ import annotations
+
+import math
+
+from backend.bus import DataBus
+from backend.control.goto import Target
+from backend.processors import CommandSet, ControlProcessor, TargetEntry, next_waypoint
+from backend.world.referee import RefereeState
+from backend.world.state import RobotState, WorldState
+
+
+def setup(entry: TargetEntry) -> tuple[ControlProcessor, DataBus]:
+    bus = DataBus({})
+    c = ControlProcessor(bus, max_wait_s=0.05, vision_stale_s=10.0)
+    bus.typed("world", WorldState).write(WorldState(
+        0.0, 0, None, (RobotState("blue", 1, 0.0, 0.0, 0.0),)))
+    bus.typed("targets", dict).write({("blue", 1): entry})
+    return c, bus
+
+
+def referee(cmd: str) -> RefereeState:
+    return RefereeState(cmd, "NORMAL_FIRST_HALF", 1, None, {}, {}, None, None, 0)
+
+
+async def last(c: ControlProcessor, bus: DataBus) -> CommandSet:
+    await c.tick()
+    cs = bus.typed("robot-commands", CommandSet).latest_value()
+    assert cs is not None
+    return cs
+
+
+async def test_a_stalled_strategy_zeroes_every_robot() -> None:
+    entry = TargetEntry(Target(2000.0, 0.0, 0.0), "strategy", role="attacker")
+    c, bus = setup(entry)
+    c.strategy_stale_s = 10.0
+    moving = await last(c, bus)
+    assert moving.commands[0].velocity.forward_mps > 0 and c.halt_reason == ""
+    c.strategy_stale_s = 0.0  # the targets are now "older" than allowed
+    stopped = await last(c, bus)
+    v = stopped.commands[0].velocity
+    assert (v.forward_mps, v.left_mps, v.angular_radps) == (0.0, 0.0, 0.0)
+    assert c.halt_reason.startswith("strategy stalled")
+
+
+async def test_no_kick_under_stop_but_kicks_in_play_and_speed_caps_hold() -> None:
+    entry = TargetEntry(Target(3000.0, 0.0, 0.0), "strategy", role="attacker",
+                        kick_speed_mps=5.0, max_speed_mps=0.4)
+    c, bus = setup(entry)
+    c.strategy_stale_s = 10.0
+    bus.typed("referee", RefereeState).write(referee("FORCE_START"))
+    for _ in range(30):  # let the controller ramp up to its cap
+        cs = await last(c, bus)
+    cmd = cs.commands[0]
+    assert cmd.kick_speed_mps == 5.0
+    assert math.hypot(cmd.velocity.forward_mps, cmd.velocity.left_mps) <= 0.4 + 1e-9
+    bus.typed("referee", RefereeState).write(referee("STOP"))
+    assert (await last(c, bus)).commands[0].kick_speed_mps == 0.0
+
+
+def test_next_waypoint_skips_reached_points_and_keeps_the_final_heading() -> None:
+    e = TargetEntry(Target(1000.0, 0.0, 1.0), "strategy",
+                    path=((300.0, 300.0), (700.0, 300.0), (1000.0, 0.0)))
+    assert next_waypoint(e, 0.0, 0.0) == Target(300.0, 300.0, 1.0)
+    assert next_waypoint(e, 250.0, 300.0) == Target(700.0, 300.0, 1.0)  # first one reached
+    assert next_waypoint(e, 500.0, 310.0) == Target(700.0, 300.0, 1.0)  # between the two
+    assert next_waypoint(e, 690.0, 300.0) == Target(1000.0, 0.0, 1.0)  # never back
+    assert next_waypoint(TargetEntry(Target(5.0, 5.0, None), "operator"), 0.0, 0.0) == \
+        Target(5.0, 5.0, None)
