@@ -6,9 +6,10 @@ UV := python3 -m uv
 SIM ?= builtin
 PORT ?= 8000
 RUN_ARGS ?=
+MINUTES ?= 3
 
 .PHONY: run test setup proto build multicast chromium octave lint typecheck test-py test-ts \
-        test-e2e bench experiments clean
+        test-e2e bench experiments clean match
 
 run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
@@ -69,6 +70,10 @@ bench: setup multicast
 experiments: setup multicast
 	$(PY) -m experiments.filters.run --out docs/experiments/filters
 	$(PY) -m experiments.controllers.run --out docs/experiments/controllers
+
+# A whole 6 v 6 match on the built-in simulator, directed and judged; prints the result table.
+match: build multicast
+	$(PY) -m match --minutes $(MINUTES)
 
 clean:
 	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report

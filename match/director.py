@@ -63,6 +63,7 @@ INTERLUDES: tuple[tuple[str, int, float], ...] = (
     ("timeout_blue", 2, 0.6), ("penalty_yellow", 2, 0.75),
 )
 PLACEMENT_INTERLUDE_MM = 1000.0  # a scripted placement moves the ball this far
+INTERLUDE_AFTER_RUNNING_S = 3.0  # an interlude waits for this much running play first
 
 MAX_DT_S = 0.5  # a gap between frames longer than this counts as this much
 
@@ -523,11 +524,14 @@ class Director:
                                Step("force", "FORCE_START")])
             return
         if self.clock_left <= 0.0:
+            # time is up: the interludes still due in this half run back to back, then it ends
             pending = [i for i in self.interludes if not i.done and i.half <= self.half]
             if pending:
                 self._start_interlude(pending[0])
             else:
                 self._end_half()
+            return
+        if self.now - self.running_since < INTERLUDE_AFTER_RUNNING_S:
             return
         elapsed_frac = 1.0 - self.clock_left / self.cfg.half_s if self.cfg.half_s > 0 else 1.0
         for il in self.interludes:

@@ -532,3 +532,17 @@ def test_every_command_is_issued_in_a_match_with_interludes() -> None:
     assert h.d.clock_left <= 0.0
     m = message(h)
     assert m.blue.timeouts == 3 and m.yellow.timeouts == 3
+
+
+def test_interludes_wait_for_running_play_and_time_up_runs_the_rest_before_half_time() -> None:
+    h = Harness(MatchConfig(half_s=4.0))
+    t_run = h.to_running()
+    t_halt = h.until_command("HALT", 10)
+    # the first interlude is due at 0.6 s of the clock, but waits for 3 s of running play
+    assert t_halt - t_run == pytest.approx(3.0, abs=SLACK)
+    h.until(lambda: h.d.referee.stage == "NORMAL_HALF_TIME", 300, "half time")
+    first = [i.name for i in h.d.interludes if i.half == 1]
+    assert all(i.done for i in h.d.interludes if i.half == 1), first
+    assert not any(i.done for i in h.d.interludes if i.half == 2)
+    started = [e["detail"] for e in h.d.timeline if e["kind"] == "interlude"]
+    assert started == first  # in their order
