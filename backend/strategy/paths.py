@@ -497,22 +497,23 @@ def _unit(ang: Array) -> Array:
     return np.stack([np.cos(ang), np.sin(ang)], axis=-1)
 
 
-def _circle_nodes(inf: _Inflated, s: Array, g: Array) -> _Graph:
-    """Around each inflated circle a polygon circumscribed about the circle grown by the pad,
-    touching it where the tangents from start and goal touch it (on the radius through an
-    end point closer than that) and with corners at most 2 pi / ``CIRCLE_SIDES`` apart in
-    between: every edge between neighbouring nodes lies on a tangent of that circle, so it
-    stays outside, and start -> touch point is a tangent too. The free nodes, with the
-    directions of the polygon's edges at each (for the tangent pruning); all edges of a
-    circle that comes near another obstacle are kept."""
-    n, k = CIRCLE_SIDES, len(inf.cr)
+def _circle_nodes(inf: _Inflated, s: Array, g: Array, sel: NDArray[np.int64]) -> _Graph:
+    """Around each selected inflated circle a polygon circumscribed about the circle grown
+    by the pad, touching it where the tangents from start and goal touch it (on the radius
+    through an end point closer than that) and with corners at most 2 pi / ``CIRCLE_SIDES``
+    apart in between: every edge between neighbouring nodes lies on a tangent of that
+    circle, so it stays outside, and start -> touch point is a tangent too. The free nodes,
+    with the directions of the polygon's edges at each (for the tangent pruning); all edges
+    of a circle that comes near another obstacle are kept."""
+    n, k = CIRCLE_SIDES, len(sel)
     two_pi = 2.0 * math.pi
-    rt = inf.cr + NODE_PAD_MM  # (K,) the circle the polygon touches
-    v = np.stack([s, g])[:, None, :] - inf.cxy  # (2, K, 2)
+    cxy, cx, cy = inf.cxy[sel], inf.cx[sel], inf.cy[sel]
+    rt = inf.cr[sel] + NODE_PAD_MM  # (k,) the circle the polygon touches
+    v = np.stack([s, g])[:, None, :] - cxy  # (2, k, 2)
     d = np.hypot(v[..., 0], v[..., 1])
     theta = np.arctan2(v[..., 1], v[..., 0])
     half = np.arccos(np.minimum(rt / np.maximum(d, 1e-12), 1.0))  # 0 from inside rt
-    a = np.sort(np.concatenate([theta - half, theta + half]).T % two_pi, axis=1)  # (K, 4)
+    a = np.sort(np.concatenate([theta - half, theta + half]).T % two_pi, axis=1)  # (k, 4)
     arc = a[:, [1, 2, 3, 0]] - a  # arc j: from touch point j to touch point j + 1
     arc[:, 3] += two_pi  # the wrap-around (2 pi when all four coincide)
     a, arc = a.ravel(), arc.ravel()
@@ -529,23 +530,22 @@ def _circle_nodes(inf: _Inflated, s: Array, g: Array) -> _Graph:
     who = np.concatenate([owner[j], owner])
     rad = rt[who] / np.cos(hs)
     cs, sn = np.cos(ang), np.sin(ang)
-    xy = inf.cxy[who] + rad[:, None] * np.column_stack([cs, sn])
+    xy = cxy[who] + rad[:, None] * np.column_stack([cs, sn])
     # circles whose polygon may reach another obstacle or a bound: only their nodes can be
     # inside one (the others are free by construction), and theirs may sit in a notch
     # between obstacles, so their edges are never pruned
     rv = rt / math.cos(math.pi / n)  # no node is farther from its centre
-    gap = np.hypot(inf.cx[:, None] - inf.cx, inf.cy[:, None] - inf.cy)
-    np.fill_diagonal(gap, np.inf)
+    gap = np.hypot(cx[:, None] - inf.cx, cy[:, None] - inf.cy)  # (k, K)
+    gap[np.arange(k), sel] = np.inf
     crowded: NDArray[np.bool_] = np.asarray((gap < rv[:, None] + inf.cr).any(axis=1))
     if len(inf.rects):
         r = inf.rects
-        ox = np.maximum(np.maximum(r[:, 0] - inf.cx[:, None], 0.0), inf.cx[:, None] - r[:, 2])
-        oy = np.maximum(np.maximum(r[:, 1] - inf.cy[:, None], 0.0), inf.cy[:, None] - r[:, 3])
+        ox = np.maximum(np.maximum(r[:, 0] - cx[:, None], 0.0), cx[:, None] - r[:, 2])
+        oy = np.maximum(np.maximum(r[:, 1] - cy[:, None], 0.0), cy[:, None] - r[:, 3])
         crowded |= (np.hypot(ox, oy) < rv[:, None]).any(axis=1)
     b = inf.bounds
     if b is not None:
-        crowded |= ((inf.cx - rv < b[0]) | (inf.cx + rv > b[2]) | (inf.cy - rv < b[1])
-                    | (inf.cy + rv > b[3]))
+        crowded |= (cx - rv < b[0]) | (cx + rv > b[2]) | (cy - rv < b[1]) | (cy + rv > b[3])
     near = crowded[who]
     keep = np.ones(len(xy), dtype=bool)
     keep[near] = inf.points_free(xy[near])
@@ -554,14 +554,14 @@ def _circle_nodes(inf: _Inflated, s: Array, g: Array) -> _Graph:
     ch, sh = np.cos(hs), np.sin(hs)
     cc, ss, cs_, sc = cs * ch, sn * sh, cs * sh, sn * ch
     dirs = np.column_stack([sc - cs_, -(cc + ss), -(sc + cs_), cc - ss])[keep]
-    own = np.column_stack([inf.cxy, rv * rv])[who]
+    own = np.column_stack([cxy, rv * rv])[who]
     return _Graph(xy[keep], dirs[:, :2], dirs[:, 2:], own[keep], near[keep])
 
 
-def _rect_nodes(inf: _Inflated) -> _Graph:
-    """The corners of each inflated rectangle pushed diagonally out by the pad (the free
-    ones); few, so never pruned."""
-    r, e = inf.rects, NODE_PAD_MM
+def _rect_nodes(inf: _Inflated, sel: NDArray[np.int64]) -> _Graph:
+    """The corners of each selected inflated rectangle pushed diagonally out by the pad
+    (the free ones); few, so never pruned."""
+    r, e = inf.rects[sel], NODE_PAD_MM
     quad = np.stack([r[:, [0, 2, 2, 0]] + np.array([-e, e, e, -e]),
                      r[:, [1, 1, 3, 3]] + np.array([-e, -e, e, e])], axis=-1).reshape(-1, 2)
     quad = quad[inf.points_free(quad)]
@@ -569,13 +569,14 @@ def _rect_nodes(inf: _Inflated) -> _Graph:
     return _Graph(quad, z, z, np.zeros((len(quad), 3)), np.ones(len(quad), dtype=bool))
 
 
-def _graph_nodes(inf: _Inflated, s: Array, g: Array) -> _Graph:
-    """Waypoints around every obstacle (see the module docstring), the free ones only."""
+def _graph_nodes(inf: _Inflated, s: Array, g: Array, circles: NDArray[np.int64],
+                 rects: NDArray[np.int64]) -> _Graph:
+    """Waypoints around the given obstacles (see the module docstring), the free ones."""
     parts = []
-    if len(inf.cr):
-        parts.append(_circle_nodes(inf, s, g))
-    if len(inf.rects):
-        parts.append(_rect_nodes(inf))
+    if len(circles):
+        parts.append(_circle_nodes(inf, s, g, circles))
+    if len(rects):
+        parts.append(_rect_nodes(inf, rects))
     if not parts:
         z = np.zeros((0, 2))
         return _Graph(z, z, z, np.zeros((0, 3)), np.zeros(0, dtype=bool))
@@ -687,24 +688,36 @@ CORRIDOR_GROWTH = 2.5
 
 def _shortest(inf: _Inflated, s: Array, g: Array, prune: bool = True) -> list[Array] | None:
     """``_astar`` within a growing corridor: most detours are short (around one or two
-    robots) and a narrow ellipse keeps the search small; each stage is exact for its bound
-    and the last has none. With ``prune`` the tangent-pruned graph is searched first and the
-    full graph only when that finds nothing, so a path is found whenever the full graph
-    has one."""
-    graph = _graph_nodes(inf, s, g)
+    robots), and a narrow ellipse keeps the search small: only the obstacles that can have
+    nodes in it get any. Each stage is exact for its bound and the last has none. With
+    ``prune`` the tangent-pruned graph is searched first and the full graph only when that
+    finds nothing, so a path is found whenever the full graph has one."""
     direct = float(np.hypot(g[0] - s[0], g[1] - s[1]))
-    rc = float(inf.cr.max()) + NODE_PAD_MM if len(inf.cr) else 0.0
-    extra = CORRIDOR_FIRST * 2.0 * math.pi * max(rc, 100.0)
-    cx, cy = graph.xy[:, 0], graph.xy[:, 1]
-    # beyond this every node is inside the ellipse: the bound no longer prunes anything
-    far = float(np.hypot(cx - s[0], cy - s[1]).max()
-                + np.hypot(cx - g[0], cy - g[1]).max()) if len(cx) else 0.0
-    while direct + extra < far:
-        chain = _astar(inf, s, g, graph, direct + extra, prune)
-        if chain is not None:
-            return chain
+    # every node of an obstacle lies within `reach` of its centre c, so it is in the
+    # ellipse of a bound L only if |s c| + |c g| - 2 reach <= L
+    rv = (inf.cr + NODE_PAD_MM) / math.cos(math.pi / CIRCLE_SIDES)
+    mid = (inf.rects[:, :2] + inf.rects[:, 2:]) * 0.5
+    half = np.hypot(inf.rects[:, 2] - inf.rects[:, 0], inf.rects[:, 3] - inf.rects[:, 1]) * 0.5
+    centre = np.vstack([inf.cxy, mid])
+    reach = np.concatenate([rv, half + NODE_PAD_MM * math.sqrt(2.0)])
+    via = (np.hypot(centre[:, 0] - s[0], centre[:, 1] - s[1])
+           + np.hypot(centre[:, 0] - g[0], centre[:, 1] - g[1]))
+    lo, hi = via - 2.0 * reach, via + 2.0 * reach
+    far = float(hi.max()) if len(hi) else 0.0  # past it the bound no longer prunes
+    k = len(inf.cr)
+    extra = CORRIDOR_FIRST * 2.0 * math.pi * max(float(rv.max()) if k else 0.0, 100.0)
+    graph, used = None, None
+    while True:
+        limit = direct + extra if direct + extra < far else math.inf
+        take = lo <= limit
+        if used is None or (take != used).any():
+            used = take
+            graph = _graph_nodes(inf, s, g, np.nonzero(take[:k])[0], np.nonzero(take[k:])[0])
+        assert graph is not None
+        chain = _astar(inf, s, g, graph, limit, prune)
+        if chain is not None or math.isinf(limit):
+            break
         extra *= CORRIDOR_GROWTH
-    chain = _astar(inf, s, g, graph, math.inf, prune)
     if chain is None and prune:
         chain = _astar(inf, s, g, graph, math.inf, False)
     return chain
