@@ -493,10 +493,6 @@ class _Graph(NamedTuple):
         return cls(*(np.concatenate([pt[i] for pt in parts]) for i in range(5)))
 
 
-def _unit(ang: Array) -> Array:
-    return np.stack([np.cos(ang), np.sin(ang)], axis=-1)
-
-
 def _circle_nodes(inf: _Inflated, s: Array, g: Array, sel: NDArray[np.int64]) -> _Graph:
     """Around each selected inflated circle a polygon circumscribed about the circle grown
     by the pad, touching it where the tangents from start and goal touch it (on the radius
