@@ -194,7 +194,7 @@ class Strategy:
         if sit.kind == "placement" and sit.ours and sit.designated is not None:
             dp = sit.designated
             return [Slot("placer", "placer", ball.xy,
-                         lambda b: _placer(b, ball, dp, tu)) if s.role == "attacker" else s
+                         lambda b: _placer(b, ball, dp, tu, fs)) if s.role == "attacker" else s
                     for s in base]
         return base
 
@@ -387,6 +387,7 @@ class Strategy:
                 d = tu.stop_distance_mm
                 p = (push_out_of_capsule(p, ball.xy, capsule, d) if capsule is not None
                      else push_out_of_circle(p, ball.xy, d))
+                p = _inside_field_off_ball(p, ball.xy, capsule, d, fs)
                 it = replace(it, kick_speed_mps=0.0, avoid_ball_mm=d - 20.0, plan=True)
             if sit.kind == "stop":
                 it = replace(it, kick_speed_mps=0.0,
@@ -399,6 +400,33 @@ class Strategy:
         return res
 
 
+def _inside_field_off_ball(p: tuple[float, float], ball: tuple[float, float],
+                           mark: tuple[float, float] | None, d: float,
+                           fs: FieldSize) -> tuple[float, float]:
+    """``p`` if it is in the field; else the nearest point in the field that still keeps
+    ``d`` from the ball (and the corridor to ``mark``): pushing out of the ball's circle
+    near a line would otherwise put the target outside, and clamping it back inside."""
+    q = clamp_to_field(p, fs)
+    if q == p:
+        return p
+
+    def clear(c: tuple[float, float]) -> bool:
+        if mark is None:
+            return math.dist(c, ball) >= d - 1e-6
+        return math.dist(push_out_of_capsule(c, ball, mark, d), c) < 1e-6
+
+    if clear(q):
+        return q
+    best: tuple[float, float] | None = None
+    for k in range(36):
+        for r in (d + 1.0, d + 150.0, d + 400.0):
+            a = 2.0 * math.pi * k / 36
+            c = clamp_to_field((ball[0] + r * math.cos(a), ball[1] + r * math.sin(a)), fs)
+            if clear(c) and (best is None or math.dist(c, p) < math.dist(best, p)):
+                best = c
+    return best if best is not None else q
+
+
 def _spread_ys(m: int, fs: FieldSize) -> list[float]:
     if m <= 0:
         return []
@@ -407,16 +435,37 @@ def _spread_ys(m: int, fs: FieldSize) -> list[float]:
     return [(k - (m - 1) / 2.0) * step for k in range(m)]
 
 
-def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning) -> Intent:
+#: the ball counts as placed this close to the mark (the rules allow 0.15 m)
+PLACED_MM = 70.0
+
+
+def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
+            fs: FieldSize | None = None) -> Intent:
     """Our ball placement: get behind the ball as seen from the mark, switch the dribbler on,
-    carry the ball to the mark, then let go and back off."""
+    carry the ball to the mark slowing down on the way (a released ball rolls on), wait
+    until ball and robot are still, then let go and back off slowly. When there is no room
+    behind the ball (it lies against the boundary wall), the placer takes the ball from the
+    mark's side and pulls it, driving backwards."""
     to_mark = math.dist(ball.xy, dp)
-    if to_mark < 100.0:
+    pull = False
+    if fs is not None and to_mark >= PLACED_MM:
+        d0 = unit(dp[0] - ball.x, dp[1] - ball.y)
+        bx = ball.x - d0[0] * (CONTACT_MM + 120.0)
+        by = ball.y - d0[1] * (CONTACT_MM + 120.0)
+        pull = abs(bx) > fs.half_length + 120.0 or abs(by) > fs.half_width + 120.0
+    if pull:
+        return _puller(bot, ball, dp, tu, to_mark)
+    held = math.dist(bot.xy, ball.xy) < CONTACT_MM + 40.0
+    bot_speed = math.hypot(bot.vx, bot.vy)
+    if to_mark < PLACED_MM or (held and to_mark < 2 * PLACED_MM and bot_speed < 150.0):
+        if held and bot_speed > 60.0:
+            # still moving: hold the ball and stand (the dribbler keeps it)
+            return Intent("placer", bot.x, bot.y, bot.orientation, dribbler=True,
+                          max_speed_mps=0.2, plan=False)
         away = unit(bot.x - ball.x, bot.y - ball.y)
         p = (ball.x + away[0] * (CONTACT_MM + 550.0), ball.y + away[1] * (CONTACT_MM + 550.0))
         face = math.atan2(ball.y - p[1], ball.x - p[0])
-        held = math.dist(bot.xy, ball.xy) < CONTACT_MM + 40.0
-        return Intent("placer", p[0], p[1], face, max_speed_mps=0.5 if held else 1.0,
+        return Intent("placer", p[0], p[1], face, max_speed_mps=0.4 if held else 1.0,
                       avoid_ball_mm=0.0 if held else CONTACT_MM + 60.0, plan=not held)
     d = unit(dp[0] - ball.x, dp[1] - ball.y)
     face = math.atan2(d[1], d[0])
@@ -426,10 +475,11 @@ def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning) -> Intent
     heading_err = abs(math.atan2(math.sin(bot.orientation - face),
                                  math.cos(bot.orientation - face)))
     if 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25:
-        # holding the ball: carry it so that it ends on the mark
+        # holding the ball: carry it so that it ends on the mark, braking on the way
         goal = (dp[0] - d[0] * CONTACT_MM, dp[1] - d[1] * CONTACT_MM)
+        brake = math.sqrt(2.0 * 0.5 * max(0.0, to_mark - 20.0) / 1000.0)
         return Intent("placer", goal[0], goal[1], face, dribbler=True,
-                      max_speed_mps=tu.placement_speed_mps, plan=False)
+                      max_speed_mps=max(0.1, min(tu.placement_speed_mps, brake)), plan=False)
     if 0.0 < along < CONTACT_MM + 200.0 and across < 40.0 and heading_err < 0.25:
         # aligned behind the ball: roll onto it slowly with the dribbler on
         return Intent("placer", ball.x - d[0] * (CONTACT_MM - 10.0),
@@ -437,4 +487,29 @@ def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning) -> Intent
                       max_speed_mps=0.5, plan=False)
     behind = (ball.x - d[0] * (CONTACT_MM + 120.0), ball.y - d[1] * (CONTACT_MM + 120.0))
     return Intent("placer", behind[0], behind[1], face, avoid_ball_mm=CONTACT_MM + 60.0,
+                  max_speed_mps=1.5)
+
+
+def _puller(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
+            to_mark: float) -> Intent:
+    """Ball placement by pulling: face the ball from the mark's side, dribble, back up."""
+    d = unit(dp[0] - ball.x, dp[1] - ball.y)
+    face = math.atan2(-d[1], -d[0])  # towards the ball, away from the mark
+    rx, ry = ball.x - bot.x, ball.y - bot.y
+    along = -(rx * d[0] + ry * d[1])  # how far the robot is on the mark's side of the ball
+    across = abs(-rx * d[1] + ry * d[0])
+    heading_err = abs(math.atan2(math.sin(bot.orientation - face),
+                                 math.cos(bot.orientation - face)))
+    if 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25:
+        goal = (dp[0] + d[0] * CONTACT_MM, dp[1] + d[1] * CONTACT_MM)
+        brake = math.sqrt(2.0 * 0.5 * max(0.0, to_mark - 20.0) / 1000.0)
+        return Intent("placer", goal[0], goal[1], face, dribbler=True,
+                      max_speed_mps=max(0.1, min(0.5, tu.placement_speed_mps, brake)),
+                      plan=False)
+    if 0.0 < along < CONTACT_MM + 200.0 and across < 40.0 and heading_err < 0.25:
+        return Intent("placer", ball.x + d[0] * (CONTACT_MM - 10.0),
+                      ball.y + d[1] * (CONTACT_MM - 10.0), face, dribbler=True,
+                      max_speed_mps=0.4, plan=False)
+    front = (ball.x + d[0] * (CONTACT_MM + 120.0), ball.y + d[1] * (CONTACT_MM + 120.0))
+    return Intent("placer", front[0], front[1], face, avoid_ball_mm=CONTACT_MM + 60.0,
                   max_speed_mps=1.5)

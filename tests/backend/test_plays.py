@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from backend.strategy.model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize
+from backend.strategy.model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Intent
 from backend.strategy.plays import Strategy, StrategyInput, Tuning
 from backend.strategy.situation import Situation
 
@@ -198,3 +198,35 @@ def test_after_our_free_kick_the_kicker_does_not_take_the_ball_again_at_once() -
     assert run[1].role != "attacker"
     later, _ = decide(RUNNING, ball=Ball(1500.0, 0.0), strategy=s, ours=ours, t=3.0)
     assert later[1].role == "attacker"
+
+
+@pytest.mark.parametrize("ball", [Ball(4400.0, 2900.0), Ball(-4450.0, -2950.0),
+                                  Ball(0.0, 2990.0)])
+def test_keeping_clear_near_a_line_keeps_targets_in_the_field(ball: Ball) -> None:
+    for seed in range(4):
+        out, _ = decide(Situation("stop", None, "STOP"), ball=ball, seed=seed)
+        for it in out.values():
+            assert abs(it.x) <= FS.half_length and abs(it.y) <= FS.half_width, it
+            assert math.dist((it.x, it.y), ball.xy) >= TU.stop_distance_mm - 1e-6, it
+
+
+def test_placement_from_against_the_wall_pulls_the_ball() -> None:
+    ball = Ball(FS.half_length + 150.0, -1000.0)  # out over the goal line, at the wall
+    dp = (FS.half_length - 200.0, -1000.0)
+    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
+    ours = team(6, x_range=(-4000.0, -3000.0))
+
+    def placer_at(x: float) -> Intent:
+        ours[3] = Bot(3, x, -1000.0, 0.0)  # on the mark's side, facing the ball
+        out, _ = decide(sit, ball=ball, ours=ours)
+        assert out[3].role == "placer"
+        return out[3]
+
+    approach = placer_at(FS.half_length - 300.0)
+    assert approach.x < ball.x and approach.orientation == pytest.approx(0.0)
+    assert not approach.dribbler  # not asked to get behind the ball, beyond the wall
+    roll_on = placer_at(ball.x - 250.0)
+    assert roll_on.dribbler and roll_on.x > ball.x - 250.0
+    pull = placer_at(ball.x - 111.5)
+    assert pull.dribbler and pull.x == pytest.approx(dp[0] - 111.5)  # backs up to the mark
+    assert pull.orientation == pytest.approx(0.0)

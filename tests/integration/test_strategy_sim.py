@@ -277,3 +277,21 @@ def test_the_keeper_runs_on_the_compute_engine_and_its_health_shows(sim: Sim, ki
         sim.patch({"strategy": {"engine": "off"}})
     wait_until(lambda: httpx.get(sim.url + "/api/health").json()["engine"] is None, 10,
                what="engine off")
+
+
+@pytest.mark.parametrize("ball,mark", [((1000.0, -1000.0), (-500.0, 500.0)),
+                                       ((HL + 150.0, 1200.0), (HL - 200.0, 1200.0))])
+def test_our_ball_placement_brings_the_ball_to_the_mark(
+        sim: Sim, ball: tuple[float, float], mark: tuple[float, float]) -> None:
+    sim.referee("STOP")
+    sim.post("/api/sim/ball", {"x": ball[0], "y": ball[1]})
+    sim.until(lambda t: math.dist((t["ball"]["x"], t["ball"]["y"]), ball) < 50, 5,
+              "ball teleported")
+    sim.referee("BALL_PLACEMENT_BLUE", mark)
+
+    def placed(t: dict[str, Any]) -> bool:
+        b = t["ball"]
+        return (math.dist((b["x"], b["y"]), mark) < 150.0 and math.hypot(b["vx"], b["vy"]) < 50
+                and all(ball_dist(r, t) > R + 21.5 + 50.0 for r in blue(t)))
+    sim.until(placed, 30, "ball still on the mark, the placer 0.05 m away")
+    sim.referee("STOP")
