@@ -450,7 +450,8 @@ class Director:
             return self._ball_at(step.pos) or \
                 self.now - self._step_teleported >= t.teleport_confirm
         if step.kind == "prepare":
-            return elapsed >= t.prepare_max or (elapsed >= t.prepare_min and self._settled())
+            longest = t.penalty_prepare_max if step.set_piece == "penalty" else t.prepare_max
+            return elapsed >= longest or (elapsed >= t.prepare_min and self._settled())
         if step.kind == "kick":
             return self._kick_done(elapsed)
         if step.kind == "placement":
@@ -833,10 +834,11 @@ class Director:
                            key=lambda r: math.hypot(r.x, r.y))
         allowed = in_circle[0].key if in_circle else None
         for r in s.robots:
+            at = f" at ({r.x:.0f}, {r.y:.0f})"
             if self.side_of(r.team) * r.x < inside_ok:
-                self._snapshot_violation("kickoff_position", r, "not in its own half")
+                self._snapshot_violation("kickoff_position", r, "not in its own half" + at)
             elif math.hypot(r.x, r.y) < TOO_CLOSE_MM and r.key != allowed:
-                self._snapshot_violation("kickoff_position", r, "inside the centre circle")
+                self._snapshot_violation("kickoff_position", r, "inside the centre circle" + at)
 
     def _judge_penalty(self, kicking: str) -> None:
         s = self.snap
@@ -854,13 +856,15 @@ class Director:
         for r in s.robots:
             if r.key == kicker:
                 continue
+            at = f" at ({r.x:.0f}, {r.y:.0f}), ball ({bx:.0f}, {by:.0f})"
             if r.team == defending and r.id == keeper:
                 if abs(r.x - goal_x) > ROBOT_RADIUS_MM + DISTANCE_TOLERANCE_MM or \
                         abs(r.y) > self.field.goal_width / 2.0:
-                    self._snapshot_violation("penalty_position", r, "keeper not on its goal line")
+                    self._snapshot_violation("penalty_position", r,
+                                             "keeper not on its goal line" + at)
                 continue
             if side * (r.x - bx) > -(PENALTY_BEHIND_BALL_MM - DISTANCE_TOLERANCE_MM):
-                self._snapshot_violation("penalty_position", r, "not 1 m behind the ball")
+                self._snapshot_violation("penalty_position", r, "not 1 m behind the ball" + at)
 
     # -- result --------------------------------------------------------------------------------
 

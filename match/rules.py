@@ -66,7 +66,8 @@ class Timing:
     start_halt: float = 1.0
     start_stop: float = 2.0
     prepare_min: float = 2.0  # PREPARE_*: at least this long ...
-    prepare_max: float = 5.0  # ... and NORMAL_START at the latest after this
+    prepare_max: float = 5.0  # ... and NORMAL_START at the latest after this (kick-off)
+    penalty_prepare_max: float = 10.0  # the game controller's prepare timeout
     settled_speed_mmps: float = 200.0  # "settled": every robot slower than this
     kick_timeout: float = 10.0  # NORMAL_START / DIRECT_FREE: FORCE_START if the ball has not moved
     goal_stop: float = 3.0  # the STOP after a goal (its last second judged by the STOP rules)

@@ -546,3 +546,12 @@ def test_interludes_wait_for_running_play_and_time_up_runs_the_rest_before_half_
     assert not any(i.done for i in h.d.interludes if i.half == 2)
     started = [e["detail"] for e in h.d.timeline if e["kind"] == "interlude"]
     assert started == first  # in their order
+
+
+def test_penalty_preparation_waits_up_to_ten_seconds_for_moving_robots() -> None:
+    h = Harness(MatchConfig(half_s=10.0))
+    h.to_running()
+    t_prep = h.until_command("PREPARE_PENALTY_BLUE", 150)
+    h.robot("yellow", 4, -3000.0, 0.0, vx=300.0)  # still on its way
+    t_start = h.until_command("NORMAL_START", 12)
+    assert t_start - t_prep == pytest.approx(10.0, abs=SLACK)
