@@ -362,7 +362,8 @@ class Director:
 
     def _kickoff_steps(self, team: str) -> list[Step]:
         return [
-            Step("prepare", f"PREPARE_KICKOFF_{team.upper()}", team=team, set_piece="kickoff"),
+            Step("prepare", f"PREPARE_KICKOFF_{team.upper()}", team=team, set_piece="kickoff",
+                 pos=(0.0, 0.0)),
             Step("kick", "NORMAL_START", team=team, set_piece="kickoff"),
         ]
 
@@ -450,8 +451,7 @@ class Director:
             return self._ball_at(step.pos) or \
                 self.now - self._step_teleported >= t.teleport_confirm
         if step.kind == "prepare":
-            longest = t.penalty_prepare_max if step.set_piece == "penalty" else t.prepare_max
-            return elapsed >= longest or (elapsed >= t.prepare_min and self._settled())
+            return self._prepare_done(step, elapsed)
         if step.kind == "kick":
             return self._kick_done(elapsed)
         if step.kind == "placement":
@@ -468,6 +468,30 @@ class Director:
                                *self._kickoff_steps(second)])
             return True
         return True  # force, end
+
+    def _prepare_done(self, step: Step, elapsed: float) -> bool:
+        """Settled (or out of time), and the ball on its spot: a ball moved off the centre or
+        the penalty mark during the preparation is put back before NORMAL_START."""
+        t = self.timing
+        if self._step_teleported is not None:
+            assert step.pos is not None
+            return self._ball_at(step.pos) or \
+                self.now - self._step_teleported >= t.teleport_confirm
+        longest = t.penalty_prepare_max if step.set_piece == "penalty" else t.prepare_max
+        if elapsed < longest and (elapsed < t.prepare_min or not self._settled()):
+            return False
+        s = self.snap
+        if step.pos is not None and s is not None and s.ball is not None \
+                and not self._ball_at(step.pos):
+            lt = self.last_touch
+            self._log("ball_moved", team=lt[0] if lt else None, robot=lt[1] if lt else None,
+                      detail=f"during {step.command}: ball at ({s.ball.x:.0f}, {s.ball.y:.0f}),"
+                      f" put back to ({step.pos[0]:.0f}, {step.pos[1]:.0f})")
+            self._count_event("ball_moved_in_preparation")
+            self._teleport(*step.pos)
+            self._step_teleported = self.now
+            return False
+        return True
 
     def _kick_done(self, elapsed: float) -> bool:
         s = self.snap
@@ -587,7 +611,7 @@ class Director:
             mark = self.field.penalty_mark(self.side_of(other(team)))
             steps = [Step("hold", "STOP", t.interlude_before, pos=mark, teleport_at=0.5),
                      Step("prepare", f"PREPARE_PENALTY_{team.upper()}", team=team,
-                          set_piece="penalty"),
+                          set_piece="penalty", pos=mark),
                      Step("kick", "NORMAL_START", team=team, set_piece="penalty")]
         else:  # pragma: no cover - INTERLUDES names are fixed
             raise ValueError(name)

@@ -555,3 +555,18 @@ def test_penalty_preparation_waits_up_to_ten_seconds_for_moving_robots() -> None
     h.robot("yellow", 4, -3000.0, 0.0, vx=300.0)  # still on its way
     t_start = h.until_command("NORMAL_START", 12)
     assert t_start - t_prep == pytest.approx(10.0, abs=SLACK)
+
+
+def test_a_ball_moved_off_its_spot_during_the_preparation_is_put_back_before_normal_start() -> None:
+    h = Harness()
+    t_prep = h.until_command("PREPARE_KICKOFF_BLUE", 5)
+    h.run(0.5)
+    h.w.ball = [-900.0, 400.0, 0.0, 0.0]  # pushed away from the centre
+    h.w.last_touch = {"team": "blue", "id": 5}
+    n = len(h.w.teleports)
+    t_start = h.until_command("NORMAL_START", 6)
+    assert t_start - t_prep == pytest.approx(2.0, abs=SLACK)  # put back at once: no delay
+    assert len(h.w.teleports) == n + 1 and (h.w.teleports[-1].x, h.w.teleports[-1].y) == (0, 0)
+    moved = [e for e in h.d.timeline if e["kind"] == "ball_moved"]
+    assert [(e["team"], e["robot"]) for e in moved] == [("blue", 5)]
+    assert h.d.result()["events"]["ball_moved_in_preparation"] == 1
