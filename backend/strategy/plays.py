@@ -389,6 +389,10 @@ class Strategy:
                      else push_out_of_circle(p, ball.xy, d))
                 p = _inside_field_off_ball(p, ball.xy, capsule, d, fs)
                 it = replace(it, kick_speed_mps=0.0, avoid_ball_mm=d - 20.0, plan=True)
+            if sit.kind in ("kickoff-prepare", "kickoff", "penalty-prepare", "penalty") \
+                    and it.role != "kicker" and ball is not None:
+                # only the kicker may touch the ball: everyone else plans around it
+                it = replace(it, avoid_ball_mm=max(it.avoid_ball_mm, 400.0))
             if sit.kind == "stop":
                 it = replace(it, kick_speed_mps=0.0,
                              max_speed_mps=min(1.2, it.max_speed_mps or 1.2))

@@ -122,8 +122,8 @@ class SituationTracker:
             prep = self._prepared
             if prep.startswith("PREPARE_KICKOFF_") and not self._in_play:
                 return Situation("kickoff", ours(prep), cmd)
-            if prep.startswith("PREPARE_PENALTY_"):
-                # the penalty lasts until the referee's next command
+            if prep.startswith("PREPARE_PENALTY_") and not self._in_play:
+                # the others wait behind the line until the kicker has touched the ball
                 return Situation("penalty", ours(prep), cmd)
             return Situation("running", None, cmd)
         if cmd.startswith("PREPARE_KICKOFF_"):

@@ -54,11 +54,12 @@ def test_free_kick_runs_once_the_ball_moved() -> None:
     assert run(tr, "DIRECT_FREE_BLUE", 6, (1100.0, 0.0)).key == "our-free-kick"
 
 
-def test_penalty_after_normal_start_stays_until_the_next_command() -> None:
+def test_penalty_after_normal_start_lasts_until_the_kick_then_the_game_runs() -> None:
     tr = SituationTracker()
     run(tr, "PREPARE_PENALTY_BLUE", 1, (3000.0, 0.0))
     assert run(tr, "NORMAL_START", 2, (3000.0, 0.0)).key == "our-penalty"
-    assert run(tr, "NORMAL_START", 2, (4000.0, 0.0)).key == "our-penalty"
+    assert run(tr, "NORMAL_START", 2, (3030.0, 0.0)).key == "our-penalty"
+    assert run(tr, "NORMAL_START", 2, (4000.0, 0.0)).key == "running"
     assert run(tr, "STOP", 3, (4000.0, 0.0)).key == "stop"
 
 
