@@ -2,6 +2,7 @@
 // Kept outside React like the app store, so the field canvas can read it every frame.
 
 import { useSyncExternalStore } from "react";
+import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
 import { createStore } from "./createStore";
 
 export type Tab = "robots" | "params" | "plots" | "referee" | "health";
@@ -13,16 +14,8 @@ export const TABS: { key: Tab; label: string }[] = [
   { key: "health", label: "Health" },
 ];
 
-export interface Layers {
-  raw: boolean;
-  filtered: boolean;
-  velocity: boolean;
-  targets: boolean;
-  trails: boolean;
-  referee: boolean;
-  paths: boolean;
-  roles: boolean;
-}
+/** The field layers the user can toggle: exactly what the field drawing takes. */
+export type Layers = DrawLayers;
 
 export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] = [
   { key: "filtered", label: "Filtered objects", help: "robots and ball from the world model" },
@@ -56,9 +49,8 @@ function load(): Partial<UiState> {
 }
 
 const saved = load();
-export const defaultLayers: Layers = {
-  raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
-};
+/** The layers a first visit shows: the field drawing's defaults. */
+export const defaultLayers: Layers = { ...DEFAULT_LAYERS };
 
 export const uiStore = createStore<UiState>({
   tab: saved.tab ?? "robots",
