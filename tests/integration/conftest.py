@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,10 +34,12 @@ class StationHandle:
         return r.json()
 
 
-@pytest.fixture(scope="session")
-def station() -> Iterator[StationHandle]:
+@contextmanager
+def launched(*extra_args: str) -> Iterator[StationHandle]:
+    """The whole station through ``python -m launcher --isolated`` with ``extra_args``;
+    stopped (SIGTERM, then kill) on exit."""
     proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated"],
+        [sys.executable, "-m", "launcher", "--isolated", *extra_args],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
@@ -66,6 +69,12 @@ def station() -> Iterator[StationHandle]:
             proc.wait(timeout=15)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+@pytest.fixture(scope="session")
+def station() -> Iterator[StationHandle]:
+    with launched() as st:
+        yield st
 
 
 def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") -> Any:  # type: ignore[no-untyped-def]

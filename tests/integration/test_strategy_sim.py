@@ -7,25 +7,18 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import signal
 import socket
-import subprocess
-import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 import zmq
 
-from .conftest import wait_until
+from .conftest import launched, wait_until
 
-ROOT = Path(__file__).resolve().parents[2]
 R = 90.0
 HL, HW = 4500.0, 3000.0  # division B
 
@@ -111,41 +104,18 @@ def ball_dist(r: dict[str, Any], t: dict[str, Any]) -> float:
 @pytest.fixture(scope="module")
 def sim() -> Iterator[Sim]:
     truth = f"tcp://127.0.0.1:{_free_port()}"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", f"--sim-arg=--truth-pub={truth}",
-         "--backend-arg=--play", "--backend-arg=match"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    lines: list[str] = []
-    ready = threading.Event()
-    info: dict[str, str] = {}
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            if line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
     ctx: zmq.Context[Any] = zmq.Context()
-    s = Sim(info["url"], truth, ctx)
-    try:
-        wait_until(lambda: len([r for r in s.world()["robots"] if r["team"] == "blue"
-                                and r.get("role")]) == 6, 20, what="roles for 6 blue robots")
-        yield s
-    finally:
-        httpx.post(info["url"] + "/api/referee/internal/enabled", json={"enabled": False})
-        proc.send_signal(signal.SIGTERM)
+    with launched(f"--sim-arg=--truth-pub={truth}", "--backend-arg=--play",
+                  "--backend-arg=match") as st:
+        s = Sim(st.url, truth, ctx)
         try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        ctx.term()
+            wait_until(lambda: len([r for r in s.world()["robots"] if r["team"] == "blue"
+                                    and r.get("role")]) == 6, 20,
+                       what="roles for 6 blue robots")
+            yield s
+        finally:
+            httpx.post(st.url + "/api/referee/internal/enabled", json={"enabled": False})
+    ctx.term()
 
 
 def test_stop_keeps_half_a_metre_from_the_ball_at_walking_speed(sim: Sim) -> None:
