@@ -294,21 +294,29 @@ class Station:
             out["last_error"] = self.strategy.engine_last_error
         return out
 
-    def strategy_view(self) -> dict[str, Any]:
+    def strategy_state(self) -> dict[str, Any]:
+        """What the strategy is doing now (sent with every world update: kept small)."""
         core = self.strategy.core if hasattr(self, "strategy") else None
         sit = core.situation if core is not None else None
-        play = self.params.current.strategy.play
         return {
-            "play": play,
-            "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
-                      for n in PLAYS],
+            "play": self.params.current.strategy.play,
             "situation": sit.key if sit is not None else "running",
             "situation_text": sit.text() if sit is not None else "",
             "our_team": self.params.current.team.our_team,
             "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
             "side_from_referee": bool(core and core.side_from_referee),
             "tick_ms": core.last_tick_ms if core is not None else 0.0,
-            "roles": {f"{self.params.current.team.our_team}/{rid}": role
+        }
+
+    def strategy_view(self) -> dict[str, Any]:
+        """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
+        core = self.strategy.core if hasattr(self, "strategy") else None
+        team = self.params.current.team.our_team
+        return {
+            **self.strategy_state(),
+            "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
+                      for n in PLAYS],
+            "roles": {f"{team}/{rid}": role
                       for rid, role in (core.strategy.roles.items() if core else [])},
         }
 
@@ -410,10 +418,7 @@ class Station:
             "strategy": None,
         }
         if hasattr(self, "strategy"):
-            sv = self.strategy_view()
-            out["strategy"] = {k: sv[k] for k in ("play", "situation", "situation_text",
-                                                   "our_team", "our_side", "side_from_referee",
-                                                   "tick_ms")}
+            out["strategy"] = self.strategy_state()
         if ref is not None:
             rd = ref.value.to_dict()
             rd["age_s"] = time.monotonic() - ref.time_mono

@@ -38,7 +38,6 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
 
     ``corridor`` = (ball, mark, radius): keep clear of the capsule around that segment.
     """
-    bots = {b.id: b for b in ours}
     everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
     all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
                            dtype=np.float64).reshape(-1, 3)
@@ -88,5 +87,4 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             orientation=None if it.orientation is None else frame.angle(it.orientation),
             path=field_pts, kick_speed_mps=it.kick_speed_mps, chip=it.chip,
             dribbler=it.dribbler, max_speed_mps=it.max_speed_mps, blocked=blocked)
-    del bots
     return out
