@@ -9,7 +9,7 @@ orientation + pi), which keeps left and right as a robot sees them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 ROBOT_RADIUS_MM = 90.0
 BALL_RADIUS_MM = 21.5
@@ -140,12 +140,3 @@ class Move:
     dribbler: bool = False
     max_speed_mps: float | None = None
     blocked: bool = False
-
-
-@dataclass
-class StrategyStats:
-    ticks: int = 0
-    planned: int = 0
-    blocked: int = 0
-    kicks_armed: int = 0
-    last: dict[str, float] = field(default_factory=dict)

@@ -18,8 +18,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
-import numpy as np
-
 from ..geometry import goalkeeper_target
 from .model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Intent
 
@@ -236,25 +234,3 @@ def push_out_of_capsule(p: tuple[float, float], a: tuple[float, float],
         side = 1.0 if (p[0] - q[0]) * n[0] + (p[1] - q[1]) * n[1] >= 0 else -1.0
         return push_out_of_circle(p, q, radius, (q[0] + side * n[0], q[1] + side * n[1]))
     return push_out_of_circle(p, q, radius)
-
-
-def spread_points(points: list[tuple[float, float]], min_dist: float) -> list[tuple[float, float]]:
-    """Targets at least ``min_dist`` apart (a later one steps sideways), so robots never aim
-    for the same spot."""
-    out: list[tuple[float, float]] = []
-    for p in points:
-        q = p
-        for _ in range(12):
-            clash = next((o for o in out if math.dist(o, q) < min_dist), None)
-            if clash is None:
-                break
-            dx, dy = q[0] - clash[0], q[1] - clash[1]
-            if math.hypot(dx, dy) < 1e-6:
-                dx, dy = 0.0, 1.0
-            q = push_out_of_circle(q, clash, min_dist + 1.0, (q[0] + dx, q[1] + dy))
-        out.append(q)
-    return out
-
-
-def nearest(points: np.ndarray, p: tuple[float, float]) -> int:
-    return int(np.argmin(np.hypot(points[:, 0] - p[0], points[:, 1] - p[1])))

@@ -18,7 +18,6 @@ from backend.strategy.roles import (
     kick_ball,
     push_out_of_capsule,
     push_out_of_circle,
-    spread_points,
 )
 
 FS = FieldSize()
@@ -141,7 +140,3 @@ def test_push_helpers_move_points_out_exactly_to_the_radius() -> None:
     assert math.isclose(q[1], 650.0) and math.isclose(q[0], 500.0)
     far = (3000.0, 3000.0)
     assert push_out_of_capsule(far, (0.0, 0.0), (1000.0, 0.0), 650.0) == far
-    pts = spread_points([(0.0, 0.0), (0.0, 0.0), (10.0, 0.0)], 200.0)
-    for i in range(3):
-        for j in range(i + 1, 3):
-            assert math.dist(pts[i], pts[j]) >= 200.0 - 1e-6
