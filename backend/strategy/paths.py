@@ -746,8 +746,8 @@ def _straight_is_clear(s: Array, g: Array, obstacles: Obstacles, clearance: floa
         dx, dy = gx - sx, gy - sy
         dd = dx * dx + dy * dy
         fx, fy = c[:, 0] - sx, c[:, 1] - sy
-        if dd > 0.0:
-            t = np.minimum(np.maximum((fx * dx + fy * dy) * (1.0 / dd), 0.0), 1.0)
+        if dd > EPS_MM * EPS_MM:  # shorter segments are the point s (1/dd would overflow)
+            t = np.minimum(np.maximum((fx * dx + fy * dy) / dd, 0.0), 1.0)
             fx, fy = fx - t * dx, fy - t * dy
         r = np.maximum(c[:, 2] + (clearance - EPS_MM), 0.0)
         if (fx * fx + fy * fy < r * r).any():

@@ -490,3 +490,13 @@ def test_obstacles_helpers_and_checks() -> None:
         plan_path((0.0, 0.0), (1.0, 0.0), obs, -1.0)
     with pytest.raises(ValueError, match="start"):
         plan_path((math.inf, 0.0), (1.0, 0.0), obs, 1.0)
+
+
+@pytest.mark.parametrize("gap", [0.0, 7.871649045916051e-158, 1e-300, 1e-9])
+def test_start_inside_obstacle_with_goal_a_hair_away_escapes(gap: float) -> None:
+    """Found by hypothesis in CI: a goal a denormal distance from a start inside a disc made
+    the straight-line test divide by ~0 and wrongly report a clear line."""
+    obs = Obstacles(np.array([[0.0, 0.0, 20.0]]), np.zeros((0, 4)), None)
+    res = plan_path((0.0, 0.0), (0.0, gap), obs, 0.0)
+    assert res.start_escape
+    check_path(res, (0.0, 0.0), (0.0, gap), Scene(obs, 0.0))
