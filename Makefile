@@ -9,7 +9,7 @@ RUN_ARGS ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto build multicast chromium octave lint typecheck test-py test-ts \
-        test-e2e bench experiments clean match
+        test-e2e bench experiments clean match fuzz
 
 run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
@@ -62,6 +62,12 @@ test-ts: setup
 
 test-e2e: build multicast chromium
 	npm run test:e2e
+
+# Property tests with fresh random examples, ROUNDS times (make test runs them derandomized).
+ROUNDS ?= 10
+fuzz: setup
+	for i in $$(seq $(ROUNDS)); do HYPOTHESIS_PROFILE=explore $(PY) -m pytest -q \
+	  $$(grep -rl "from hypothesis" tests --include='test_*.py') || exit 1; done
 
 bench: setup multicast
 	for b in bench/*.py; do echo "== $$b"; PYTHONPATH=. $(PY) $$b || exit 1; done
