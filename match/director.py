@@ -789,7 +789,8 @@ class Director:
             v.seconds += dt
             if key not in prev and (latched is None or key not in latched):
                 v.count += 1
-                self._log("violation", team=key[0], robot=key[1], detail=kind)
+                self._log("violation", team=key[0], robot=key[1],
+                          detail=f"{kind}{self._where(key)}")
         if latched is not None:
             latched |= offenders
         self._active[kind] = offenders
@@ -832,6 +833,27 @@ class Director:
                 self.stats[r.team].possession_s += dt
             else:
                 self.loose_ball_s += dt
+
+    def _where(self, key: RobotKey) -> str:
+        """Where an episode starts: the robot (position, speed), the ball and, during a
+        placement, the designated position; mm and m/s on fieldsim's ground truth."""
+        snap = self.snap
+        if snap is None:
+            return ""
+        r = next((r for r in snap.robots if r.key == key), None)
+        if r is None:
+            return ""
+        out = f": robot at ({r.x:.0f}, {r.y:.0f}) {r.speed / 1000.0:.2f} m/s"
+        if snap.ball is not None:
+            b = snap.ball
+            out += f", ball at ({b.x:.0f}, {b.y:.0f}) {dist(r.x, r.y, b.x, b.y):.0f} mm away"
+        dp = self.referee.designated_position
+        if self.referee.command.startswith("BALL_PLACEMENT_") and dp is not None:
+            out += f", placing to ({dp[0]:.0f}, {dp[1]:.0f})"
+            if snap.ball is not None:
+                d = dist_to_segment(r.x, r.y, snap.ball.x, snap.ball.y, dp[0], dp[1])
+                out += f", {d:.0f} mm from the corridor's line"
+        return out
 
     def _defense_area_offenders(self, robots: tuple[RobotView, ...]) -> set[RobotKey]:
         out: set[RobotKey] = set()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from match.director import Director, MatchConfig
@@ -319,6 +321,19 @@ def test_placement_distance_for_the_opponents_near_the_ball_to_target_segment() 
     h.run(3 * TICK)
     assert h.violations("yellow", "placement_distance")[0] == 1
     assert h.violations("blue", "placement_distance") == (0, 0.0)
+    # the timeline says where: robot, ball, designated position, distance to the line
+    (ev,) = [e for e in h.d.timeline if e["kind"] == "violation"
+             and e["detail"].startswith("placement_distance")]
+    assert ev["robot"] == 2 and ev["team"] == "yellow"
+    dp = h.d.referee.designated_position
+    assert dp is not None
+    # distance from (-750, 2600) to the segment (-1500, 2000) -> dp, by hand
+    ux, uy = dp[0] + 1500.0, dp[1] - 2000.0
+    t = max(0.0, min(1.0, (750.0 * ux + 600.0 * uy) / (ux * ux + uy * uy)))
+    d = math.hypot(-750.0 - (-1500.0 + t * ux), 2600.0 - (2000.0 + t * uy))
+    assert ev["detail"] == (f"placement_distance: robot at (-750, 2600) 0.00 m/s, ball at "
+                            f"(-1500, 2000) 960 mm away, placing to ({dp[0]:.0f}, {dp[1]:.0f}),"
+                            f" {d:.0f} mm from the corridor's line")
 
 
 def test_defense_area_in_running_play_after_the_grace_keeper_exempt() -> None:
@@ -334,7 +349,7 @@ def test_defense_area_in_running_play_after_the_grace_keeper_exempt() -> None:
     assert h.violations("blue", "defense_area")[0] == 1
     assert h.violations("yellow", "defense_area")[0] == 1
     bad = {(e["team"], e["robot"]) for e in h.d.timeline
-           if e["kind"] == "violation" and e["detail"] == "defense_area"}
+           if e["kind"] == "violation" and e["detail"].startswith("defense_area: robot at")}
     assert bad == {("blue", 1), ("yellow", 1)}
 
 
