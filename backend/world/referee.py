@@ -5,7 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from sslpb.ssl_gc_referee_message_pb2 import Referee
+from sslpb.ssl_gc_common_pb2 import Team
+from sslpb.ssl_gc_game_event_pb2 import GameEvent
+from sslpb.ssl_gc_referee_message_pb2 import MatchType, Referee
 
 
 @dataclass(frozen=True, slots=True)
@@ -21,6 +23,21 @@ class RefereeState:
     packet_timestamp_us: int
     source_identifier: str = ""
     source: str = "game-controller"
+    next_command: str | None = None
+    status_message: str = ""
+    match_type: str | None = None
+    current_action_time_remaining_s: float | None = None
+    #: the newest game events first, as {id, type, by_team, origin, created_s}
+    game_events: tuple[dict[str, Any], ...] = ()
+
+    def team(self, colour: str) -> dict[str, Any]:
+        return self.blue if colour == "blue" else self.yellow
+
+    def max_allowed_bots(self, colour: str) -> int | None:
+        """How many robots the team may have on the field (cards lower it); None when the
+        game controller does not say."""
+        v = self.team(colour).get("max_allowed_bots")
+        return int(v) if isinstance(v, int) else None
 
     @property
     def halted(self) -> bool:
@@ -46,6 +63,11 @@ class RefereeState:
                 else {"x": self.designated_position[0], "y": self.designated_position[1]}
             ),
             "blue_team_on_positive_half": self.blue_team_on_positive_half,
+            "next_command": self.next_command,
+            "status_message": self.status_message,
+            "match_type": self.match_type,
+            "current_action_time_remaining_s": self.current_action_time_remaining_s,
+            "game_events": list(self.game_events),
         }
 
 
@@ -58,7 +80,46 @@ def _team(info: Referee.TeamInfo) -> dict[str, Any]:
         "goalkeeper": info.goalkeeper,
         "yellow_card_times_s": [t / 1e6 for t in info.yellow_card_times],
         "timeouts": info.timeouts,
+        "timeout_time_s": info.timeout_time / 1e6,
+        # optional in the protocol: None when this game controller does not send it
+        "foul_counter": info.foul_counter if info.HasField("foul_counter") else None,
+        "ball_placement_failures": (info.ball_placement_failures
+                                    if info.HasField("ball_placement_failures") else None),
+        "can_place_ball": info.can_place_ball if info.HasField("can_place_ball") else None,
+        "max_allowed_bots": info.max_allowed_bots if info.HasField("max_allowed_bots") else None,
+        "bot_substitution_intent": (info.bot_substitution_intent
+                                    if info.HasField("bot_substitution_intent") else None),
+        "bot_substitution_allowed": (info.bot_substitution_allowed
+                                     if info.HasField("bot_substitution_allowed") else None),
     }
+
+
+#: game events kept per Referee message (the game controller sends the recent ones)
+MAX_GAME_EVENTS = 8
+
+
+def _game_event(ev: Any) -> dict[str, Any]:
+    kind = ev.WhichOneof("event")
+    by_team = None
+    if kind is not None:
+        body = getattr(ev, kind)
+        if body.HasField("by_team"):
+            by_team = Team.Name(body.by_team)
+    return {
+        "id": ev.id,
+        "type": _enum_name(GameEvent.Type, ev.type) if ev.HasField("type") else (kind or "UNKNOWN"),
+        "by_team": by_team,
+        "origin": list(ev.origin),
+        "created_s": ev.created_timestamp / 1e6 if ev.HasField("created_timestamp") else None,
+    }
+
+
+def _enum_name(enum: Any, value: int) -> str:
+    """The enum's name, or the number for a value newer than our .proto."""
+    try:
+        return str(enum.Name(value))
+    except ValueError:
+        return str(value)
 
 
 def decode_referee(msg: Referee) -> RefereeState:
@@ -78,4 +139,13 @@ def decode_referee(msg: Referee) -> RefereeState:
         ),
         packet_timestamp_us=msg.packet_timestamp,
         source_identifier=msg.source_identifier,
+        next_command=(_enum_name(Referee.Command, msg.next_command)
+                      if msg.HasField("next_command") else None),
+        status_message=msg.status_message,
+        match_type=(_enum_name(MatchType, msg.match_type)
+                    if msg.HasField("match_type") else None),
+        current_action_time_remaining_s=(
+            msg.current_action_time_remaining / 1e6
+            if msg.HasField("current_action_time_remaining") else None),
+        game_events=tuple(_game_event(e) for e in msg.game_events[-MAX_GAME_EVENTS:][::-1]),
     )
