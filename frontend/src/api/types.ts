@@ -110,6 +110,34 @@ export interface RefereeTeam {
   yellow_cards: number;
   red_cards: number;
   goalkeeper: number;
+  // Optional below: what the official game controller sends beyond the basics. Absent from an
+  // older backend; null when this game controller does not send the field.
+  /** Seconds left on each of the team's active yellow cards. */
+  yellow_card_times_s?: number[];
+  timeouts?: number;
+  /** Timeout time left (s). */
+  timeout_time_s?: number;
+  foul_counter?: number | null;
+  ball_placement_failures?: number | null;
+  /** False: the team may not place the ball (too many failed placements). */
+  can_place_ball?: boolean | null;
+  /** Robots the team may have on the field now (cards lower it). */
+  max_allowed_bots?: number | null;
+  bot_substitution_intent?: boolean | null;
+  bot_substitution_allowed?: boolean | null;
+}
+
+/** A game event as the game controller reports it (newest first in Referee.game_events). */
+export interface RefereeGameEvent {
+  id: string;
+  /** Proto enum name ("BOT_CRASH_UNIQUE", "BALL_LEFT_FIELD_TOUCH_LINE", ...). */
+  type: string;
+  /** "BLUE", "YELLOW" (or "UNKNOWN"); null when the event names no team. */
+  by_team: string | null;
+  /** Who reported it: autorefs' names, "UI", "Engine", ... */
+  origin: string[];
+  /** Unix s, null when not sent. */
+  created_s: number | null;
 }
 
 export interface Referee {
@@ -121,9 +149,23 @@ export interface Referee {
   stage_time_left_s: number | null;
   blue: RefereeTeam;
   yellow: RefereeTeam;
+  /** The game controller's position for a ball placement. It may be sent during other commands
+   * too (the official one sends its last one always): use `placementTarget` (referee.ts). */
   designated_position: Vec | null;
   blue_team_on_positive_half: boolean | null;
   age_s: number;
+  source_identifier?: string;
+  // Optional below: absent from an older backend.
+  /** The command that follows the current one, null when none is announced. */
+  next_command?: string | null;
+  /** The game controller's message to the teams, "" when none. */
+  status_message?: string;
+  /** "FRIENDLY", "GROUP_PHASE", ...; null when not sent. */
+  match_type?: string | null;
+  /** Seconds left for the current action (placement, free kick, ...); negative once over. */
+  current_action_time_remaining_s?: number | null;
+  /** Recent game events, newest first. */
+  game_events?: RefereeGameEvent[];
 }
 
 export interface World {
