@@ -22,6 +22,8 @@ export interface TouchlineTestApi {
     robotsDrawn: number; rawDrawn: number;
     /** Robots whose planned path / role tag the last field frame drew. */
     pathsDrawn: number; rolesDrawn: number;
+    /** The ball placement mark the last field frame drew (world mm), null when none. */
+    designatedDrawn: { x: number; y: number } | null;
   };
   /** The strategy's state in the latest world (null before the station reports one). */
   strategy(): StrategyState | null;
@@ -68,6 +70,7 @@ export function installTestHooks(): void {
       rawDrawn: fieldStats.rawDrawn,
       pathsDrawn: fieldStats.pathsDrawn,
       rolesDrawn: fieldStats.rolesDrawn,
+      designatedDrawn: fieldStats.designatedDrawn,
     }),
     strategy: () => appStore.getState().world?.strategy ?? null,
     roles: (ours = false) => {

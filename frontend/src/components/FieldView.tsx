@@ -18,7 +18,10 @@ import { pushToast } from "../store/toasts";
 import { LAYER_LABELS, toggleLayer, uiStore, useUi, type UiState } from "../store/uiStore";
 
 /** Frames the field drew (for window.__touchline.stats and bench/page_fps.mjs). */
-export const fieldStats = { rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0 };
+export const fieldStats = {
+  rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0,
+  designatedDrawn: null as { x: number; y: number } | null,
+};
 
 /** Pixels a press may move and still count as a click. */
 const CLICK_SLOP_PX = 6;
@@ -179,6 +182,7 @@ export function FieldView() {
       fieldStats.rawDrawn = counts.raw;
       fieldStats.pathsDrawn = counts.paths;
       fieldStats.rolesDrawn = counts.roles;
+      fieldStats.designatedDrawn = counts.designated;
     };
     raf = requestAnimationFrame(frame);
 

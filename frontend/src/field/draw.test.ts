@@ -1,9 +1,9 @@
 import { describe, expect, it } from "vitest";
 import type { Robot, StrategyState } from "../api/types";
-import { geometry, world } from "../ws/fixtures";
+import { geometry, referee, world } from "../ws/fixtures";
 import { ALL_LAYERS, drawField, roleTagPx, type DrawInput } from "./draw";
 import { robot } from "./testRobots";
-import { makeTransform } from "./transform";
+import { makeTransform, worldToCanvas } from "./transform";
 
 /** A 2D context that records what is drawn: method calls with their arguments, text drawn. */
 function fakeCtx() {
@@ -91,7 +91,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0 });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -115,5 +115,41 @@ describe("drawField: strategy layers", () => {
     const tagHeight = (calls: { name: string; args: unknown[]; style: unknown }[]) =>
       Math.max(...calls.filter((c) => c.name === "fillRect" && c.style === "rgba(15,23,42,0.82)").map((c) => Number(c.args[3])));
     expect(tagHeight(large.calls)).toBeGreaterThan(tagHeight(small.calls));
+  });
+});
+
+describe("drawField: the ball placement mark", () => {
+  const mark = { x: 1500, y: -700 };
+  const draw = (command: string, dp = mark as { x: number; y: number } | null, layers = ALL_LAYERS) => {
+    const f = fakeCtx();
+    const counts = drawField(f.ctx, { ...input([], layers), world: world(1, { referee: referee(command, { designated_position: dp }) }) });
+    const centre = worldToCanvas(t, mark.x, mark.y);
+    // the mark is a dashed circle centred on the designated position
+    const circles = f.calls.filter((c) => c.name === "arc" && c.dash > 0 && c.args[0] === centre.x && c.args[1] === centre.y);
+    return { counts, circles: circles.length };
+  };
+
+  it("is drawn during a ball placement of either team, at the designated position", () => {
+    for (const cmd of ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"]) {
+      const d = draw(cmd);
+      expect(d.counts.designated).toEqual(mark);
+      expect(d.circles).toBe(1);
+    }
+  });
+
+  it("is not drawn for a position the game controller sends outside a placement (STOP, timeout, start)", () => {
+    for (const cmd of ["STOP", "TIMEOUT_BLUE", "HALT", "DIRECT_FREE_YELLOW", "FORCE_START"]) {
+      const d = draw(cmd);
+      expect(d.counts.designated).toBeNull();
+      expect(d.circles).toBe(0);
+    }
+    expect(draw("HALT", { x: 0, y: 0 }).counts.designated).toBeNull();
+  });
+
+  it("is not drawn without a position or with the referee layer off", () => {
+    expect(draw("BALL_PLACEMENT_BLUE", null).counts.designated).toBeNull();
+    const off = draw("BALL_PLACEMENT_BLUE", mark, { ...ALL_LAYERS, referee: false });
+    expect(off.counts.designated).toBeNull();
+    expect(off.circles).toBe(0);
   });
 });

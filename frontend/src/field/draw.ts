@@ -3,6 +3,7 @@
 
 import type { Geometry, Robot, RobotKey, Team, World } from "../api/types";
 import { sameRobot } from "../api/types";
+import { placementTarget } from "../referee";
 import { roleColor, roleTag } from "../strategy/roles";
 import { ROBOT_RADIUS_MM } from "./hitTest";
 import { pathPoints, tracePath } from "./paths";
@@ -103,10 +104,12 @@ export interface DrawCounts {
   paths: number;
   /** Role tags drawn. */
   roles: number;
+  /** The ball placement mark drawn (world mm), null when none. */
+  designated: { x: number; y: number } | null;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0 };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -120,7 +123,12 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
   if (world) {
     const robots = world.robots;
     const ref = world.referee;
-    if (L.referee && ref && ref.source !== "none" && ref.designated_position) drawDesignated(ctx, t, ref.designated_position, ref.command);
+    // Only during a ball placement: the game controller sends its last mark at other times too.
+    const mark = placementTarget(ref);
+    if (L.referee && ref && mark) {
+      drawDesignated(ctx, t, mark, ref.command);
+      counts.designated = { x: mark.x, y: mark.y };
+    }
     if (L.trails && input.trails) drawTrails(ctx, t, input.trails);
     if (L.raw) counts.raw = drawRaw(ctx, t, world);
     // Paths and targets under robots, robots over them, the selected robot last, role tags on top.

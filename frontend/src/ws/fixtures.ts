@@ -1,5 +1,5 @@
 // Test fixtures (only imported by tests).
-import type { EngineHealth, Geometry, Health, World } from "../api/types";
+import type { EngineHealth, Geometry, Health, Referee, RefereeTeam, World } from "../api/types";
 import { DEFAULT_GEOMETRY } from "../field/defaultGeometry";
 import { robot } from "../field/testRobots";
 
@@ -47,5 +47,30 @@ export const engineHealth = (extra: Partial<EngineHealth> = {}): EngineHealth =>
   busy: 1,
   idle: 1,
   fallbacks: 0,
+  ...extra,
+});
+
+export const refereeTeam = (name: string, extra: Partial<RefereeTeam> = {}): RefereeTeam => ({
+  name,
+  score: 0,
+  yellow_cards: 0,
+  red_cards: 0,
+  goalkeeper: 0,
+  ...extra,
+});
+
+/** A referee state with only the basic fields (as the internal referee sends). */
+export const referee = (command: string, extra: Partial<Referee> = {}): Referee => ({
+  source: "game-controller",
+  source_identifier: "gc-1",
+  command,
+  stage: "NORMAL_FIRST_HALF",
+  command_counter: 3,
+  stage_time_left_s: 240,
+  blue: refereeTeam("Blue"),
+  yellow: refereeTeam("Yellow"),
+  designated_position: null,
+  blue_team_on_positive_half: false,
+  age_s: 0.02,
   ...extra,
 });

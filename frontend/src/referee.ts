@@ -1,0 +1,18 @@
+// What the referee state means for the page (pure; no React).
+
+import type { Referee, Vec } from "./api/types";
+
+/** The commands during which the designated position is where the ball goes. */
+export const PLACEMENT_COMMANDS: readonly string[] = ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"];
+
+/**
+ * The ball placement target, only while a ball placement runs. The official game controller
+ * sends `designated_position` whenever its placement position is set, not only during a
+ * placement: (0, 0) at the start, the old mark during STOP and timeouts. That one means
+ * nothing and is not shown.
+ */
+export function placementTarget(ref: Referee | null | undefined): Vec | null {
+  if (!ref || ref.source === "none" || !ref.designated_position) return null;
+  return PLACEMENT_COMMANDS.includes(ref.command) ? ref.designated_position : null;
+}
+
