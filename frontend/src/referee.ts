@@ -1,6 +1,6 @@
 // What the referee state means for the page (pure; no React).
 
-import type { Referee, Vec } from "./api/types";
+import type { Referee, Robot, Team, Vec } from "./api/types";
 
 /** The commands during which the designated position is where the ball goes. */
 export const PLACEMENT_COMMANDS: readonly string[] = ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"];
@@ -16,3 +16,7 @@ export function placementTarget(ref: Referee | null | undefined): Vec | null {
   return PLACEMENT_COMMANDS.includes(ref.command) ? ref.designated_position : null;
 }
 
+/** Robots of `team` the station sees on the field now. */
+export function visibleRobots(robots: readonly Robot[] | undefined, team: Team): number {
+  return (robots ?? []).filter((r) => r.team === team && r.visible).length;
+}

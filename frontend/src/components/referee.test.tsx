@@ -1,0 +1,151 @@
+// @vitest-environment jsdom
+import { act } from "react";
+import { createRoot, type Root } from "react-dom/client";
+import { afterEach, beforeEach, describe, expect, it } from "vitest";
+import type { RefereeGameEvent, Robot, Team } from "../api/types";
+import { robot } from "../field/testRobots";
+import { placementTarget } from "../referee";
+import { referee, refereeTeam } from "../ws/fixtures";
+import { EVENTS_SHOWN, fmtCards, RefereeState } from "./RefereePanel";
+
+(globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
+
+let host: HTMLDivElement;
+let root: Root;
+
+beforeEach(() => {
+  host = document.createElement("div");
+  document.body.appendChild(host);
+  root = createRoot(host);
+});
+
+afterEach(() => {
+  act(() => root.unmount());
+  host.remove();
+});
+
+const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
+const text = (id: string) => q(id)?.textContent ?? null;
+
+/** `n` visible robots of `team`, plus one of that team the station no longer sees. */
+function team(t: Team, n: number): Robot[] {
+  const out = Array.from({ length: n }, (_, i) => robot(t, i, 100 * i, t === "blue" ? -500 : 500));
+  out.push(robot(t, 15, 0, 0, { visible: false }));
+  return out;
+}
+
+function event(type: string, by_team: string | null, origin: string[], id = type): RefereeGameEvent {
+  return { id, type, by_team, origin, created_s: 1_700_000_000 };
+}
+
+/** What the official game controller sends during a yellow free kick after a foul. */
+const gc = referee("STOP", {
+  next_command: "DIRECT_FREE_YELLOW",
+  status_message: "Robot substitution by blue",
+  current_action_time_remaining_s: 7.46,
+  designated_position: { x: 1500, y: -700 },
+  blue: refereeTeam("Blue", {
+    yellow_cards: 2,
+    red_cards: 1,
+    yellow_card_times_s: [41.2, 12],
+    max_allowed_bots: 4,
+    foul_counter: 2,
+    can_place_ball: false,
+    ball_placement_failures: 5,
+  }),
+  yellow: refereeTeam("Yellow", { max_allowed_bots: 6, foul_counter: 0, can_place_ball: true, ball_placement_failures: 0 }),
+  game_events: [
+    event("BOT_CRASH_UNIQUE", "BLUE", ["TIGERs AutoRef", "ER-Force"]),
+    event("BALL_LEFT_FIELD_TOUCH_LINE", "YELLOW", ["UI"]),
+    event("NO_PROGRESS_IN_GAME", null, []),
+  ],
+});
+
+describe("RefereeState: what the game controller sends beyond the basics", () => {
+  it("shows the next command, the status message and the action time left", () => {
+    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
+    expect(text("referee-panel-command")).toBe("STOP");
+    expect(text("referee-next")).toBe("DIRECT_FREE_YELLOW");
+    expect(text("referee-status-message")).toBe("Robot substitution by blue");
+    expect(text("referee-action-time")).toBe("7.5 s left");
+    expect(q("referee-action-time")?.classList.contains("warn")).toBe(false);
+  });
+
+  it("marks an action time that ran out", () => {
+    act(() => root.render(<RefereeState ref={{ ...gc, current_action_time_remaining_s: -3.04 }} />));
+    expect(text("referee-action-time")).toBe("over by 3.0 s");
+    expect(q("referee-action-time")?.classList.contains("warn")).toBe(true);
+  });
+
+  it("shows per team the robots allowed against those on the field, warning when there are too many", () => {
+    // blue: 5 on the field, 4 allowed (two yellow cards); yellow: 6 of 6
+    act(() => root.render(<RefereeState ref={gc} robots={[...team("blue", 5), ...team("yellow", 6)]} />));
+    expect(text("referee-robots-blue")).toBe("5 / 4 allowed");
+    expect(q("referee-robots-blue")?.classList.contains("warn")).toBe(true);
+    expect(text("referee-robots-yellow")).toBe("6 / 6 allowed");
+    expect(q("referee-robots-yellow")?.classList.contains("warn")).toBe(false);
+    // a robot the station does not see does not count: 4 of 4 is fine
+    act(() => root.render(<RefereeState ref={gc} robots={[...team("blue", 4), ...team("yellow", 6)]} />));
+    expect(text("referee-robots-blue")).toBe("4 / 4 allowed");
+    expect(q("referee-robots-blue")?.classList.contains("warn")).toBe(false);
+  });
+
+  it("shows cards with their seconds left, fouls and a team that cannot place the ball", () => {
+    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
+    expect(text("referee-cards-blue")).toBe("2 yellow (41 s, 12 s) · 1 red");
+    expect(text("referee-cards-yellow")).toBe("none");
+    expect(text("referee-fouls-blue")).toBe("2");
+    expect(text("referee-fouls-yellow")).toBe("0");
+    expect(text("referee-placing-blue")).toBe("cannot place ball (5 failed)");
+    expect(q("referee-placing-blue")?.classList.contains("warn")).toBe(true);
+    expect(text("referee-placing-yellow")).toBe("—");
+  });
+
+  it("lists the recent game events newest first: type, team, origin", () => {
+    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
+    const items = [...host.querySelectorAll('[data-testid="referee-event"]')].map((li) => li.textContent);
+    expect(items).toEqual([
+      "bot crash unique blue · TIGERs AutoRef, ER-Force",
+      "ball left field touch line yellow · UI",
+      "no progress in game",
+    ]);
+    const many = Array.from({ length: 8 }, (_, i) => event("BOT_CRASH_UNIQUE", "BLUE", ["UI"], `e${i}`));
+    act(() => root.render(<RefereeState ref={{ ...gc, game_events: many }} robots={[]} />));
+    expect(host.querySelectorAll('[data-testid="referee-event"]').length).toBe(EVENTS_SHOWN);
+  });
+
+  it("leaves out what a referee does not send (the internal referee, an older backend)", () => {
+    act(() => root.render(<RefereeState ref={referee("HALT", { source: "internal" })} robots={team("blue", 6)} />));
+    expect(text("referee-panel-command")).toBe("HALT");
+    for (const id of ["referee-next", "referee-status-message", "referee-action-time", "referee-robots-blue", "referee-fouls-blue", "referee-placing-blue", "referee-events"]) {
+      expect(q(id), id).toBeNull();
+    }
+    expect(text("referee-cards-blue")).toBe("none");
+  });
+});
+
+describe("the ball placement target", () => {
+  const mark = { x: 1500, y: -700 };
+
+  it("is shown only during a ball placement, not the old mark the game controller sends during STOP", () => {
+    act(() => root.render(<RefereeState ref={referee("STOP", { designated_position: mark })} />));
+    expect(text("referee-placement")).toBe("—");
+    act(() => root.render(<RefereeState ref={referee("BALL_PLACEMENT_YELLOW", { designated_position: mark })} />));
+    expect(text("referee-placement")).toBe("1500, -700 mm");
+  });
+
+  it("placementTarget: the position during BALL_PLACEMENT_BLUE/YELLOW only", () => {
+    expect(placementTarget(referee("BALL_PLACEMENT_BLUE", { designated_position: mark }))).toEqual(mark);
+    expect(placementTarget(referee("BALL_PLACEMENT_YELLOW", { designated_position: mark }))).toEqual(mark);
+    for (const cmd of ["STOP", "HALT", "TIMEOUT_YELLOW", "NORMAL_START", "PREPARE_KICKOFF_BLUE"]) {
+      expect(placementTarget(referee(cmd, { designated_position: mark })), cmd).toBeNull();
+    }
+    expect(placementTarget(referee("BALL_PLACEMENT_BLUE"))).toBeNull();
+    expect(placementTarget(referee("BALL_PLACEMENT_BLUE", { source: "none", designated_position: mark }))).toBeNull();
+    expect(placementTarget(null)).toBeNull();
+  });
+
+  it("fmtCards ignores expired card times", () => {
+    expect(fmtCards(refereeTeam("b", { yellow_cards: 1, yellow_card_times_s: [0] }))).toBe("1 yellow");
+  });
+});
