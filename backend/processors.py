@@ -32,6 +32,7 @@ from .engine import EngineError, PoolEngine
 from .params.model import StrategyParams
 from .processor import Every, OnTopic, Processor
 from .referee.internal import InternalReferee, RefereeCommandError
+from .referee.watch import RefereeWatch
 from .strategy.core import Prepared, StrategyCore
 from .world.decode import decode_detection, geometry_to_dict
 from .world.model import WorldModel
@@ -246,14 +247,18 @@ class VisionIngest(Processor):
 
 
 class RefereeIngest(Processor):
+    """Decodes referee datagrams onto the referee topic; also runs when none arrives for
+    ``SILENCE_CHECK_S``, so a silent referee is noticed (and logged) as it happens."""
+
     name = "referee-ingest"
 
-    def __init__(self, bus: DataBus) -> None:
+    def __init__(self, bus: DataBus, watch: RefereeWatch | None = None) -> None:
         packets = bus.typed("referee-packets", tl.Envelope)
-        super().__init__(OnTopic(packets))
+        super().__init__(OnTopic(packets, max_wait_s=SILENCE_CHECK_S))
         self.reader = Reader(packets)
         self.referee = bus.typed("referee", RefereeState)
         self.counter = StreamCounter()
+        self.watch = watch or RefereeWatch()
 
     async def tick(self) -> None:
         for env in self.reader.read_new():
@@ -268,7 +273,14 @@ class RefereeIngest(Processor):
                 self.counter.last_error = str(exc)
                 _badlog.warning("referee", "bad referee packet from %s: %s", env.source, exc)
                 continue
-            self.referee.write(decode_referee(msg))
+            state = decode_referee(msg)
+            self.watch.heard(state)
+            self.referee.write(state)
+        self.watch.check()
+
+
+#: how often the referee ingest looks for a silent referee when nothing arrives
+SILENCE_CHECK_S = 0.5
 
 
 class WorldProcessor(Processor):

@@ -43,6 +43,7 @@ from .processors import (
     WorldProcessor,
 )
 from .referee.internal import OPERATOR_COMMANDS, InternalReferee
+from .referee.watch import RefereeWatch
 from .strategy.plays import PLAY_INFO
 from .world.referee import RefereeState
 from .world.state import Team, WorldState
@@ -89,6 +90,7 @@ class Station:
         self.relay_stats = self.bus.typed("relay-stats", dict)
         self.params_topic = self.bus.typed("params", int, capacity=4)
         self.referee_state = InternalReferee()
+        self.referee_watch = RefereeWatch()
         self._engine_key: tuple[str, str] | None = None
         self._engine_gen = 0
         self._engine_tasks: set[asyncio.Task[None]] = set()
@@ -181,7 +183,7 @@ class Station:
         prm = self.params.current
         self.ingest = RelayIngest(self.bus, sub)
         self.vision = VisionIngest(self.bus)
-        self.referee = RefereeIngest(self.bus)
+        self.referee = RefereeIngest(self.bus, self.referee_watch)
         self.world = WorldProcessor(self.bus)
         self.strategy = StrategyProcessor(self.bus, prm.team.our_team, prm.strategy)
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
@@ -189,6 +191,8 @@ class Station:
         self.publisher = CommandPublisher(self.bus, pub)
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        # the internal referee switched off is not obeyed: its silence is no warning
+        self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
@@ -539,10 +543,19 @@ class Station:
             for name, st in rs["streams"].items():
                 streams[f"relay.{name}"] = st
         vision = streams.get("vision", {})
+        # ok: the loop works (fresh vision, relay alive). A silent referee leaves it true: the
+        # station then does what the rules expect of a team (it keeps obeying the last
+        # command); it is a warning about a system outside the station, in `warnings`.
         ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
             relay is not None and relay["alive"]
+        referee = self.referee_watch.status()
+        if referee is not None:
+            referee["source"] = ("internal" if referee["source_identifier"]
+                                 == self.referee_state.source_identifier else "game-controller")
         out: dict[str, Any] = _finite({
             "ok": ok,
+            "warnings": _warnings(vision, relay, referee),
+            "referee": referee,
             "uptime_s": time.monotonic() - self.started_mono,
             "streams": streams,
             "processors": procs,
@@ -554,6 +567,25 @@ class Station:
             "engine": self.engine_health(),
         })
         return out
+
+
+def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
+              referee: dict[str, Any] | None) -> list[str]:
+    """One line per problem: why ``ok`` is false, and a silent referee."""
+    out: list[str] = []
+    age = vision.get("last_age_s", -1)
+    if not vision or age < 0:
+        out.append("no vision received")
+    elif age >= 1.0:
+        out.append(f"no vision for {age:.1f} s")
+    if relay is None:
+        out.append("no relay statistics received")
+    elif not relay["alive"]:
+        out.append(f"relay silent for {relay['age_s']:.1f} s")
+    line = RefereeWatch.warning(referee)
+    if line is not None:
+        out.append(line)
+    return out
 
 
 def _finite(obj: Any) -> Any:

@@ -16,6 +16,9 @@ class RateLimitedLog:
         self._suppressed: dict[str, int] = {}
 
     def warning(self, key: str, message: str, *args: object) -> None:
+        self.log(logging.WARNING, key, message, *args)
+
+    def log(self, level: int, key: str, message: str, *args: object) -> None:
         now = time.monotonic()
         last = self._last.get(key)
         if last is not None and now - last < self._interval_s:
@@ -25,4 +28,4 @@ class RateLimitedLog:
         self._last[key] = now
         if suppressed:
             message = f"{message} ({suppressed} more since last report)"
-        self._logger.warning(message, *args)
+        self._logger.log(level, message, *args)

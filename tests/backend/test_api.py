@@ -1,8 +1,11 @@
 import json
 import socket
+import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
+import zmq
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
@@ -100,6 +103,8 @@ def test_health_lists_processors_and_topics(client) -> None:  # type: ignore[no-
     topics = {t["name"]: t for t in h["topics"]}
     assert topics["robot-commands"]["capacity"] == 20
     assert h["ok"] is False  # no vision, no relay
+    assert h["warnings"] == ["no vision received", "no relay statistics received"]
+    assert h["referee"] is None  # none heard yet: nothing to say about it
 
 
 def test_websocket_snapshot_then_world(client) -> None:  # type: ignore[no-untyped-def]
@@ -212,3 +217,125 @@ def test_teleport_goes_to_the_simulator_in_metres(client) -> None:  # type: igno
     t = cmd.control.teleport_robot[0]
     assert (t.id.id, t.id.team, t.y, t.orientation, t.present) == (2, 1, 1.0, 1.0, True)
     assert c.post("/api/sim/ball", json={"x": "NaN", "y": 0}).status_code == 422
+
+
+# ---- a silent referee: packets through the relay's ZeroMQ stream, the watch's clock injected ----
+
+class _Clock:
+    def __init__(self) -> None:
+        self.t = 5000.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def _referee_envelope(command: str, source: str, seq: int) -> bytes:
+    from sslpb import touchline_pb2 as tl
+    from sslpb.ssl_gc_referee_message_pb2 import Referee
+
+    now_us = time.time_ns() // 1000
+    m = Referee(source_identifier=source, packet_timestamp=now_us,
+                stage=Referee.NORMAL_FIRST_HALF, command=Referee.Command.Value(command),
+                command_counter=1, command_timestamp=now_us)
+    for t in (m.yellow, m.blue):
+        t.name, t.score, t.red_cards, t.yellow_cards = "t", 0, 0, 0
+        t.timeouts, t.timeout_time, t.goalkeeper = 4, 300_000_000, 0
+    return tl.Envelope(stream=tl.STREAM_REFEREE, receive_time_ns=time.time_ns(), sequence=seq,
+                       source="127.0.0.1:10003", payload=m.SerializeToString()
+                       ).SerializeToString()
+
+
+class _Relay:
+    """Plays the relay's PUB side: referee envelopes on the ZeroMQ stream the station reads."""
+
+    def __init__(self, endpoint: str) -> None:
+        self.ctx = zmq.Context()
+        self.sock = self.ctx.socket(zmq.PUB)
+        self.sock.setsockopt(zmq.LINGER, 0)
+        self.sock.bind(endpoint)
+        self.seq = 0
+
+    def referee(self, command: str, source: str) -> None:
+        self.seq += 1
+        self.sock.send_multipart([b"referee", _referee_envelope(command, source, self.seq)])
+
+    def close(self) -> None:
+        self.sock.close()
+        self.ctx.term()
+
+
+@pytest.fixture
+def relay(client) -> Iterator[_Relay]:  # type: ignore[no-untyped-def]
+    _, st = client
+    r = _Relay(st.settings.relay_pub)
+    yield r
+    r.close()
+
+
+def _until(cond, what: str, timeout_s: float = 10.0) -> Any:  # type: ignore[no-untyped-def]
+    """Polls ``cond`` (bounded) until it returns something truthy."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        got = cond()
+        if got:
+            return got
+        time.sleep(0.02)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def _health_when(c: TestClient, relay: _Relay, command: str, source: str, cond) -> Any:  # type: ignore[no-untyped-def]
+    """Sends referee packets until the station's health satisfies ``cond`` (a subscriber
+    connecting to a PUB socket misses what was sent before it joined)."""
+    def step() -> Any:
+        relay.referee(command, source)
+        h = c.get("/api/health").json()
+        return h if cond(h) else None
+    return _until(step, f"health after {command} from {source}")
+
+
+def test_health_flags_a_silent_game_controller_and_clears_when_it_speaks(  # type: ignore[no-untyped-def]
+        client, relay) -> None:
+    c, st = client
+    clock = _Clock()
+    st.referee_watch.clock = clock
+    h = c.get("/api/health").json()
+    assert h["referee"] is None and not any("referee" in w for w in h["warnings"])
+    h = _health_when(c, relay, "STOP", "gc-test", lambda h: h["referee"] is not None)
+    assert h["referee"] == {"last_heard_s": 0.0, "source_identifier": "gc-test",
+                            "command": "STOP", "obeyed": True, "silent": False,
+                            "silent_after_s": 3.0, "source": "game-controller"}
+    ok_heard = h["ok"]
+
+    clock.t += 3.0  # at the threshold: not yet
+    assert c.get("/api/health").json()["referee"]["silent"] is False
+    clock.t += 0.5
+    h = c.get("/api/health").json()
+    assert h["referee"]["silent"] is True and h["referee"]["last_heard_s"] == 3.5
+    assert "referee silent 3 s: still obeying STOP from gc-test" in h["warnings"]
+    assert h["ok"] == ok_heard  # a warning, not a broken loop (docs/api.md)
+    # the station keeps obeying the last command
+    assert st.control.active_referee() is not None
+    assert c.get("/api/world").json()["referee"]["command"] == "STOP"
+
+    h = _health_when(c, relay, "FORCE_START", "gc-test",
+                     lambda h: h["referee"]["command"] == "FORCE_START")
+    assert h["referee"]["silent"] is False and h["referee"]["last_heard_s"] == 0.0
+    assert not any("referee" in w for w in h["warnings"])
+
+
+def test_the_internal_referee_switched_off_is_no_silent_referee(  # type: ignore[no-untyped-def]
+        client, relay) -> None:
+    c, st = client
+    clock = _Clock()
+    st.referee_watch.clock = clock
+    assert c.post("/api/referee/internal/command", json={"command": "STOP"}).status_code == 200
+    own = st.referee_state.source_identifier
+    # the relay loops the internal referee's multicast back to the station
+    _health_when(c, relay, "STOP", own, lambda h: h["referee"] is not None)
+    clock.t += 10.0
+    h = c.get("/api/health").json()
+    assert h["referee"]["source"] == "internal" and h["referee"]["silent"] is True
+    assert c.post("/api/referee/internal/enabled", json={"enabled": False}).status_code == 200
+    h = c.get("/api/health").json()
+    assert h["referee"]["obeyed"] is False and h["referee"]["silent"] is False
+    assert not any("referee" in w for w in h["warnings"])
