@@ -1,6 +1,6 @@
 // What the referee state means for the page (pure; no React).
 
-import type { Referee, Robot, Team, Vec } from "./api/types";
+import type { Health, Referee, Robot, Team, Vec } from "./api/types";
 
 /** The commands during which the designated position is where the ball goes. */
 export const PLACEMENT_COMMANDS: readonly string[] = ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"];
@@ -19,4 +19,14 @@ export function placementTarget(ref: Referee | null | undefined): Vec | null {
 /** Robots of `team` the station sees on the field now. */
 export function visibleRobots(robots: readonly Robot[] | undefined, team: Team): number {
   return (robots ?? []).filter((r) => r.team === team && r.visible).length;
+}
+
+/**
+ * Whole seconds the referee the station obeys has been silent, null while it speaks (or none
+ * was heard, or the station ignores it). The station keeps obeying its last command meanwhile.
+ */
+export function refereeSilentFor(health: Health | null | undefined): number | null {
+  const r = health?.referee;
+  if (!r || !r.silent || !Number.isFinite(r.last_heard_s)) return null;
+  return Math.floor(r.last_heard_s);
 }

@@ -308,10 +308,30 @@ export interface EngineHealth {
   fallbacks: number;
 }
 
+/** The newest referee message as health sees it (docs/api.md, "A silent referee"). */
+export interface RefereeHealth {
+  /** Seconds since it arrived. */
+  last_heard_s: number;
+  source_identifier: string;
+  source: "game-controller" | "internal" | string;
+  /** Its command: what the station still obeys. */
+  command: string;
+  /** False: the internal referee, switched off by the operator (its silence is no warning). */
+  obeyed: boolean;
+  /** Obeyed and quiet for longer than `silent_after_s`: the station keeps obeying `command`. */
+  silent: boolean;
+  silent_after_s: number;
+}
+
 export interface Health {
   latency?: LatencyHealth | null;
   engine?: EngineHealth | null;
+  /** The station's own loop works (fresh vision, relay alive); a silent referee leaves it true. */
   ok: boolean;
+  /** One line per problem (absent from an older backend). */
+  warnings?: string[];
+  /** Null before any referee message was heard (absent from an older backend). */
+  referee?: RefereeHealth | null;
   streams: Record<string, StreamHealth>;
   processors: ProcessorHealth[];
   topics: TopicHealth[];

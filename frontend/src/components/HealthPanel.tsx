@@ -198,6 +198,13 @@ export function HealthPanel() {
   return (
     <div className="health-panel" data-testid="health-panel">
       <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
+      {(h.warnings ?? []).length > 0 && (
+        <ul className="health-warnings" data-testid="health-warnings">
+          {(h.warnings ?? []).map((w, i) => (
+            <li key={i}>{w}</li>
+          ))}
+        </ul>
+      )}
       <Latency h={h} />
       <EnginePanel h={h} />
       <Processors h={h} />

@@ -1,11 +1,13 @@
 import { useAppState } from "../store/hooks";
 import { fmtFixed } from "../format";
+import { refereeSilentFor } from "../referee";
 import { engineOf, engineSummary } from "../strategy/engine";
 
 /** Compact station health, shown in the details panel while no robot is selected. */
 export function HealthSummary() {
   const health = useAppState((s) => s.health);
   if (!health) return <p className="muted">No health data yet.</p>;
+  const silentFor = refereeSilentFor(health);
   const order = (name: string) => (name === "vision" ? 0 : name === "referee" ? 1 : 2);
   const streams = Object.entries(health.streams)
     .sort(([a], [b]) => order(a) - order(b) || a.localeCompare(b))
@@ -14,14 +16,21 @@ export function HealthSummary() {
   const eng = engineSummary(engine);
   return (
     <dl className="details-grid health" data-testid="health-summary">
-      {streams.map(([name, s]) => (
-        <div className="health-row" key={name} title={s.last_error || undefined}>
-          <dt title={name}>{name}</dt>
-          <dd className={`num ${s.errors > 0 || (name === "vision" && s.rate_hz <= 0) ? "warn" : ""}`}>
-            {fmtFixed(s.rate_hz, 1)} Hz{s.errors > 0 ? ` · ${s.errors} err` : ""}
-          </dd>
-        </div>
-      ))}
+      {streams.map(([name, s]) => {
+        const silent = name === "referee" ? silentFor : null;
+        return (
+          <div className="health-row" key={name} title={s.last_error || undefined}>
+            <dt title={name}>{name}</dt>
+            <dd
+              className={`num ${s.errors > 0 || (name === "vision" && s.rate_hz <= 0) || silent !== null ? "warn" : ""}`}
+              data-testid={`health-summary-stream-${name}`}
+            >
+              {fmtFixed(s.rate_hz, 1)} Hz{s.errors > 0 ? ` · ${s.errors} err` : ""}
+              {silent !== null ? ` · silent ${silent} s` : ""}
+            </dd>
+          </div>
+        );
+      })}
       {health.relay && (
         <div className="health-row">
           <dt>relay</dt>

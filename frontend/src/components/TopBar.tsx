@@ -1,6 +1,7 @@
 import { setEstop } from "../actions";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
+import { refereeSilentFor } from "../referee";
 import { uiStore, useUi } from "../store/uiStore";
 import { PlaySelector } from "./PlaySelector";
 
@@ -63,6 +64,7 @@ function refereeClass(command: string): string {
 
 function RefereeInfo() {
   const world = useThrottledWorld(250);
+  const silentFor = useAppState((s) => refereeSilentFor(s.health));
   const ref = world?.referee ?? null;
   const command = ref && ref.source !== "none" ? ref.command : null;
   return (
@@ -74,6 +76,15 @@ function RefereeInfo() {
       {ref && ref.source !== "none" && (
         <span className="score num" data-testid="score">
           <span className="score-blue">{ref.blue.score}</span>:<span className="score-yellow">{ref.yellow.score}</span>
+        </span>
+      )}
+      {silentFor !== null && (
+        <span
+          className="ref-silent num"
+          data-testid="referee-silent"
+          title="No referee message for this long: the station keeps obeying the last command"
+        >
+          referee silent {silentFor} s
         </span>
       )}
     </div>

@@ -2,11 +2,15 @@
 import { act } from "react";
 import { createRoot, type Root } from "react-dom/client";
 import { afterEach, beforeEach, describe, expect, it } from "vitest";
-import type { RefereeGameEvent, Robot, Team } from "../api/types";
+import type { Health, RefereeGameEvent, RefereeHealth, Robot, Team } from "../api/types";
 import { robot } from "../field/testRobots";
-import { placementTarget } from "../referee";
-import { referee, refereeTeam } from "../ws/fixtures";
+import { placementTarget, refereeSilentFor } from "../referee";
+import { appStore, initialAppState } from "../store/appStore";
+import { health, referee, refereeTeam, world } from "../ws/fixtures";
+import { HealthPanel } from "./HealthPanel";
+import { HealthSummary } from "./HealthSummary";
 import { EVENTS_SHOWN, fmtCards, RefereeState } from "./RefereePanel";
+import { TopBar } from "./TopBar";
 
 (globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
 
@@ -147,5 +151,67 @@ describe("the ball placement target", () => {
 
   it("fmtCards ignores expired card times", () => {
     expect(fmtCards(refereeTeam("b", { yellow_cards: 1, yellow_card_times_s: [0] }))).toBe("1 yellow");
+  });
+});
+
+describe("a silent referee", () => {
+  const connected = { status: "connected" as const, attempt: 0, retryAt: null, lastError: null };
+  const refHealth = (last_heard_s: number, silent: boolean): RefereeHealth => ({
+    last_heard_s,
+    source_identifier: "gc-1",
+    source: "game-controller",
+    command: "STOP",
+    obeyed: true,
+    silent,
+    silent_after_s: 3,
+  });
+  const withReferee = (r: RefereeHealth | null, warnings: string[] = []): Health => ({
+    ...health(60),
+    streams: {
+      ...health(60).streams,
+      referee: { packets: 900, errors: 0, rate_hz: r?.silent ? 0 : 40, last_age_s: r?.last_heard_s ?? -1, last_error: "" },
+    },
+    referee: r,
+    warnings,
+  });
+
+  beforeEach(() => appStore.setState(initialAppState()));
+
+  it("shows 'referee silent N s' in the top bar and the health summary, and clears when it speaks again", () => {
+    // the top bar samples the world (throttled): it is there before the first render
+    appStore.setState({ connection: connected, world: world(1, { referee: referee("STOP") }), health: withReferee(refHealth(0.02, false)) });
+    act(() => root.render(<><TopBar onRetryNow={() => {}} /><HealthSummary /></>));
+    expect(q("referee-silent")).toBeNull();
+    expect(q("health-summary-stream-referee")?.classList.contains("warn")).toBe(false);
+    act(() => appStore.setState({ health: withReferee(refHealth(12.7, true), ["referee silent 12 s: still obeying STOP from gc-1"]) }));
+    expect(text("referee-silent")).toBe("referee silent 12 s");
+    // the last command is still shown: the station still obeys it
+    expect(text("referee-command")).toBe("STOP");
+    expect(text("health-summary-stream-referee")).toBe("0.0 Hz · silent 12 s");
+    expect(q("health-summary-stream-referee")?.classList.contains("warn")).toBe(true);
+    act(() => appStore.setState({ health: withReferee(refHealth(0.01, false)) }));
+    expect(q("referee-silent")).toBeNull();
+    expect(text("health-summary-stream-referee")).toBe("40.0 Hz");
+  });
+
+  it("says nothing for a referee the station ignores, none heard, or an older backend", () => {
+    act(() => root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ health: withReferee({ ...refHealth(60, false), obeyed: false }) }));
+    expect(q("referee-silent")).toBeNull();
+    act(() => appStore.setState({ health: withReferee(null) }));
+    expect(q("referee-silent")).toBeNull();
+    act(() => appStore.setState({ health: health(60) }));
+    expect(q("referee-silent")).toBeNull();
+    expect(refereeSilentFor(null)).toBeNull();
+  });
+
+  it("lists the health warnings under the station's state", () => {
+    act(() => root.render(<HealthPanel />));
+    act(() => appStore.setState({ health: withReferee(refHealth(4.2, true), ["referee silent 4 s: still obeying STOP from gc-1"]) }));
+    expect([...host.querySelectorAll('[data-testid="health-warnings"] li')].map((li) => li.textContent)).toEqual([
+      "referee silent 4 s: still obeying STOP from gc-1",
+    ]);
+    act(() => appStore.setState({ health: withReferee(refHealth(0.1, false)) }));
+    expect(q("health-warnings")).toBeNull();
   });
 });
