@@ -175,6 +175,8 @@ class Director:
         self._kicks_seen: dict[RobotKey, int] = {}
         self.last_touch: RobotKey | None = None
         self._active: dict[str, set[RobotKey]] = {k: set() for k in EPISODE_KINDS}
+        #: since when each robot of the non-placing team is inside the placement corridor
+        self._in_corridor_since: dict[RobotKey, float] = {}
         self._halt_flagged: set[RobotKey] = set()
         self._actions: list[TeleportBall] = []
         self._issued = False  # the first HALT is issued even though the referee starts in HALT
@@ -809,13 +811,24 @@ class Director:
             if ball is not None:
                 found["stop_distance"] = {r.key for r in robots
                                           if dist(r.x, r.y, ball.x, ball.y) < TOO_CLOSE_MM}
-        if cmd.startswith("BALL_PLACEMENT_") and since >= g.placement_distance \
-                and ball is not None and self.referee.designated_position is not None:
+        if cmd.startswith("BALL_PLACEMENT_") and ball is not None \
+                and self.referee.designated_position is not None:
+            # the rules' interference: a robot of the other team inside the corridor for
+            # more than 2 s on end (a robot crossing it, or passed by the ball, is not)
             placing = cmd[len("BALL_PLACEMENT_"):].lower()
             px, py = self.referee.designated_position
-            found["placement_distance"] = {
-                r.key for r in robots if r.team != placing
-                and dist_to_segment(r.x, r.y, ball.x, ball.y, px, py) < TOO_CLOSE_MM}
+            inside = {r.key for r in robots if r.team != placing
+                      and dist_to_segment(r.x, r.y, ball.x, ball.y, px, py) < TOO_CLOSE_MM}
+            entered = self._in_corridor_since
+            for key in list(entered):
+                if key not in inside:
+                    del entered[key]
+            for key in inside:
+                entered.setdefault(key, self.now)
+            found["placement_distance"] = {k for k in inside
+                                           if self.now - entered[k] > g.placement_distance}
+        else:
+            self._in_corridor_since.clear()
         sp = self.set_piece
         if sp is not None and sp[1] in ("kickoff", "free") and ball is not None \
                 and self.now - sp[2] >= g.set_piece_distance:

@@ -55,7 +55,7 @@ class Grace:
     halt: float = 2.0  # rules: 2 s to brake after HALT
     stop: float = 2.0  # rules: 2 s to reach the STOP distance / speed
     set_piece_distance: float = 2.0  # opponents of a free kick / kick-off (from its start)
-    placement_distance: float = 2.0  # opponents of the placing team (from BALL_PLACEMENT)
+    placement_distance: float = 2.0  # opponents of the placing team: in the corridor so long
     defense_area: float = 1.0  # after running play starts
 
 

@@ -314,11 +314,21 @@ def test_placement_distance_for_the_opponents_near_the_ball_to_target_segment() 
     h.tick()
     h.until_command("BALL_PLACEMENT_BLUE", 2)
     h.w.ball = [-1500.0, 2000.0, 0.0, 0.0]  # the ball is being brought to (0, 2800)
-    h.robot("yellow", 2, -750.0, 2600.0)  # near the middle of the segment
     h.robot("blue", 2, -700.0, 2500.0)  # the placing team may be there
-    h.run(2.0 - 2 * TICK)
+    # yellow 3 crosses the corridor: 1.5 s in, out, 1.5 s in again: no interference
+    h.robot("yellow", 3, -1000.0, 2300.0)
+    h.run(1.5)
+    h.robot("yellow", 3, -1000.0, 1000.0)
+    h.tick()
+    h.robot("yellow", 3, -1000.0, 2300.0)
+    h.run(1.5)
     assert h.violations("yellow", "placement_distance") == (0, 0.0)
-    h.run(3 * TICK)
+    # yellow 2 stays near the middle of the segment: a foul after 2 s on end, not before
+    h.robot("yellow", 3, -1000.0, 1000.0)
+    h.robot("yellow", 2, -750.0, 2600.0)
+    h.run(2.0 - TICK)  # seen inside from the first tick on: 2 s - 2 ticks inside
+    assert h.violations("yellow", "placement_distance") == (0, 0.0)
+    h.run(3 * TICK)  # 2 s + 1 tick
     assert h.violations("yellow", "placement_distance")[0] == 1
     assert h.violations("blue", "placement_distance") == (0, 0.0)
     # the timeline says where: robot, ball, designated position, distance to the line
