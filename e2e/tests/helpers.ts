@@ -17,7 +17,7 @@ export interface Strategy {
 }
 export interface World {
   robots: Robot[]; ball: { x: number; y: number } | null; estop: boolean;
-  referee: { source: string; command: string } | null;
+  referee: { source: string; command: string; designated_position?: { x: number; y: number } | null } | null;
   strategy?: Strategy | null;
 }
 
@@ -25,7 +25,13 @@ export interface Hooks {
   worldToScreen(x: number, y: number): { x: number; y: number };
   plots(): { id: number; keys: string[]; lastX: number; points: number }[];
   signals(): string[];
-  stats(): { fieldDraws: number; rawDrawn: number; robotsDrawn: number; pathsDrawn: number; rolesDrawn: number };
+  stats(): {
+    fieldDraws: number; rawDrawn: number; robotsDrawn: number; pathsDrawn: number; rolesDrawn: number;
+    /** The ball placement mark the last field frame drew (world mm), null when none. */
+    designatedDrawn: { x: number; y: number } | null;
+  };
+  /** The world the page holds (as received over the websocket). */
+  getWorld(): World | null;
   strategy(): Strategy | null;
   roles(ours?: boolean): { team: string; id: number; role: string | null }[];
   paths(): { team: string; id: number; path: { x: number; y: number }[] | null }[];
