@@ -68,7 +68,7 @@ function RefereeInfo() {
   const ref = world?.referee ?? null;
   const command = ref && ref.source !== "none" ? ref.command : null;
   return (
-    <div className="stat referee" title={ref ? `Stage ${ref.stage}` : "No referee messages"}>
+    <div className={`stat referee ${silentFor !== null ? "is-silent" : ""}`} title={ref ? `Stage ${ref.stage}` : "No referee messages"}>
       <span className="stat-label">Referee</span>
       <span className={`ref-cmd ${command ? refereeClass(command) : ""}`} data-testid="referee-command">
         {command ?? "—"}
