@@ -26,6 +26,10 @@ from .navigate import navigate
 from .plays import Strategy, StrategyInput, Tuning
 from .situation import Situation, SituationTracker
 
+#: robot body to the opponents' defence area while the game is stopped: the rules' 0.2 m
+#: plus 60 mm for the vision noise and the controller's overshoot
+STOPPED_DEFENSE_MARGIN_MM = 260.0
+
 
 @dataclass(frozen=True, slots=True)
 class Prepared:
@@ -134,7 +138,11 @@ class StrategyCore:
         if sit.kind == "placement" and not sit.ours and sit.designated is not None \
                 and inp.ball is not None:
             corridor = (inp.ball.xy, sit.designated, inp.tuning.stop_distance_mm - 20.0)
+        their_margin = None
+        if sit.kind in ("stop", "free-kick", "placement"):
+            # rules: 0.2 m from the opponents' defence area during stop and free kicks
+            their_margin = max(self.defense_margin_mm, STOPPED_DEFENSE_MARGIN_MM)
         moves = navigate(intents, inp.ours, inp.theirs, inp.ball, inp.fs, prep.frame,
-                         self.robot_margin_mm, self.defense_margin_mm, corridor)
+                         self.robot_margin_mm, self.defense_margin_mm, corridor, their_margin)
         self.last_tick_ms = (time.perf_counter() - t0) * 1000.0
         return moves

@@ -124,6 +124,7 @@ class Intent:
     plan: bool = True  # False: drive straight (the last few cm to the ball)
     avoid_ball_mm: float = 0.0  # keep the robot's centre this far from the ball (0: no)
     own_defense_ok: bool = False  # the keeper may enter our defence area
+    their_defense_ok: bool = False  # our ball placer may enter theirs (the game is stopped)
 
 
 @dataclass(frozen=True, slots=True)

@@ -33,15 +33,19 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
              ball: Ball | None, fs: FieldSize, frame: Frame, robot_margin_mm: float,
              defense_margin_mm: float,
              corridor: tuple[tuple[float, float], tuple[float, float], float] | None = None,
+             their_defense_margin_mm: float | None = None,
              ) -> dict[int, Move]:
     """Paths for every intent, returned as moves in the field frame.
 
     ``corridor`` = (ball, mark, radius): keep clear of the capsule around that segment.
+    ``their_defense_margin_mm``: how far the robots' bodies keep from the opponents' defence
+    area (default ``defense_margin_mm``; the rules ask 0.2 m while the game is stopped).
     """
     everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
     all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
                            dtype=np.float64).reshape(-1, 3)
-    their_def = _rect_grow(fs.their_defense(), defense_margin_mm)
+    their_def = _rect_grow(fs.their_defense(), defense_margin_mm
+                           if their_defense_margin_mm is None else their_defense_margin_mm)
     own_def = _rect_grow(fs.own_defense(), defense_margin_mm)
     extra_circles: list[list[float]] = []
     if corridor is not None:
@@ -60,7 +64,8 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             continue
         it = intents[bot.id]
         goal = (it.x, it.y)
-        rects = [their_def] if it.own_defense_ok else [their_def, own_def]
+        rects = ([] if it.their_defense_ok else [their_def]) \
+            + ([] if it.own_defense_ok else [own_def])
         plan = it.plan
         if not plan and any(_inside(goal, r, 0.0) for r in rects):
             plan = True  # a straight drive would end in a forbidden area: plan instead

@@ -8,14 +8,16 @@ hysteresis so roles do not flicker). The referee's situation changes the slots:
 =================  ==========================================================================
 HALT               nobody moves (control zeroes every robot too)
 STOP               no kicks, <= 1.5 m/s, every target and path >= stop distance from the ball;
-                   the attacker becomes a blocker between ball and our goal
+                   the attacker becomes a blocker between ball and our goal; 0.2 m from the
+                   opponents' defence area (``core.STOPPED_DEFENSE_MARGIN_MM``)
 kickoff            everyone in our half outside the centre circle; our kicker behind the ball,
                    it kicks after NORMAL_START
 penalty            ours: kicker behind the ball, the rest 1 m behind it; theirs: keeper on
                    the goal line, the rest 1 m behind the ball
 free kick          ours: the kicker shoots (direct, open goal) or passes; theirs: a blocker
                    and every robot >= stop distance from the ball
-ball placement     ours: the placer carries the ball to the mark with the dribbler; theirs:
+ball placement     ours: the placer carries the ball to the mark with the dribbler (into a
+                   defence area too, to fetch the ball); theirs:
                    every robot >= stop distance from the ball-to-mark segment
 timeout            robots parked along our touch line
 side switch        the referee's side flag flips our frame (see ``model.Frame``)
@@ -193,8 +195,13 @@ class Strategy:
             return [self._free_kicker(s, inp) if s.role == "attacker" else s for s in base]
         if sit.kind == "placement" and sit.ours and sit.designated is not None:
             dp = sit.designated
-            return [Slot("placer", "placer", ball.xy,
-                         lambda b: _placer(b, ball, dp, tu, fs)) if s.role == "attacker" else s
+
+            def place(b: Bot) -> Intent:
+                # the game is stopped: the defence area rules are for running play (and the
+                # 0.2 m of STOP and free kicks), so the placer fetches a ball from either area
+                return replace(_placer(b, ball, dp, tu, fs), own_defense_ok=True,
+                               their_defense_ok=True)
+            return [Slot("placer", "placer", ball.xy, place) if s.role == "attacker" else s
                     for s in base]
         return base
 

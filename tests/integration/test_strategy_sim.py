@@ -249,8 +249,12 @@ def test_the_keeper_runs_on_the_compute_engine_and_its_health_shows(sim: Sim, ki
                what="engine off")
 
 
-@pytest.mark.parametrize("ball,mark", [((1000.0, -1000.0), (-500.0, 500.0)),
-                                       ((HL + 150.0, 1200.0), (HL - 200.0, 1200.0))])
+@pytest.mark.parametrize("ball,mark", [
+    ((1000.0, -1000.0), (-500.0, 500.0)),
+    ((HL + 150.0, 1200.0), (HL - 200.0, 1200.0)),  # behind their goal line, by the wall
+    ((HL - 300.0, 300.0), (HL - 2200.0, 300.0)),  # in their defence area
+    ((HL - 40.0, -150.0), (HL - 2200.0, 0.0)),  # on their goal line, in front of the goal
+], ids=["open-field", "behind-goal-line", "their-defence-area", "their-goal-mouth"])
 def test_our_ball_placement_brings_the_ball_to_the_mark(
         sim: Sim, ball: tuple[float, float], mark: tuple[float, float]) -> None:
     sim.referee("STOP")
