@@ -50,6 +50,12 @@ class RefereeCommandIn(BaseModel):
     designated_position: Point | None = Field(default=None, description="for ball placement")
 
 
+class CardIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    team: Literal["blue", "yellow"]
+    card: Literal["yellow", "red", "clear"]
+
+
 class EnableIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
     enabled: bool
@@ -193,6 +199,21 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 {"loc": ["body", "command"], "msg": str(exc), "type": "value_error"}]})
         await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s", body.command)
+        return st.referee_view()
+
+    @api.post("/referee/internal/card", response_model=None)
+    async def referee_card(body: CardIn) -> dict[str, Any] | JSONResponse:
+        other = st.internal_referee.foreign_active()
+        if other is not None:
+            return JSONResponse(status_code=409, content={
+                "detail": f"a game controller is active ({other}): the internal referee "
+                          "stays off"})
+        geo = st.geometry() or {}
+        # the division's robots per team, from the field size (A: 12 m x 9 m, 11 robots)
+        st.referee_state.robots_per_team = 11 if geo.get("field_length", 0) >= 11000 else 6
+        await st.call(st.referee_state.card, body.team, body.card)
+        await st.call(st.internal_referee.enable, True)
+        log.info("internal referee: %s card for %s", body.card, body.team)
         return st.referee_view()
 
     @api.post("/estop")

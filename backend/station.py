@@ -391,6 +391,8 @@ class Station:
                 "designated_position": None if st.designated_position is None else {
                     "x": st.designated_position[0], "y": st.designated_position[1]},
                 "score": {"blue": st.blue.score, "yellow": st.yellow.score},
+                "max_allowed_bots": {"blue": st.max_allowed_bots("blue"),
+                                     "yellow": st.max_allowed_bots("yellow")},
                 "commands": list(OPERATOR_COMMANDS),
             },
         }

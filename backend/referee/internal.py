@@ -27,6 +27,11 @@ class RefereeCommandError(ValueError):
     pass
 
 
+#: a yellow card lasts this long (the rules: 120 s of playing time; here: wall time)
+YELLOW_CARD_US = 120_000_000
+CARDS = ("yellow", "red", "clear")  # clear: the operator withdraws the team's cards
+
+
 @dataclass
 class _Team:
     name: str
@@ -36,6 +41,12 @@ class _Team:
     timeouts: int = 4
     timeout_time_us: int = 300_000_000
     goalkeeper: int = 0
+    yellow_card_ends_us: list[int] = field(default_factory=list)  # of the active cards
+    carded: bool = False  # once a card was given, max_allowed_bots is sent
+
+    def active_yellow_us(self, now_us: int) -> list[int]:
+        """Time left (us) of each yellow card still running, the soonest first."""
+        return sorted(t - now_us for t in self.yellow_card_ends_us if t > now_us)
 
 
 @dataclass
@@ -49,6 +60,32 @@ class InternalReferee:
     blue_team_on_positive_half: bool = False
     blue: _Team = field(default_factory=lambda: _Team("Blue"))
     yellow: _Team = field(default_factory=lambda: _Team("Yellow"))
+    robots_per_team: int = 6  # the division's number (B: 6, A: 11); cards lower it
+
+    def card(self, team: str, kind: str, now_us: int | None = None) -> None:
+        """A yellow card (one robot fewer for 120 s) or a red card (for the rest of the
+        game); the game goes on: the team takes a robot out by itself. ``clear`` withdraws
+        the team's cards (an operator's mistake)."""
+        if team not in ("blue", "yellow"):
+            raise RefereeCommandError(f"unknown team {team!r}; blue or yellow")
+        if kind not in CARDS:
+            raise RefereeCommandError(f"unknown card {kind!r}; one of {', '.join(CARDS)}")
+        t = self.blue if team == "blue" else self.yellow
+        now = int(time.time() * 1e6) if now_us is None else now_us
+        t.carded = True
+        if kind == "yellow":
+            t.yellow_cards += 1
+            t.yellow_card_ends_us.append(now + YELLOW_CARD_US)
+        elif kind == "red":
+            t.red_cards += 1
+        else:
+            t.yellow_cards = t.red_cards = 0
+            t.yellow_card_ends_us.clear()
+
+    def max_allowed_bots(self, team: str, now_us: int | None = None) -> int:
+        t = self.blue if team == "blue" else self.yellow
+        now = int(time.time() * 1e6) if now_us is None else now_us
+        return max(0, self.robots_per_team - t.red_cards - len(t.active_yellow_us(now)))
 
     def give(self, command: str, designated_position: tuple[float, float] | None = None,
              now_us: int | None = None) -> None:
@@ -88,6 +125,10 @@ class InternalReferee:
             info.red_cards, info.yellow_cards = t.red_cards, t.yellow_cards
             info.timeouts, info.timeout_time = t.timeouts, t.timeout_time_us
             info.goalkeeper = t.goalkeeper
+            info.yellow_card_times.extend(t.active_yellow_us(now))
+            if t.carded:
+                info.max_allowed_bots = self.max_allowed_bots(
+                    "blue" if t is self.blue else "yellow", now)
         if self.designated_position is not None:
             m.designated_position.x, m.designated_position.y = self.designated_position
         return m

@@ -110,7 +110,8 @@ class StrategyCore:
             keeper_min_speed_mmps=params.keeper_min_speed_mmps,
             formation_period_s=params.formation_period_s)
         inp = StrategyInput(t=now, ours=ours, theirs=theirs, ball=ball, fs=fs, situation=sit,
-                            keeper_id=keeper_id, play=params.play, tuning=tuning)
+                            keeper_id=keeper_id, play=params.play, tuning=tuning,
+                            max_bots=referee.max_allowed_bots(our_team) if referee else None)
         goal_x = frame.point(-fs.half_length + ROBOT_RADIUS_MM + 30.0, 0.0)[0]
         return Prepared(inp, frame, ball_field, vel_field, goal_x)
 

@@ -90,6 +90,7 @@ class StrategyInput:
     keeper_point: tuple[float, float] | None = None  # e.g. from the compute engine
     play: str = "match"
     tuning: Tuning = Tuning()
+    max_bots: int | None = None  # robots allowed on the field (the referee; cards lower it)
 
 
 Make = Callable[[Bot], Intent]
@@ -122,6 +123,8 @@ class Strategy:
         self._kicker_banned_until = -1.0
         self._last_kind = ""
         self._last_play = ""
+        self.leaving: set[int] = set()  # robots sent off the field (more than allowed)
+        self._all_ours: list[Bot] = []
 
     def configure(self, assignment: str, hysteresis_mm: float) -> None:
         self.assigner.mode = assignment  # type: ignore[assignment]
@@ -134,7 +137,11 @@ class Strategy:
             self._last_play = inp.play
         if inp.play == "idle" or not inp.ours:
             self.roles = {}
+            self.leaving = set()
             return {}
+        leaving = self._choose_leaving(inp)
+        if leaving:
+            inp = replace(inp, ours=[b for b in inp.ours if b.id not in leaving])
         sit = inp.situation
         # double touch: the robot that took a kickoff or free kick keeps off the ball a while
         if self._last_kind in ("kickoff", "free-kick") and sit.kind == "running":
@@ -168,9 +175,32 @@ class Strategy:
             if rid not in out:
                 b = bots[rid]
                 out[rid] = Intent("waiting", b.x, b.y, None, plan=False)
-        out = self._constrain(out, inp)
+        gone = [b for b in self._all_ours if b.id in leaving]
+        for b in gone:
+            out[b.id] = _substitution(b, inp.fs)
+            bots[b.id] = b
+        out = self._constrain(out, replace(inp, ours=self._all_ours) if gone else inp)
         self.roles = {rid: it.role for rid, it in out.items()}
         return out
+
+    def _choose_leaving(self, inp: StrategyInput) -> set[int]:
+        """The robots to take off the field when the referee allows fewer than we have (a
+        yellow or red card): the ones already on their way, then the nearest to a
+        substitution spot, the keeper last. Robots leave by driving to within 1 m of where
+        the halfway line meets a touch line, where the robot handler takes them out."""
+        self._all_ours = list(inp.ours)
+        excess = 0 if inp.max_bots is None else len(inp.ours) - max(0, inp.max_bots)
+        if excess <= 0:
+            self.leaving = set()
+            return set()
+        visible = {b.id: b for b in inp.ours}
+        keep = [i for i in sorted(self.leaving) if i in visible][:excess]
+
+        def cost(b: Bot) -> tuple[bool, float]:
+            return (b.id == inp.keeper_id, math.dist(b.xy, _substitution_spot(b, inp.fs)))
+        rest = sorted((b for b in inp.ours if b.id not in keep), key=cost)
+        self.leaving = set(keep) | {b.id for b in rest[: excess - len(keep)]}
+        return self.leaving
 
     # ---- slots per play and situation ----
 
@@ -409,6 +439,18 @@ class Strategy:
                 p = clamp_to_field(p, fs)
             res[rid] = replace(it, x=p[0], y=p[1])
         return res
+
+
+def _substitution_spot(bot: Bot, fs: FieldSize) -> tuple[float, float]:
+    """On our side of the halfway line, by the touch line nearer the robot, inside the
+    field and well within the rules' 1 m of where the halfway line meets it."""
+    side = 1.0 if bot.y >= 0.0 else -1.0
+    return (-(R + 200.0), side * (fs.half_width - R - 20.0))
+
+
+def _substitution(bot: Bot, fs: FieldSize) -> Intent:
+    p = _substitution_spot(bot, fs)
+    return Intent("substitution", p[0], p[1], None, max_speed_mps=1.5)
 
 
 def _inside_field_off_ball(p: tuple[float, float], ball: tuple[float, float],

@@ -104,7 +104,7 @@ def _game_event(ev: Any) -> dict[str, Any]:
     if kind is not None:
         body = getattr(ev, kind)
         if body.HasField("by_team"):
-            by_team = Team.Name(body.by_team)
+            by_team = _enum_name(Team, body.by_team)
     return {
         "id": ev.id,
         "type": _enum_name(GameEvent.Type, ev.type) if ev.HasField("type") else (kind or "UNKNOWN"),

@@ -230,3 +230,67 @@ def test_placement_from_against_the_wall_pulls_the_ball() -> None:
     pull = placer_at(ball.x - 111.5)
     assert pull.dribbler and pull.x == pytest.approx(dp[0] - 111.5)  # backs up to the mark
     assert pull.orientation == pytest.approx(0.0)
+
+
+def _with_max(max_bots: int | None, ours: list[Bot], strategy: Strategy,
+              sit: Situation = RUNNING, keeper: int | None = 0) -> dict[int, Intent]:
+    inp = StrategyInput(t=0.0, ours=ours, theirs=team(6, 101), ball=BALL, fs=FS, situation=sit,
+                        keeper_id=keeper, play="match", tuning=TU, max_bots=max_bots)
+    return strategy.decide(inp)
+
+
+def test_a_card_sends_the_excess_robots_to_the_halfway_line_and_play_goes_on() -> None:
+    ours = team(6, 3)
+    s = Strategy()
+    out = _with_max(6, ours, s)
+    assert "substitution" not in roles(out)
+    out = _with_max(4, ours, s)  # two yellow cards
+    leaving = sorted(rid for rid, it in out.items() if it.role == "substitution")
+    assert len(leaving) == 2 and 0 not in leaving  # never the keeper while others can go
+    for rid in leaving:
+        it = out[rid]
+        # within the rules' 1 m of where the halfway line meets a touch line, in the field
+        corner = (0.0, math.copysign(FS.half_width, it.y))
+        assert math.dist((it.x, it.y), corner) < 1000.0
+        assert abs(it.y) <= FS.half_width - R
+    # the four others still play the match: keeper, attacker, and so on
+    rest = sorted(it.role for rid, it in out.items() if rid not in leaving)
+    assert "goalkeeper" in rest and "attacker" in rest and len(rest) == 4
+    # the same robots keep leaving while they move, even if others are now nearer the spot
+    moved = [Bot(b.id, 0.0, 2500.0, 0.0) if b.id not in leaving else b for b in ours]
+    again = _with_max(4, moved, s)
+    assert sorted(r for r, it in again.items() if it.role == "substitution") == leaving
+
+
+def test_a_robot_taken_out_is_not_replaced_and_an_expired_card_brings_robots_back() -> None:
+    ours = team(6, 3)
+    s = Strategy()
+    out = _with_max(5, ours, s)
+    (gone,) = [rid for rid, it in out.items() if it.role == "substitution"]
+    remaining = [b for b in ours if b.id != gone]  # the robot handler took it out
+    out = _with_max(5, remaining, s)
+    assert "substitution" not in roles(out) and len(out) == 5
+    out = _with_max(6, ours, s)  # the card expired and the robot is back
+    assert "substitution" not in roles(out) and len(out) == 6
+
+
+def test_substitution_obeys_stop_and_halt() -> None:
+    ours = team(6, 3)
+    s = Strategy()
+    stop = Situation("stop", None, "STOP")
+    out = _with_max(5, ours, s, stop)
+    (rid,) = [r for r, it in out.items() if it.role == "substitution"]
+    assert out[rid].kick_speed_mps == 0.0
+    assert (out[rid].max_speed_mps or 9.9) <= 1.5
+    halt = Situation("halt", None, "HALT")
+    out = _with_max(5, ours, s, halt)
+    b = next(b for b in ours if b.id == rid)
+    assert (out[rid].x, out[rid].y) == (b.x, b.y)
+
+
+def test_the_keeper_leaves_only_when_nobody_else_can() -> None:
+    ours = team(2, 5)
+    out = _with_max(0, ours, Strategy())
+    assert roles(out) == ["substitution", "substitution"]
+    out = _with_max(1, ours, Strategy())
+    assert out[0].role == "goalkeeper" and out[1].role == "substitution"

@@ -269,3 +269,34 @@ def test_our_ball_placement_brings_the_ball_to_the_mark(
                 and all(ball_dist(r, t) > R + 21.5 + 50.0 for r in blue(t)))
     sim.until(placed, 30, "ball still on the mark, the placer 0.05 m away")
     sim.referee("STOP")
+
+
+def test_yellow_cards_take_robots_off_at_the_halfway_line_and_clearing_brings_them_back(
+        sim: Sim) -> None:
+    """Two yellow cards for blue: the referee allows 4 robots, two non-keepers drive to the
+    halfway line by a touch line (where the robot handler takes them), the others play on;
+    the operator withdraws the cards and all six play again."""
+    sim.referee("FORCE_START")
+    try:
+        for _ in range(2):
+            assert sim.post("/api/referee/internal/card",
+                            {"team": "blue", "card": "yellow"}).status_code == 200
+        wait_until(lambda: (sim.world().get("referee") or {}).get("blue", {})
+                   .get("max_allowed_bots") == 4, 5, what="4 robots allowed, via multicast")
+
+        def at_spot(r: dict[str, Any]) -> bool:
+            return math.dist((r["x"], abs(r["y"])), (0.0, HW)) < 1000.0 and abs(r["y"]) <= HW
+
+        def two_left(t: dict[str, Any]) -> bool:
+            off = [r for r in blue(t) if at_spot(r) and speed_mps(r) < 0.2]
+            return len(off) == 2 and all(r["id"] != 0 for r in off)
+        sim.until(two_left, 20, "two blue robots (not the keeper) at the halfway line")
+        roles = {r["id"]: r.get("role") for r in sim.world()["robots"] if r["team"] == "blue"}
+        assert sorted(roles.values()).count("substitution") == 2
+        assert roles[0] == "goalkeeper"
+    finally:
+        sim.post("/api/referee/internal/card", {"team": "blue", "card": "clear"})
+    wait_until(lambda: "substitution" not in [r.get("role") for r in sim.world()["robots"]
+                                              if r["team"] == "blue"], 5,
+               what="every blue robot back in the play")
+    sim.referee("STOP")

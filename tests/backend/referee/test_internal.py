@@ -45,3 +45,37 @@ def test_goal_counts_and_stops() -> None:
     ref.goal("yellow")
     m = Referee.FromString(ref.encode())
     assert m.yellow.score == 1 and m.command == Referee.STOP
+
+
+def test_cards_lower_the_robots_allowed_until_a_yellow_expires() -> None:
+    from backend.referee.internal import YELLOW_CARD_US
+    from backend.world.referee import decode_referee
+
+    ref = InternalReferee()
+    t0 = 1_000_000_000
+    # before any card, max_allowed_bots is not sent (like an older game controller)
+    assert not Referee.FromString(ref.encode(t0)).blue.HasField("max_allowed_bots")
+    ref.card("blue", "yellow", now_us=t0)
+    ref.card("blue", "red", now_us=t0 + 1_000_000)
+    ref.card("blue", "yellow", now_us=t0 + 2_000_000)
+    st = decode_referee(Referee.FromString(ref.encode(t0 + 10_000_000)))
+    assert st.max_allowed_bots("blue") == 3 and st.max_allowed_bots("yellow") is None
+    assert st.blue["yellow_cards"] == 2 and st.blue["red_cards"] == 1
+    assert st.blue["yellow_card_times_s"] == [110.0, 112.0]
+    # the first yellow ends: one robot back; the red stays for the game
+    st = decode_referee(Referee.FromString(ref.encode(t0 + YELLOW_CARD_US + 500_000)))
+    assert st.max_allowed_bots("blue") == 4
+    st = decode_referee(Referee.FromString(ref.encode(t0 + 3 * YELLOW_CARD_US)))
+    assert st.max_allowed_bots("blue") == 5 and st.blue["yellow_card_times_s"] == []
+    assert st.blue["yellow_cards"] == 2  # cards given, as the game controller counts them
+    ref.card("blue", "clear", now_us=t0 + 3 * YELLOW_CARD_US)
+    st = decode_referee(Referee.FromString(ref.encode(t0 + 3 * YELLOW_CARD_US)))
+    assert st.max_allowed_bots("blue") == 6 and st.blue["red_cards"] == 0
+
+
+@pytest.mark.parametrize("team,card", [("green", "yellow"), ("blue", "blue")])
+def test_bad_cards_are_refused(team: str, card: str) -> None:
+    ref = InternalReferee()
+    with pytest.raises(RefereeCommandError):
+        ref.card(team, card)
+    assert ref.blue.red_cards == ref.blue.yellow_cards == 0
