@@ -12,6 +12,7 @@ import json
 import logging
 import os
 import random
+import shutil
 import signal
 import socket
 import subprocess
@@ -170,8 +171,9 @@ def main() -> int:
         return 2
 
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
+    own_state_dir: str | None = None  # a temporary state folder of ours: removed at exit
     if a.isolated and a.state_dir is None:
-        a.state_dir = tempfile.mkdtemp(prefix="touchline-state-")
+        a.state_dir = own_state_dir = tempfile.mkdtemp(prefix="touchline-state-")
     if a.vision_port:
         ports.vision = a.vision_port
     children = build_children(a, ports)
@@ -191,6 +193,8 @@ def main() -> int:
         print(f"\n  Touchline is running: {url}\n", flush=True)  # noqa: T201
         # machine-readable lines for tests and scripts
         print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
+        if own_state_dir is not None:
+            print(f"TOUCHLINE_STATE_DIR {own_state_dir}", flush=True)  # noqa: T201
         print(f"TOUCHLINE_READY {url}", flush=True)  # noqa: T201
     else:
         log.error("backend did not answer on %s within 30 s", url)
@@ -222,6 +226,9 @@ def main() -> int:
                     c.proc.wait(timeout=5)
                 except subprocess.TimeoutExpired:
                     c.proc.kill()
+                    c.proc.wait()
+        if own_state_dir is not None:
+            shutil.rmtree(own_state_dir, ignore_errors=True)
         log.info("stopped")
     return 0
 

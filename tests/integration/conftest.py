@@ -53,6 +53,8 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
             lines.append(line.rstrip())
             if line.startswith("TOUCHLINE_PORTS "):
                 info["ports"] = json.loads(line.split(" ", 1)[1])
+            if line.startswith("TOUCHLINE_STATE_DIR "):
+                info["state_dir"] = line.split(" ", 1)[1].strip()
             if line.startswith("TOUCHLINE_READY "):
                 info["url"] = line.split(" ", 1)[1].strip()
                 ready.set()
@@ -69,6 +71,10 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
             proc.wait(timeout=15)
         except subprocess.TimeoutExpired:
             proc.kill()
+        else:
+            # an orderly stop leaves no temporary state folder behind
+            assert "state_dir" in info, "the launcher did not say where its state went"
+            assert not Path(info["state_dir"]).exists(), info["state_dir"]
 
 
 @pytest.fixture(scope="session")
