@@ -381,7 +381,7 @@ class Strategy:
             line_x = bxy[0] + 1000.0 + R + 150.0
         m = n - len(slots)
         line_x = max(-fs.half_length + R + 50.0, min(fs.half_length - R - 50.0, line_x))
-        ys = _spread_ys(m, fs)
+        ys = _free_ys(m, fs, line_x, [b.xy for b in inp.theirs])
         for k, y in enumerate(ys):
             p = (line_x, y)
             slots.append(Slot(f"penalty-{k + 1}", "waiting", p, _hold("waiting", p, 0.0)))
@@ -478,6 +478,28 @@ def _inside_field_off_ball(p: tuple[float, float], ball: tuple[float, float],
             if clear(c) and (best is None or math.dist(c, p) < math.dist(best, p)):
                 best = c
     return best if best is not None else q
+
+
+def _free_ys(m: int, fs: FieldSize, x: float, others: Sequence[tuple[float, float]],
+             ) -> list[float]:
+    """``m`` spots along the line at ``x``, spread as ``_spread_ys`` does but moved off the
+    other team's robots standing on or near that line (both teams line up behind the ball
+    at a penalty: the same spots would leave our robots stuck in front of theirs)."""
+    spread = _spread_ys(m, fs)
+    near = [oy for ox, oy in others if abs(ox - x) < 2.0 * R + 100.0]
+    if not near:
+        return spread
+    gap = 2.0 * R + 100.0
+    lim = fs.half_width - R - 100.0
+    free = [k * 50.0 for k in range(-int(lim // 50.0), int(lim // 50.0) + 1)
+            if all(abs(k * 50.0 - oy) >= gap for oy in near)]
+    out: list[float] = []
+    for want in spread:  # each wanted spot takes the nearest free one not too near ours
+        options = [y for y in free if all(abs(y - o) >= gap for o in out)]
+        if not options:
+            break
+        out.append(min(options, key=lambda y: abs(y - want)))
+    return sorted(out) + spread[len(out):]
 
 
 def _spread_ys(m: int, fs: FieldSize) -> list[float]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import random
 
@@ -294,3 +295,27 @@ def test_the_keeper_leaves_only_when_nobody_else_can() -> None:
     assert roles(out) == ["substitution", "substitution"]
     out = _with_max(1, ours, Strategy())
     assert out[0].role == "goalkeeper" and out[1].role == "substitution"
+
+
+@pytest.mark.parametrize("ours_pen", [True, False])
+def test_penalty_line_spots_avoid_the_other_team_standing_on_that_line(ours_pen: bool) -> None:
+    """Both teams wait behind the ball at a penalty: our spots move off their robots."""
+    ball = Ball(FS.half_length - 2000.0, 0.0) if ours_pen else Ball(-FS.half_length + 2000.0, 0.0)
+    plain, _ = decide(Situation("penalty-prepare", ours_pen, "PREPARE_PENALTY_X"), ball=ball)
+    line = [it for it in plain.values() if it.role == "waiting"]
+    assert len(line) >= 3
+    # their robots on exactly the spots we would take
+    theirs = [Bot(10 + k, it.x, it.y, 0.0) for k, it in enumerate(line)]
+    s = Strategy()
+    inp = StrategyInput(t=0.0, ours=team(6, 1), theirs=theirs, ball=ball, fs=FS,
+                        situation=Situation("penalty-prepare", ours_pen, "PREPARE_PENALTY_X"),
+                        play="match", tuning=TU)
+    out = s.decide(inp)
+    moved = [it for it in out.values() if it.role == "waiting"]
+    assert len(moved) == len(line)
+    for it in moved:
+        assert it.x == line[0].x  # still on the line behind the ball
+        assert min(math.dist((it.x, it.y), b.xy) for b in theirs) >= 2 * R + 100.0
+        assert abs(it.y) <= FS.half_width - R
+    ys = sorted(it.y for it in moved)
+    assert all(b - a >= 2 * R + 100.0 for a, b in itertools.pairwise(ys))
