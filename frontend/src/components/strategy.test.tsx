@@ -214,6 +214,18 @@ describe("roles in the robot table and panel, situation banner", () => {
     expect(q("robot-row-blue-1")!.querySelector('[data-testid="robot-role"]')!.textContent).toBe("");
   });
 
+  it("shows a robot leaving the field for a substitution as SUB (Substitution on hover)", () => {
+    const robots = [robot("blue", 3, -300, 2900, { role: "substitution" })];
+    act(() => root.render(<RobotTable robots={robots} selected={null} />));
+    const cell = q("robot-row-blue-3")!.querySelector('[data-testid="robot-role"]') as HTMLElement;
+    expect(cell.textContent).toBe("SUB");
+    expect(cell.getAttribute("title")).toBe("Substitution");
+    expect(cell.getAttribute("data-role")).toBe("substitution");
+    expect(cell.style.color).not.toBe("");
+    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robots[0]!} />));
+    expect(q("robot-role-detail")?.textContent).toBe("Substitution (SUB)");
+  });
+
   it("shows role, path, kicker and dribbler of the selected robot", () => {
     const r = robot("blue", 4, 0, 0, {
       role: "attacker",

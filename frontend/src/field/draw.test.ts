@@ -1,6 +1,7 @@
 import { describe, expect, it } from "vitest";
 import type { Robot, StrategyState } from "../api/types";
 import { geometry, referee, world } from "../ws/fixtures";
+import { roleColor } from "../strategy/roles";
 import { ALL_LAYERS, drawField, roleTagPx, type DrawInput } from "./draw";
 import { robot } from "./testRobots";
 import { makeTransform, worldToCanvas } from "./transform";
@@ -72,6 +73,15 @@ describe("drawField: strategy layers", () => {
     // dashed polylines: robot 1 -> two waypoints
     const dashedLines = calls.filter((c) => c.name === "lineTo" && c.dash > 0);
     expect(dashedLines.length).toBeGreaterThanOrEqual(3);
+  });
+
+  it("tags a robot leaving the field for a substitution SUB, in the substitution colour", () => {
+    const { ctx, calls } = fakeCtx();
+    const counts = drawField(ctx, input([...ours, robot("blue", 5, -300, 4400, { role: "substitution" })]));
+    expect(counts.roles).toBe(4);
+    const sub = calls.filter((c) => c.name === "fillText" && c.args[0] === "SUB");
+    expect(sub).toHaveLength(1);
+    expect(sub[0]!.style).toBe(roleColor("substitution"));
   });
 
   it("draws no path with the paths layer off and no tags with the roles layer off", () => {

@@ -13,6 +13,7 @@ describe("roleTag", () => {
     expect(roleTag("waiting")).toBe("WAIT");
     expect(roleTag("parked")).toBe("PRK");
     expect(roleTag("operator")).toBe("OP");
+    expect(roleTag("substitution")).toBe("SUB");
   });
   it("is case and space tolerant", () => {
     expect(roleTag(" Goalkeeper ")).toBe("GK");
@@ -40,6 +41,12 @@ describe("roleName and roleColor", () => {
     expect(roleName("ball_placer")).toBe("Ball placer");
     expect(roleName("free-kick-taker")).toBe("Free kick taker");
     expect(roleName(null)).toBe("—");
+  });
+  it("gives a robot leaving for a substitution a colour of its own (not the supporter's, whose tag looks alike)", () => {
+    expect(roleName("substitution")).toBe("Substitution");
+    const c = roleColor("substitution");
+    expect(c).not.toBe(roleColor(null));
+    for (const other of ["supporter", "attacker", "goalkeeper", "waiting", "placer"]) expect(c, other).not.toBe(roleColor(other));
   });
   it("colours attack and defence differently and has a default", () => {
     expect(roleColor("attacker")).not.toBe(roleColor("defender"));

@@ -12,6 +12,7 @@ export const ROLE_TAGS: Readonly<Record<string, string>> = {
   waiting: "WAIT",
   parked: "PRK",
   operator: "OP",
+  substitution: "SUB",
 };
 
 function norm(role: string): string {
@@ -34,7 +35,8 @@ export function roleName(role: string | null | undefined): string {
   return s.charAt(0).toUpperCase() + s.slice(1);
 }
 
-/** Text colour of a role's tag: keeper and defenders cool, attack warm, set pieces violet. */
+/** Text colour of a role's tag: keeper and defenders cool, attack warm, set pieces violet,
+ * a robot leaving the field for a substitution (a card) orange. */
 export function roleColor(role: string | null | undefined): string {
   switch (typeof role === "string" ? norm(role) : "") {
     case "goalkeeper":
@@ -51,6 +53,8 @@ export function roleColor(role: string | null | undefined): string {
     case "waiting":
     case "parked":
       return "#cbd5e1";
+    case "substitution":
+      return "#fb923c";
     default:
       return "#f1f5f9";
   }
