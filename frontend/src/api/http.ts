@@ -142,8 +142,14 @@ export interface InternalReferee {
   command_counter: number;
   designated_position: { x: number; y: number } | null;
   score: { blue: number; yellow: number };
+  /** Robots per team the internal referee allows now (cards lower it; absent from an older backend). */
+  max_allowed_bots?: { blue: number; yellow: number };
   commands: string[];
 }
+
+/** A card from the internal referee: yellow (one robot fewer for 120 s), red (for the rest of
+ * the game), or clear (withdraw the team's cards). */
+export type Card = "yellow" | "red" | "clear";
 
 export const getReferee = () => request<{ internal: InternalReferee; active: unknown }>("GET", "/api/referee");
 export const postRefereeCommand = (command: string, designated_position?: { x: number; y: number }) =>
@@ -152,6 +158,8 @@ export const postRefereeCommand = (command: string, designated_position?: { x: n
     "/api/referee/internal/command",
     designated_position ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } } : { command },
   );
+export const postRefereeCard = (team: Team, card: Card) =>
+  request<{ internal: InternalReferee }>("POST", "/api/referee/internal/card", { team, card });
 export const postRefereeEnabled = (enabled: boolean) => request<InternalReferee>("POST", "/api/referee/internal/enabled", { enabled });
 
 export const teleportBall = (x: number, y: number) => request<unknown>("POST", "/api/sim/ball", { x: Math.round(x), y: Math.round(y) });

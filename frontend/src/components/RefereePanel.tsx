@@ -1,5 +1,5 @@
 import { useCallback, useEffect, useState } from "react";
-import { ApiError, getReferee, postRefereeCommand, postRefereeEnabled, type InternalReferee } from "../api/http";
+import { ApiError, getReferee, postRefereeCard, postRefereeCommand, postRefereeEnabled, type Card, type InternalReferee } from "../api/http";
 import type { Referee, RefereeGameEvent, RefereeTeam, Robot, Team } from "../api/types";
 import { fmtFixed, fmtInt } from "../format";
 import { placementTarget, visibleRobots } from "../referee";
@@ -196,6 +196,25 @@ export async function giveRefereeCommand(command: string, at?: { x: number; y: n
   }
 }
 
+/** The internal referee's card buttons: a row per card, a button per team. */
+const CARD_ROWS: { card: Card; label: string; help: string }[] = [
+  { card: "yellow", label: "Yellow card", help: "one robot fewer for 120 s" },
+  { card: "red", label: "Red card", help: "one robot fewer for the rest of the game" },
+  { card: "clear", label: "Clear cards", help: "withdraw the team's yellow and red cards" },
+];
+
+/** A card from the internal referee; resolves to an error text or null (a toast shows it too). */
+export async function giveRefereeCard(team: Team, card: Card): Promise<string | null> {
+  try {
+    await postRefereeCard(team, card);
+    return null;
+  } catch (e) {
+    const msg = e instanceof ApiError ? `${e.message} (HTTP ${e.status})` : (e as Error).message;
+    pushToast("error", `Referee ${card === "clear" ? "clear cards" : `${card} card`} for ${team}: ${msg}`);
+    return msg;
+  }
+}
+
 export function RefereePanel() {
   const world = useThrottledWorld(250);
   const placing = useUi((s) => s.placing);
@@ -224,6 +243,25 @@ export function RefereePanel() {
     setMsg(err);
     refresh();
   };
+  const card = async (team: Team, kind: Card) => {
+    const err = await giveRefereeCard(team, kind);
+    setMsg(err);
+    refresh();
+  };
+  const cardBtn = (team: Team, row: (typeof CARD_ROWS)[number]) => (
+    <button
+      key={team}
+      type="button"
+      className={`btn refbtn refbtn-card refbtn-card-${row.card}`}
+      disabled={disabled}
+      title={`${row.label} for ${team}: ${row.help}`}
+      aria-label={`${row.label} for ${team}`}
+      data-testid={`ref-card-${row.card}-${team}`}
+      onClick={() => void card(team, row.card)}
+    >
+      {team}
+    </button>
+  );
   const btn = (cmd: string, label = pretty(cmd), cls = "") => (
     <button
       key={cmd}
@@ -281,6 +319,14 @@ export function RefereePanel() {
             <td>{btn("BALL_PLACEMENT_BLUE", "blue…")}</td>
             <td>{btn("BALL_PLACEMENT_YELLOW", "yellow…")}</td>
           </tr>
+          {CARD_ROWS.map((row) => (
+            <tr key={row.card}>
+              <td>{row.label}</td>
+              {SIDES.map((side) => (
+                <td key={side}>{cardBtn(side, row)}</td>
+              ))}
+            </tr>
+          ))}
         </tbody>
       </table>
       {placing && (

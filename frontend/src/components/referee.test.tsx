@@ -1,7 +1,8 @@
 // @vitest-environment jsdom
 import { act } from "react";
 import { createRoot, type Root } from "react-dom/client";
-import { afterEach, beforeEach, describe, expect, it } from "vitest";
+import { afterEach, beforeEach, describe, expect, it, vi } from "vitest";
+import type { InternalReferee } from "../api/http";
 import type { Health, RefereeGameEvent, RefereeHealth, Robot, Team } from "../api/types";
 import { robot } from "../field/testRobots";
 import { placementTarget, refereeSilentFor } from "../referee";
@@ -9,7 +10,8 @@ import { appStore, initialAppState } from "../store/appStore";
 import { health, referee, refereeTeam, world } from "../ws/fixtures";
 import { HealthPanel } from "./HealthPanel";
 import { HealthSummary } from "./HealthSummary";
-import { EVENTS_SHOWN, fmtCards, RefereeState } from "./RefereePanel";
+import { EVENTS_SHOWN, fmtCards, RefereePanel, RefereeState } from "./RefereePanel";
+import { Toasts } from "./Toasts";
 import { TopBar } from "./TopBar";
 
 (globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
@@ -26,6 +28,7 @@ beforeEach(() => {
 afterEach(() => {
   act(() => root.unmount());
   host.remove();
+  vi.unstubAllGlobals();
 });
 
 const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
@@ -213,5 +216,126 @@ describe("a silent referee", () => {
     ]);
     act(() => appStore.setState({ health: withReferee(refHealth(0.1, false)) }));
     expect(q("health-warnings")).toBeNull();
+  });
+});
+
+describe("the internal referee's card buttons", () => {
+  const internal = (over: Partial<InternalReferee> = {}): InternalReferee => ({
+    enabled: true,
+    disabled_reason: "",
+    foreign_source: null,
+    command: "FORCE_START",
+    stage: "NORMAL_FIRST_HALF",
+    command_counter: 3,
+    designated_position: null,
+    score: { blue: 0, yellow: 0 },
+    max_allowed_bots: { blue: 6, yellow: 6 },
+    commands: ["HALT", "STOP", "FORCE_START"],
+    ...over,
+  });
+
+  type Reply = { status: number; body: unknown };
+  /** fetch for GET /api/referee and POST /api/referee/internal/card (`card` answers the POST). */
+  function stubApi(state: InternalReferee, card: (body: { team: string; card: string }) => Reply) {
+    const fetchMock = vi.fn(async (url: string, init?: RequestInit) => {
+      const key = `${init?.method ?? "GET"} ${url}`;
+      const r: Reply =
+        key === "GET /api/referee"
+          ? { status: 200, body: { internal: state, active: null } }
+          : key === "POST /api/referee/internal/card"
+            ? card(JSON.parse(String(init?.body)))
+            : { status: 404, body: { detail: "Not Found" } };
+      return new Response(JSON.stringify(r.body), { status: r.status });
+    });
+    vi.stubGlobal("fetch", fetchMock);
+    return fetchMock;
+  }
+  const posted = (fetchMock: ReturnType<typeof stubApi>) =>
+    fetchMock.mock.calls
+      .filter(([url, init]) => url === "/api/referee/internal/card" && init?.method === "POST")
+      .map(([, init]) => ({ type: (init?.headers as Record<string, string>)["Content-Type"], body: JSON.parse(String(init?.body)) }));
+
+  /** Let pending fetches and the renders they cause finish. */
+  async function settle() {
+    for (let i = 0; i < 5; i++) await act(async () => new Promise((r) => setTimeout(r, 0)));
+  }
+  const click = async (id: string) => {
+    const b = q(id) as HTMLButtonElement | null;
+    expect(b, id).not.toBeNull();
+    act(() => b!.click());
+    await settle();
+  };
+  const toasts = () => [...host.querySelectorAll('[data-testid="toast"]')].map((t) => [t.getAttribute("data-kind"), t.querySelector("span")?.textContent]);
+
+  beforeEach(() => appStore.setState(initialAppState()));
+
+  it("has a yellow card, red card and clear cards button per team, named for screen readers", async () => {
+    stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
+    act(() => root.render(<RefereePanel />));
+    await settle();
+    for (const team of ["blue", "yellow"]) {
+      for (const [card, name] of [["yellow", "Yellow card"], ["red", "Red card"], ["clear", "Clear cards"]]) {
+        const b = q(`ref-card-${card}-${team}`) as HTMLButtonElement;
+        expect(b.textContent).toBe(team);
+        expect(b.getAttribute("aria-label")).toBe(`${name} for ${team}`);
+        expect(b.title.startsWith(`${name} for ${team}: `)).toBe(true);
+        expect(b.disabled).toBe(false);
+      }
+    }
+  });
+
+  it("posts {team, card} for each button", async () => {
+    const fetchMock = stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
+    act(() => root.render(<RefereePanel />));
+    await settle();
+    await click("ref-card-yellow-blue");
+    await click("ref-card-red-yellow");
+    await click("ref-card-clear-blue");
+    await click("ref-card-yellow-yellow");
+    await click("ref-card-red-blue");
+    await click("ref-card-clear-yellow");
+    expect(posted(fetchMock)).toEqual([
+      { type: "application/json", body: { team: "blue", card: "yellow" } },
+      { type: "application/json", body: { team: "yellow", card: "red" } },
+      { type: "application/json", body: { team: "blue", card: "clear" } },
+      { type: "application/json", body: { team: "yellow", card: "yellow" } },
+      { type: "application/json", body: { team: "blue", card: "red" } },
+      { type: "application/json", body: { team: "yellow", card: "clear" } },
+    ]);
+    expect(q("referee-error")).toBeNull();
+  });
+
+  it("shows a 409 (a game controller is active) under the buttons and as an error toast", async () => {
+    const detail = "a game controller is active (gc-1): the internal referee stays off";
+    stubApi(internal(), () => ({ status: 409, body: { detail } }));
+    act(() => root.render(<><RefereePanel /><Toasts /></>));
+    await settle();
+    await click("ref-card-yellow-blue");
+    expect(text("referee-error")).toBe(`${detail} (HTTP 409)`);
+    expect(toasts()).toContainEqual(["error", `Referee yellow card for blue: ${detail} (HTTP 409)`]);
+  });
+
+  it("shows a 422 with the server's field message; a later success clears it", async () => {
+    let reply: Reply = { status: 422, body: { detail: [{ loc: ["body", "card"], msg: "Input should be 'yellow', 'red' or 'clear'" }] } };
+    stubApi(internal(), () => reply);
+    act(() => root.render(<><RefereePanel /><Toasts /></>));
+    await settle();
+    await click("ref-card-clear-yellow");
+    expect(text("referee-error")).toBe("card: Input should be 'yellow', 'red' or 'clear' (HTTP 422)");
+    expect(toasts()).toContainEqual(["error", "Referee clear cards for yellow: card: Input should be 'yellow', 'red' or 'clear' (HTTP 422)"]);
+    reply = { status: 200, body: { internal: internal() } };
+    await click("ref-card-clear-yellow");
+    expect(q("referee-error")).toBeNull();
+  });
+
+  it("is disabled while a game controller has the say", async () => {
+    const fetchMock = stubApi(internal({ enabled: false, foreign_source: "gc-1" }), () => ({ status: 200, body: {} }));
+    act(() => root.render(<RefereePanel />));
+    await settle();
+    for (const id of ["ref-card-yellow-blue", "ref-card-red-yellow", "ref-card-clear-blue"]) {
+      expect((q(id) as HTMLButtonElement).disabled, id).toBe(true);
+    }
+    await click("ref-card-yellow-blue");
+    expect(posted(fetchMock)).toEqual([]);
   });
 });
