@@ -87,7 +87,10 @@ def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ign
                     seqs.append(msg["world"]["seq"])
         # the last 2 s, when the stalled clients' buffers are long full
         late = [t for t in stamps if t > t_end - 2.0]
-        assert len(late) / 2.0 > 40, f"only {len(late) / 2.0:.0f} world messages/s"
+        # a fan-out that waits for the stalled clients delivers nothing once their buffers
+        # are full; 5 messages/s is far above that and far below what a loaded 2-core CI
+        # machine still gives (the rate itself is measured in bench/ws_fanout.py)
+        assert len(late) / 2.0 >= 5.0, f"only {len(late) / 2.0:.1f} world messages/s"
         assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)  # latest only, in order
     finally:
         stop.set()
