@@ -571,7 +571,33 @@ def next_waypoint(entry: TargetEntry, x_mm: float, y_mm: float) -> Target:
             k += 1
     if k == len(path) - 1:
         return entry.target
-    return Target(path[k][0], path[k][1], entry.target.orientation)
+    return _carry_through(path, k, x_mm, y_mm, entry.target.orientation)
+
+
+#: how far past an intermediate waypoint the controller is aimed at most (mm)
+CARRY_MAX_MM = 600.0
+
+
+def _carry_through(path: tuple[tuple[float, float], ...], k: int, x_mm: float, y_mm: float,
+                   orientation: float | None) -> Target:
+    """The controller's target for intermediate waypoint ``k``: the waypoint itself pushed on
+    along the robot's line to it, by up to the path still left after it (at most
+    ``CARRY_MAX_MM``), scaled by cos^2 of the turn there. The speed controllers brake to
+    stop at their target; aimed past a waypoint the robot keeps its speed through a gentle
+    turn and still stops at a sharp one (90 deg or more: no carry at all)."""
+    px, py = path[k]
+    nx, ny = path[k + 1]
+    ix, iy = px - x_mm, py - y_mm
+    ox, oy = nx - px, ny - py
+    li, lo = math.hypot(ix, iy), math.hypot(ox, oy)
+    if li < 1e-6 or lo < 1e-6:
+        return Target(px, py, orientation)
+    cos_turn = (ix * ox + iy * oy) / (li * lo)
+    if cos_turn <= 0.0:
+        return Target(px, py, orientation)
+    rest = lo + sum(math.dist(path[i], path[i + 1]) for i in range(k + 1, len(path) - 1))
+    ext = min(rest, CARRY_MAX_MM) * cos_turn * cos_turn
+    return Target(px + ix / li * ext, py + iy / li * ext, orientation)
 
 
 def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:

@@ -60,12 +60,35 @@ async def test_no_kick_under_stop_but_kicks_in_play_and_speed_caps_hold() -> Non
     assert (await last(c, bus)).commands[0].kick_speed_mps == 0.0
 
 
+def _near(t: Target, x: float, y: float, o: float | None) -> bool:
+    return math.isclose(t.x, x, abs_tol=1e-6) and math.isclose(t.y, y, abs_tol=1e-6) \
+        and t.orientation == o
+
+
 def test_next_waypoint_skips_reached_points_and_keeps_the_final_heading() -> None:
+    # right-angle corners: the controller is aimed exactly at each waypoint
+    e = TargetEntry(Target(700.0, 0.0, 1.0), "strategy",
+                    path=((0.0, 300.0), (700.0, 300.0), (700.0, 0.0)))
+    assert _near(next_waypoint(e, 0.0, 0.0), 0.0, 300.0, 1.0)
+    assert _near(next_waypoint(e, 10.0, 250.0), 700.0, 300.0, 1.0)  # first one reached
+    assert _near(next_waypoint(e, 400.0, 300.0), 700.0, 300.0, 1.0)  # between the two
+    assert next_waypoint(e, 690.0, 290.0) == Target(700.0, 0.0, 1.0)  # never back
+    assert next_waypoint(e, 0.0, 400.0) != Target(700.0, 0.0, 1.0)
+
+
+def test_a_gentle_turn_aims_past_the_waypoint_by_cos_squared_of_the_turn() -> None:
+    """45 deg at (300, 300): aimed on along the robot's line by min(rest, 600) * cos^2."""
     e = TargetEntry(Target(1000.0, 0.0, 1.0), "strategy",
                     path=((300.0, 300.0), (700.0, 300.0), (1000.0, 0.0)))
-    assert next_waypoint(e, 0.0, 0.0) == Target(300.0, 300.0, 1.0)
-    assert next_waypoint(e, 250.0, 300.0) == Target(700.0, 300.0, 1.0)  # first one reached
-    assert next_waypoint(e, 500.0, 310.0) == Target(700.0, 300.0, 1.0)  # between the two
-    assert next_waypoint(e, 690.0, 300.0) == Target(1000.0, 0.0, 1.0)  # never back
+    t = next_waypoint(e, 0.0, 0.0)
+    ext = 600.0 * 0.5  # rest = 400 + 424 mm > 600; cos^2(45 deg) = 0.5
+    assert _near(t, 300.0 + ext / math.sqrt(2), 300.0 + ext / math.sqrt(2), 1.0)
+    # the second corner (45 deg) with only 424 mm left after it
+    t = next_waypoint(e, 400.0, 300.0)
+    assert _near(t, 700.0 + 424.26406871192853 * 0.5, 300.0, 1.0)
+    # straight on through a waypoint: the whole rest, capped at 600 mm
+    e = TargetEntry(Target(2000.0, 0.0, None), "strategy",
+                    path=((500.0, 0.0), (900.0, 0.0), (2000.0, 0.0)))
+    assert _near(next_waypoint(e, 0.0, 0.0), 1100.0, 0.0, None)
     assert next_waypoint(TargetEntry(Target(5.0, 5.0, None), "operator"), 0.0, 0.0) == \
         Target(5.0, 5.0, None)
