@@ -24,6 +24,16 @@ def _positive(text: str) -> float:
     return v
 
 
+def _speed(text: str) -> float | None:
+    """A controller speed limit in m/s (the parameters' range), or 'station'."""
+    if text == "station":
+        return None
+    v = float(text)
+    if not 0.05 <= v <= 5.0:
+        raise argparse.ArgumentTypeError("must be within 0.05..5 m/s, or 'station'")
+    return v
+
+
 def build_parser() -> argparse.ArgumentParser:
     d = Options()
     p = argparse.ArgumentParser(prog="python -m match", description=__doc__,
@@ -39,6 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--blue-play", default=d.blue_play, help="blue's play (default %(default)s)")
     p.add_argument("--yellow-play", default=d.yellow_play,
                    help="yellow's play (default %(default)s)")
+    p.add_argument("--robot-speed", type=_speed, default=d.robot_speed_mps, metavar="MPS",
+                   help="speed limit v of every speed controller in both backends (default "
+                        "%(default)s m/s; 'station' keeps the station's 1.0 m/s)")
     p.add_argument("--backend-arg", dest="backend_args", action="append", default=[],
                    help="extra flag for both backends (repeatable)")
     p.add_argument("--startup-timeout", type=_positive, default=d.startup_timeout_s,
@@ -53,7 +66,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     opts = Options(minutes=a.minutes, seed=a.seed, division=a.division, engine=a.engine,
                    out=a.out, blue_play=a.blue_play, yellow_play=a.yellow_play,
-                   backend_args=list(a.backend_args), startup_timeout_s=a.startup_timeout)
+                   backend_args=list(a.backend_args), startup_timeout_s=a.startup_timeout,
+                   robot_speed_mps=a.robot_speed)
     return MatchRunner(opts).run()
 
 

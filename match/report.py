@@ -52,8 +52,10 @@ def format_result(res: dict[str, Any]) -> str:
             f"{yellow.get('goals', 0)} yellow ({yellow.get('play', '?')})   -- {status}")
     sub = []
     if opts:
+        speed = opts.get("robot_speed_mps")
         sub.append(f"division {opts.get('division')}, {opts.get('minutes')} min "
-                   f"(2 halves), seed {opts.get('seed')}")
+                   f"(2 halves), seed {opts.get('seed')}, robots at "
+                   + (f"{speed} m/s" if speed is not None else "the station's speed"))
     sub.append(f"{res.get('elapsed_s', 0.0):.0f} s on the clock of the director; events from "
                f"{res.get('events_source') or 'nowhere (none seen)'}")
     rows = []

@@ -52,6 +52,9 @@ class Options:
     startup_timeout_s: float = 90.0
     status_every_s: float = 10.0
     backend_args: list[str] = field(default_factory=list)
+    #: speed limit v (m/s) of every speed controller in both backends; None: the station's
+    #: default (the paper's classroom 1.0 m/s)
+    robot_speed_mps: float | None = 2.0
 
     @property
     def half_s(self) -> float:
@@ -62,6 +65,10 @@ class Options:
         """A bound on the whole match: the halves, every interlude and set piece timing out,
         half time, and slack for a loaded machine."""
         return self.minutes * 60.0 * 2.0 + 300.0
+
+
+#: the controllers whose speed limit ``v_mps`` --robot-speed sets
+SPEED_CONTROLLERS = ("algorithm1", "algorithm2", "proportional")
 
 
 class StartupError(RuntimeError):
@@ -146,6 +153,9 @@ def build(opts: Options, ports: Ports, truth_endpoint: str, http: dict[str, int]
             backend_args += ["--play", plays[team]]
         if team == "blue" and opts.engine and "--set" in supported:
             backend_args += ["--set", f"strategy.engine={opts.engine}"]
+        if opts.robot_speed_mps is not None and "--set" in supported:
+            for ctrl in SPEED_CONTROLLERS:
+                backend_args += ["--set", f"control.params.{ctrl}.v_mps={opts.robot_speed_mps}"]
         ns = argparse.Namespace(
             sim="builtin", seed=opts.seed, interface=opts.interface,
             sim_args=["--blue", "6", "--yellow", "6", "--division", opts.division,
@@ -333,7 +343,7 @@ class MatchRunner:
             "version": 1,
             "options": {"minutes": o.minutes, "seed": o.seed, "division": o.division,
                         "engine": o.engine, "blue_play": o.blue_play,
-                        "yellow_play": o.yellow_play},
+                        "yellow_play": o.yellow_play, "robot_speed_mps": o.robot_speed_mps},
             "reason": self.reason,
             **res,
             "referee": {"source_identifier": director.referee.source_identifier,

@@ -97,8 +97,16 @@ def test_runner_builds_fieldsim_one_relay_and_two_backends_on_isolated_ports() -
         assert argv[argv.index("--play") + 1] == play
         assert argv[argv.index("--relay-pub") + 1] == ports.relay_pub
         assert argv[argv.index("--state-dir") + 1] == dirs[team]
-    assert blue[blue.index("--set") + 1] == "strategy.engine=octave"
-    assert "--set" not in yellow
+    def sets(argv: list[str]) -> list[str]:
+        return [argv[i + 1] for i, a in enumerate(argv) if a == "--set"]
+    speed = [f"control.params.{c}.v_mps=2.0" for c in ("algorithm1", "algorithm2",
+                                                        "proportional")]
+    assert sets(blue) == ["strategy.engine=octave", *speed]
+    assert sets(yellow) == speed
+    # --robot-speed station: the backends keep their own speed limits
+    kids = build(Options(robot_speed_mps=None), ports, "tcp://127.0.0.1:5999", http, dirs,
+                 {"--play", "--set"})
+    assert all(not sets(c.argv) for c in kids)
     # a backend without the strategy flags still gets a working command line
     old = build(Options(), ports, "tcp://127.0.0.1:5999", http, dirs, set())
     assert all("--play" not in c.argv and "--set" not in c.argv for c in old)
