@@ -20,6 +20,13 @@ from .paths import Obstacles, plan_path
 
 R = ROBOT_RADIUS_MM
 
+#: another robot's centre this close ahead (within 60 deg of the way we go) caps our speed:
+#: a crash above 1.5 m/s relative is a foul, and paths avoid robots where they are, not
+#: where they will be
+GUARD_MM = 650.0
+GUARD_COS = 0.5
+GUARD_SPEED_MPS = 1.0
+
 
 def _rect_grow(r: tuple[float, float, float, float], g: float) -> list[float]:
     return [r[0] - g, r[1] - g, r[2] + g, r[3] + g]
@@ -85,11 +92,32 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         else:
             pts = (goal,)
         end = pts[-1]
+        max_speed = it.max_speed_mps
+        if _someone_ahead(bot, pts[0], everyone):
+            max_speed = min(max_speed if max_speed is not None else GUARD_SPEED_MPS,
+                            GUARD_SPEED_MPS)
         field_pts = tuple(frame.point(x, y) for x, y in pts)
         fx, fy = frame.point(end[0], end[1])
         out[bot.id] = Move(
             role=it.role, x=fx, y=fy,
             orientation=None if it.orientation is None else frame.angle(it.orientation),
             path=field_pts, kick_speed_mps=it.kick_speed_mps, chip=it.chip,
-            dribbler=it.dribbler, max_speed_mps=it.max_speed_mps, blocked=blocked)
+            dribbler=it.dribbler, max_speed_mps=max_speed, blocked=blocked)
     return out
+
+
+def _someone_ahead(bot: Bot, towards: tuple[float, float],
+                   everyone: Sequence[tuple[str, Bot]]) -> bool:
+    """Is another robot within ``GUARD_MM`` of ``bot`` and within 60 deg of its way?"""
+    dx, dy = towards[0] - bot.x, towards[1] - bot.y
+    n = math.hypot(dx, dy)
+    if n < 1e-6:
+        return False
+    for _, o in everyone:
+        if o is bot:
+            continue
+        ox, oy = o.x - bot.x, o.y - bot.y
+        d = math.hypot(ox, oy)
+        if 0.0 < d < GUARD_MM and (ox * dx + oy * dy) > GUARD_COS * d * n:
+            return True
+    return False
