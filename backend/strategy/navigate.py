@@ -25,7 +25,7 @@ R = ROBOT_RADIUS_MM
 #: where they will be
 GUARD_MM = 650.0
 GUARD_COS = 0.5
-GUARD_SPEED_MPS = 1.0
+GUARD_SPEED_MPS = 0.75  # two robots driving at each other: 1.5 m/s relative at most
 
 
 def _rect_grow(r: tuple[float, float, float, float], g: float) -> list[float]:
