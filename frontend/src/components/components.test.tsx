@@ -1,7 +1,6 @@
 // @vitest-environment jsdom
 import { act } from "react";
-import { createRoot, type Root } from "react-dom/client";
-import { afterEach, beforeEach, describe, expect, it } from "vitest";
+import { describe, expect, it } from "vitest";
 import { robot } from "../field/testRobots";
 import { appStore, initialAppState } from "../store/appStore";
 import { health, world } from "../ws/fixtures";
@@ -9,24 +8,12 @@ import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
 
+import { domPerTest } from "../testing/dom";
+
 (globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
 
-let host: HTMLDivElement;
-let root: Root;
-
-beforeEach(() => {
-  appStore.setState(initialAppState());
-  host = document.createElement("div");
-  document.body.appendChild(host);
-  root = createRoot(host);
-});
-
-afterEach(() => {
-  act(() => root.unmount());
-  host.remove();
-});
-
-const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
+const t = domPerTest(() => appStore.setState(initialAppState()));
+const q = t.q;
 
 describe("RobotTable", () => {
   const robots = [
@@ -35,9 +22,9 @@ describe("RobotTable", () => {
   ];
 
   it("renders one row per robot with the stable test ids, blue first", () => {
-    act(() => root.render(<RobotTable robots={robots} selected={{ team: "blue", id: 3 }} />));
+    act(() => t.root.render(<RobotTable robots={robots} selected={{ team: "blue", id: 3 }} />));
     expect(q("robot-table")).not.toBeNull();
-    const rows = host.querySelectorAll('[data-testid^="robot-row-"]');
+    const rows = t.host.querySelectorAll('[data-testid^="robot-row-"]');
     expect([...rows].map((r) => r.getAttribute("data-testid"))).toEqual(["robot-row-blue-3", "robot-row-yellow-2"]);
     const blue = q("robot-row-blue-3")!;
     expect(blue.getAttribute("data-visible")).toBe("true");
@@ -52,7 +39,7 @@ describe("RobotTable", () => {
   });
 
   it("selects a robot when its row is clicked", () => {
-    act(() => root.render(<RobotTable robots={robots} selected={null} />));
+    act(() => t.root.render(<RobotTable robots={robots} selected={null} />));
     act(() => (q("robot-row-yellow-2") as HTMLElement).click());
     expect(appStore.getState().selected).toEqual({ team: "yellow", id: 2 });
   });
@@ -60,16 +47,16 @@ describe("RobotTable", () => {
 
 describe("RobotDetails", () => {
   it("shows 'team id' for the selection", () => {
-    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robot("blue", 3, 0, 0)} />));
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robot("blue", 3, 0, 0)} />));
     expect(q("selected-robot")?.textContent).toBe("blue 3");
-    act(() => root.render(<RobotDetails selected={null} robot={null} />));
+    act(() => t.root.render(<RobotDetails selected={null} robot={null} />));
     expect(q("selected-robot")?.textContent).toBe("No robot selected");
   });
 });
 
 describe("TopBar", () => {
   it("shows connection, vision rate and the e-stop state from the store", () => {
-    act(() => root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
     expect(q("connection-status")?.textContent).not.toContain("connected");
     expect(q("vision-rate")?.textContent).toBe("— Hz");
     expect(q("estop-button")?.textContent).toBe("EMERGENCY STOP");

@@ -1,7 +1,6 @@
 // @vitest-environment jsdom
 import { act } from "react";
-import { createRoot, type Root } from "react-dom/client";
-import { afterEach, beforeEach, describe, expect, it, vi } from "vitest";
+import { beforeEach, describe, expect, it, vi } from "vitest";
 import type { InternalReferee } from "../api/http";
 import type { Health, RefereeGameEvent, RefereeHealth, Robot, Team } from "../api/types";
 import { robot } from "../field/testRobots";
@@ -14,24 +13,12 @@ import { EVENTS_SHOWN, fmtCards, RefereePanel, RefereeState } from "./RefereePan
 import { Toasts } from "./Toasts";
 import { TopBar } from "./TopBar";
 
+import { domPerTest } from "../testing/dom";
+
 (globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
 
-let host: HTMLDivElement;
-let root: Root;
-
-beforeEach(() => {
-  host = document.createElement("div");
-  document.body.appendChild(host);
-  root = createRoot(host);
-});
-
-afterEach(() => {
-  act(() => root.unmount());
-  host.remove();
-  vi.unstubAllGlobals();
-});
-
-const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
+const t = domPerTest();
+const q = t.q;
 const text = (id: string) => q(id)?.textContent ?? null;
 
 /** `n` visible robots of `team`, plus one of that team the station no longer sees. */
@@ -70,7 +57,7 @@ const gc = referee("STOP", {
 
 describe("RefereeState: what the game controller sends beyond the basics", () => {
   it("shows the next command, the status message and the action time left", () => {
-    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
+    act(() => t.root.render(<RefereeState ref={gc} robots={[]} />));
     expect(text("referee-panel-command")).toBe("STOP");
     expect(text("referee-next")).toBe("DIRECT_FREE_YELLOW");
     expect(text("referee-status-message")).toBe("Robot substitution by blue");
@@ -79,26 +66,26 @@ describe("RefereeState: what the game controller sends beyond the basics", () =>
   });
 
   it("marks an action time that ran out", () => {
-    act(() => root.render(<RefereeState ref={{ ...gc, current_action_time_remaining_s: -3.04 }} />));
+    act(() => t.root.render(<RefereeState ref={{ ...gc, current_action_time_remaining_s: -3.04 }} />));
     expect(text("referee-action-time")).toBe("over by 3.0 s");
     expect(q("referee-action-time")?.classList.contains("warn")).toBe(true);
   });
 
   it("shows per team the robots allowed against those on the field, warning when there are too many", () => {
     // blue: 5 on the field, 4 allowed (two yellow cards); yellow: 6 of 6
-    act(() => root.render(<RefereeState ref={gc} robots={[...team("blue", 5), ...team("yellow", 6)]} />));
+    act(() => t.root.render(<RefereeState ref={gc} robots={[...team("blue", 5), ...team("yellow", 6)]} />));
     expect(text("referee-robots-blue")).toBe("5 / 4 allowed");
     expect(q("referee-robots-blue")?.classList.contains("warn")).toBe(true);
     expect(text("referee-robots-yellow")).toBe("6 / 6 allowed");
     expect(q("referee-robots-yellow")?.classList.contains("warn")).toBe(false);
     // a robot the station does not see does not count: 4 of 4 is fine
-    act(() => root.render(<RefereeState ref={gc} robots={[...team("blue", 4), ...team("yellow", 6)]} />));
+    act(() => t.root.render(<RefereeState ref={gc} robots={[...team("blue", 4), ...team("yellow", 6)]} />));
     expect(text("referee-robots-blue")).toBe("4 / 4 allowed");
     expect(q("referee-robots-blue")?.classList.contains("warn")).toBe(false);
   });
 
   it("shows cards with their seconds left, fouls and a team that cannot place the ball", () => {
-    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
+    act(() => t.root.render(<RefereeState ref={gc} robots={[]} />));
     expect(text("referee-cards-blue")).toBe("2 yellow (41 s, 12 s) · 1 red");
     expect(text("referee-cards-yellow")).toBe("none");
     expect(text("referee-fouls-blue")).toBe("2");
@@ -109,20 +96,20 @@ describe("RefereeState: what the game controller sends beyond the basics", () =>
   });
 
   it("lists the recent game events newest first: type, team, origin", () => {
-    act(() => root.render(<RefereeState ref={gc} robots={[]} />));
-    const items = [...host.querySelectorAll('[data-testid="referee-event"]')].map((li) => li.textContent);
+    act(() => t.root.render(<RefereeState ref={gc} robots={[]} />));
+    const items = [...t.host.querySelectorAll('[data-testid="referee-event"]')].map((li) => li.textContent);
     expect(items).toEqual([
       "bot crash unique blue · TIGERs AutoRef, ER-Force",
       "ball left field touch line yellow · UI",
       "no progress in game",
     ]);
     const many = Array.from({ length: 8 }, (_, i) => event("BOT_CRASH_UNIQUE", "BLUE", ["UI"], `e${i}`));
-    act(() => root.render(<RefereeState ref={{ ...gc, game_events: many }} robots={[]} />));
-    expect(host.querySelectorAll('[data-testid="referee-event"]').length).toBe(EVENTS_SHOWN);
+    act(() => t.root.render(<RefereeState ref={{ ...gc, game_events: many }} robots={[]} />));
+    expect(t.host.querySelectorAll('[data-testid="referee-event"]').length).toBe(EVENTS_SHOWN);
   });
 
   it("leaves out what a referee does not send (the internal referee, an older backend)", () => {
-    act(() => root.render(<RefereeState ref={referee("HALT", { source: "internal" })} robots={team("blue", 6)} />));
+    act(() => t.root.render(<RefereeState ref={referee("HALT", { source: "internal" })} robots={team("blue", 6)} />));
     expect(text("referee-panel-command")).toBe("HALT");
     for (const id of ["referee-next", "referee-status-message", "referee-action-time", "referee-robots-blue", "referee-fouls-blue", "referee-placing-blue", "referee-events"]) {
       expect(q(id), id).toBeNull();
@@ -135,9 +122,9 @@ describe("the ball placement target", () => {
   const mark = { x: 1500, y: -700 };
 
   it("is shown only during a ball placement, not the old mark the game controller sends during STOP", () => {
-    act(() => root.render(<RefereeState ref={referee("STOP", { designated_position: mark })} />));
+    act(() => t.root.render(<RefereeState ref={referee("STOP", { designated_position: mark })} />));
     expect(text("referee-placement")).toBe("—");
-    act(() => root.render(<RefereeState ref={referee("BALL_PLACEMENT_YELLOW", { designated_position: mark })} />));
+    act(() => t.root.render(<RefereeState ref={referee("BALL_PLACEMENT_YELLOW", { designated_position: mark })} />));
     expect(text("referee-placement")).toBe("1500, -700 mm");
   });
 
@@ -183,7 +170,7 @@ describe("a silent referee", () => {
   it("shows 'referee silent N s' in the top bar and the health summary, and clears when it speaks again", () => {
     // the top bar samples the world (throttled): it is there before the first render
     appStore.setState({ connection: connected, world: world(1, { referee: referee("STOP") }), health: withReferee(refHealth(0.02, false)) });
-    act(() => root.render(<><TopBar onRetryNow={() => {}} /><HealthSummary /></>));
+    act(() => t.root.render(<><TopBar onRetryNow={() => {}} /><HealthSummary /></>));
     expect(q("referee-silent")).toBeNull();
     expect(q("health-summary-stream-referee")?.classList.contains("warn")).toBe(false);
     act(() => appStore.setState({ health: withReferee(refHealth(12.7, true), ["referee silent 12 s: still obeying STOP from gc-1"]) }));
@@ -198,7 +185,7 @@ describe("a silent referee", () => {
   });
 
   it("says nothing for a referee the station ignores, none heard, or an older backend", () => {
-    act(() => root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
     act(() => appStore.setState({ health: withReferee({ ...refHealth(60, false), obeyed: false }) }));
     expect(q("referee-silent")).toBeNull();
     act(() => appStore.setState({ health: withReferee(null) }));
@@ -209,9 +196,9 @@ describe("a silent referee", () => {
   });
 
   it("lists the health warnings under the station's state", () => {
-    act(() => root.render(<HealthPanel />));
+    act(() => t.root.render(<HealthPanel />));
     act(() => appStore.setState({ health: withReferee(refHealth(4.2, true), ["referee silent 4 s: still obeying STOP from gc-1"]) }));
-    expect([...host.querySelectorAll('[data-testid="health-warnings"] li')].map((li) => li.textContent)).toEqual([
+    expect([...t.host.querySelectorAll('[data-testid="health-warnings"] li')].map((li) => li.textContent)).toEqual([
       "referee silent 4 s: still obeying STOP from gc-1",
     ]);
     act(() => appStore.setState({ health: withReferee(refHealth(0.1, false)) }));
@@ -265,13 +252,13 @@ describe("the internal referee's card buttons", () => {
     act(() => b!.click());
     await settle();
   };
-  const toasts = () => [...host.querySelectorAll('[data-testid="toast"]')].map((t) => [t.getAttribute("data-kind"), t.querySelector("span")?.textContent]);
+  const toasts = () => [...t.host.querySelectorAll('[data-testid="toast"]')].map((el) => [el.getAttribute("data-kind"), el.querySelector("span")?.textContent]);
 
   beforeEach(() => appStore.setState(initialAppState()));
 
   it("has a yellow card, red card and clear cards button per team, named for screen readers", async () => {
     stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
-    act(() => root.render(<RefereePanel />));
+    act(() => t.root.render(<RefereePanel />));
     await settle();
     for (const team of ["blue", "yellow"]) {
       for (const [card, name] of [["yellow", "Yellow card"], ["red", "Red card"], ["clear", "Clear cards"]]) {
@@ -286,7 +273,7 @@ describe("the internal referee's card buttons", () => {
 
   it("posts {team, card} for each button", async () => {
     const fetchMock = stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
-    act(() => root.render(<RefereePanel />));
+    act(() => t.root.render(<RefereePanel />));
     await settle();
     await click("ref-card-yellow-blue");
     await click("ref-card-red-yellow");
@@ -308,7 +295,7 @@ describe("the internal referee's card buttons", () => {
   it("shows a 409 (a game controller is active) under the buttons and as an error toast", async () => {
     const detail = "a game controller is active (gc-1): the internal referee stays off";
     stubApi(internal(), () => ({ status: 409, body: { detail } }));
-    act(() => root.render(<><RefereePanel /><Toasts /></>));
+    act(() => t.root.render(<><RefereePanel /><Toasts /></>));
     await settle();
     await click("ref-card-yellow-blue");
     expect(text("referee-error")).toBe(`${detail} (HTTP 409)`);
@@ -318,7 +305,7 @@ describe("the internal referee's card buttons", () => {
   it("shows a 422 with the server's field message; a later success clears it", async () => {
     let reply: Reply = { status: 422, body: { detail: [{ loc: ["body", "card"], msg: "Input should be 'yellow', 'red' or 'clear'" }] } };
     stubApi(internal(), () => reply);
-    act(() => root.render(<><RefereePanel /><Toasts /></>));
+    act(() => t.root.render(<><RefereePanel /><Toasts /></>));
     await settle();
     await click("ref-card-clear-yellow");
     expect(text("referee-error")).toBe("card: Input should be 'yellow', 'red' or 'clear' (HTTP 422)");
@@ -330,7 +317,7 @@ describe("the internal referee's card buttons", () => {
 
   it("is disabled while a game controller has the say", async () => {
     const fetchMock = stubApi(internal({ enabled: false, foreign_source: "gc-1" }), () => ({ status: 200, body: {} }));
-    act(() => root.render(<RefereePanel />));
+    act(() => t.root.render(<RefereePanel />));
     await settle();
     for (const id of ["ref-card-yellow-blue", "ref-card-red-yellow", "ref-card-clear-blue"]) {
       expect((q(id) as HTMLButtonElement).disabled, id).toBe(true);

@@ -1,7 +1,6 @@
 // @vitest-environment jsdom
 import { act } from "react";
-import { createRoot, type Root } from "react-dom/client";
-import { afterEach, beforeEach, describe, expect, it, vi } from "vitest";
+import { describe, expect, it, vi } from "vitest";
 import type { StrategyInfo, StrategyState } from "../api/types";
 import { robot } from "../field/testRobots";
 import { formStore } from "../params/paramsStore";
@@ -16,29 +15,18 @@ import { RobotTable } from "./RobotTable";
 import { SituationBanner } from "./SituationBanner";
 import { Toasts } from "./Toasts";
 
-(globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
+import { domPerTest } from "../testing/dom";
 
-let host: HTMLDivElement;
-let root: Root;
+(globalThis as { IS_REACT_ACT_ENVIRONMENT?: boolean }).IS_REACT_ACT_ENVIRONMENT = true;
 
 const connected = { status: "connected" as const, attempt: 0, retryAt: null, lastError: null };
 
-beforeEach(() => {
+const t = domPerTest(() => {
   appStore.setState(initialAppState());
   playsStore.setState({ info: null, error: null, loading: false, pending: null });
   formStore.setState({ groups: null, error: null, loading: false });
-  host = document.createElement("div");
-  document.body.appendChild(host);
-  root = createRoot(host);
 });
-
-afterEach(() => {
-  act(() => root.unmount());
-  host.remove();
-  vi.unstubAllGlobals();
-});
-
-const q = (id: string) => host.querySelector(`[data-testid="${id}"]`);
+const q = t.q;
 
 /** Let pending fetches and the renders they cause finish. */
 async function settle() {
@@ -85,7 +73,7 @@ describe("PlaySelector", () => {
   it("lists the plays by title, the current one selected, its description as help", async () => {
     stubApi({ "GET /api/strategy": () => ({ status: 200, body: strategyInfo }) });
     appStore.setState({ connection: connected, params: { version: 3, values: { strategy: { play: "defend" } } } });
-    act(() => root.render(<PlaySelector variant="bar" />));
+    act(() => t.root.render(<PlaySelector variant="bar" />));
     await settle();
     const el = select();
     expect(el.getAttribute("aria-label")).toBe("Play");
@@ -101,7 +89,7 @@ describe("PlaySelector", () => {
       "PATCH /api/params": (_m, body) => ({ status: 200, body: { version: 4, values: body } }),
     });
     appStore.setState({ connection: connected, params: { version: 3, values: { strategy: { play: "match" } } } });
-    act(() => root.render(<PlaySelector variant="bar" />));
+    act(() => t.root.render(<PlaySelector variant="bar" />));
     await settle();
     choose(select(), "formation");
     await settle();
@@ -122,7 +110,7 @@ describe("PlaySelector", () => {
     });
     appStore.setState({ connection: connected, params: { version: 3, values: { strategy: { play: "match" } } } });
     act(() =>
-      root.render(
+      t.root.render(
         <>
           <PlaySelector variant="bar" />
           <Toasts />
@@ -132,7 +120,7 @@ describe("PlaySelector", () => {
     await settle();
     choose(select(), "defend");
     await settle();
-    const toast = host.querySelector('[data-testid="toast"][data-kind="error"]');
+    const toast = t.host.querySelector('[data-testid="toast"][data-kind="error"]');
     expect(toast?.textContent).toContain('Play "Defend" refused');
     expect(toast?.textContent).toContain("the referee holds the game: no drills now");
     expect(select().value).toBe("match");
@@ -151,7 +139,7 @@ describe("PlaySelector", () => {
       }),
     });
     appStore.setState({ connection: connected, params: { version: 1, values: { strategy: { play: "idle" } } } });
-    act(() => root.render(<PlaySelector variant="panel" />));
+    act(() => t.root.render(<PlaySelector variant="panel" />));
     await settle();
     const el = q("play-select-panel") as HTMLSelectElement;
     expect([...el.options].map((o) => o.value)).toEqual(["match", "attack-drill", "idle"]);
@@ -162,24 +150,24 @@ describe("PlaySelector", () => {
   it("renders nothing for a station without strategy", async () => {
     stubApi({});
     appStore.setState({ connection: connected });
-    act(() => root.render(<PlaySelector variant="bar" />));
+    act(() => t.root.render(<PlaySelector variant="bar" />));
     await settle();
-    expect(host.innerHTML).toBe("");
+    expect(t.host.innerHTML).toBe("");
   });
 });
 
 describe("EnginePanel and the health summary", () => {
   it("says engine off without an engine (field null or absent)", () => {
-    act(() => root.render(<EnginePanel h={health()} />));
+    act(() => t.root.render(<EnginePanel h={health()} />));
     expect(q("engine-panel")?.getAttribute("data-engine")).toBe("off");
     expect(q("engine-off")?.textContent).toContain("engine off");
-    act(() => root.render(<EnginePanel h={{ ...health(), engine: null }} />));
+    act(() => t.root.render(<EnginePanel h={{ ...health(), engine: null }} />));
     expect(q("engine-off")).not.toBeNull();
     expect(q("engine-details")).toBeNull();
   });
 
   it("shows every number and the last error when there is one", () => {
-    act(() => root.render(<EnginePanel h={{ ...health(), engine: engineHealth({ fallbacks: 7 }) }} />));
+    act(() => t.root.render(<EnginePanel h={{ ...health(), engine: engineHealth({ fallbacks: 7 }) }} />));
     expect(q("engine-panel")?.getAttribute("data-engine")).toBe("octave");
     expect(q("engine-kind")?.textContent).toBe("octave");
     expect(q("engine-function")?.textContent).toBe("goalkeeper");
@@ -189,14 +177,14 @@ describe("EnginePanel and the health summary", () => {
     expect(q("engine-fallbacks")?.textContent).toBe("7");
     expect(q("engine-fallbacks")?.className).toContain("warn");
     expect(q("engine-last-error")).toBeNull();
-    act(() => root.render(<EnginePanel h={{ ...health(), engine: engineHealth({ last_error: "goalkeeper.m: undefined 'ball_x'" }) }} />));
+    act(() => t.root.render(<EnginePanel h={{ ...health(), engine: engineHealth({ last_error: "goalkeeper.m: undefined 'ball_x'" }) }} />));
     expect(q("engine-last-error")?.getAttribute("role")).toBe("alert");
     expect(q("engine-last-error")?.textContent).toContain("goalkeeper.m: undefined 'ball_x'");
   });
 
   it("puts the engine in the health summary", () => {
     appStore.setState({ health: health() });
-    act(() => root.render(<HealthSummary />));
+    act(() => t.root.render(<HealthSummary />));
     expect(q("health-summary-engine")?.textContent).toBe("off");
     act(() => appStore.setState({ health: { ...health(), engine: engineHealth({ kind: "numpy", timeouts: 2 }) } }));
     expect(q("health-summary-engine")?.textContent).toBe("numpy 20/s · 2 err");
@@ -206,7 +194,7 @@ describe("EnginePanel and the health summary", () => {
 describe("roles in the robot table and panel, situation banner", () => {
   it("shows the role tag with the full name on hover, nothing without a role", () => {
     const robots = [robot("blue", 0, 0, 0, { role: "goalkeeper" }), robot("blue", 1, 0, 0), robot("yellow", 0, 0, 0, { role: null })];
-    act(() => root.render(<RobotTable robots={robots} selected={null} />));
+    act(() => t.root.render(<RobotTable robots={robots} selected={null} />));
     const cell = q("robot-row-blue-0")!.querySelector('[data-testid="robot-role"]')!;
     expect(cell.textContent).toBe("GK");
     expect(cell.getAttribute("title")).toBe("Goalkeeper");
@@ -216,13 +204,13 @@ describe("roles in the robot table and panel, situation banner", () => {
 
   it("shows a robot leaving the field for a substitution as SUB (Substitution on hover)", () => {
     const robots = [robot("blue", 3, -300, 2900, { role: "substitution" })];
-    act(() => root.render(<RobotTable robots={robots} selected={null} />));
+    act(() => t.root.render(<RobotTable robots={robots} selected={null} />));
     const cell = q("robot-row-blue-3")!.querySelector('[data-testid="robot-role"]') as HTMLElement;
     expect(cell.textContent).toBe("SUB");
     expect(cell.getAttribute("title")).toBe("Substitution");
     expect(cell.getAttribute("data-role")).toBe("substitution");
     expect(cell.style.color).not.toBe("");
-    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robots[0]!} />));
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robots[0]!} />));
     expect(q("robot-role-detail")?.textContent).toBe("Substitution (SUB)");
   });
 
@@ -233,7 +221,7 @@ describe("roles in the robot table and panel, situation banner", () => {
       kick: { speed_mps: 4, chip: true },
       dribbler: true,
     });
-    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 4 }} robot={r} />));
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 4 }} robot={r} />));
     expect(q("robot-role-detail")?.textContent).toBe("Attacker (ATK)");
     expect(q("robot-path")?.textContent).toBe("2 waypoints · 1.50 m");
     expect(q("robot-kick")?.textContent).toBe("armed 4.0 m/s chip");
@@ -244,7 +232,7 @@ describe("roles in the robot table and panel, situation banner", () => {
   });
 
   it("leaves the strategy rows out for a robot without strategy fields", () => {
-    act(() => root.render(<RobotDetails selected={{ team: "blue", id: 4 }} robot={robot("blue", 4, 0, 0)} />));
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 4 }} robot={robot("blue", 4, 0, 0)} />));
     expect(q("robot-role-detail")).toBeNull();
     expect(q("robot-kick")).toBeNull();
   });
@@ -259,7 +247,7 @@ describe("roles in the robot table and panel, situation banner", () => {
       side_from_referee: true,
       tick_ms: 2,
     };
-    act(() => root.render(<SituationBanner />));
+    act(() => t.root.render(<SituationBanner />));
     expect(q("situation-banner")).toBeNull();
     act(() => appStore.setState({ world: world(1, { strategy }) }));
     expect(q("situation-banner")?.getAttribute("data-situation")).toBe("stop");
