@@ -528,6 +528,9 @@ def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
         bx = ball.x - d0[0] * (CONTACT_MM + 120.0)
         by = ball.y - d0[1] * (CONTACT_MM + 120.0)
         pull = abs(bx) > fs.half_length + 120.0 or abs(by) > fs.half_width + 120.0
+        # a ball already held for pulling is pulled all the way: going round it to push,
+        # once there is room behind it, would cost many seconds of the 30 allowed
+        pull = pull or _pull_hold(bot, ball, dp)
     if pull:
         return _puller(bot, ball, dp, tu, to_mark)
     held = math.dist(bot.xy, ball.xy) < CONTACT_MM + 40.0
@@ -565,9 +568,8 @@ def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
                   max_speed_mps=1.5)
 
 
-def _puller(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
-            to_mark: float) -> Intent:
-    """Ball placement by pulling: face the ball from the mark's side, dribble, back up."""
+def _pull_pose(bot: Bot, ball: Ball, dp: tuple[float, float]) -> tuple[float, float, float]:
+    """(along, across, heading error) of a robot facing the ball from the mark's side."""
     d = unit(dp[0] - ball.x, dp[1] - ball.y)
     face = math.atan2(-d[1], -d[0])  # towards the ball, away from the mark
     rx, ry = ball.x - bot.x, ball.y - bot.y
@@ -575,7 +577,21 @@ def _puller(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
     across = abs(-rx * d[1] + ry * d[0])
     heading_err = abs(math.atan2(math.sin(bot.orientation - face),
                                  math.cos(bot.orientation - face)))
-    if 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25:
+    return along, across, heading_err
+
+
+def _pull_hold(bot: Bot, ball: Ball, dp: tuple[float, float]) -> bool:
+    along, across, heading_err = _pull_pose(bot, ball, dp)
+    return 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25
+
+
+def _puller(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
+            to_mark: float) -> Intent:
+    """Ball placement by pulling: face the ball from the mark's side, dribble, back up."""
+    d = unit(dp[0] - ball.x, dp[1] - ball.y)
+    face = math.atan2(-d[1], -d[0])  # towards the ball, away from the mark
+    along, across, heading_err = _pull_pose(bot, ball, dp)
+    if _pull_hold(bot, ball, dp):
         goal = (dp[0] + d[0] * CONTACT_MM, dp[1] + d[1] * CONTACT_MM)
         brake = math.sqrt(2.0 * 0.5 * max(0.0, to_mark - 20.0) / 1000.0)
         return Intent("placer", goal[0], goal[1], face, dribbler=True,

@@ -233,6 +233,28 @@ def test_placement_from_against_the_wall_pulls_the_ball() -> None:
     assert pull.orientation == pytest.approx(0.0)
 
 
+def test_a_ball_held_for_pulling_is_pulled_to_the_mark_with_room_behind_it() -> None:
+    """Once pulled off the line there is room behind the ball: the placer keeps pulling
+    rather than going round the ball to push it (which cost the 30 s in a test)."""
+    ball = Ball(FS.half_length - 900.0, -100.0)  # in the field, plenty of room behind
+    dp = (FS.half_length - 2200.0, 0.0)
+    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
+    ours = team(6, x_range=(-4000.0, -3000.0))
+    d = (dp[0] - ball.x, dp[1] - ball.y)
+    n = math.hypot(*d)
+    u = (d[0] / n, d[1] / n)
+    # holding it from the mark's side, facing the ball
+    ours[3] = Bot(3, ball.x + u[0] * 111.5, ball.y + u[1] * 111.5, math.atan2(-u[1], -u[0]))
+    out, _ = decide(sit, ball=ball, ours=ours)
+    it = out[3]
+    assert it.role == "placer" and it.dribbler
+    assert math.dist((it.x, it.y), (dp[0] + u[0] * 111.5, dp[1] + u[1] * 111.5)) < 1.0
+    # not holding it (behind the ball, facing the mark): the usual push
+    ours[3] = Bot(3, ball.x - u[0] * 400.0, ball.y - u[1] * 400.0, math.atan2(u[1], u[0]))
+    out, _ = decide(sit, ball=ball, ours=ours)
+    assert out[3].orientation == pytest.approx(math.atan2(u[1], u[0]))
+
+
 def _with_max(max_bots: int | None, ours: list[Bot], strategy: Strategy,
               sit: Situation = RUNNING, keeper: int | None = 0) -> dict[int, Intent]:
     inp = StrategyInput(t=0.0, ours=ours, theirs=team(6, 101), ball=BALL, fs=FS, situation=sit,

@@ -267,7 +267,13 @@ def test_our_ball_placement_brings_the_ball_to_the_mark(
         b = t["ball"]
         return (math.dist((b["x"], b["y"]), mark) < 150.0 and math.hypot(b["vx"], b["vy"]) < 50
                 and all(ball_dist(r, t) > R + 21.5 + 50.0 for r in blue(t)))
-    sim.until(placed, 30, "ball still on the mark, the placer 0.05 m away")
+    try:
+        sim.until(placed, 30, "ball still on the mark, the placer 0.05 m away")
+    except AssertionError as exc:
+        t = sim.truth()
+        near = sorted(blue(t), key=lambda r: ball_dist(r, t))[0]
+        raise AssertionError(f"{exc}; ball {t['ball']}, in goal {t.get('ball_in_goal')}, "
+                             f"nearest blue {near}") from None
     sim.referee("STOP")
 
 
