@@ -19,17 +19,8 @@ import {
 import { useAppState } from "../store/hooks";
 import { pushToast } from "../store/toasts";
 import { setTab } from "../store/uiStore";
+import { Row } from "./Row";
 
-function Row({ label, value, testId }: { label: string; value: string; testId?: string }) {
-  return (
-    <>
-      <dt>{label}</dt>
-      <dd className="num" data-testid={testId}>
-        {value}
-      </dd>
-    </>
-  );
-}
 
 function openPlots(plots: string[][]): void {
   for (const keys of plots) addPlot(keys);

@@ -3,6 +3,7 @@ import { clearTarget, selectRobot } from "../actions";
 import { HealthSummary } from "./HealthSummary";
 import { ParamField } from "./ParamField";
 import { RobotControlPanel } from "./RobotControlPanel";
+import { Row } from "./Row";
 import { useParamForm } from "../params/paramsStore";
 import { chooserFields, getAt } from "../params/schema";
 import { useAppState } from "../store/hooks";
@@ -10,16 +11,6 @@ import { fmtDeg, fmtFixed, fmtHeading, fmtInt, speedMps } from "../format";
 import { pathLengthMm, pathPoints } from "../field/paths";
 import { roleName, roleTag } from "../strategy/roles";
 
-function Field({ label, value, testId }: { label: string; value: string; testId?: string }) {
-  return (
-    <>
-      <dt>{label}</dt>
-      <dd className="num" data-testid={testId}>
-        {value}
-      </dd>
-    </>
-  );
-}
 
 const KNOWN = new Set([
   "team", "id", "x", "y", "orientation", "vx", "vy", "omega", "visible", "age_s", "cameras", "target", "controlled", "command",
@@ -49,10 +40,10 @@ function StrategyFields({ robot }: { robot: Robot }) {
   const t = strategyTexts(robot);
   return (
     <>
-      <Field label="role" value={t.role} testId="robot-role-detail" />
-      <Field label="path" value={t.path} testId="robot-path" />
-      <Field label="kicker" value={t.kick} testId="robot-kick" />
-      {robot.dribbler !== undefined && <Field label="dribbler" value={t.dribbler} testId="robot-dribbler" />}
+      <Row label="role" value={t.role} testId="robot-role-detail" />
+      <Row label="path" value={t.path} testId="robot-path" />
+      <Row label="kicker" value={t.kick} testId="robot-kick" />
+      {robot.dribbler !== undefined && <Row label="dribbler" value={t.dribbler} testId="robot-dribbler" />}
     </>
   );
 }
@@ -75,7 +66,7 @@ function ExtraFields({ robot }: { robot: Robot }) {
   return (
     <>
       {extra.map(([k, v]) => (
-        <Field key={k} label={k.replace(/_/g, " ")} value={fmtAny(v)} testId={`robot-extra-${k}`} />
+        <Row key={k} label={k.replace(/_/g, " ")} value={fmtAny(v)} testId={`robot-extra-${k}`} />
       ))}
     </>
   );
@@ -133,17 +124,17 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
       )}
       {robot && (
         <dl className="details-grid" data-testid="selected-robot-details">
-          <Field label="x, y" value={`${fmtInt(robot.x)}, ${fmtInt(robot.y)} mm`} />
-          <Field label="heading" value={fmtHeading(robot.orientation)} />
-          <Field label="speed" value={`${fmtFixed(speedMps(robot.vx, robot.vy), 2)} m/s`} />
-          <Field label="turn" value={`${fmtDeg(robot.omega)}/s`} />
-          <Field
+          <Row label="x, y" value={`${fmtInt(robot.x)}, ${fmtInt(robot.y)} mm`} />
+          <Row label="heading" value={fmtHeading(robot.orientation)} />
+          <Row label="speed" value={`${fmtFixed(speedMps(robot.vx, robot.vy), 2)} m/s`} />
+          <Row label="turn" value={`${fmtDeg(robot.omega)}/s`} />
+          <Row
             label="seen"
             value={robot.visible ? `yes (cam ${robot.cameras.join(", ") || "—"})` : `no, ${fmtFixed(robot.age_s, 1)} s ago`}
           />
-          <Field label="controlled" value={robot.controlled ? "yes" : "no"} />
+          <Row label="controlled" value={robot.controlled ? "yes" : "no"} />
           <StrategyFields robot={robot} />
-          <Field
+          <Row
             label="target"
             value={
               robot.target
@@ -155,7 +146,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
             testId="selected-target"
           />
           <ExtraFields robot={robot} />
-          <Field
+          <Row
             label="command"
             value={
               robot.command
