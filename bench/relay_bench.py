@@ -20,7 +20,6 @@ import random
 import signal
 import socket
 import statistics
-import struct
 import subprocess
 import sys
 import time
@@ -28,10 +27,9 @@ import time
 import zmq
 import zmq.asyncio
 
+from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
 from sslnet.multicast import open_multicast_sender
 from sslpb import ssl_simulation_robot_control_pb2, ssl_vision_wrapper_pb2, touchline_pb2
-
-SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
 
 
 def free_port(kind: int = socket.SOCK_STREAM) -> int:
@@ -73,7 +71,7 @@ async def bench(seconds: float, cameras: int, fps: float) -> None:
     sub_ep = f"tcp://127.0.0.1:{free_port()}"
     sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sim.bind(("127.0.0.1", 0))
-    sim.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+    enable_kernel_timestamps(sim)
     sim_port = sim.getsockname()[1]
     cmd = [
         sys.executable, "-m", "larcmacs_relay",
@@ -176,11 +174,8 @@ async def bench(seconds: float, cameras: int, fps: float) -> None:
                         await asyncio.wait_for(fut, 0.1)
                     loop.remove_reader(sim.fileno())
                     continue
-                t = time.time()
-                for level, kind, payload in anc:
-                    if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS:
-                        sec, nsec = struct.unpack("qq", payload[:16])
-                        t = sec + nsec * 1e-9
+                stamp = kernel_time(anc)
+                t = time.time() if stamp is None else stamp
                 rc = ssl_simulation_robot_control_pb2.RobotControl.FromString(data)
                 for r in rc.robot_commands:
                     key = round(r.move_command.local_velocity.forward, 3)

@@ -7,7 +7,6 @@ import contextlib
 import dataclasses
 import random
 import socket
-import struct
 import time
 from collections.abc import AsyncIterator, Callable
 from typing import Any
@@ -16,6 +15,7 @@ import zmq
 import zmq.asyncio
 
 from larcmacs_relay import Relay, RelayConfig
+from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
 from sslnet.multicast import open_multicast_sender
 
 STARTUP_TIMEOUT_S = 5.0
@@ -44,14 +44,11 @@ def random_multicast_port() -> int:
     raise RuntimeError("no free port found")
 
 
-SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux value, not exported by Python
-
-
 def udp_server() -> socket.socket:
     """A UDP socket standing in for a simulator / robot box; the kernel stamps arrivals."""
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
-    s.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+    enable_kernel_timestamps(s)
     s.setblocking(False)
     return s
 
@@ -96,12 +93,8 @@ async def recv_udp_from(
             finally:
                 loop.remove_reader(sock.fileno())
             continue
-        t = time.time()
-        for level, kind, payload in anc:
-            if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS:
-                sec, nsec = struct.unpack("qq", payload[:16])
-                t = sec + nsec * 1e-9
-        return data, t, addr
+        stamp = kernel_time(anc)
+        return data, time.time() if stamp is None else stamp, addr
 
 
 def drain_udp(sock: socket.socket) -> int:
