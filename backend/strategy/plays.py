@@ -124,7 +124,6 @@ class Strategy:
         self._last_kind = ""
         self._last_play = ""
         self.leaving: set[int] = set()  # robots sent off the field (more than allowed)
-        self._all_ours: list[Bot] = []
 
     def configure(self, assignment: str, hysteresis_mm: float) -> None:
         self.assigner.mode = assignment  # type: ignore[assignment]
@@ -139,6 +138,7 @@ class Strategy:
             self.roles = {}
             self.leaving = set()
             return {}
+        everyone = inp  # with the robots leaving the field, for the rules every robot obeys
         leaving = self._choose_leaving(inp)
         if leaving:
             inp = replace(inp, ours=[b for b in inp.ours if b.id not in leaving])
@@ -175,11 +175,10 @@ class Strategy:
             if rid not in out:
                 b = bots[rid]
                 out[rid] = Intent("waiting", b.x, b.y, None, plan=False)
-        gone = [b for b in self._all_ours if b.id in leaving]
-        for b in gone:
-            out[b.id] = _substitution(b, inp.fs)
-            bots[b.id] = b
-        out = self._constrain(out, replace(inp, ours=self._all_ours) if gone else inp)
+        for b in everyone.ours:
+            if b.id in leaving:
+                out[b.id] = _substitution(b, inp.fs)
+        out = self._constrain(out, everyone)
         self.roles = {rid: it.role for rid, it in out.items()}
         return out
 
@@ -188,7 +187,6 @@ class Strategy:
         yellow or red card): the ones already on their way, then the nearest to a
         substitution spot, the keeper last. Robots leave by driving to within 1 m of where
         the halfway line meets a touch line, where the robot handler takes them out."""
-        self._all_ours = list(inp.ours)
         excess = 0 if inp.max_bots is None else len(inp.ours) - max(0, inp.max_bots)
         if excess <= 0:
             self.leaving = set()
