@@ -353,7 +353,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
         geo_seq = st.geometry_topic.seq
         params_version = st.params.version
         last_health = time.monotonic()
-        sent_key = st.world_topic.seq
+        sent_key = st.world_version()
         next_t = time.monotonic()
         while not closed.is_set():
             next_t += 1.0 / st.params.current.stream.ws_max_hz
@@ -371,7 +371,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
             if st.geometry_topic.seq != geo_seq:
                 geo_seq = st.geometry_topic.seq
                 await ws.send_text(json.dumps({"type": "geometry", "geometry": st.geometry()}))
-            key = st.world_topic.seq * 2 + (1 if st.estop else 0)
+            key = st.world_version()
             if key != sent_key:
                 sent_key = key
                 await ws.send_text(st.world_json())

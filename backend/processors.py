@@ -284,7 +284,9 @@ SILENCE_CHECK_S = 0.5
 
 
 class WorldProcessor(Processor):
-    """Merges camera frames into the world, on every new frame."""
+    """Merges camera frames into the world, on every new frame. The world is written only when
+    a frame was merged: frames that are all dropped (capture time far from the receive clock,
+    a camera id that cannot be) leave the world to age, so the lost-vision stop fires."""
 
     name = "world-model"
 
@@ -293,18 +295,61 @@ class WorldProcessor(Processor):
         super().__init__(OnTopic(detections))
         self.reader = Reader(detections)
         self.world = bus.typed("world", WorldState)
+        self.geometry = bus.typed("geometry", dict)
+        self._geometry_seq = -1
         self.model = model or WorldModel()
         self.latency = LatencyStage()  # relay arrival -> world written
+        self._rejected_total = 0
+        # (monotonic time, counts by reason) when the counts changed, the last 10 s
+        self._rejection_log: deque[tuple[float, dict[str, int]]] = deque(maxlen=32)
+
+    def recent_rejections(self, window_s: float = 10.0) -> dict[str, int]:
+        """What the world model dropped in the last ``window_s``, by reason."""
+        now = time.monotonic()
+        base: dict[str, int] | None = None
+        for t, counts in self._rejection_log:
+            if now - t > window_s:
+                base = counts
+        cur = self.model.rejected
+        if not self._rejection_log or now - self._rejection_log[-1][0] > window_s:
+            return {}
+        base = base or {}
+        return {k: v - base.get(k, 0) for k, v in sorted(cur.items()) if v - base.get(k, 0) > 0}
+
+    def _field_from_geometry(self) -> None:
+        if self.geometry.seq == self._geometry_seq:
+            return
+        self._geometry_seq = self.geometry.seq
+        g = self.geometry.latest_value()
+        if g is not None:
+            self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
+                                 g["boundary_width"])
 
     async def tick(self) -> None:
         frames = self.reader.read_new()
         if not frames:
             return
-        for f in frames:
-            self.model.update(f)
+        self._field_from_geometry()
+        merged = [f for f in frames if self.model.update(f)]
+        total = sum(self.model.rejected.values())
+        if total != self._rejected_total:
+            self._rejected_total = total
+            now, log_ = time.monotonic(), self._rejection_log
+            if log_ and now - log_[-1][0] < 1.0:  # one entry a second at most
+                log_[-1] = (log_[-1][0], dict(self.model.rejected))
+            else:
+                log_.append((now, dict(self.model.rejected)))
+            _badlog.warning("world-rejected", "vision dropped by the world model (%s so far): "
+                            "%s", _reasons(self.model.rejected), self.model.last_rejection)
+        if not merged:
+            return
         self.world.write(self.model.snapshot())
-        for f in frames:
+        for f in merged:
             self.latency.add_since(f.receive_time_ns)
+
+
+def _reasons(counts: dict[str, int]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
 
 
 class StrategyProcessor(Processor):
@@ -471,6 +516,19 @@ class ControlProcessor(Processor):
             return None
         return ref
 
+    def vision_age_s(self, now_mono: float) -> float:
+        """How old the robots' view of the world is: since the world was last written, and
+        since the relay received the newest frame merged into it (this machine's clock; a
+        world written again and again from nothing new is as stale as one not written)."""
+        rec = self.world.latest()
+        if rec is None:
+            return math.inf
+        age = now_mono - rec.time_mono
+        recv_ns = rec.value.receive_time_ns
+        if recv_ns > 0:
+            age = max(age, (time.time_ns() - recv_ns) / 1e9)
+        return age
+
     def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
         self.motion.apply_settings(settings)
         self.our_team = our_team
@@ -494,11 +552,12 @@ class ControlProcessor(Processor):
         zero = LocalVelocity.zero()
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s
-        if (rec is None or now - rec.time_mono > self.vision_stale_s or (ref and ref.halted)
-                or stalled):
+        vision_age = self.vision_age_s(now)
+        blind = vision_age > self.vision_stale_s
+        if rec is None or blind or (ref and ref.halted) or stalled:
             self.halt_reason = ("HALT" if ref and ref.halted else
-                                "no vision" if rec is None
-                                or now - rec.time_mono > self.vision_stale_s
+                                "no vision" if vision_age == math.inf else
+                                f"no vision for {vision_age:.1f} s" if blind
                                 else f"strategy stalled ({targets_age:.1f} s)")
             self.motion.reset_all()
             cmds = tuple(Command(t, i, zero) for t, i in keys)

@@ -62,7 +62,7 @@ class Station:
         self._stop_event: asyncio.Event | None = None
         self.runner = Runner()
         self.started_mono = time.monotonic()
-        self._world_json_cache: tuple[int, str] = (-1, "")
+        self._world_json_cache: tuple[tuple[int, bool, str], str] = ((-1, False, ""), "")
         self._health_json_cache: tuple[float, str] = (-1e9, "")
         self.ws_clients = 0
         self.params = ParamStore(settings.state_dir)
@@ -478,6 +478,23 @@ class Station:
         } for c in world.cameras]
         return out
 
+    def _world_health(self) -> dict[str, Any] | None:
+        """The world model's view: its age by the receive clock, what it dropped and why,
+        each camera's clock offset."""
+        if not hasattr(self, "world"):
+            return None
+        model = self.world.model
+        age = self.control.vision_age_s(time.monotonic())
+        return {
+            "age_s": age if math.isfinite(age) else None,
+            "stale": age > self.control.vision_stale_s,
+            "rejected": dict(model.rejected),
+            "recent_rejections": self.world.recent_rejections(),
+            "last_rejection": model.last_rejection,
+            "clock_resyncs": model.clocks.resyncs,
+            "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
+        }
+
     def _latency_stages(self) -> list[dict[str, Any]]:
         """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
         if not hasattr(self, "publisher"):
@@ -493,9 +510,15 @@ class Station:
                            "p50_ms": None, "p99_ms": None, "n": None})
         return stages
 
+    def world_version(self) -> tuple[int, bool, str]:
+        """Changes whenever the world message would: a new world, the e-stop, or why the
+        robots are stopped (that changes while no world is written: vision lost)."""
+        halt = self.control.halt_reason if hasattr(self, "control") else ""
+        return (self.world_topic.seq, self.estop, halt)
+
     def world_json(self) -> str:
         """The world as JSON, encoded once per world update and shared by every client."""
-        key = self.world_topic.seq * 2 + (1 if self.estop else 0)
+        key = self.world_version()
         if self._world_json_cache[0] != key:
             self._world_json_cache = (key, json.dumps({"type": "world",
                                                        "world": _finite(self.world_dict())}))
@@ -550,13 +573,17 @@ class Station:
         # command); it is a warning about a system outside the station, in `warnings`.
         ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
             relay is not None and relay["alive"]
+        world = self._world_health()
+        if world is not None and world["stale"]:
+            ok = False
         referee = self.referee_watch.status()
         if referee is not None:
             referee["source"] = ("internal" if referee["source_identifier"]
                                  == self.referee_state.source_identifier else "game-controller")
         out: dict[str, Any] = _finite({
             "ok": ok,
-            "warnings": _warnings(vision, relay, referee),
+            "warnings": _warnings(vision, relay, referee, world),
+            "world": world,
             "referee": referee,
             "uptime_s": time.monotonic() - self.started_mono,
             "streams": streams,
@@ -572,9 +599,18 @@ class Station:
 
 
 def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
-              referee: dict[str, Any] | None) -> list[str]:
+              referee: dict[str, Any] | None, world: dict[str, Any] | None = None) -> list[str]:
     """One line per problem: why ``ok`` is false, and a silent referee."""
     out: list[str] = []
+    if world is not None:
+        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
+                and vision.get("last_age_s", -1) < 1.0:
+            # vision arrives but nothing of it reaches the world: say why
+            out.append(f"world not updated for {world['age_s']:.1f} s although vision "
+                       f"arrives: robots stopped ({world['last_rejection'] or 'no frame merged'})")
+        if world["recent_rejections"]:
+            out.append("vision dropped by the world model in the last 10 s: "
+                       + ", ".join(f"{k} {v}" for k, v in world["recent_rejections"].items()))
     age = vision.get("last_age_s", -1)
     if not vision or age < 0:
         out.append("no vision received")

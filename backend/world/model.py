@@ -9,6 +9,14 @@ One object per robot (team, id) and one ball. Per object:
   kalman; chosen per object class and per robot by :class:`FilterSettings`). The state carries
   both the filtered value (``x``, ``y``, ``orientation``) and the latest merged measurement
   (``raw_x``, ``raw_y``, ``raw_orientation``), and the filter's velocity.
+* Times: a frame's capture time is checked against the relay's receive clock, per camera
+  (:mod:`backend.world.clock`), and mapped onto it; a frame far from its camera's clock is
+  dropped and counted, a camera whose clock jumped is re-synchronised. So no time from the
+  wire becomes "the latest time" alone, and ``WorldState.receive_time_ns`` is the receive time
+  of the newest frame that was merged: the age of the world by this machine's clock.
+* Sanity: a camera id above ``max_camera_id``, objects outside the field plus a margin
+  (``field_half_length_mm``/``field_half_width_mm``, set from the geometry packet) and objects
+  beyond ``max_objects`` in one frame are dropped and counted (``rejected``, by reason).
 * An object not seen for ``predict_after_s`` is extrapolated with its velocity
   (``predicted``), after ``visible_timeout_s`` it is ``lost`` (not visible, frozen, velocity zero),
   after ``drop_timeout_s`` removed.
@@ -25,11 +33,12 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_filter
 from backend.filters.params import FilterKind, FilterSettings
 
+from .clock import CameraClocks, ClockConfig
 from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
 
 
@@ -52,6 +61,15 @@ class WorldModelConfig:
     ball_hypothesis_timeout_s: float = 0.1  # a hypothesis not confirmed again is forgotten
     ball_max_hypotheses: int = 16
     velocity_smoothing: float = 0.3  # unused since the filters give velocities (kept for params)
+    # sanity limits on what a frame may carry (the rest is dropped and counted)
+    max_camera_id: int = 63
+    max_objects: int = 64  # balls, and robots per team, in one frame
+    # objects beyond the field plus its boundary plus this are not on the field (mm)
+    field_margin_mm: float = 1000.0
+    field_half_length_mm: float = 6000.0  # division A until a geometry packet says otherwise
+    field_half_width_mm: float = 4500.0
+    field_boundary_mm: float = 300.0
+    clock: ClockConfig = field(default_factory=ClockConfig)
 
 
 @dataclass
@@ -102,6 +120,11 @@ class WorldModel:
         self._cameras: dict[int, CameraFrame] = {}
         self._t_latest = 0.0
         self._recv_latest = 0
+        self.clocks = CameraClocks(self.config.clock)
+        #: frames and objects dropped, by reason ("time out of range", "bad camera id",
+        #: "object out of field", "too many objects")
+        self.rejected: dict[str, int] = {}
+        self.last_rejection = ""
         self.ball_rejected_on_robot = 0  # counters for health/experiments
         self.ball_rejected_gate = 0
         self.ball_recoveries = 0
@@ -178,18 +201,68 @@ class WorldModel:
         tr.cam_seen[cam] = t
         return True
 
-    def update(self, frame: CameraFrame) -> None:
-        """Merge one camera frame."""
+    def _reject(self, reason: str, detail: str, n: int = 1) -> None:
+        self.rejected[reason] = self.rejected.get(reason, 0) + n
+        self.last_rejection = f"{reason}: {detail}"
+
+    def set_field(self, half_length_mm: float, half_width_mm: float,
+                  boundary_mm: float) -> None:
+        """The field from the geometry packet (objects beyond it plus the margin are dropped).
+        Nonsense (non-finite, not positive) is ignored: the previous field stays."""
+        vals = (half_length_mm, half_width_mm, boundary_mm)
+        if not all(math.isfinite(v) for v in vals) or half_length_mm <= 0 or half_width_mm <= 0:
+            return
+        c = self.config
+        c.field_half_length_mm, c.field_half_width_mm = half_length_mm, half_width_mm
+        c.field_boundary_mm = max(0.0, boundary_mm)
+
+    def _on_field(self, x: float, y: float) -> bool:
+        c = self.config
+        extra = c.field_boundary_mm + c.field_margin_mm
+        return abs(x) <= c.field_half_length_mm + extra and abs(y) <= c.field_half_width_mm + extra
+
+    def update(self, frame: CameraFrame) -> bool:
+        """Merge one camera frame. False if the whole frame was dropped (counted in
+        ``rejected``): its camera id or its capture time cannot be right."""
+        cfg = self.config
+        if not 0 <= frame.camera_id <= cfg.max_camera_id:
+            self._reject("bad camera id", f"camera {frame.camera_id}")
+            return False
+        verdict = self.clocks.check(frame.camera_id, frame.t_capture, frame.receive_time_ns)
+        if verdict.t_local is None:
+            self._reject("time out of range",
+                         f"camera {frame.camera_id} frame {frame.frame_number}: capture time "
+                         f"{verdict.skew_s:+.3f} s from its clock")
+            return False
+        t = verdict.t_local
+        if len(frame.robots) > 2 * cfg.max_objects:
+            self._reject("too many objects", f"camera {frame.camera_id}: "
+                         f"{len(frame.robots)} robots")
+            frame = replace(frame, robots=frame.robots[:2 * cfg.max_objects])
+        if verdict.resynced:
+            self.last_rejection = (f"camera {frame.camera_id}: clock re-synchronised "
+                                   f"(offset {self.clocks.offsets()[frame.camera_id]:+.3f} s)")
+        if t != frame.t_capture:
+            frame = replace(frame, t_capture=t)
         self._cameras[frame.camera_id] = frame
-        t = frame.t_capture
         if t > self._t_latest:
             self._t_latest = t
             self._recv_latest = frame.receive_time_ns
         seen: set[tuple[Team, int]] = set()
+        per_team = {"blue": 0, "yellow": 0}
         for det in frame.robots:
             key = (det.team, det.id)
             if key in seen:  # a duplicate id in one frame: keep the first
                 continue
+            if not self._on_field(det.x, det.y):
+                self._reject("object out of field", f"{det.team} {det.id} at "
+                             f"({det.x:.0f}, {det.y:.0f})")
+                continue
+            per_team[det.team] += 1
+            if per_team[det.team] > cfg.max_objects:
+                self._reject("too many objects", f"camera {frame.camera_id}: more than "
+                             f"{cfg.max_objects} {det.team} robots")
+                break
             seen.add(key)
             tr = self._robots.get(key)
             if tr is None:
@@ -197,6 +270,7 @@ class WorldModel:
                 self._robots[key] = tr
             self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation)
         self._update_ball(frame)
+        return True
 
     # -- ball ------------------------------------------------------------------------------
 
@@ -222,8 +296,14 @@ class WorldModel:
         cfg = self.config
         t, cam = frame.t_capture, frame.camera_id
         cands: list[RawBall] = []
-        for b in frame.balls:
-            if self._on_robot(b, frame):
+        balls = frame.balls
+        if len(balls) > cfg.max_objects:
+            self._reject("too many objects", f"camera {cam}: {len(balls)} balls")
+            balls = balls[:cfg.max_objects]
+        for b in balls:
+            if not self._on_field(b.x, b.y):
+                self._reject("object out of field", f"ball at ({b.x:.0f}, {b.y:.0f})")
+            elif self._on_robot(b, frame):
                 self.ball_rejected_on_robot += 1
             else:
                 cands.append(b)

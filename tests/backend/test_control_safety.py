@@ -92,3 +92,25 @@ def test_a_gentle_turn_aims_past_the_waypoint_by_cos_squared_of_the_turn() -> No
     assert _near(next_waypoint(e, 0.0, 0.0), 1100.0, 0.0, None)
     assert next_waypoint(TargetEntry(Target(5.0, 5.0, None), "operator"), 0.0, 0.0) == \
         Target(5.0, 5.0, None)
+
+
+async def test_a_world_written_from_old_frames_is_stale_vision() -> None:
+    """Staleness is judged by when the relay received the newest frame merged, not only by
+    when the world topic was last written: a world rewritten from nothing new stops the
+    robots."""
+    import time
+
+    entry = TargetEntry(Target(2000.0, 0.0, 0.0), "strategy", role="attacker")
+    c, bus = setup(entry)
+    c.strategy_stale_s = 10.0
+    c.vision_stale_s = 0.3
+    world = bus.typed("world", WorldState)
+    world.write(WorldState(0.0, time.time_ns(), None, (RobotState("blue", 1, 0.0, 0.0, 0.0),)))
+    moving = await last(c, bus)
+    assert moving.commands[0].velocity.forward_mps > 0 and c.halt_reason == ""
+    world.write(WorldState(0.0, time.time_ns() - 2_000_000_000, None,
+                           (RobotState("blue", 1, 0.0, 0.0, 0.0),)))
+    stopped = await last(c, bus)
+    v = stopped.commands[0].velocity
+    assert (v.forward_mps, v.left_mps, v.angular_radps) == (0.0, 0.0, 0.0)
+    assert c.halt_reason.startswith("no vision for 2.")
