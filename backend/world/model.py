@@ -247,7 +247,9 @@ class WorldModel:
         self._cameras[frame.camera_id] = frame
         if t > self._t_latest:
             self._t_latest = t
-            self._recv_latest = frame.receive_time_ns
+        # the world's age by this machine's clock: the newest arrival merged (a frame a camera
+        # captured a moment before another one's still brings news)
+        self._recv_latest = max(self._recv_latest, frame.receive_time_ns)
         seen: set[tuple[Team, int]] = set()
         per_team = {"blue": 0, "yellow": 0}
         for det in frame.robots:

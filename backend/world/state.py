@@ -80,7 +80,7 @@ class CameraFrame:
 @dataclass(frozen=True, slots=True)
 class WorldState:
     t_capture: float  # Unix s of the newest frame merged
-    receive_time_ns: int  # relay receive time of the newest frame merged
+    receive_time_ns: int  # relay receive time of the latest frame merged (this machine's clock)
     ball: BallState | None
     robots: tuple[RobotState, ...]
     cameras: tuple[CameraFrame, ...] = field(default=())
