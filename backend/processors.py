@@ -273,7 +273,13 @@ class RefereeIngest(Processor):
                 self.counter.last_error = str(exc)
                 _badlog.warning("referee", "bad referee packet from %s: %s", env.source, exc)
                 continue
-            state = decode_referee(msg)
+            bad: list[str] = []
+            state = decode_referee(msg, bad)
+            if bad:  # used all the same, with replacement characters
+                self.counter.errors += 1
+                self.counter.last_error = "bad string: not UTF-8: " + ", ".join(bad)
+                _badlog.warning("referee-string", "referee message from %s: not UTF-8 (%s); "
+                                "decoded with replacement characters", env.source, ", ".join(bad))
             self.watch.heard(state)
             self.referee.write(state)
         self.watch.check()

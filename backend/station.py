@@ -534,7 +534,10 @@ class Station:
         return self._health_json_cache[1]
 
     def geometry(self) -> dict[str, Any] | None:
-        return self.geometry_topic.latest_value()
+        """The field as decoded (cleaned at decode time; non-finite numbers, should any get
+        through, become null here rather than break the JSON)."""
+        g = self.geometry_topic.latest_value()
+        return None if g is None else dict(_finite(g))
 
     def health(self) -> dict[str, Any]:
         procs = []
@@ -606,8 +609,10 @@ def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
         if world["stale"] and vision.get("last_age_s", -1) >= 0 \
                 and vision.get("last_age_s", -1) < 1.0:
             # vision arrives but nothing of it reaches the world: say why
-            out.append(f"world not updated for {world['age_s']:.1f} s although vision "
-                       f"arrives: robots stopped ({world['last_rejection'] or 'no frame merged'})")
+            since = ("no frame merged yet" if world["age_s"] is None
+                     else f"world not updated for {world['age_s']:.1f} s")
+            out.append(f"{since} although vision arrives: robots stopped "
+                       f"({world['last_rejection'] or 'no detection frame merged'})")
         if world["recent_rejections"]:
             out.append("vision dropped by the world model in the last 10 s: "
                        + ", ".join(f"{k} {v}" for k, v in world["recent_rejections"].items()))

@@ -8,6 +8,7 @@ from typing import Any
 from sslpb.ssl_vision_detection_pb2 import SSL_DetectionFrame
 from sslpb.ssl_vision_geometry_pb2 import SSL_GeometryData
 
+from .referee import wire_str
 from .state import CameraFrame, RawBall, RawRobot, Team
 
 
@@ -40,20 +41,25 @@ def decode_detection(frame: SSL_DetectionFrame, receive_time_ns: int) -> CameraF
 
 
 def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
-    """The field part of a geometry packet as the JSON the browser draws from (mm, rad)."""
+    """The field part of a geometry packet as the JSON the browser draws from (mm, rad).
+
+    Cleaned at the edge: names are valid UTF-8 (decoded with replacement), a line or arc with
+    a non-finite number is left out, a non-finite or non-positive radius takes its default; so
+    nothing that cannot be JSON reaches the page or the API."""
     f = geo.field
     lines = [
         {
-            "name": ln.name,
+            "name": wire_str(ln.name),
             "p1": {"x": ln.p1.x, "y": ln.p1.y},
             "p2": {"x": ln.p2.x, "y": ln.p2.y},
             "thickness": ln.thickness,
         }
         for ln in f.field_lines
+        if _finite(ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness)
     ]
     arcs = [
         {
-            "name": a.name,
+            "name": wire_str(a.name),
             "center": {"x": a.center.x, "y": a.center.y},
             "radius": a.radius,
             "a1": a.a1,
@@ -61,7 +67,12 @@ def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
             "thickness": a.thickness,
         }
         for a in f.field_arcs
+        if _finite(a.center.x, a.center.y, a.radius, a.a1, a.a2, a.thickness)
     ]
+
+    def positive(has: bool, value: float, default: float) -> float:
+        return value if has and math.isfinite(value) and value > 0 else default
+
     return {
         "field_length": f.field_length,
         "field_width": f.field_width,
@@ -73,8 +84,8 @@ def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
         "center_circle_radius": (
             f.center_circle_radius if f.HasField("center_circle_radius") else 500
         ),
-        "ball_radius": f.ball_radius if f.HasField("ball_radius") else 21.5,
-        "max_robot_radius": f.max_robot_radius if f.HasField("max_robot_radius") else 90.0,
+        "ball_radius": positive(f.HasField("ball_radius"), f.ball_radius, 21.5),
+        "max_robot_radius": positive(f.HasField("max_robot_radius"), f.max_robot_radius, 90.0),
         "lines": lines,
         "arcs": arcs,
     }

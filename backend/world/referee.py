@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -71,9 +72,27 @@ class RefereeState:
         }
 
 
-def _team(info: Referee.TeamInfo) -> dict[str, Any]:
+def wire_str(value: object, bad: list[str] | None = None, where: str = "") -> str:
+    """A string from the network, always valid UTF-8: proto2 ``string`` fields that are not
+    UTF-8 come out of the parser as bytes (or strings with lone surrogates); they are decoded
+    with replacement characters here, at the edge, and noted in ``bad``."""
+    if isinstance(value, bytes):
+        if bad is not None:
+            bad.append(where)
+        return value.decode("utf-8", "replace")
+    s = str(value)
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError:
+        if bad is not None:
+            bad.append(where)
+        return s.encode("utf-8", "replace").decode("utf-8")
+    return s
+
+
+def _team(info: Referee.TeamInfo, bad: list[str], colour: str) -> dict[str, Any]:
     return {
-        "name": info.name,
+        "name": wire_str(info.name, bad, f"{colour} team name"),
         "score": info.score,
         "yellow_cards": info.yellow_cards,
         "red_cards": info.red_cards,
@@ -98,7 +117,7 @@ def _team(info: Referee.TeamInfo) -> dict[str, Any]:
 MAX_GAME_EVENTS = 8
 
 
-def _game_event(ev: Any) -> dict[str, Any]:
+def _game_event(ev: Any, bad: list[str]) -> dict[str, Any]:
     kind = ev.WhichOneof("event")
     by_team = None
     if kind is not None:
@@ -106,10 +125,10 @@ def _game_event(ev: Any) -> dict[str, Any]:
         if body.HasField("by_team"):
             by_team = _enum_name(Team, body.by_team)
     return {
-        "id": ev.id,
+        "id": wire_str(ev.id, bad, "game event id"),
         "type": _enum_name(GameEvent.Type, ev.type) if ev.HasField("type") else (kind or "UNKNOWN"),
         "by_team": by_team,
-        "origin": list(ev.origin),
+        "origin": [wire_str(o, bad, "game event origin") for o in ev.origin],
         "created_s": ev.created_timestamp / 1e6 if ev.HasField("created_timestamp") else None,
     }
 
@@ -122,30 +141,36 @@ def _enum_name(enum: Any, value: int) -> str:
         return str(value)
 
 
-def decode_referee(msg: Referee) -> RefereeState:
+def decode_referee(msg: Referee, bad: list[str] | None = None) -> RefereeState:
+    """The station's referee state. Strings that are not UTF-8 are decoded with replacement
+    and named in ``bad`` (the message is used all the same: nothing else in it is wrong)."""
+    bad = [] if bad is None else bad
     dp = None
     if msg.HasField("designated_position"):
         dp = (msg.designated_position.x, msg.designated_position.y)
+        if not all(math.isfinite(v) for v in dp):
+            dp = None  # no place to put the ball: as if none was sent
     return RefereeState(
         command=Referee.Command.Name(msg.command),
         stage=Referee.Stage.Name(msg.stage),
         command_counter=msg.command_counter,
         stage_time_left_s=msg.stage_time_left / 1e6 if msg.HasField("stage_time_left") else None,
-        blue=_team(msg.blue),
-        yellow=_team(msg.yellow),
+        blue=_team(msg.blue, bad, "blue"),
+        yellow=_team(msg.yellow, bad, "yellow"),
         designated_position=dp,
         blue_team_on_positive_half=(
             msg.blue_team_on_positive_half if msg.HasField("blue_team_on_positive_half") else None
         ),
         packet_timestamp_us=msg.packet_timestamp,
-        source_identifier=msg.source_identifier,
+        source_identifier=wire_str(msg.source_identifier, bad, "source identifier"),
         next_command=(_enum_name(Referee.Command, msg.next_command)
                       if msg.HasField("next_command") else None),
-        status_message=msg.status_message,
+        status_message=wire_str(msg.status_message, bad, "status message"),
         match_type=(_enum_name(MatchType, msg.match_type)
                     if msg.HasField("match_type") else None),
         current_action_time_remaining_s=(
             msg.current_action_time_remaining / 1e6
             if msg.HasField("current_action_time_remaining") else None),
-        game_events=tuple(_game_event(e) for e in msg.game_events[-MAX_GAME_EVENTS:][::-1]),
+        game_events=tuple(_game_event(e, bad)
+                          for e in msg.game_events[-MAX_GAME_EVENTS:][::-1]),
     )

@@ -339,3 +339,64 @@ def test_the_internal_referee_switched_off_is_no_silent_referee(  # type: ignore
     h = c.get("/api/health").json()
     assert h["referee"]["obeyed"] is False and h["referee"]["silent"] is False
     assert not any("referee" in w for w in h["warnings"])
+
+
+def test_a_referee_name_that_is_not_utf8_breaks_no_endpoint_and_no_stream(  # type: ignore[no-untyped-def]
+        client, relay) -> None:
+    """The defect: a valid Referee whose team name is not UTF-8 made /api/world, /api/referee
+    and /api/health answer 500 and closed every websocket. Strings from the wire are decoded
+    with replacement at the edge; the message is used, and counted as a bad string."""
+    c, st = client
+    good = _referee_envelope("STOP", "gc", 1)
+    from sslpb import touchline_pb2 as tl
+
+    env = tl.Envelope.FromString(good)
+    env.payload = env.payload.replace(b"\x0a\x01t", b"\x0a\x01\xff", 1)  # blue/yellow name "t"
+    bad = env.SerializeToString()
+
+    def step() -> Any:
+        relay.sock.send_multipart([b"referee", bad])
+        ref = st.referee_topic.latest_value()
+        return ref if ref is not None else None
+    ref = _until(step, "the referee message with a bad name")
+    assert "\ufffd" in ref.yellow["name"] + ref.blue["name"]
+    for path in ("/api/world", "/api/referee", "/api/health"):
+        r = c.get(path)
+        assert r.status_code == 200, (path, r.text)
+    assert "bad string" in c.get("/api/health").json()["streams"]["referee"]["last_error"]
+    with c.websocket_connect("/api/ws") as ws:
+        snap = json.loads(ws.receive_text())
+        assert snap["type"] == "snapshot"
+        assert "\ufffd" in json.dumps(snap["world"]["referee"], ensure_ascii=False)
+
+
+def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # type: ignore[no-untyped-def]
+        client, relay) -> None:
+    from sslpb import touchline_pb2 as tl
+    from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+    c, st = client
+    pkt = SSL_WrapperPacket()
+    f = pkt.geometry.field
+    f.field_length, f.field_width, f.goal_width, f.goal_depth, f.boundary_width = \
+        9000, 6000, 1000, 180, 300
+    f.ball_radius = float("nan")
+    ln = f.field_lines.add()
+    ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = "Bad", float("nan"), 0, 1, 0, 10
+    ln = f.field_lines.add()
+    ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = "Good", 0, 0, 1, 0, 10
+    env = tl.Envelope(stream=tl.STREAM_VISION, receive_time_ns=time.time_ns(), sequence=1,
+                      source="127.0.0.1:10020", payload=pkt.SerializeToString())
+
+    def step() -> Any:
+        relay.sock.send_multipart([b"vision", env.SerializeToString()])
+        return st.geometry()
+    _until(step, "the geometry")
+    r = c.get("/api/geometry")
+    assert r.status_code == 200
+    g = json.loads(r.text, parse_constant=lambda s: pytest.fail(f"{s} in /api/geometry"))
+    assert [ln["name"] for ln in g["lines"]] == ["Good"] and g["ball_radius"] == 21.5
+    with c.websocket_connect("/api/ws") as ws:
+        snap = json.loads(ws.receive_text(),
+                          parse_constant=lambda s: pytest.fail(f"{s} in the websocket"))
+        assert snap["geometry"]["field_length"] == 9000
