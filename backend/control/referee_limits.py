@@ -7,20 +7,27 @@ from __future__ import annotations
 import math
 
 from backend.control.goto import LocalVelocity
-from domain.rules import speed_limit_mps
+from domain.rules import STOP_SPEED_MPS, speed_limit_mps
 
 
 def referee_limits(
-    velocity: LocalVelocity, command: str | None, our_team: str | None = None
+    velocity: LocalVelocity, command: str | None, our_team: str | None = None,
+    stop_speed_mps: float = STOP_SPEED_MPS, max_speed_mps: float = math.inf,
 ) -> LocalVelocity:
-    """Limit ``velocity`` for the referee ``command`` (proto enum name, e.g. "STOP").
+    """Limit ``velocity`` for the referee ``command`` (proto enum name, e.g. "STOP"), in one
+    place and once.
 
-    HALT -> zero. STOP -> speed at most 1.5 m/s (direction kept, angular kept).
-    BALL_PLACEMENT_<team>: limited for the other team; the placing team may move freely. With
-    ``our_team`` unknown (None), every ball placement is limited (the safe side).
+    HALT -> zero. STOP -> speed at most 1.5 m/s (direction kept, angular kept), or the
+    operator's lower ``stop_speed_mps``. BALL_PLACEMENT_<team>: the same limit for the other
+    team; the placing team may move freely. With ``our_team`` unknown (None), every ball
+    placement is limited (the safe side). ``max_speed_mps``: the strategy's own cap for this
+    robot, whatever the command.
     """
     cap = speed_limit_mps(command, our_team)
-    if cap == 0.0:
+    if 0.0 < cap < math.inf:
+        cap = min(cap, stop_speed_mps)
+    cap = min(cap, max_speed_mps)
+    if cap <= 0.0:
         return LocalVelocity.zero()
     s = math.hypot(velocity.forward_mps, velocity.left_mps)
     if s <= cap:
