@@ -17,6 +17,7 @@ import zmq
 import zmq.asyncio
 from google.protobuf.message import DecodeError, Message
 
+from domain.rules import kick_allowed
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
 from sslpb import touchline_pb2 as tl
@@ -584,12 +585,10 @@ class ControlProcessor(Processor):
             entry = targets[key]
             vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
                          next_waypoint(entry, robot.x, robot.y), dt)
-            vel = referee_limits(vel, command, our_team=self.our_team)
-            if command == "STOP":  # the operator may set a lower cap than the rules' 1.5 m/s
-                vel = _limit_speed(vel, self.stop_speed_mps)
-            if entry.max_speed_mps is not None:
-                vel = _limit_speed(vel, entry.max_speed_mps)
-            kick_ok = command is None or command not in _NO_KICK
+            vel = referee_limits(
+                vel, command, our_team=self.our_team, stop_speed_mps=self.stop_speed_mps,
+                max_speed_mps=math.inf if entry.max_speed_mps is None else entry.max_speed_mps)
+            kick_ok = kick_allowed(command)
             out.append(Command(key[0], key[1], vel,
                                kick_speed_mps=entry.kick_speed_mps if kick_ok else 0.0,
                                chip=entry.chip and kick_ok,
@@ -611,9 +610,6 @@ class ControlProcessor(Processor):
 
 _UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
 
-# No kicking while the referee has the game stopped (STOP, placements, timeouts).
-_NO_KICK = frozenset({"HALT", "STOP", "GOAL_BLUE", "GOAL_YELLOW", "BALL_PLACEMENT_BLUE",
-                      "BALL_PLACEMENT_YELLOW", "TIMEOUT_BLUE", "TIMEOUT_YELLOW"})
 
 #: a waypoint closer than this counts as passed: the robot heads for the next one
 WAYPOINT_REACHED_MM = 120.0
@@ -663,14 +659,6 @@ def _carry_through(path: tuple[tuple[float, float], ...], k: int, x_mm: float, y
     rest = lo + sum(math.dist(path[i], path[i + 1]) for i in range(k + 1, len(path) - 1))
     ext = min(rest, CARRY_MAX_MM) * cos_turn * cos_turn
     return Target(px + ix / li * ext, py + iy / li * ext, orientation)
-
-
-def _limit_speed(v: LocalVelocity, max_mps: float) -> LocalVelocity:
-    s = math.hypot(v.forward_mps, v.left_mps)
-    if s <= max_mps:
-        return v
-    k = max_mps / s
-    return LocalVelocity(v.forward_mps * k, v.left_mps * k, v.angular_radps)
 
 
 class InternalRefereeProcessor(Processor):

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from domain.field import DIVISION_A
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from backend import geometry as g
@@ -41,7 +43,7 @@ def cases(n: int) -> dict[str, Callable[[], Any]]:
         "segment_hits_circles (16 obstacles)": lambda: g.segment_hits_circles(
             a, b, obstacles, radii),
         "in_rectangle": lambda: g.in_rectangle(p, [0, 0], [1000, 500], 0.3),
-        "in_defense_area": lambda: g.in_defense_area(p, g.DIVISION_A),
+        "in_defense_area": lambda: g.in_defense_area(p, DIVISION_A),
         "fit_line_tls (one track of N)": lambda: g.fit_line_tls(track),
         "goalkeeper_target": lambda: g.goalkeeper_target(a, b, -4500.0, 1000.0, 90.0),
     }

@@ -24,7 +24,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from backend.geometry import DIVISION_A, DIVISION_B, FieldGeometry
 from backend.strategy.assignment import (
     StableAssigner,
     bottleneck_assignment,
@@ -37,6 +36,7 @@ from backend.strategy.paths import (
     field_bounds,
     plan_path,
 )
+from domain.field import DIVISION_A, DIVISION_B, Field
 
 BALL_RADIUS_MM = 21.5
 CLEARANCE_MM = ROBOT_RADIUS_MM + 30.0
@@ -47,12 +47,12 @@ def stats(samples_s: list[float]) -> str:
     return f"{np.median(us):9.1f} {np.percentile(us, 99):9.1f} {len(us):6d}"
 
 
-def random_positions(rng: np.random.Generator, field: FieldGeometry, n: int) -> np.ndarray:
+def random_positions(rng: np.random.Generator, field: Field, n: int) -> np.ndarray:
     hl, hw = field.field_length / 2 - 200, field.field_width / 2 - 200
     return rng.uniform([-hl, -hw], [hl, hw], size=(n, 2))
 
 
-def bench_paths(per_team: int, field: FieldGeometry, ticks: int,
+def bench_paths(per_team: int, field: Field, ticks: int,
                 rng: np.random.Generator) -> None:
     rects = defense_area_rects(field)
     bounds = field_bounds(field, 200.0)

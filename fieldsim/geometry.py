@@ -1,4 +1,4 @@
-"""Field geometry of division A and B, and its SSL_GeometryFieldSize with lines and arcs.
+"""The field (``domain.field``) as an SSL_GeometryFieldSize with lines and arcs.
 
 Lines and arcs are generated the way ssl-vision names them: touch lines, goal lines, halfway
 and centre line, penalty stretches and the centre circle. All lengths in mm.
@@ -7,60 +7,17 @@ and centre line, penalty stretches and the centre circle. All lengths in mm.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
+from domain.field import Field, division
 from sslpb import ssl_vision_geometry_pb2 as geom_pb
 
-
-@dataclass(frozen=True)
-class FieldGeometry:
-    """Sizes of one field in mm (the SSL rules' names)."""
-
-    field_length: int
-    field_width: int
-    goal_width: int
-    goal_depth: int = 180
-    boundary_width: int = 300
-    penalty_area_depth: int = 1000
-    penalty_area_width: int = 2000
-    center_circle_radius: int = 500
-    line_thickness: int = 10
-    goal_height: int = 155
-    ball_radius: float = 21.5
-    max_robot_radius: float = 90.0
-
-    @property
-    def half_length(self) -> float:
-        return self.field_length / 2.0
-
-    @property
-    def half_width(self) -> float:
-        return self.field_width / 2.0
-
-    @property
-    def wall_x(self) -> float:
-        """x of the outer wall (field edge plus boundary), mm."""
-        return self.half_length + self.boundary_width
-
-    @property
-    def wall_y(self) -> float:
-        """y of the outer wall, mm."""
-        return self.half_width + self.boundary_width
+#: fieldsim's name for the domain's field
+FieldGeometry = Field
 
 
-def division_geometry(division: str) -> FieldGeometry:
+def division_geometry(name: str) -> Field:
     """The default field of division "A" (12000x9000) or "B" (9000x6000)."""
-    if division == "A":
-        return FieldGeometry(
-            field_length=12000,
-            field_width=9000,
-            goal_width=1800,
-            penalty_area_depth=1800,
-            penalty_area_width=3600,
-        )
-    if division == "B":
-        return FieldGeometry(field_length=9000, field_width=6000, goal_width=1000)
-    raise ValueError(f"unknown division {division!r}")
+    return division(name)
 
 
 _T = geom_pb.SSL_FieldShapeType
@@ -87,16 +44,16 @@ def _line(
 def field_size_message(g: FieldGeometry) -> geom_pb.SSL_GeometryFieldSize:
     """SSL_GeometryFieldSize with sizes, field_lines and field_arcs like ssl-vision's."""
     fs = geom_pb.SSL_GeometryFieldSize()
-    fs.field_length = g.field_length
-    fs.field_width = g.field_width
-    fs.goal_width = g.goal_width
-    fs.goal_depth = g.goal_depth
-    fs.boundary_width = g.boundary_width
-    fs.penalty_area_depth = g.penalty_area_depth
-    fs.penalty_area_width = g.penalty_area_width
-    fs.center_circle_radius = g.center_circle_radius
-    fs.line_thickness = g.line_thickness
-    fs.goal_height = g.goal_height
+    fs.field_length = round(g.field_length)
+    fs.field_width = round(g.field_width)
+    fs.goal_width = round(g.goal_width)
+    fs.goal_depth = round(g.goal_depth)
+    fs.boundary_width = round(g.boundary_width)
+    fs.penalty_area_depth = round(g.penalty_area_depth)
+    fs.penalty_area_width = round(g.penalty_area_width)
+    fs.center_circle_radius = round(g.center_circle_radius)
+    fs.line_thickness = round(g.line_thickness)
+    fs.goal_height = round(g.goal_height)
     fs.ball_radius = g.ball_radius
     fs.max_robot_radius = g.max_robot_radius
 

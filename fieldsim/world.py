@@ -42,6 +42,7 @@ import random
 from dataclasses import dataclass
 from typing import Any
 
+from domain.angles import wrap_angle
 from fieldsim.config import SimConfig
 from fieldsim.geometry import FieldGeometry, division_geometry
 
@@ -106,11 +107,6 @@ class Ball:
     vx: float = 0.0  # m/s
     vy: float = 0.0
     vz: float = 0.0
-
-
-def wrap_angle(a: float) -> float:
-    """Angle in [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 # Formation in fractions of (half length, half width) on the negative-x half, 11 slots.

@@ -10,118 +10,19 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
-import random
 import shutil
 import signal
-import socket
-import subprocess
-import sys
 import tempfile
 import time
 import urllib.request
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
+from dataclasses import asdict
 
 from sslnet import defaults
 from sslnet.multicast import loopback_multicast_ok
 
-ROOT = Path(__file__).resolve().parent.parent
+from .supervisor import Ports, StationConfig, Supervisor, command_lines
+
 log = logging.getLogger("touchline.launcher")
-
-
-def free_tcp_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
-
-
-@dataclass
-class Ports:
-    http: int = defaults.BACKEND_PORT
-    vision_group: str = defaults.VISION_GROUP
-    vision: int = defaults.VISION_PORT_SIM
-    referee_group: str = defaults.REFEREE_GROUP
-    referee: int = defaults.REFEREE_PORT
-    sim_control: int = defaults.SIM_CONTROL_PORT
-    sim_blue: int = defaults.SIM_BLUE_PORT
-    sim_yellow: int = defaults.SIM_YELLOW_PORT
-    grsim: int = defaults.GRSIM_COMMAND_PORT
-    relay_pub: str = defaults.RELAY_PUB
-    relay_sub: str = defaults.RELAY_SUB
-
-    @staticmethod
-    def isolated(http: int | None) -> Ports:
-        rnd = random.Random(os.getpid() ^ time.time_ns())
-        return Ports(
-            http=http or free_tcp_port(),
-            vision=rnd.randrange(30000, 40000),
-            referee=rnd.randrange(40000, 50000),
-            sim_control=free_udp_port(),
-            sim_blue=free_udp_port(),
-            sim_yellow=free_udp_port(),
-            grsim=free_udp_port(),
-            relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
-            relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}",
-        )
-
-
-@dataclass
-class Child:
-    name: str
-    argv: list[str]
-    proc: subprocess.Popen[bytes] | None = None
-    restarts: int = 0
-    started: float = 0.0
-    history: list[float] = field(default_factory=list)
-
-
-def build_children(a: argparse.Namespace, ports: Ports) -> list[Child]:
-    py = sys.executable
-    children: list[Child] = []
-    if a.sim == "builtin":
-        children.append(Child("fieldsim", [
-            py, "-m", "fieldsim",
-            "--seed", str(a.seed),
-            "--vision-group", ports.vision_group, "--vision-port", str(ports.vision),
-            "--interface", a.interface,
-            "--control-port", str(ports.sim_control), "--blue-port", str(ports.sim_blue),
-            "--yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
-            *a.sim_args,
-        ]))
-    children.append(Child("relay", [
-        py, "-m", "larcmacs_relay",
-        "--vision", f"{ports.vision_group}:{ports.vision}",
-        "--referee", f"{ports.referee_group}:{ports.referee}",
-        "--interface", a.interface,
-        "--output", a.output, "--sim-host", a.sim_host,
-        "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
-        "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
-        "--pub", ports.relay_pub, "--sub", ports.relay_sub,
-        *a.relay_args,
-    ]))
-    children.append(Child("backend", [
-        py, "-m", "backend", "--host", a.host, "--port", str(ports.http),
-        "--relay-pub", ports.relay_pub, "--relay-sub", ports.relay_sub,
-        *(["--our-team", a.our_team] if a.our_team else []),
-        *(["--state-dir", a.state_dir] if a.state_dir else []),
-        *a.backend_args,
-    ]))
-    return children
-
-
-def start(child: Child) -> None:
-    log.info("starting %s: %s", child.name, " ".join(child.argv[1:]))
-    child.proc = subprocess.Popen(child.argv, cwd=ROOT)
-    child.started = time.monotonic()
 
 
 def wait_http(url: str, timeout_s: float) -> bool:
@@ -176,7 +77,10 @@ def main() -> int:
         a.state_dir = own_state_dir = tempfile.mkdtemp(prefix="touchline-state-")
     if a.vision_port:
         ports.vision = a.vision_port
-    children = build_children(a, ports)
+    sup = Supervisor(command_lines(StationConfig(
+        sim=a.sim, seed=a.seed, interface=a.interface, output=a.output, sim_host=a.sim_host,
+        host=a.host, our_team=a.our_team, state_dir=a.state_dir, sim_args=a.sim_args,
+        relay_args=a.relay_args, backend_args=a.backend_args), ports), restart=True)
     stopping = False
 
     def on_signal(signum: int, _frame: object) -> None:
@@ -186,8 +90,7 @@ def main() -> int:
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
 
-    for c in children:
-        start(c)
+    sup.start()
     url = f"http://{a.host}:{ports.http}"
     if wait_http(url + "/api/health", 30.0):
         print(f"\n  Touchline is running: {url}\n", flush=True)  # noqa: T201
@@ -201,37 +104,17 @@ def main() -> int:
 
     try:
         while not stopping:
-            for c in children:
-                assert c.proc is not None
-                code = c.proc.poll()
-                if code is None or stopping:
-                    continue
-                now = time.monotonic()
-                c.history = [t for t in c.history if now - t < 60] + [now]
-                if len(c.history) > 5:
-                    log.error("%s exited %s and keeps crashing; giving up", c.name, code)
-                    stopping = True
-                    break
-                log.warning("%s exited with %s; restarting", c.name, code)
-                c.restarts += 1
-                time.sleep(min(2.0, 0.2 * c.restarts))
-                start(c)
+            why = sup.watch()
+            if why is not None:
+                log.error("%s", why)
+                break
             time.sleep(0.2)
     finally:
-        # stop in mirror order: backend first (it sends a last stop), simulator last
-        for c in reversed(children):
-            if c.proc and c.proc.poll() is None:
-                c.proc.send_signal(signal.SIGTERM)
-                try:
-                    c.proc.wait(timeout=5)
-                except subprocess.TimeoutExpired:
-                    c.proc.kill()
-                    c.proc.wait()
+        sup.stop(timeout_s=5.0)
         if own_state_dir is not None:
             shutil.rmtree(own_state_dir, ignore_errors=True)
         log.info("stopped")
     return 0
-
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -20,29 +20,32 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from domain.field import division
+from domain.rules import (
+    BALL_RADIUS_MM,
+    COLLISION_SPEED_MPS,
+    PLACEMENT_TOLERANCE_MM,
+    ROBOT_RADIUS_MM,
+)
 from match.referee import MatchReferee
 from match.rules import (
     BALL_IN_PLAY_MM,
-    BALL_RADIUS_MM,
     COLLISION_DRAWN_MPS,
-    COLLISION_SPEED_MPS,
     DISTANCE_TOLERANCE_MM,
     HALT_SPEED_LIMIT_MMPS,
     NO_PROGRESS_MM,
     NO_PROGRESS_S,
     PENALTY_BEHIND_BALL_MM,
     PLACEMENT_STILL_MMPS,
-    PLACEMENT_TOLERANCE_MM,
     POSSESSION_DISTANCE_MM,
-    ROBOT_RADIUS_MM,
     STOP_SPEED_LIMIT_MMPS,
     TOO_CLOSE_MM,
     TOUCH_DISTANCE_MM,
-    Field,
     Grace,
     Timing,
     dist,
     dist_to_segment,
+    placement_position,
 )
 from match.truth import TEAMS, RobotKey, RobotView, Snapshot, num, other, parse_truth, robot_key
 
@@ -130,7 +133,7 @@ class _Interlude:
 class Director:
     def __init__(self, config: MatchConfig | None = None, *, wall_offset_s: float = 0.0) -> None:
         self.cfg = config if config is not None else MatchConfig()
-        self.field = Field.for_division(self.cfg.division)
+        self.field = division(self.cfg.division)
         self.timing = self.cfg.timing
         self.grace = self.cfg.grace
         self.wall_offset_s = wall_offset_s
@@ -592,7 +595,7 @@ class Director:
             s = self.snap
             if s is not None and s.ball is not None:
                 # the ball stays where it is unless that is no place for a free kick
-                pos = self.field.placement_position(s.ball.x, s.ball.y)
+                pos = placement_position(self.field, s.ball.x, s.ball.y)
                 if dist(pos[0], pos[1], s.ball.x, s.ball.y) > 1.0:
                     hold.pos, hold.teleport_at = pos, 0.5
             steps = [hold, Step("kick", f"DIRECT_FREE_{team.upper()}", team=team,
@@ -630,7 +633,7 @@ class Director:
             tx, ty = bx - bx / d * PLACEMENT_INTERLUDE_MM, by - by / d * PLACEMENT_INTERLUDE_MM
         else:
             tx, ty = bx, by + (-PLACEMENT_INTERLUDE_MM if by > 0 else PLACEMENT_INTERLUDE_MM)
-        return self.field.placement_position(tx, ty)
+        return placement_position(self.field, tx, ty)
 
     # -- events --------------------------------------------------------------------------------
 
@@ -751,7 +754,7 @@ class Director:
     def _ball_out(self, line: str, x: float, y: float, last: RobotKey | None) -> None:
         # the team that did not touch it last; unknown: the team defending that half
         team = other(last[0]) if last is not None else self.team_on_side(1 if x >= 0 else -1)
-        pos = self.field.placement_position(x, y)
+        pos = placement_position(self.field, x, y)
         by = f"last touch {last[0]} {last[1]}" if last else "last touch unknown"
         self._log("ball_out", team=team, detail=f"{line} line at ({x:.0f}, {y:.0f}); {by}")
         self.queue.extend([

@@ -12,13 +12,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fieldsim.geometry import division_geometry
-
-ROBOT_RADIUS_MM = 90.0
-BALL_RADIUS_MM = 21.5
+from domain.field import Field
+from domain.rules import (
+    BALL_RADIUS_MM,
+    ROBOT_RADIUS_MM,
+    STOP_BALL_DISTANCE_MM,
+)
 
 # Distances and speeds of the rules
-STOP_BALL_DISTANCE_MM = 500.0  # STOP and the opponents of a free kick / kick-off / placement
 DISTANCE_TOLERANCE_MM = 50.0  # what the game controller forgives on any distance rule
 # a robot is "too close" when its centre is nearer than this to the ball centre
 TOO_CLOSE_MM = STOP_BALL_DISTANCE_MM + ROBOT_RADIUS_MM - DISTANCE_TOLERANCE_MM
@@ -26,13 +27,11 @@ STOP_SPEED_LIMIT_MMPS = 1500.0 + 100.0  # 1.5 m/s plus 0.1 m/s tolerance
 HALT_SPEED_LIMIT_MMPS = 100.0
 CENTER_CIRCLE_RADIUS_MM = 500.0
 PENALTY_BEHIND_BALL_MM = 1000.0  # the other robots at a penalty kick stay this far behind
-COLLISION_SPEED_MPS = 1.5  # relative speed above which a collision is a foul
 COLLISION_DRAWN_MPS = 0.3  # both robots are at fault if their speeds are this close
 POSSESSION_DISTANCE_MM = 200.0  # robot centre to ball centre
 TOUCH_DISTANCE_MM = ROBOT_RADIUS_MM + BALL_RADIUS_MM + 15.0  # fallback last-touch detection
 
 # Ball placement
-PLACEMENT_TOLERANCE_MM = 150.0
 PLACEMENT_STILL_MMPS = 100.0
 PLACEMENT_LINE_OFFSET_MM = 200.0
 PLACEMENT_DEFENSE_AREA_OFFSET_MM = 700.0
@@ -44,8 +43,6 @@ BALL_IN_PLAY_MM = 50.0
 NO_PROGRESS_S = 15.0
 NO_PROGRESS_MM = 100.0
 
-# Penalty mark: distance from the goal centre (ssl-game-controller default geometry)
-PENALTY_MARK_DISTANCE_MM = {"A": 8000.0, "B": 6000.0}
 
 
 @dataclass(frozen=True)
@@ -101,78 +98,24 @@ def dist_to_segment(px: float, py: float, ax: float, ay: float, bx: float, by: f
     return dist(px, py, ax + t * dx, ay + t * dy)
 
 
-@dataclass(frozen=True)
-class Field:
-    """Field sizes (mm) of one division, from fieldsim's geometry."""
-
-    length: float
-    width: float
-    goal_width: float
-    defense_depth: float
-    defense_width: float
-    center_radius: float
-    penalty_mark_distance: float
-
-    @staticmethod
-    def for_division(division: str) -> Field:
-        g = division_geometry(division)
-        return Field(
-            length=float(g.field_length),
-            width=float(g.field_width),
-            goal_width=float(g.goal_width),
-            defense_depth=float(g.penalty_area_depth),
-            defense_width=float(g.penalty_area_width),
-            center_radius=float(g.center_circle_radius),
-            penalty_mark_distance=PENALTY_MARK_DISTANCE_MM[division],
-        )
-
-    @property
-    def half_length(self) -> float:
-        return self.length / 2.0
-
-    @property
-    def half_width(self) -> float:
-        return self.width / 2.0
-
-    def defense_rect(self, side: int) -> tuple[float, float, float, float]:
-        """(x0, x1, y0, y1) of the defence area in front of the goal at x = side * half_length."""
-        hl, d, hw = self.half_length, self.defense_depth, self.defense_width / 2.0
-        if side > 0:
-            return (hl - d, hl, -hw, hw)
-        return (-hl, -hl + d, -hw, hw)
-
-    def dist_to_defense_area(self, x: float, y: float, side: int) -> float:
-        """0 inside the defence area of ``side``, else the distance to it."""
-        x0, x1, y0, y1 = self.defense_rect(side)
-        dx = max(x0 - x, 0.0, x - x1)
-        dy = max(y0 - y, 0.0, y - y1)
-        return math.hypot(dx, dy)
-
-    def in_field(self, x: float, y: float) -> bool:
-        return abs(x) <= self.half_length and abs(y) <= self.half_width
-
-    def penalty_mark(self, defending_side: int) -> tuple[float, float]:
-        """The penalty mark in front of the goal defended on ``defending_side`` (+1 / -1)."""
-        return (defending_side * (self.half_length - self.penalty_mark_distance), 0.0)
-
-    def placement_position(self, x: float, y: float) -> tuple[float, float]:
-        """Where a ball that left the field at (x, y) is placed: 200 mm inside the field lines,
-        then moved away from a defence area it is closer to than 700 mm (along x or along y,
-        whichever moves it less)."""
-        lx = self.half_length - PLACEMENT_LINE_OFFSET_MM
-        ly = self.half_width - PLACEMENT_LINE_OFFSET_MM
-        px, py = clamp(x, -lx, lx), clamp(y, -ly, ly)
-        gap = PLACEMENT_DEFENSE_AREA_OFFSET_MM
-        for side in (-1, 1):
-            if self.dist_to_defense_area(px, py, side) >= gap:
-                continue
-            x0, x1, _, y1 = self.defense_rect(side)
-            # candidate 1: in front of the area, towards the centre
-            cx = (x0 - gap) if side > 0 else (x1 + gap)
-            # candidate 2: beside the area, towards the touch line on the ball's side
-            cy = math.copysign(min(y1 + gap, ly), py if py != 0.0 else 1.0)
-            if abs(cy) >= y1 + gap and abs(cy - py) < abs(cx - px):
-                py = cy
-            else:
-                px = cx
-        return (px, py)
+def placement_position(field: Field, x: float, y: float) -> tuple[float, float]:
+    """Where a ball that left the field at (x, y) is placed: 200 mm inside the field lines,
+    then moved away from a defence area it is closer to than 700 mm (along x or along y,
+    whichever moves it less)."""
+    lx = field.half_length - PLACEMENT_LINE_OFFSET_MM
+    ly = field.half_width - PLACEMENT_LINE_OFFSET_MM
+    px, py = clamp(x, -lx, lx), clamp(y, -ly, ly)
+    gap = PLACEMENT_DEFENSE_AREA_OFFSET_MM
+    for side in (-1, 1):
+        if field.dist_to_defense_area(px, py, side) >= gap:
+            continue
+        x0, x1, _, y1 = field.defense_rect(side)
+        # candidate 1: in front of the area, towards the centre
+        cx = (x0 - gap) if side > 0 else (x1 + gap)
+        # candidate 2: beside the area, towards the touch line on the ball's side
+        cy = math.copysign(min(y1 + gap, ly), py if py != 0.0 else 1.0)
+        if abs(cy) >= y1 + gap and abs(cy - py) < abs(cx - px):
+            py = cy
+        else:
+            px = cx
+    return (px, py)

@@ -2,19 +2,16 @@
 
 Children (each in its own session, its output in a log file, and told by the kernel to stop if
 the runner dies): fieldsim with both teams and a truth publisher, one relay, and two backends on
-that relay (blue: our strategy, yellow: the opponent). The launcher builds their command lines.
+that relay (blue: our strategy, yellow: the opponent), under the one supervisor
+(``launcher.supervisor``), which builds their command lines.
 """
 
 from __future__ import annotations
 
-import argparse
-import contextlib
 import json
 import logging
-import re
 import shutil
 import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -23,7 +20,14 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import IO, Any
 
-from launcher.__main__ import ROOT, Child, Ports, build_children, free_tcp_port
+from launcher.supervisor import (
+    Child,
+    Ports,
+    StationConfig,
+    Supervisor,
+    command_lines,
+    free_tcp_port,
+)
 from match.director import Director, MatchConfig
 from match.report import format_result, write_outputs
 from match.shell import DirectorShell
@@ -75,94 +79,25 @@ class StartupError(RuntimeError):
     pass
 
 
-def backend_supports(flags: list[str]) -> set[str]:
-    """Which of ``flags`` `python -m backend --help` lists (strategy flags may not exist yet)."""
-    try:
-        out = subprocess.run([sys.executable, "-m", "backend", "--help"], cwd=ROOT,
-                             capture_output=True, text=True, timeout=120, check=False)
-    except (OSError, subprocess.TimeoutExpired):
-        return set()
-    return {f for f in flags if re.search(rf"(^|\s){re.escape(f)}\b", out.stdout)}
-
-
-def _die_with_parent() -> None:
-    """In the child before exec: SIGTERM when the runner dies (Linux), so nothing is orphaned
-    even if the runner is killed with SIGKILL."""
-    with contextlib.suppress(Exception):
-        import ctypes
-
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
-class Processes:
-    def __init__(self, children: list[Child], log_dir: Path) -> None:
-        self.children = children
-        self.log_dir = log_dir
-        self._logs: list[IO[bytes]] = []
-        self.exit_codes: dict[str, int | None] = {}
-
-    def start(self) -> None:
-        self.log_dir.mkdir(parents=True, exist_ok=True)
-        for c in self.children:
-            f = (self.log_dir / f"{c.name}.log").open("wb")
-            self._logs.append(f)
-            log.info("starting %s", c.name)
-            c.proc = subprocess.Popen(c.argv, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT,
-                                      stdin=subprocess.DEVNULL, start_new_session=True,
-                                      preexec_fn=_die_with_parent)
-            c.started = time.monotonic()
-
-    def dead(self) -> list[Child]:
-        return [c for c in self.children if c.proc is not None and c.proc.poll() is not None]
-
-    def log_tail(self, name: str, lines: int = 25) -> str:
-        try:
-            text = (self.log_dir / f"{name}.log").read_text(errors="replace")
-        except OSError:
-            return ""
-        return "\n".join(text.splitlines()[-lines:])
-
-    def stop(self) -> None:
-        """Backends first (they send a last stop), then the relay, the simulator last."""
-        for c in reversed(self.children):
-            if c.proc is not None and c.proc.poll() is None:
-                c.proc.send_signal(signal.SIGTERM)
-        for c in reversed(self.children):
-            if c.proc is None:
-                continue
-            try:
-                c.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                log.warning("%s did not stop in 10 s: killing it", c.name)
-                c.proc.kill()
-                c.proc.wait(timeout=10)
-            self.exit_codes[c.name] = c.proc.returncode
-        for f in self._logs:
-            f.close()
-        self._logs.clear()
-
-
 def build(opts: Options, ports: Ports, truth_endpoint: str, http: dict[str, int],
-          state_dirs: dict[str, str], supported: set[str]) -> list[Child]:
+          state_dirs: dict[str, str]) -> list[Child]:
     plays = {"blue": opts.blue_play, "yellow": opts.yellow_play}
     sides = {"blue": -1, "yellow": 1}  # fieldsim puts blue on the negative half
     children: list[Child] = []
     for team in ("blue", "yellow"):
         backend_args = ["--our-side", str(sides[team]), *opts.backend_args]
-        if "--play" in supported:
-            backend_args += ["--play", plays[team]]
-        if team == "blue" and opts.engine and "--set" in supported:
+        backend_args += ["--play", plays[team]]
+        if team == "blue" and opts.engine:
             backend_args += ["--set", f"strategy.engine={opts.engine}"]
-        if opts.robot_speed_mps is not None and "--set" in supported:
+        if opts.robot_speed_mps is not None:
             for ctrl in SPEED_CONTROLLERS:
                 backend_args += ["--set", f"control.params.{ctrl}.v_mps={opts.robot_speed_mps}"]
-        ns = argparse.Namespace(
+        cfg = StationConfig(
             sim="builtin", seed=opts.seed, interface=opts.interface,
             sim_args=["--blue", "6", "--yellow", "6", "--division", opts.division,
                       "--truth-pub", truth_endpoint],
-            output="sim", sim_host="127.0.0.1", relay_args=[], host="127.0.0.1",
             our_team=team, state_dir=state_dirs[team], backend_args=backend_args)
-        built = build_children(ns, replace(ports, http=http[team]))
+        built = command_lines(cfg, replace(ports, http=http[team]))
         if team == "blue":
             children.extend(built[:-1])  # fieldsim and the relay, once
         backend = built[-1]
@@ -217,17 +152,13 @@ class MatchRunner:
 
     def _run(self, tmp: Path) -> int:
         opts = self.opts
-        supported = backend_supports(["--play", "--set"])
-        for flag in ("--play", "--set"):
-            if flag not in supported and (flag == "--play" or opts.engine):
-                self.say(f"note: this backend has no {flag} flag yet: the teams run whatever "
-                         "the backend does by default")
         ports = Ports.isolated(None)
         http = {"blue": free_tcp_port(), "yellow": free_tcp_port()}
         truth = f"tcp://127.0.0.1:{free_tcp_port()}"
         state_dirs = {t: str(tmp / f"state-{t}") for t in ("blue", "yellow")}
         log_dir = (opts.out / "logs") if opts.out is not None else tmp / "logs"
-        procs = Processes(build(opts, ports, truth, http, state_dirs, supported), log_dir)
+        procs = Supervisor(build(opts, ports, truth, http, state_dirs), log_dir=log_dir,
+                           detach=True)
         director = Director(MatchConfig(
             half_s=opts.half_s, division=opts.division,
             plays={"blue": opts.blue_play, "yellow": opts.yellow_play}),
@@ -269,7 +200,7 @@ class MatchRunner:
             self.say(f"result: {opts.out / 'result.json'}, events: {opts.out / 'events.csv'}")
         return code
 
-    def _wait_ready(self, procs: Processes, shell: DirectorShell, http: dict[str, int]) -> None:
+    def _wait_ready(self, procs: Supervisor, shell: DirectorShell, http: dict[str, int]) -> None:
         deadline = time.monotonic() + self.opts.startup_timeout_s
         healthy: set[str] = set()
         truth = 0
@@ -295,7 +226,7 @@ class MatchRunner:
                     f"not ready after {self.opts.startup_timeout_s:.0f} s: truth frames {truth}, "
                     f"healthy backends {sorted(healthy) or 'none'}")
 
-    def _play(self, procs: Processes, shell: DirectorShell, director: Director) -> int:
+    def _play(self, procs: Supervisor, shell: DirectorShell, director: Director) -> int:
         start = time.monotonic()
         next_status = start + self.opts.status_every_s
         while not director.finished:
@@ -335,7 +266,7 @@ class MatchRunner:
         return (f"  {d.now - (d.t0 or d.now):6.1f} s  {r.stage:<22} {r.command:<22} "
                 f"blue {r.blue.score} : {r.yellow.score} yellow   stage time left {left:5.1f} s")
 
-    def _result(self, director: Director, shell: DirectorShell, procs: Processes, ports: Ports,
+    def _result(self, director: Director, shell: DirectorShell, procs: Supervisor, ports: Ports,
                 http: dict[str, int], started: bool) -> dict[str, Any]:
         res = director.result()
         o = self.opts

@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from domain.angles import wrap_angle
+
 
 @dataclass(frozen=True, slots=True)
 class Target:
@@ -34,10 +36,6 @@ class GoToConfig:
     max_angular_radps: float = 4.0
     position_tolerance_mm: float = 15.0
     angle_tolerance_rad: float = 0.03
-
-
-def wrap_angle(a: float) -> float:
-    return math.atan2(math.sin(a), math.cos(a))
 
 
 def global_to_local(vx: float, vy: float, heading: float) -> tuple[float, float]:

@@ -30,7 +30,6 @@ from backend.control.goto import (
     Target,
     global_to_local,
     set_last_velocity,
-    wrap_angle,
 )
 from backend.control.params import (
     ALGORITHMS,
@@ -39,6 +38,7 @@ from backend.control.params import (
     ControlSettings,
 )
 from backend.control.profile import ProfilePoint, Trapezoid
+from domain.angles import wrap_angle
 
 # Phase codes in telemetry()["phase"] (floats so that telemetry stays dict[str, float]).
 PHASE_IDLE = 0

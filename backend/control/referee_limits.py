@@ -1,40 +1,36 @@
-"""Speed limits the referee command imposes on our robots (SSL rules): HALT stops every robot at
-once; STOP and the other team's ball placement allow at most 1.5 m/s."""
+"""Speed limits the referee command imposes on our robots (the rules in ``domain.rules``):
+HALT stops every robot at once; STOP and the other team's ball placement allow at most
+1.5 m/s."""
 
 from __future__ import annotations
 
 import math
 
 from backend.control.goto import LocalVelocity
-
-STOP_SPEED_MPS = 1.5
-
-# Commands under which every robot must stay at or below STOP_SPEED_MPS. GOAL_* are the old
-# (deprecated) goal commands, which the game controller follows with STOP semantics.
-_SLOW_COMMANDS = frozenset({"STOP", "GOAL_BLUE", "GOAL_YELLOW"})
+from domain.rules import STOP_SPEED_MPS, speed_limit_mps
 
 
 def referee_limits(
-    velocity: LocalVelocity, command: str | None, our_team: str | None = None
+    velocity: LocalVelocity, command: str | None, our_team: str | None = None,
+    stop_speed_mps: float = STOP_SPEED_MPS, max_speed_mps: float = math.inf,
 ) -> LocalVelocity:
-    """Limit ``velocity`` for the referee ``command`` (proto enum name, e.g. "STOP").
+    """Limit ``velocity`` for the referee ``command`` (proto enum name, e.g. "STOP"), in one
+    place and once.
 
-    HALT -> zero. STOP -> speed at most 1.5 m/s (direction kept, angular kept).
-    BALL_PLACEMENT_<team>: limited for the other team; the placing team may move freely. With
-    ``our_team`` unknown (None), every ball placement is limited (the safe side).
+    HALT -> zero. STOP -> speed at most 1.5 m/s (direction kept, angular kept), or the
+    operator's lower ``stop_speed_mps``. BALL_PLACEMENT_<team>: the same limit for the other
+    team; the placing team may move freely. With ``our_team`` unknown (None), every ball
+    placement is limited (the safe side). ``max_speed_mps``: the strategy's own cap for this
+    robot, whatever the command.
     """
-    if command is None:
-        return velocity
-    if command == "HALT":
+    cap = speed_limit_mps(command, our_team)
+    if 0.0 < cap < math.inf:
+        cap = min(cap, stop_speed_mps)
+    cap = min(cap, max_speed_mps)
+    if cap <= 0.0:
         return LocalVelocity.zero()
-    slow = command in _SLOW_COMMANDS
-    if command.startswith("BALL_PLACEMENT_"):
-        placer = command.removeprefix("BALL_PLACEMENT_").lower()
-        slow = our_team is None or placer != our_team.lower()
-    if not slow:
-        return velocity
     s = math.hypot(velocity.forward_mps, velocity.left_mps)
-    if s <= STOP_SPEED_MPS:
+    if s <= cap:
         return velocity
-    k = STOP_SPEED_MPS / s
+    k = cap / s
     return LocalVelocity(velocity.forward_mps * k, velocity.left_mps * k, velocity.angular_radps)

@@ -10,7 +10,6 @@ from .core import (
     RawFilter,
     VelocityFit,
     make_filter,
-    wrap_angle,
 )
 from .params import (
     FILTER_KINDS,
@@ -25,5 +24,5 @@ from .params import (
 __all__ = [
     "FILTER_KINDS", "AngleFilter", "FilterKind", "FilterSettings", "KalmanCV", "KalmanParams",
     "MedianFilter", "MedianParams", "MedianWeighted", "PaperFilter", "PaperParams",
-    "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter", "wrap_angle",
+    "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter",
 ]

@@ -16,14 +16,11 @@ import math
 from collections import deque
 from typing import Protocol
 
+from domain.angles import wrap_angle
+
 from .params import FilterKind, KalmanParams, MedianParams, PaperParams, RawParams
 
 Vec = tuple[float, float]
-
-
-def wrap_angle(a: float) -> float:
-    """Angle in [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _median(vals: list[float]) -> float:

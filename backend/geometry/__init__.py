@@ -39,9 +39,6 @@ from .lines import (
     signed_line_distance,
 )
 from .regions import (
-    DIVISION_A,
-    DIVISION_B,
-    FieldGeometry,
     in_defense_area,
     in_half_plane,
     in_rectangle,
@@ -61,10 +58,7 @@ from .vectors import (
 )
 
 __all__ = [
-    "DIVISION_A",
-    "DIVISION_B",
     "PARALLEL_EPS",
-    "FieldGeometry",
     "Line",
     "Motion",
     "SegmentHit",

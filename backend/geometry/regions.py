@@ -8,10 +8,11 @@ spot, x along the field towards the right-hand goal).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+
+from domain.field import Field
 
 from ._types import ArrayLike, BoolArray, as_points, as_scalars
 from .vectors import cross, rotate
@@ -36,31 +37,7 @@ def in_rectangle(p: ArrayLike, center: ArrayLike, size: ArrayLike,
                       & (np.abs(local[..., 1]) <= half[..., 1]))
 
 
-@dataclass(frozen=True)
-class FieldGeometry:
-    """The sizes the goal-zone tests need (mm), as in the SSL-Vision geometry packet."""
-
-    field_length: float
-    field_width: float
-    goal_width: float
-    penalty_area_depth: float
-    penalty_area_width: float
-
-    @classmethod
-    def from_packet(cls, geom: dict[str, float]) -> FieldGeometry:
-        """From the backend's decoded geometry dict (``backend.world.decode``)."""
-        return cls(float(geom["field_length"]), float(geom["field_width"]),
-                   float(geom["goal_width"]), float(geom["penalty_area_depth"]),
-                   float(geom["penalty_area_width"]))
-
-
-#: Division A field (SSL rules 2022+): 12 x 9 m, defence area 1.8 m deep, 3.6 m wide
-DIVISION_A = FieldGeometry(12000.0, 9000.0, 1800.0, 1800.0, 3600.0)
-#: Division B field (SSL rules 2022+): 9 x 6 m, defence area 1 m deep, 2 m wide
-DIVISION_B = FieldGeometry(9000.0, 6000.0, 1000.0, 1000.0, 2000.0)
-
-
-def in_defense_area(p: ArrayLike, field: FieldGeometry,
+def in_defense_area(p: ArrayLike, field: Field,
                     side: Literal["positive", "negative", "either"] = "either",
                     margin: float = 0.0) -> BoolArray:
     """True where p is inside a defence area (the rectangle penalty_area_depth deep and

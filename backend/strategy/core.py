@@ -17,18 +17,21 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from domain.field import Field
+from domain.rules import STOPPED_DEFENSE_AREA_DISTANCE_MM
+
 from ..geometry import fit_motion_lsq
 from ..params.model import StrategyParams
 from ..world.referee import RefereeState
 from ..world.state import Team, WorldState
-from .model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Frame, Move
+from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Move
 from .navigate import navigate
 from .plays import Strategy, StrategyInput, Tuning
 from .situation import Situation, SituationTracker
 
 #: robot body to the opponents' defence area while the game is stopped: the rules' 0.2 m
 #: plus 60 mm for the vision noise and the controller's overshoot
-STOPPED_DEFENSE_MARGIN_MM = 260.0
+STOPPED_DEFENSE_MARGIN_MM = STOPPED_DEFENSE_AREA_DISTANCE_MM + 60.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,7 +60,7 @@ class StrategyCore:
     def prepare(self, world: WorldState, geometry: dict[str, float] | None,
                 referee: RefereeState | None, params: StrategyParams, our_team: Team,
                 our_side_negative: bool, side_from_referee: bool, now: float) -> Prepared:
-        fs = FieldSize.from_geometry(geometry)
+        fs = Field.from_geometry(geometry)
         negative = our_side_negative
         self.side_from_referee = False
         if side_from_referee and referee is not None \

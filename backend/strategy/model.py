@@ -11,8 +11,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-ROBOT_RADIUS_MM = 90.0
-BALL_RADIUS_MM = 21.5
+from domain.field import Field
+from domain.rules import BALL_RADIUS_MM as BALL_RADIUS_MM
+from domain.rules import ROBOT_RADIUS_MM as ROBOT_RADIUS_MM
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,52 +30,16 @@ class Frame:
         return a if self.sign > 0 else math.atan2(-math.sin(a), -math.cos(a))
 
 
-@dataclass(frozen=True, slots=True)
-class FieldSize:
-    """The sizes the strategy needs (mm), from the vision geometry packet."""
+def own_defense(fs: Field) -> tuple[float, float, float, float]:
+    """Our defence area (our frame) as xmin, ymin, xmax, ymax; it reaches behind the goal
+    line so that paths never cut through the goal."""
+    hl, hw = fs.half_length, fs.penalty_area_width / 2.0
+    return (-hl - 400.0, -hw, -hl + fs.penalty_area_depth, hw)
 
-    length: float = 9000.0
-    width: float = 6000.0
-    goal_width: float = 1000.0
-    goal_depth: float = 180.0
-    defense_depth: float = 1000.0
-    defense_width: float = 2000.0
-    center_radius: float = 500.0
 
-    @classmethod
-    def from_geometry(cls, g: dict[str, float] | None) -> FieldSize:
-        if not g:
-            return cls()
-
-        def val(key: str, default: float) -> float:
-            v = g.get(key)
-            return float(v) if isinstance(v, int | float) and v > 0 else default
-
-        return cls(
-            length=val("field_length", 9000.0), width=val("field_width", 6000.0),
-            goal_width=val("goal_width", 1000.0), goal_depth=val("goal_depth", 180.0),
-            defense_depth=val("penalty_area_depth", 1000.0),
-            defense_width=val("penalty_area_width", 2000.0),
-            center_radius=val("center_circle_radius", 500.0),
-        )
-
-    @property
-    def half_length(self) -> float:
-        return self.length / 2.0
-
-    @property
-    def half_width(self) -> float:
-        return self.width / 2.0
-
-    def own_defense(self) -> tuple[float, float, float, float]:
-        """Our defence area (our frame) as xmin, ymin, xmax, ymax; it reaches behind the goal
-        line so that paths never cut through the goal."""
-        hl, hw = self.half_length, self.defense_width / 2.0
-        return (-hl - 400.0, -hw, -hl + self.defense_depth, hw)
-
-    def their_defense(self) -> tuple[float, float, float, float]:
-        hl, hw = self.half_length, self.defense_width / 2.0
-        return (hl - self.defense_depth, -hw, hl + 400.0, hw)
+def their_defense(fs: Field) -> tuple[float, float, float, float]:
+    hl, hw = fs.half_length, fs.penalty_area_width / 2.0
+    return (hl - fs.penalty_area_depth, -hw, hl + 400.0, hw)
 
 
 @dataclass(frozen=True, slots=True)

@@ -15,7 +15,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Frame, Intent, Move
+from domain.field import Field
+
+from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Intent, Move, own_defense, their_defense
 from .paths import Obstacles, plan_path
 
 R = ROBOT_RADIUS_MM
@@ -37,7 +39,7 @@ def _inside(p: tuple[float, float], r: Sequence[float], g: float) -> bool:
 
 
 def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[Bot],
-             ball: Ball | None, fs: FieldSize, frame: Frame, robot_margin_mm: float,
+             ball: Ball | None, fs: Field, frame: Frame, robot_margin_mm: float,
              defense_margin_mm: float,
              corridor: tuple[tuple[float, float], tuple[float, float], float] | None = None,
              their_defense_margin_mm: float | None = None,
@@ -51,9 +53,9 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
     everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
     all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
                            dtype=np.float64).reshape(-1, 3)
-    their_def = _rect_grow(fs.their_defense(), defense_margin_mm
+    their_def = _rect_grow(their_defense(fs), defense_margin_mm
                            if their_defense_margin_mm is None else their_defense_margin_mm)
-    own_def = _rect_grow(fs.own_defense(), defense_margin_mm)
+    own_def = _rect_grow(own_defense(fs), defense_margin_mm)
     extra_circles: list[list[float]] = []
     if corridor is not None:
         a, b, rad = corridor

@@ -48,7 +48,8 @@ from typing import Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from backend.geometry import FieldGeometry, circle_circle_intersection, segment_hits_circles
+from backend.geometry import circle_circle_intersection, segment_hits_circles
+from domain.field import Field
 
 __all__ = [
     "CIRCLE_SIDES",
@@ -177,7 +178,7 @@ class Obstacles:
         return Obstacles(c, self.rects + g, self.bounds)
 
 
-def defense_area_rects(field: FieldGeometry,
+def defense_area_rects(field: Field,
                        side: Literal["positive", "negative", "either"] = "either",
                        margin: float = 0.0) -> Array:
     """The defence areas as rectangles (L, 4), grown by ``margin`` on every side: the same
@@ -195,7 +196,7 @@ def defense_area_rects(field: FieldGeometry,
     return out
 
 
-def field_bounds(field: FieldGeometry, margin: float = 0.0) -> Bounds:
+def field_bounds(field: Field, margin: float = 0.0) -> Bounds:
     """The field rectangle grown by ``margin`` (e.g. part of the boundary run-off area)."""
     hl, hw = field.field_length / 2.0 + margin, field.field_width / 2.0 + margin
     return (-hl, -hw, hl, hw)

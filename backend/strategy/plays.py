@@ -32,9 +32,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from domain.field import Field
+
 from .assignment import StableAssigner
 from .demo import DemoConfig, formation
-from .model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Intent
+from .model import ROBOT_RADIUS_MM, Ball, Bot, Intent
 from .roles import (
     CONTACT_MM,
     attacker,
@@ -84,7 +86,7 @@ class StrategyInput:
     ours: Sequence[Bot]  # our frame
     theirs: Sequence[Bot]
     ball: Ball | None
-    fs: FieldSize
+    fs: Field
     situation: Situation  # designated position already in our frame
     keeper_id: int | None = None  # from the referee
     keeper_point: tuple[float, float] | None = None  # e.g. from the compute engine
@@ -271,9 +273,10 @@ class Strategy:
             n_sup += n_att
         dpts = defender_points(n_def, ball, fs, tu.defense_margin_mm)
         if play == "simple":
-            spts = [(-0.3 * fs.length, -0.25 * fs.width), (-0.3 * fs.length, 0.25 * fs.width),
-                    (-0.15 * fs.length, 0.0), (-0.35 * fs.length, 0.0),
-                    (-0.15 * fs.length, 0.35 * fs.width)] * 3
+            spts = [(-0.3 * fs.field_length, -0.25 * fs.field_width),
+                    (-0.3 * fs.field_length, 0.25 * fs.field_width),
+                    (-0.15 * fs.field_length, 0.0), (-0.35 * fs.field_length, 0.0),
+                    (-0.15 * fs.field_length, 0.35 * fs.field_width)] * 3
             spts = spts[:n_sup]
         else:
             spts = supporter_points(n_sup, ball, fs)
@@ -292,7 +295,7 @@ class Strategy:
         return slots + rest
 
     @staticmethod
-    def _blocker(s: Slot, ball: Ball, fs: FieldSize, tu: Tuning) -> Slot:
+    def _blocker(s: Slot, ball: Ball, fs: Field, tu: Tuning) -> Slot:
         u = unit(-fs.half_length - ball.x, -ball.y)
         p = clamp_to_field((ball.x + u[0] * (tu.stop_distance_mm + 30.0),
                             ball.y + u[1] * (tu.stop_distance_mm + 30.0)), fs)
@@ -309,7 +312,7 @@ class Strategy:
             others = [b.xy for b in inp.theirs] + [b.xy for b in inp.ours if b.id != bot.id]
             aim, angle = best_shot(ball.xy, others, fs)
             speed = tu.kick_speed_mps
-            deep = fs.half_length - ball.x > 0.6 * fs.length
+            deep = fs.half_length - ball.x > 0.6 * fs.field_length
             if sit.indirect or angle < math.radians(3.0) or deep:
                 # pass to the team mate furthest forward (or just forward)
                 mates = [b for b in inp.ours if b.id != bot.id]
@@ -324,7 +327,7 @@ class Strategy:
 
     def _kickoff(self, inp: StrategyInput) -> list[Slot]:
         fs, ball, n, tu, sit = inp.fs, inp.ball, len(inp.ours), inp.tuning, inp.situation
-        cr = fs.center_radius + R + 80.0
+        cr = fs.center_circle_radius + R + 80.0
         slots = [Slot("goalkeeper", "goalkeeper", (-fs.half_length + R + 30.0, 0.0),
                       _hold("goalkeeper", (-fs.half_length + R + 30.0, 0.0), 0.0,
                             own_defense_ok=True))]
@@ -341,12 +344,14 @@ class Strategy:
                 make = _hold("kicker", p, 0.0)
             slots.append(Slot("kicker", "kicker", (bxy[0] - CONTACT_MM - 90.0, bxy[1]), make))
         spots = [(-cr, 0.0)] if not sit.ours else []
-        spots += [(-fs.half_length + fs.defense_depth + 350.0, -500.0),
-                  (-fs.half_length + fs.defense_depth + 350.0, 500.0),
-                  (-R - 100.0, -0.25 * fs.width), (-R - 100.0, 0.25 * fs.width),
-                  (-0.25 * fs.length, 0.0), (-0.2 * fs.length, -0.35 * fs.width),
-                  (-0.2 * fs.length, 0.35 * fs.width), (-cr, 0.6 * cr), (-cr, -0.6 * cr),
-                  (-0.35 * fs.length, 0.3 * fs.width), (-0.35 * fs.length, -0.3 * fs.width)]
+        spots += [(-fs.half_length + fs.penalty_area_depth + 350.0, -500.0),
+                  (-fs.half_length + fs.penalty_area_depth + 350.0, 500.0),
+                  (-R - 100.0, -0.25 * fs.field_width), (-R - 100.0, 0.25 * fs.field_width),
+                  (-0.25 * fs.field_length, 0.0), (-0.2 * fs.field_length, -0.35 * fs.field_width),
+                  (-0.2 * fs.field_length, 0.35 * fs.field_width), (-cr, 0.6 * cr),
+                  (-cr, -0.6 * cr),
+                  (-0.35 * fs.field_length, 0.3 * fs.field_width),
+                  (-0.35 * fs.field_length, -0.3 * fs.field_width)]
         for k, p in enumerate(spots[: max(0, n - len(slots))]):
             role = "blocker" if (not sit.ours and k == 0) else "kickoff"
             slots.append(Slot(f"kickoff-{k + 1}", role, p, _hold(role, p, 0.0)))
@@ -386,7 +391,7 @@ class Strategy:
         return slots
 
     @staticmethod
-    def _parked(n: int, fs: FieldSize) -> list[Slot]:
+    def _parked(n: int, fs: Field) -> list[Slot]:
         y = -fs.half_width + R + 150.0
         slots = []
         for k in range(n):
@@ -397,8 +402,8 @@ class Strategy:
 
     def _formation(self, inp: StrategyInput) -> list[Slot]:
         fs = inp.fs
-        cfg = DemoConfig(period_s=inp.tuning.formation_period_s, field_length_mm=fs.length,
-                         field_width_mm=fs.width, own_half_sign=-1)
+        cfg = DemoConfig(period_s=inp.tuning.formation_period_s, field_length_mm=fs.field_length,
+                         field_width_mm=fs.field_width, own_half_sign=-1)
         pts = formation(int(inp.t // cfg.period_s), len(inp.ours), cfg)
         return [Slot(f"formation-{k + 1}", "formation", p, _hold("formation", p, 0.0))
                 for k, p in enumerate(pts)]
@@ -439,21 +444,21 @@ class Strategy:
         return res
 
 
-def _substitution_spot(bot: Bot, fs: FieldSize) -> tuple[float, float]:
+def _substitution_spot(bot: Bot, fs: Field) -> tuple[float, float]:
     """On our side of the halfway line, by the touch line nearer the robot, inside the
     field and well within the rules' 1 m of where the halfway line meets it."""
     side = 1.0 if bot.y >= 0.0 else -1.0
     return (-(R + 200.0), side * (fs.half_width - R - 20.0))
 
 
-def _substitution(bot: Bot, fs: FieldSize) -> Intent:
+def _substitution(bot: Bot, fs: Field) -> Intent:
     p = _substitution_spot(bot, fs)
     return Intent("substitution", p[0], p[1], None, max_speed_mps=1.5)
 
 
 def _inside_field_off_ball(p: tuple[float, float], ball: tuple[float, float],
                            mark: tuple[float, float] | None, d: float,
-                           fs: FieldSize) -> tuple[float, float]:
+                           fs: Field) -> tuple[float, float]:
     """``p`` if it is in the field; else the nearest point in the field that still keeps
     ``d`` from the ball (and the corridor to ``mark``): pushing out of the ball's circle
     near a line would otherwise put the target outside, and clamping it back inside."""
@@ -478,7 +483,7 @@ def _inside_field_off_ball(p: tuple[float, float], ball: tuple[float, float],
     return best if best is not None else q
 
 
-def _free_ys(m: int, fs: FieldSize, x: float, others: Sequence[tuple[float, float]],
+def _free_ys(m: int, fs: Field, x: float, others: Sequence[tuple[float, float]],
              ) -> list[float]:
     """``m`` spots along the line at ``x``, spread as ``_spread_ys`` does but moved off the
     other team's robots standing on or near that line (both teams line up behind the ball
@@ -500,10 +505,10 @@ def _free_ys(m: int, fs: FieldSize, x: float, others: Sequence[tuple[float, floa
     return sorted(out) + spread[len(out):]
 
 
-def _spread_ys(m: int, fs: FieldSize) -> list[float]:
+def _spread_ys(m: int, fs: Field) -> list[float]:
     if m <= 0:
         return []
-    span = fs.width - 2 * (R + 300.0)
+    span = fs.field_width - 2 * (R + 300.0)
     step = min(450.0, span / max(1, m - 1))
     return [(k - (m - 1) / 2.0) * step for k in range(m)]
 
@@ -513,7 +518,7 @@ PLACED_MM = 70.0
 
 
 def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
-            fs: FieldSize | None = None) -> Intent:
+            fs: Field | None = None) -> Intent:
     """Our ball placement: get behind the ball as seen from the mark, switch the dribbler on,
     carry the ball to the mark slowing down on the way (a released ball rolls on), wait
     until ball and robot are still, then let go and back off slowly. When there is no room

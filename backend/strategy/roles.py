@@ -18,8 +18,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
+from domain.field import Field
+
 from ..geometry import goalkeeper_target
-from .model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Intent
+from .model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot, Intent, own_defense
 
 R = ROBOT_RADIUS_MM
 #: centre distance robot-ball when the ball touches the kicker
@@ -32,7 +34,7 @@ def unit(dx: float, dy: float) -> tuple[float, float]:
 
 
 def best_shot(ball: tuple[float, float], blockers: Sequence[tuple[float, float]],
-              fs: FieldSize, goal_x: float | None = None) -> tuple[tuple[float, float], float]:
+              fs: Field, goal_x: float | None = None) -> tuple[tuple[float, float], float]:
     """The aim point on the opponents' goal line (x = +L/2 unless ``goal_x``) with the widest
     open angle seen from ``ball``, and that angle (rad). Each blocker (a robot between the
     ball and the goal line) hides the interval of directions its disc covers. When the goal
@@ -75,7 +77,7 @@ def best_shot(ball: tuple[float, float], blockers: Sequence[tuple[float, float]]
     return (gx, max(-half_goal, min(half_goal, y))), a1 - a0
 
 
-def keeper_point(ball: Ball, fs: FieldSize, min_speed: float) -> tuple[float, float]:
+def keeper_point(ball: Ball, fs: Field, min_speed: float) -> tuple[float, float]:
     """The goalkeeper's spot (our frame): on a line just in front of our goal line, where the
     ball's path crosses it when the ball comes towards the goal, else level with the ball."""
     gx = -fs.half_length + R + 30.0
@@ -84,12 +86,12 @@ def keeper_point(ball: Ball, fs: FieldSize, min_speed: float) -> tuple[float, fl
     return float(p[0]), float(p[1])
 
 
-def in_own_defense(p: tuple[float, float], fs: FieldSize, margin: float = 0.0) -> bool:
-    x0, y0, x1, y1 = fs.own_defense()
+def in_own_defense(p: tuple[float, float], fs: Field, margin: float = 0.0) -> bool:
+    x0, y0, x1, y1 = own_defense(fs)
     return x0 - margin <= p[0] <= x1 + margin and y0 - margin <= p[1] <= y1 + margin
 
 
-def goalkeeper(ball: Ball | None, fs: FieldSize, point: tuple[float, float] | None,
+def goalkeeper(ball: Ball | None, fs: Field, point: tuple[float, float] | None,
                min_speed: float, clear_speed_mps: float, robot: Bot | None = None) -> Intent:
     """``point``: a precomputed keeper spot (e.g. from the compute engine), else computed."""
     if ball is None:
@@ -128,15 +130,15 @@ def kick_ball(ball: Ball, aim: tuple[float, float], speed_mps: float, role: str,
 
 
 def attacker(ball: Ball, robot: Bot | None, blockers: Sequence[tuple[float, float]],
-             fs: FieldSize, kick_speed: float, pass_speed: float,
+             fs: Field, kick_speed: float, pass_speed: float,
              role: str = "attacker", max_speed_mps: float | None = None) -> Intent:
     aim, angle = best_shot(ball.xy, blockers, fs)
-    far = fs.half_length - ball.x > 0.6 * fs.length
+    far = fs.half_length - ball.x > 0.6 * fs.field_length
     speed = pass_speed if far or angle < math.radians(1.0) else kick_speed
     return kick_ball(ball, aim, speed, role, robot, max_speed_mps=max_speed_mps)
 
 
-def defender_points(n: int, ball: Ball | None, fs: FieldSize,
+def defender_points(n: int, ball: Ball | None, fs: Field,
                     margin: float) -> list[tuple[float, float]]:
     """``n`` spots side by side on the line from our goal centre to the ball, just outside
     our defence area (grown by ``margin`` and a robot radius)."""
@@ -147,7 +149,7 @@ def defender_points(n: int, ball: Ball | None, fs: FieldSize,
     u = unit(b[0] - g[0], b[1] - g[1])
     if u[0] < 0.05:  # the ball beside or behind the goal line: guard the near post side
         u = unit(0.05, u[1] if abs(u[1]) > 1e-6 else 1.0)
-    x0, y0, x1, y1 = fs.own_defense()
+    x0, y0, x1, y1 = own_defense(fs)
     grow = margin + R
     # smallest t with g + u t outside the grown rectangle
     tx = (x1 + grow - g[0]) / u[0]
@@ -174,21 +176,22 @@ def _push_out_of_rect(px: float, py: float, rect: tuple[float, float, float, flo
     return (px, py)
 
 
-def supporter_points(n: int, ball: Ball | None, fs: FieldSize) -> list[tuple[float, float]]:
+def supporter_points(n: int, ball: Ball | None, fs: Field) -> list[tuple[float, float]]:
     """Open spots in the opponents' half on the side away from the ball, then the other."""
     if n <= 0:
         return []
     by = ball.y if ball is not None else 0.0
     bx = ball.x if ball is not None else 0.0
     side = -1.0 if by > 0 else 1.0
-    x_front = min(fs.half_length - fs.defense_depth - 500.0, max(bx + 1200.0, 0.25 * fs.length))
-    x_back = max(-0.1 * fs.length, bx - 1500.0)
+    x_front = min(fs.half_length - fs.penalty_area_depth - 500.0,
+                  max(bx + 1200.0, 0.25 * fs.field_length))
+    x_back = max(-0.1 * fs.field_length, bx - 1500.0)
     cands = [
-        (x_front, side * fs.width * 0.28),
-        (x_back, -side * fs.width * 0.3),
-        (x_front * 0.5, -side * fs.width * 0.05),
-        (x_back, side * fs.width * 0.35),
-        (x_front * 0.7, side * fs.width * 0.05),
+        (x_front, side * fs.field_width * 0.28),
+        (x_back, -side * fs.field_width * 0.3),
+        (x_front * 0.5, -side * fs.field_width * 0.05),
+        (x_back, side * fs.field_width * 0.35),
+        (x_front * 0.7, side * fs.field_width * 0.05),
     ]
     out = []
     for k in range(n):
@@ -199,7 +202,7 @@ def supporter_points(n: int, ball: Ball | None, fs: FieldSize) -> list[tuple[flo
     return out
 
 
-def clamp_to_field(p: tuple[float, float], fs: FieldSize,
+def clamp_to_field(p: tuple[float, float], fs: Field,
                    inside: float = R + 20.0) -> tuple[float, float]:
     return (max(-fs.half_length + inside, min(fs.half_length - inside, p[0])),
             max(-fs.half_width + inside, min(fs.half_width - inside, p[1])))

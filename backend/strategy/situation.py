@@ -13,6 +13,8 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from domain.rules import SLOW_COMMANDS
+
 SituationKind = Literal[
     "halt",  # every robot stands still
     "stop",  # <= 1.5 m/s, >= 0.5 m from the ball
@@ -114,7 +116,7 @@ class SituationTracker:
 
         if cmd == "HALT":
             return Situation("halt", None, cmd)
-        if cmd in ("STOP", "GOAL_BLUE", "GOAL_YELLOW"):
+        if cmd in SLOW_COMMANDS:  # STOP, and the old goal commands with STOP semantics
             return Situation("stop", None, cmd)
         if cmd == "FORCE_START":
             return Situation("running", None, cmd)

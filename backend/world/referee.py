@@ -44,11 +44,6 @@ class RefereeState:
     def halted(self) -> bool:
         return self.command == "HALT"
 
-    @property
-    def stopped(self) -> bool:
-        return self.command in ("STOP", "BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW",
-                                "GOAL_BLUE", "GOAL_YELLOW")
-
     def to_dict(self) -> dict[str, Any]:
         return {
             "source": self.source,

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
 
-Team = Literal["blue", "yellow"]
-TEAMS: tuple[Team, Team] = ("blue", "yellow")
+from domain.teams import TEAMS as TEAMS
+from domain.teams import Team as Team
 
 
 @dataclass(slots=True)

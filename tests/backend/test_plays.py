@@ -8,11 +8,12 @@ import random
 
 import pytest
 
-from backend.strategy.model import ROBOT_RADIUS_MM, Ball, Bot, FieldSize, Intent
+from backend.strategy.model import ROBOT_RADIUS_MM, Ball, Bot, Intent
 from backend.strategy.plays import Strategy, StrategyInput, Tuning
 from backend.strategy.situation import Situation
+from domain.field import DIVISION_B
 
-FS = FieldSize()
+FS = DIVISION_B
 R = ROBOT_RADIUS_MM
 TU = Tuning()
 
@@ -118,7 +119,7 @@ def test_kickoff_positions_in_our_half_outside_the_centre_circle(ours_kick: bool
     for it in out.values():
         assert it.x <= -R + 1e-6, it  # in our half, the body included
         if it.role != "kicker":
-            assert math.hypot(it.x, it.y) >= FS.center_radius + R, it
+            assert math.hypot(it.x, it.y) >= FS.center_circle_radius + R, it
 
 
 def test_our_kickoff_kicker_kicks_after_normal_start() -> None:

@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from backend.strategy.model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot, FieldSize
+from backend.strategy.model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot
 from backend.strategy.roles import (
     attacker,
     best_shot,
@@ -19,8 +19,9 @@ from backend.strategy.roles import (
     push_out_of_capsule,
     push_out_of_circle,
 )
+from domain.field import DIVISION_B
 
-FS = FieldSize()
+FS = DIVISION_B
 R = ROBOT_RADIUS_MM
 
 

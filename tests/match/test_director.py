@@ -6,13 +6,14 @@ import math
 
 import pytest
 
+from domain.field import division
 from match.director import Director, MatchConfig
 from match.rules import (
     PLACEMENT_DEFENSE_AREA_OFFSET_MM,
     PLACEMENT_LINE_OFFSET_MM,
     TOO_CLOSE_MM,
-    Field,
     Timing,
+    placement_position,
 )
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 
@@ -197,20 +198,20 @@ def test_ball_out_with_unknown_last_touch_goes_to_the_team_defending_that_half()
 
 def test_placement_position_keeps_off_the_lines_and_the_defence_areas() -> None:
     for div in ("A", "B"):
-        f = Field.for_division(div)
+        f = division(div)
         hl, hw = f.half_length, f.half_width
         for x, y in [(hl + 50, 0.0), (hl + 50, 300.0), (-hl - 50, -200.0), (hl - 100, hw + 40),
                      (0.0, -hw - 80), (hl - 900, 900.0), (-hl, hw)]:
-            px, py = f.placement_position(x, y)
+            px, py = placement_position(f, x, y)
             assert abs(px) <= hl - PLACEMENT_LINE_OFFSET_MM + 1e-6
             assert abs(py) <= hw - PLACEMENT_LINE_OFFSET_MM + 1e-6
             for side in (-1, 1):
                 assert f.dist_to_defense_area(px, py, side) >= \
                     PLACEMENT_DEFENSE_AREA_OFFSET_MM - 1e-6, (div, x, y, px, py)
-    f = Field.for_division("B")
-    assert f.placement_position(1000.0, 3100.0) == (1000.0, 2800.0)  # unchanged but the offset
+    f = division("B")
+    assert placement_position(f, 1000.0, 3100.0) == (1000.0, 2800.0)  # unchanged but the offset
     assert f.penalty_mark(1) == (-1500.0, 0.0) and f.penalty_mark(-1) == (1500.0, 0.0)
-    assert Field.for_division("A").penalty_mark(1) == (-2000.0, 0.0)
+    assert division("A").penalty_mark(1) == (-2000.0, 0.0)
 
 
 # -- no progress ------------------------------------------------------------------------------
@@ -369,7 +370,7 @@ def test_penalty_positions_keeper_on_its_line_others_a_metre_behind_the_ball() -
     h = Harness(cfg)
     h.to_running()
     h.until_command("PREPARE_PENALTY_BLUE", 150)
-    mark = Field.for_division("B").penalty_mark(1)  # yellow defends the positive goal
+    mark = division("B").penalty_mark(1)  # yellow defends the positive goal
     assert (h.w.teleports[-1].x, h.w.teleports[-1].y) == mark
     # everybody well behind the ball (x < -2500), the kicker at it, yellow's keeper on its line
     for rid in range(6):

@@ -7,7 +7,7 @@ import json
 import re
 from pathlib import Path
 
-from launcher.__main__ import Ports
+from launcher.supervisor import Ports
 from match.director import VIOLATION_KINDS, MatchConfig
 from match.report import format_result, table, write_outputs
 from match.runner import Options, build
@@ -79,7 +79,7 @@ def test_runner_builds_fieldsim_one_relay_and_two_backends_on_isolated_ports() -
     http = {"blue": 50001, "yellow": 50002}
     dirs = {"blue": "/tmp/b", "yellow": "/tmp/y"}
     kids = build(Options(engine="octave", division="A", seed=7), ports, "tcp://127.0.0.1:5999",
-                 http, dirs, {"--play", "--set"})
+                 http, dirs)
     names = [c.name for c in kids]
     assert names == ["fieldsim", "relay", "backend-blue", "backend-yellow"]
     fs, relay, blue, yellow = (c.argv for c in kids)
@@ -104,9 +104,5 @@ def test_runner_builds_fieldsim_one_relay_and_two_backends_on_isolated_ports() -
     assert sets(blue) == ["strategy.engine=octave", *speed]
     assert sets(yellow) == speed
     # --robot-speed station: the backends keep their own speed limits
-    kids = build(Options(robot_speed_mps=None), ports, "tcp://127.0.0.1:5999", http, dirs,
-                 {"--play", "--set"})
+    kids = build(Options(robot_speed_mps=None), ports, "tcp://127.0.0.1:5999", http, dirs)
     assert all(not sets(c.argv) for c in kids)
-    # a backend without the strategy flags still gets a working command line
-    old = build(Options(), ports, "tcp://127.0.0.1:5999", http, dirs, set())
-    assert all("--play" not in c.argv and "--set" not in c.argv for c in old)

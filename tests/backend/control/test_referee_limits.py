@@ -37,3 +37,15 @@ def test_ball_placement_limits_only_the_other_team() -> None:
                                      "DIRECT_FREE_YELLOW"])
 def test_other_commands_pass(command: str | None) -> None:
     assert referee_limits(FAST, command) == FAST
+
+
+def test_the_operators_stop_cap_and_the_strategys_cap_apply_once_with_the_rules() -> None:
+    # the operator's lower STOP cap binds under every slow command, never in running play
+    assert speed(referee_limits(FAST, "STOP", stop_speed_mps=0.8)) == pytest.approx(0.8)
+    assert speed(referee_limits(FAST, "BALL_PLACEMENT_YELLOW", our_team="blue",
+                                stop_speed_mps=0.8)) == pytest.approx(0.8)
+    assert referee_limits(FAST, "FORCE_START", stop_speed_mps=0.8) == FAST
+    # the strategy's cap binds whatever the command; the lower of the caps wins
+    assert speed(referee_limits(FAST, "FORCE_START", max_speed_mps=0.75)) == pytest.approx(0.75)
+    assert speed(referee_limits(FAST, "STOP", max_speed_mps=2.0)) == pytest.approx(1.5)
+    assert referee_limits(FAST, "HALT", max_speed_mps=2.0) == LocalVelocity.zero()

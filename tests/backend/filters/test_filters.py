@@ -22,8 +22,8 @@ from backend.filters import (
     PaperParams,
     RawFilter,
     make_filter,
-    wrap_angle,
 )
+from domain.angles import wrap_angle
 
 DT = 1 / 60
 

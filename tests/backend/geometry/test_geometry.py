@@ -11,6 +11,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from backend import geometry as g
+from domain.field import DIVISION_A, DIVISION_B, Field
 
 coord = st.floats(-1e4, 1e4, allow_nan=False, allow_infinity=False)
 point = st.tuples(coord, coord)
@@ -337,8 +338,8 @@ def test_half_plane_and_rectangle_hand_cases() -> None:
     assert sq.tolist() == [True, False, True, False]
 
 
-@pytest.mark.parametrize("field", [g.DIVISION_A, g.DIVISION_B])
-def test_defense_area(field: g.FieldGeometry) -> None:
+@pytest.mark.parametrize("field", [DIVISION_A, DIVISION_B])
+def test_defense_area(field: Field) -> None:
     hl = field.field_length / 2
     depth, hw = field.penalty_area_depth, field.penalty_area_width / 2
     pts = np.array([[hl - 1, 0], [hl - depth + 1, hw - 1], [hl - depth - 1, 0], [hl - 1, hw + 1],
@@ -352,10 +353,10 @@ def test_defense_area(field: g.FieldGeometry) -> None:
 
 
 def test_field_geometry_from_packet_dict() -> None:
-    f = g.FieldGeometry.from_packet({"field_length": 9000, "field_width": 6000,
+    f = Field.from_geometry({"field_length": 9000, "field_width": 6000,
                                      "goal_width": 1000, "penalty_area_depth": 1000,
                                      "penalty_area_width": 2000})
-    assert f == g.DIVISION_B
+    assert f == DIVISION_B
 
 
 # -- fits --------------------------------------------------------------------------------

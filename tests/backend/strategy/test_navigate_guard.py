@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import pytest
 
-from backend.strategy.model import Bot, FieldSize, Frame, Intent
+from backend.strategy.model import Bot, Frame, Intent
 from backend.strategy.navigate import GUARD_MM, GUARD_SPEED_MPS, navigate
+from domain.field import DIVISION_B
 
-FS = FieldSize()
+FS = DIVISION_B
 
 
 def move_of(me: Bot, other: Bot, target: tuple[float, float],

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from backend.geometry import DIVISION_A, DIVISION_B, in_defense_area
+from backend.geometry import in_defense_area
 from backend.strategy.paths import (
     MOVE_PAD_MM,
     NODE_PAD_MM,
@@ -25,6 +25,7 @@ from backend.strategy.paths import (
     point_is_free,
     segment_is_free,
 )
+from domain.field import DIVISION_A, DIVISION_B
 
 TOL = 1e-6
 

@@ -1,0 +1,235 @@
+"""One supervisor for Touchline's processes, importable: the command lines of fieldsim, the relay
+and the backend from one typed :class:`StationConfig`, and a :class:`Supervisor` that starts
+them, watches them, restarts a crashed one (when asked) and stops them in mirror order (the
+backend first: it sends a last stop; the simulator last).
+
+Used by ``python -m launcher`` (``make run``, the integration and browser tests, the websocket
+benchmark) and by ``python -m match`` (two backends on one relay and one simulator)."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import random
+import signal
+import socket
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+from sslnet import defaults
+
+ROOT = Path(__file__).resolve().parent.parent
+log = logging.getLogger("touchline.launcher")
+
+
+def free_tcp_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+@dataclass
+class Ports:
+    http: int = defaults.BACKEND_PORT
+    vision_group: str = defaults.VISION_GROUP
+    vision: int = defaults.VISION_PORT_SIM
+    referee_group: str = defaults.REFEREE_GROUP
+    referee: int = defaults.REFEREE_PORT
+    sim_control: int = defaults.SIM_CONTROL_PORT
+    sim_blue: int = defaults.SIM_BLUE_PORT
+    sim_yellow: int = defaults.SIM_YELLOW_PORT
+    grsim: int = defaults.GRSIM_COMMAND_PORT
+    relay_pub: str = defaults.RELAY_PUB
+    relay_sub: str = defaults.RELAY_SUB
+
+    @staticmethod
+    def isolated(http: int | None) -> Ports:
+        """Free, non-standard ports for everything (tests: never disturb a running station)."""
+        rnd = random.Random(os.getpid() ^ time.time_ns())
+        return Ports(
+            http=http or free_tcp_port(),
+            vision=rnd.randrange(30000, 40000),
+            referee=rnd.randrange(40000, 50000),
+            sim_control=free_udp_port(),
+            sim_blue=free_udp_port(),
+            sim_yellow=free_udp_port(),
+            grsim=free_udp_port(),
+            relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+            relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}",
+        )
+
+
+@dataclass
+class StationConfig:
+    """What the three processes are started with (the launcher's flags, typed)."""
+
+    sim: str = "builtin"  # "builtin": fieldsim; "none": an external simulator or SSL-Vision
+    seed: int = 1
+    interface: str = "127.0.0.1"  # multicast interface (vision, referee)
+    output: str = "sim"  # the relay's output: "sim", "grsim", "robot-box"
+    sim_host: str = "127.0.0.1"
+    host: str = "127.0.0.1"  # the backend's HTTP address
+    our_team: str | None = None
+    state_dir: str | None = None
+    sim_args: list[str] = field(default_factory=list)
+    relay_args: list[str] = field(default_factory=list)
+    backend_args: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Child:
+    name: str
+    argv: list[str]
+    proc: subprocess.Popen[bytes] | None = None
+    restarts: int = 0
+    started: float = 0.0
+    history: list[float] = field(default_factory=list)
+
+
+def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
+    """fieldsim (with ``sim="builtin"``), the relay and the backend, in start order."""
+    py = sys.executable
+    children: list[Child] = []
+    if cfg.sim == "builtin":
+        children.append(Child("fieldsim", [
+            py, "-m", "fieldsim",
+            "--seed", str(cfg.seed),
+            "--vision-group", ports.vision_group, "--vision-port", str(ports.vision),
+            "--interface", cfg.interface,
+            "--control-port", str(ports.sim_control), "--blue-port", str(ports.sim_blue),
+            "--yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+            *cfg.sim_args,
+        ]))
+    children.append(Child("relay", [
+        py, "-m", "larcmacs_relay",
+        "--vision", f"{ports.vision_group}:{ports.vision}",
+        "--referee", f"{ports.referee_group}:{ports.referee}",
+        "--interface", cfg.interface,
+        "--output", cfg.output, "--sim-host", cfg.sim_host,
+        "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
+        "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+        "--pub", ports.relay_pub, "--sub", ports.relay_sub,
+        *cfg.relay_args,
+    ]))
+    children.append(Child("backend", [
+        py, "-m", "backend", "--host", cfg.host, "--port", str(ports.http),
+        "--relay-pub", ports.relay_pub, "--relay-sub", ports.relay_sub,
+        *(["--our-team", cfg.our_team] if cfg.our_team else []),
+        *(["--state-dir", cfg.state_dir] if cfg.state_dir else []),
+        *cfg.backend_args,
+    ]))
+    return children
+
+
+def _die_with_parent() -> None:
+    """In the child before exec: SIGTERM when the supervisor dies (Linux), so nothing is
+    orphaned even if the supervisor is killed with SIGKILL."""
+    with contextlib.suppress(Exception):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
+class Supervisor:
+    """Starts ``children`` and keeps an eye on them.
+
+    ``log_dir``: each child's output goes to ``<name>.log`` there (else it is inherited).
+    ``restart``: :meth:`watch` restarts a child that exited, at most ``max_restarts`` times a
+    minute (then it gives up and says why). ``detach``: each child in its own session, told by
+    the kernel to stop when the supervisor dies."""
+
+    def __init__(self, children: list[Child], *, log_dir: Path | None = None,
+                 restart: bool = False, max_restarts: int = 5, detach: bool = False) -> None:
+        self.children = children
+        self.log_dir = log_dir
+        self.restart = restart
+        self.max_restarts = max_restarts
+        self.detach = detach
+        self.exit_codes: dict[str, int | None] = {}
+        self._logs: dict[str, IO[bytes]] = {}
+
+    def start(self) -> None:
+        if self.log_dir is not None:
+            self.log_dir.mkdir(parents=True, exist_ok=True)
+        for c in self.children:
+            self._start(c)
+
+    def _start(self, c: Child) -> None:
+        log.info("starting %s: %s", c.name, " ".join(c.argv[1:]))
+        out: IO[bytes] | None = None
+        if self.log_dir is not None:
+            old = self._logs.pop(c.name, None)
+            if old is not None:
+                old.close()
+            out = self._logs[c.name] = (self.log_dir / f"{c.name}.log").open("ab")
+        c.proc = subprocess.Popen(
+            c.argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
+            stdin=subprocess.DEVNULL if self.detach else None, start_new_session=self.detach,
+            preexec_fn=_die_with_parent if self.detach else None)
+        c.started = time.monotonic()
+
+    def child(self, name: str) -> Child:
+        return next(c for c in self.children if c.name == name)
+
+    def dead(self) -> list[Child]:
+        return [c for c in self.children if c.proc is not None and c.proc.poll() is not None]
+
+    def watch(self) -> str | None:
+        """Restarts children that exited (with ``restart``); returns why it gives up, if it
+        does (a child crashing more than ``max_restarts`` times a minute)."""
+        for c in self.dead():
+            assert c.proc is not None
+            code = c.proc.returncode
+            if not self.restart:
+                return f"{c.name} exited with {code}"
+            now = time.monotonic()
+            c.history = [t for t in c.history if now - t < 60] + [now]
+            if len(c.history) > self.max_restarts:
+                return f"{c.name} exited {code} and keeps crashing; giving up"
+            log.warning("%s exited with %s; restarting", c.name, code)
+            c.restarts += 1
+            time.sleep(min(2.0, 0.2 * c.restarts))
+            self._start(c)
+        return None
+
+    def log_tail(self, name: str, lines: int = 25) -> str:
+        if self.log_dir is None:
+            return ""
+        try:
+            text = (self.log_dir / f"{name}.log").read_text(errors="replace")
+        except OSError:
+            return ""
+        return "\n".join(text.splitlines()[-lines:])
+
+    def stop(self, timeout_s: float = 10.0) -> None:
+        """Mirror order, one after the other: the backend first (it sends a last stop to the
+        relay), then the relay (its own last stop to the robots), the simulator last; a child
+        that does not stop within ``timeout_s`` is killed."""
+        for c in reversed(self.children):
+            if c.proc is None:
+                continue
+            if c.proc.poll() is None:
+                c.proc.send_signal(signal.SIGTERM)
+                try:
+                    c.proc.wait(timeout=timeout_s)
+                except subprocess.TimeoutExpired:
+                    log.warning("%s did not stop in %.0f s: killing it", c.name, timeout_s)
+                    c.proc.kill()
+                    c.proc.wait(timeout=timeout_s)
+            self.exit_codes[c.name] = c.proc.returncode
+        for f in self._logs.values():
+            f.close()
+        self._logs.clear()

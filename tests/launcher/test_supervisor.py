@@ -1,0 +1,79 @@
+"""The one supervisor (launcher.supervisor) with real child processes: mirror-order stop,
+restart of a crashed child and giving up on one that keeps crashing, logs per child."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from launcher.supervisor import Child, Ports, StationConfig, Supervisor, command_lines
+
+# a child that notes when it is asked to stop, then exits
+_POLITE = """
+import signal, sys, time
+def bye(*_):
+    with open(sys.argv[1], "a") as f:
+        f.write(sys.argv[2] + "\\n")
+    sys.exit(0)
+signal.signal(signal.SIGTERM, bye)
+print("hello from", sys.argv[2], flush=True)
+for _ in range(600):
+    time.sleep(0.1)
+"""
+
+
+def _polite(name: str, note: Path) -> Child:
+    return Child(name, [sys.executable, "-c", _POLITE, str(note), name])
+
+
+def _wait(cond, timeout_s: float = 10.0) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout_s
+    while not cond():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+
+
+def test_children_stop_in_mirror_order_and_log_to_their_files(tmp_path: Path) -> None:
+    note = tmp_path / "stopped.txt"
+    sup = Supervisor([_polite(n, note) for n in ("fieldsim", "relay", "backend")],
+                     log_dir=tmp_path / "logs", detach=True)
+    sup.start()
+    try:
+        _wait(lambda: all("hello" in sup.log_tail(n) for n in ("fieldsim", "relay", "backend")))
+    finally:
+        sup.stop(timeout_s=5.0)
+    assert note.read_text().split() == ["backend", "relay", "fieldsim"]
+    assert sup.exit_codes == {"backend": 0, "relay": 0, "fieldsim": 0}
+    assert sup.watch() == "fieldsim exited with 0"  # without restart: a dead child is reported
+
+
+def test_a_crashed_child_is_restarted_and_one_that_keeps_crashing_is_given_up(
+        tmp_path: Path) -> None:
+    crash = Child("relay", [sys.executable, "-c", "import sys; sys.exit(3)"])
+    sup = Supervisor([crash], log_dir=tmp_path, restart=True, max_restarts=2)
+    sup.start()
+    verdicts = []
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        v = sup.watch()
+        verdicts.append(v)
+        if v is not None:
+            break
+        time.sleep(0.05)
+    sup.stop(timeout_s=5.0)
+    assert crash.restarts == 2
+    assert verdicts[-1] == "relay exited 3 and keeps crashing; giving up"
+
+
+def test_command_lines_of_the_station() -> None:
+    ports = Ports.isolated(None)
+    kids = command_lines(StationConfig(sim="none", output="robot-box", our_team="yellow",
+                                       backend_args=["--play", "idle"]), ports)
+    assert [c.name for c in kids] == ["relay", "backend"]
+    relay, backend = (c.argv for c in kids)
+    assert relay[relay.index("--output") + 1] == "robot-box"
+    assert relay[relay.index("--sub") + 1] == ports.relay_sub
+    assert backend[backend.index("--relay-sub") + 1] == ports.relay_sub
+    assert backend[backend.index("--our-team") + 1] == "yellow"
+    assert backend[-2:] == ["--play", "idle"]
