@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 import zmq
 
-from launcher.__main__ import free_tcp_port
+from launcher.supervisor import free_tcp_port
 from match.director import Director, MatchConfig, TeleportBall
 from match.shell import DirectorShell
 from sslnet.multicast import loopback_multicast_ok, open_multicast_receiver, open_udp_server
