@@ -32,12 +32,17 @@ def main() -> None:
                         "JSON, or text); repeatable")
     p.add_argument("--state-dir", type=Path, default=d.state_dir,
                    help="where parameters and presets are kept (default %(default)s)")
+    p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
+                   metavar="NAME",
+                   help="a host name or address this station may be reached by besides the "
+                        "bound address and localhost (repeatable; '*' for any: not on a "
+                        "shared network). Other Host headers get 400 (DNS rebinding).")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
-                        our_team=a.our_team, our_side=a.our_side,
+                        our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
                         play="idle" if a.no_demo else a.play, set_params=a.set_params,
                         state_dir=a.state_dir)
     app = create_app(settings)

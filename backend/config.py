@@ -23,6 +23,8 @@ class Settings(BaseModel):
     set_params: list[str] = Field(default_factory=list)  # "group.key=value" (value JSON or text)
     static_dir: Path = ROOT / "frontend" / "dist"
     state_dir: Path | None = ROOT / "var"  # parameters and presets; None: not persisted
+    #: names the Host header may carry besides the bound address and loopback ("*": any)
+    allowed_hosts: list[str] = Field(default_factory=list)
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

@@ -9,7 +9,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -18,8 +18,10 @@ import zmq.asyncio
 from google.protobuf.message import DecodeError, Message
 
 from domain.rules import kick_allowed
+from sslnet import streams
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
+from sslnet.streams import StreamCounter
 from sslpb import touchline_pb2 as tl
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
@@ -42,24 +44,6 @@ from .world.state import CameraFrame, Team, WorldState
 
 log = logging.getLogger("touchline.processors")
 _badlog = RateLimitedLog(log, interval_s=10.0)
-
-
-@dataclass
-class StreamCounter:
-    """Packets and errors of one input stream as the backend sees it."""
-
-    rate: RateCounter = field(default_factory=RateCounter)
-    errors: int = 0
-    last_error: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "packets": self.rate.total,
-            "errors": self.errors,
-            "rate_hz": self.rate.rate_hz(),
-            "last_age_s": self.rate.age_s(),
-            "last_error": self.last_error,
-        }
 
 
 class LatencyStage:
@@ -135,7 +119,7 @@ class RelayIngest(Processor):
         self.vision_packets = bus.typed("vision-packets", tl.Envelope)
         self.referee_packets = bus.typed("referee-packets", tl.Envelope)
         self.relay_stats = bus.typed("relay-stats", dict)
-        self.counters = {"zmq": StreamCounter()}
+        self.counters = {"zmq": StreamCounter("zmq")}
 
     async def wait_input(self) -> None:
         await self.sock.poll()
@@ -152,8 +136,7 @@ class RelayIngest(Processor):
         c = self.counters["zmq"]
         c.rate.add()
         if len(frames) != 2:
-            c.errors += 1
-            c.last_error = f"expected 2 frames, got {len(frames)}"
+            c.error("bad frames", f"expected 2 frames, got {len(frames)}")
             _badlog.warning("zmq-frames", "relay message with %d frames ignored", len(frames))
             return
         topic, body = frames
@@ -162,8 +145,7 @@ class RelayIngest(Processor):
             try:
                 stats.ParseFromString(body)
             except DecodeError as exc:
-                c.errors += 1
-                c.last_error = f"stats: {exc}"
+                c.error(streams.wire_problem(body), f"stats: {exc}")
                 return
             self.relay_stats.write(_relay_stats_dict(stats))
             return
@@ -171,8 +153,7 @@ class RelayIngest(Processor):
         try:
             env.ParseFromString(body)
         except DecodeError as exc:
-            c.errors += 1
-            c.last_error = f"envelope: {exc}"
+            c.error(streams.wire_problem(body), f"envelope: {exc}")
             _badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, exc)
             return
         if topic == b"vision":
@@ -198,15 +179,23 @@ def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
                 "rate_hz": st.rate_hz,
                 "last_age_s": st.last_age_s,
                 "last_error": st.last_error,
+                "errors_by_reason": dict(sorted(st.errors_by_reason.items())),
             }
             for st in s.streams
         },
     }
 
 
-def _missing(msg: Message) -> str:
-    errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
-    return "missing required fields: " + ", ".join(errors)
+def _parse(msg: Message, data: bytes) -> tuple[str, str] | None:
+    """Parses ``data`` into ``msg``; on failure the reason (sslnet.streams) and the detail."""
+    try:
+        msg.ParseFromString(data)
+    except (DecodeError, RuntimeError, ValueError) as exc:
+        return streams.wire_problem(data), str(exc)
+    if not msg.IsInitialized():
+        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
+        return streams.MISSING_FIELD, ", ".join(errors[:5])
+    return None
 
 
 class VisionIngest(Processor):
@@ -220,7 +209,7 @@ class VisionIngest(Processor):
         self.reader = Reader(packets)
         self.detections = bus.typed("vision-detections", CameraFrame)
         self.geometry = bus.typed("geometry", dict)
-        self.counter = StreamCounter()
+        self.counter = StreamCounter("vision")
         self.latency = LatencyStage()  # relay arrival -> decoded on the bus
         self._last_geometry_bytes = b""
 
@@ -228,14 +217,11 @@ class VisionIngest(Processor):
         for env in self.reader.read_new():
             self.counter.rate.add()
             pkt = SSL_WrapperPacket()
-            try:
-                pkt.ParseFromString(env.payload)
-                if not pkt.IsInitialized():
-                    raise DecodeError(_missing(pkt))
-            except DecodeError as exc:
-                self.counter.errors += 1
-                self.counter.last_error = str(exc)
-                _badlog.warning("vision", "bad vision packet from %s: %s", env.source, exc)
+            reason = _parse(pkt, env.payload)
+            if reason is not None:
+                self.counter.error(*reason)
+                _badlog.warning("vision", "bad vision packet from %s: %s", env.source,
+                                self.counter.last_error)
                 continue
             if pkt.HasField("detection"):
                 self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
@@ -258,27 +244,23 @@ class RefereeIngest(Processor):
         super().__init__(OnTopic(packets, max_wait_s=SILENCE_CHECK_S))
         self.reader = Reader(packets)
         self.referee = bus.typed("referee", RefereeState)
-        self.counter = StreamCounter()
+        self.counter = StreamCounter("referee")
         self.watch = watch or RefereeWatch()
 
     async def tick(self) -> None:
         for env in self.reader.read_new():
             self.counter.rate.add()
             msg = Referee()
-            try:
-                msg.ParseFromString(env.payload)
-                if not msg.IsInitialized():
-                    raise DecodeError(_missing(msg))
-            except DecodeError as exc:
-                self.counter.errors += 1
-                self.counter.last_error = str(exc)
-                _badlog.warning("referee", "bad referee packet from %s: %s", env.source, exc)
+            reason = _parse(msg, env.payload)
+            if reason is not None:
+                self.counter.error(*reason)
+                _badlog.warning("referee", "bad referee packet from %s: %s", env.source,
+                                self.counter.last_error)
                 continue
             bad: list[str] = []
             state = decode_referee(msg, bad)
             if bad:  # used all the same, with replacement characters
-                self.counter.errors += 1
-                self.counter.last_error = "bad string: not UTF-8: " + ", ".join(bad)
+                self.counter.error(streams.BAD_STRING, "not UTF-8: " + ", ".join(bad))
                 _badlog.warning("referee-string", "referee message from %s: not UTF-8 (%s); "
                                 "decoded with replacement characters", env.source, ", ".join(bad))
             self.watch.heard(state)

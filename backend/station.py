@@ -558,7 +558,12 @@ class Station:
                    "age_s": t.age_s()} for t in self.bus.topics()]
         streams: dict[str, Any] = {}
         if hasattr(self, "vision"):
-            streams["vision"] = self.vision.counter.to_dict()
+            vis = self.vision.counter.to_dict()
+            # what the world model dropped, by the same reasons ("time out of range", ...)
+            for reason, n in self.world.model.rejected.items():
+                vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
+                vis["errors"] += n
+            streams["vision"] = vis
             streams["referee"] = self.referee.counter.to_dict()
             streams["zmq"] = self.ingest.counters["zmq"].to_dict()
         relay = None

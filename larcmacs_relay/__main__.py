@@ -67,6 +67,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="robot box address (robot-box mode)",
     )
     a("--rate", type=float, default=d.output_rate_hz, help="output rate, Hz (>= 100)")
+    a("--max-datagram", type=int, default=d.max_datagram_bytes,
+      help="input datagrams larger than this many bytes are dropped as oversized")
     a(
         "--command-timeout",
         type=float,
@@ -120,6 +122,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         robot_box_host=args.robot_box[0],
         robot_box_port=args.robot_box[1],
         output_rate_hz=args.rate,
+        max_datagram_bytes=args.max_datagram,
         command_timeout_s=args.command_timeout,
         hold_time_s=args.hold_time,
         chip_angle_deg=args.chip_angle,

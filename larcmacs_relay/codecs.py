@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from google.protobuf import empty_pb2
 from google.protobuf.message import DecodeError, Message
 
+from sslnet import streams
 from sslpb import (
     grsim_packet_pb2,
     ssl_gc_common_pb2,
@@ -53,6 +54,17 @@ def _parse(msg: Message, data: bytes) -> str | None:
         missing = ", ".join(msg.FindInitializationErrors()[:5])  # type: ignore[attr-defined]
         return f"{msg.DESCRIPTOR.name} misses required fields: {missing}"
     return None
+
+
+def classify(reason: str, data: bytes) -> str:
+    """The reason kind (sslnet.streams) of a validation failure of ``data``."""
+    if reason.startswith("does not parse as"):
+        return streams.wire_problem(data)
+    if "misses required fields" in reason:
+        return streams.MISSING_FIELD
+    if "has neither detection nor geometry" in reason or reason.startswith("empty "):
+        return streams.NO_CONTENT
+    return streams.OTHER
 
 
 def validate_vision(data: bytes) -> str | None:

@@ -68,6 +68,10 @@ class CommandTable:
             out.append(entry.command.zero())
         return out
 
+    def all_zero(self) -> list[Command]:
+        """A zero command for every robot ever commanded (the relay's last word)."""
+        return [self._entries[k].command.zero() for k in sorted(self._entries)]
+
     def count(self, state: RobotState) -> int:
         return sum(1 for e in self._entries.values() if e.state is state)
 

@@ -58,6 +58,11 @@ class RelayConfig:
 
     stats_interval_s: float = 1.0
     log_interval_s: float = 5.0
+    # an input datagram larger than this is dropped and counted "oversized" (SSL-Vision
+    # detection frames are ~1-2 KB, geometry with 8 camera calibrations ~3 KB)
+    max_datagram_bytes: int = 32768
+    # on every shutdown it can see, a zero command this many times to every robot commanded
+    last_word_repeats: int = 3
     # Referee messages from the station's internal referee ("referee-out" topic) are
     # multicast to the referee group. None: only when the interface is loopback, so a station
     # on a venue network never competes with the real game controller unless told to.

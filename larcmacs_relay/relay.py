@@ -24,9 +24,11 @@ from larcmacs_relay.codecs import Command, CommandError
 from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
+from sslnet import streams
 from sslnet.multicast import open_multicast_receiver, open_multicast_sender
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
+from sslnet.streams import StreamCounter
 from sslpb import ssl_simulation_control_pb2, touchline_pb2
 
 log = logging.getLogger("larcmacs_relay")
@@ -35,38 +37,18 @@ MAX_DATAGRAM = 65536
 MAX_BATCH = 512
 
 
-class StreamCounter:
-    """Packets, errors, bytes, rate and last error of one stream (published in RelayStats)."""
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self.rate = RateCounter()
-        self.errors = 0
-        self.bytes = 0
-        self.last_error = ""
-
-    @property
-    def packets(self) -> int:
-        return self.rate.total
-
-    def packet(self, size: int, now: float | None = None) -> None:
-        self.rate.add(now)
-        self.bytes += size
-
-    def error(self, reason: str, n: int = 1) -> None:
-        self.errors += n
-        self.last_error = reason
-
-    def to_proto(self, now: float) -> touchline_pb2.StreamStats:
-        return touchline_pb2.StreamStats(
-            name=self.name,
-            packets=self.packets,
-            errors=self.errors,
-            bytes=self.bytes,
-            rate_hz=self.rate.rate_hz(now),
-            last_age_s=self.rate.age_s(now),
-            last_error=self.last_error,
-        )
+def stream_proto(c: StreamCounter, now: float) -> touchline_pb2.StreamStats:
+    """One stream's counters as published in RelayStats."""
+    return touchline_pb2.StreamStats(
+        name=c.name,
+        packets=c.packets,
+        errors=c.errors,
+        bytes=c.bytes,
+        rate_hz=c.rate.rate_hz(now),
+        last_age_s=c.rate.age_s(now),
+        last_error=c.last_error,
+        errors_by_reason=c.by_reason,
+    )
 
 
 class Relay:
@@ -211,6 +193,7 @@ class Relay:
             for t in tasks:
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await t
+            self.last_word()
             for s in udp:
                 with contextlib.suppress(Exception):
                     loop.remove_reader(s.fileno())
@@ -245,16 +228,22 @@ class Relay:
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:
-                counter.error(f"receive failed: {exc}")
+                counter.error("receive failed", str(exc))
                 self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                 return
             receive_ns = time.time_ns()
-            try:
-                reason = validate(data)
-            except Exception as exc:  # a decoder surprise must not kill the reader
-                reason = f"validation failed: {exc!r}"
+            if len(data) > self.config.max_datagram_bytes:
+                reason: str | None = (f"{len(data)} bytes, more than "
+                                      f"{self.config.max_datagram_bytes}")
+                kind = streams.OVERSIZED
+            else:
+                try:
+                    reason = validate(data)
+                except Exception as exc:  # a decoder surprise must not kill the reader
+                    reason = f"validation failed: {exc!r}"
+                kind = codecs.classify(reason, data) if reason is not None else ""
             if reason is not None:
-                counter.error(reason)
+                counter.error(kind, reason)
                 self._ratelog.warning(
                     f"{name}-bad",
                     "dropped malformed %s datagram from %s:%d: %s",
@@ -297,13 +286,14 @@ class Relay:
             try:
                 self._handle_native(frames)
             except Exception as exc:  # never fatal: a bad message is an error, not a crash
-                self.streams["commands"].error(f"internal error: {exc}")
+                self.streams["commands"].error("internal error", str(exc))
                 log.exception("command handling failed")
 
     def _handle_native(self, frames: list[bytes]) -> None:
         now = time.monotonic()
         if len(frames) != 2:
-            self._command_error("commands", f"expected [topic, message], got {len(frames)} frames")
+            self._command_error("commands", f"expected [topic, message], got {len(frames)} frames",
+                                "bad frames")
             return
         topic, body = frames
         if topic == b"sim":
@@ -313,14 +303,15 @@ class Relay:
             self._handle_referee_out(body)
             return
         if topic != b"commands":
-            self._command_error("commands", f"unknown topic {topic[:32]!r}")
+            self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
             return
         counter = self.streams["commands"]
         cset = touchline_pb2.RobotCommandSet()
         try:
             cset.ParseFromString(body)
         except DecodeError as exc:
-            self._command_error("commands", f"RobotCommandSet does not parse: {exc}")
+            self._command_error("commands", f"RobotCommandSet does not parse: {exc}",
+                                streams.wire_problem(body))
             return
         counter.packet(len(body), now)
         accepted: list[Command] = []
@@ -328,7 +319,7 @@ class Relay:
             try:
                 accepted.append(codecs.command_from_proto(pc))
             except CommandError as exc:
-                self._command_error("commands", str(exc))
+                self._command_error("commands", str(exc), "bad command")
         if cset.stop_all:
             for c in accepted:
                 self.table.update(c.zero(), now)
@@ -343,8 +334,8 @@ class Relay:
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
 
-    def _command_error(self, stream: str, reason: str) -> None:
-        self.streams[stream].error(reason)
+    def _command_error(self, stream: str, reason: str, kind: str = "rejected") -> None:
+        self.streams[stream].error(kind, reason)
         kind = " ".join(reason.split()[:3])  # bounded set of log keys, one per kind of error
         self._ratelog.warning(f"{stream}-bad:{kind}", "rejected %s: %s", stream, reason)
 
@@ -355,10 +346,12 @@ class Relay:
         try:
             cmd.ParseFromString(body)
         except DecodeError as exc:
-            self._command_error("sim_commands", f"SimulatorCommand does not parse: {exc}")
+            self._command_error("sim_commands", f"SimulatorCommand does not parse: {exc}",
+                                streams.wire_problem(body))
             return
         if not cmd.IsInitialized():
-            self._command_error("sim_commands", "SimulatorCommand misses required fields")
+            self._command_error("sim_commands", "SimulatorCommand misses required fields",
+                                streams.MISSING_FIELD)
             return
         counter.packet(len(body))
         if cfg.output == "sim":
@@ -452,6 +445,15 @@ class Relay:
         due = self.table.due(now)
         if not due:
             return
+        self._send_commands(due)
+        if self._pending_latency_ns:
+            sent_ns = time.time_ns()
+            for src in self._pending_latency_ns:
+                self._latencies.append((now, (sent_ns - src) / 1e6))
+            self._pending_latency_ns.clear()
+
+    def _send_commands(self, due: list[Command]) -> None:
+        """Encode and send ``due`` on the configured output."""
         cfg = self.config
         if cfg.output == "robot-box":
             for c in due:
@@ -478,11 +480,21 @@ class Relay:
                         cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg
                     )
                     self._send(data, (self._sim_host, cfg.grsim_port))
-        if self._pending_latency_ns:
-            sent_ns = time.time_ns()
-            for src in self._pending_latency_ns:
-                self._latencies.append((now, (sent_ns - src) / 1e6))
-            self._pending_latency_ns.clear()
+
+    def last_word(self) -> None:
+        """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
+        no kick, dribbler off to every robot it ever commanded, ``last_word_repeats`` times
+        (UDP can drop one), so the robots' last datagram from it is a stop. Only a SIGKILL
+        (or a power cut) leaves the stop to the robots' own command timeout."""
+        zeros = self.table.all_zero()
+        if not zeros or self._udp_out is None:
+            return
+        for k in range(self.config.last_word_repeats):
+            if k:
+                time.sleep(0.005)
+            self._send_commands(zeros)
+        log.warning("last word: stop sent to %d robots (%d times)", len(zeros),
+                    self.config.last_word_repeats)
 
     def _send(self, data: bytes, addr: tuple[str, int]) -> None:
         counter = self.streams["output"]
@@ -491,7 +503,7 @@ class Relay:
         try:
             self._udp_out.sendto(data, addr)
         except OSError as exc:
-            counter.error(f"send to {addr[0]}:{addr[1]} failed: {exc}")
+            counter.error("send failed", f"to {addr[0]}:{addr[1]}: {exc}")
             self._ratelog.warning("output-send", "send to %s:%d failed: %s", *addr, exc)
             return
         counter.packet(len(data))
@@ -504,13 +516,13 @@ class Relay:
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:  # e.g. ICMP port unreachable reported on the socket
-                counter.error(f"simulator socket error: {exc}")
+                counter.error("socket error", str(exc))
                 self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
                 continue
             counter.packet(len(data))
             n, reason = codecs.count_response_errors(data)
             if n:
-                counter.error(reason, n)
+                counter.error("simulator error", reason, n)
                 self._ratelog.warning(
                     "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
                 )
@@ -525,7 +537,7 @@ class Relay:
         latency = sum(lat) / len(lat) if lat else -1.0
         return touchline_pb2.RelayStats(
             time_ns=time.time_ns(),
-            streams=[s.to_proto(t) for s in self.streams.values()],
+            streams=[stream_proto(s, t) for s in self.streams.values()],
             output_mode=self.config.output,
             active_robots=self.table.count(RobotState.ACTIVE),
             stale_robots=self.table.count(RobotState.STALE) + self.table.count(RobotState.STOPPED),

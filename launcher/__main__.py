@@ -60,6 +60,9 @@ def main() -> int:
                    help="extra flag for fieldsim (repeatable), e.g. --sim-arg=--false-prob=0.2")
     p.add_argument("--relay-arg", dest="relay_args", action="append", default=[])
     p.add_argument("--backend-arg", dest="backend_args", action="append", default=[])
+    p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
+                   metavar="NAME", help="a name the station may be reached by besides the "
+                   "bound address and localhost (repeatable; see python -m backend --help)")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -80,7 +83,9 @@ def main() -> int:
     sup = Supervisor(command_lines(StationConfig(
         sim=a.sim, seed=a.seed, interface=a.interface, output=a.output, sim_host=a.sim_host,
         host=a.host, our_team=a.our_team, state_dir=a.state_dir, sim_args=a.sim_args,
-        relay_args=a.relay_args, backend_args=a.backend_args), ports), restart=True)
+        relay_args=a.relay_args,
+        backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *a.backend_args]), ports),
+        restart=True)
     stopping = False
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -178,6 +178,9 @@ class ParamStore:
         return self.patch_from(self.defaults.model_dump(mode="json"), values)
 
     def patch_from(self, base: dict[str, Any], values: dict[str, Any]) -> StationParams:
+        if not isinstance(values, dict):
+            raise ParamError([{"loc": ["body"], "msg": "expected an object of parameter "
+                               "groups", "type": "type_error"}])
         try:
             new = StationParams.model_validate(deep_merge(base, values))
         except ValidationError as exc:

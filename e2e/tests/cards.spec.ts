@@ -50,7 +50,7 @@ test.describe("cards", () => {
     // a robot under an operator's target is the operator's, not the play's: give every robot
     // back to the strategy (earlier specs may leave one behind)
     for (const r of (await world(page)).robots) {
-      if (r.target?.source === "operator") await page.request.delete(`/api/robots/${r.team}/${r.id}/target`);
+      if (r.target?.source === "operator") await page.request.delete(`/api/robots/${r.team}/${r.id}/target`, { headers: { "X-Touchline": "1" } });
     }
     await expect.poll(async () => (await world(page)).robots.filter((r) => r.target?.source === "operator").length).toBe(0);
   });

@@ -50,7 +50,7 @@ test("Algorithm 1 chosen in the robot panel drives a robot to a clicked point; t
     await expect(page.getByTestId("robot-controller-effective")).toHaveAttribute("data-override", "false");
   } finally {
     await page.request.patch("/api/params", { data: { control: { robots: { "blue/5": null } } } });
-    await page.request.delete("/api/robots/blue/5/target");
+    await page.request.delete("/api/robots/blue/5/target", { headers: { "X-Touchline": "1" } });
   }
 });
 

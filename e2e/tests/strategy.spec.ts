@@ -41,7 +41,7 @@ test.describe("strategy", () => {
     // A robot under an operator's target is the operator's, not the play's (role "operator"):
     // earlier specs may leave one behind, so give every robot back to the strategy.
     for (const r of (await world(page)).robots) {
-      if (r.target?.source === "operator") await page.request.delete(`/api/robots/${r.team}/${r.id}/target`);
+      if (r.target?.source === "operator") await page.request.delete(`/api/robots/${r.team}/${r.id}/target`, { headers: { "X-Touchline": "1" } });
     }
     await expect.poll(async () => (await world(page)).robots.filter((r) => r.target?.source === "operator").length).toBe(0);
   });

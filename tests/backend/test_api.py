@@ -26,9 +26,11 @@ def _port() -> int:
 def client(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
     settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
                         relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
-                        state_dir=tmp_path / "state")
+                        state_dir=tmp_path / "state",
+                        allowed_hosts=["testserver"])  # the test client's Host header
     st = Station(settings)
-    with TestClient(create_app(settings, st)) as c:
+    # the page's header (backend.security refuses state changes without it or JSON)
+    with TestClient(create_app(settings, st), headers={"X-Touchline": "1"}) as c:
         yield c, st
 
 

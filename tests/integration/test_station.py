@@ -88,7 +88,7 @@ def test_operator_target_drives_a_robot_there(station: StationHandle) -> None:
     rb = wait_until(close, 20, what="robot 4 at its target")
     assert abs(math.remainder(rb["orientation"] - target["orientation"], 2 * math.pi)) < 0.15
     assert rb["target"]["source"] == "operator"
-    httpx.delete(station.url + "/api/robots/blue/4/target")
+    httpx.delete(station.url + "/api/robots/blue/4/target", headers={"X-Touchline": "1"})
 
 
 def test_bad_target_is_rejected_and_station_keeps_running(station: StationHandle) -> None:
@@ -229,7 +229,7 @@ def test_per_robot_algorithm1_drives_to_a_point_and_reports_its_gain(
         assert 0.7 < tel["c_estimate"] < 1.3, tel
         assert tel["path_length_m"] > 0.3
     finally:
-        httpx.delete(station.url + "/api/robots/blue/2/target")
+        httpx.delete(station.url + "/api/robots/blue/2/target", headers={"X-Touchline": "1"})
         httpx.patch(station.url + "/api/params", json={"control": {"robots": {"blue/2": None}}})
 
 

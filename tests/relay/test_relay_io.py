@@ -434,3 +434,33 @@ async def test_referee_out_is_off_on_a_non_loopback_interface_unless_asked() -> 
     assert not cfg.referee_out_enabled
     assert RelayConfig(interface="192.0.2.10", referee_out=True).referee_out_enabled
     assert RelayConfig().referee_out_enabled
+
+
+async def test_datagram_errors_are_counted_by_reason_and_published() -> None:
+    """Every stream counts its refused datagrams by reason (sslnet.streams), not only the
+    last error, and RelayStats carries the counts to the backend's health."""
+    async with running_relay() as h:
+        sub = h.subscriber(b"stats")
+        vision = h.relay.streams["vision"]
+        good = make_detection_wrapper(7)
+        h.send_vision(good[: len(good) // 2])  # cut short: truncated
+        h.send_vision(b"\xff\xfe garbage \x00\x07")  # not protobuf
+        h.send_vision(b"\x0a\x02\x08\x05")  # detection without its required fields
+        h.send_vision(b"")  # a wrapper with nothing in it
+        h.send_vision(good + b"\x00" * 40000)  # larger than the stream's limit
+        await wait_for(lambda: vision.errors >= 5, what="five errors")
+        assert vision.by_reason == {"truncated": 1, "not protobuf": 1,
+                                    "missing required field": 1, "no content": 1,
+                                    "oversized": 1}
+        h.send_referee(make_referee(Ref.STOP, 1)[:-3])
+        await wait_for(lambda: h.relay.streams["referee"].errors == 1, what="referee error")
+        assert h.relay.streams["referee"].by_reason == {"truncated": 1}
+        deadline = time.monotonic() + 5
+        while True:
+            assert time.monotonic() < deadline, "no stats with the reasons"
+            _, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
+            st = touchline_pb2.RelayStats.FromString(body)
+            by = {s.name: dict(s.errors_by_reason) for s in st.streams}
+            if by.get("vision", {}).get("oversized") == 1 and by.get("referee"):
+                break
+        assert by["referee"] == {"truncated": 1}

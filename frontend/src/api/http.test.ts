@@ -1,5 +1,5 @@
 import { afterEach, describe, expect, it, vi } from "vitest";
-import { ApiError, errorMessageFromBody, postTarget } from "./http";
+import { ApiError, errorMessageFromBody, postTarget, request } from "./http";
 
 describe("errorMessageFromBody", () => {
   it("reads FastAPI string details", () => {
@@ -39,6 +39,16 @@ describe("postTarget", () => {
     expect(url).toBe("/api/robots/blue/3/target");
     expect(init.method).toBe("POST");
     expect(JSON.parse(String(init.body))).toEqual({ x: 1200, y: -300 });
+    // the station refuses state changes without JSON or this header (cross-site requests)
+    expect(init.headers).toMatchObject({ "Content-Type": "application/json", "X-Touchline": "1" });
+  });
+
+  it("sends the station's header on requests without a body", async () => {
+    const fetchMock = vi.fn(async () => new Response("{}"));
+    vi.stubGlobal("fetch", fetchMock);
+    await request("DELETE", "/api/robots/blue/1/target");
+    const [, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
+    expect(init.headers).toEqual({ "X-Touchline": "1" });
   });
 
   it("throws an ApiError with the server's message on 422", async () => {

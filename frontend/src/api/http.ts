@@ -46,7 +46,12 @@ export async function request<T>(method: string, path: string, body?: unknown, r
   try {
     res = await fetch(path, {
       method,
-      headers: body === undefined && rawBody === undefined ? {} : { "Content-Type": "application/json" },
+      // X-Touchline: the station refuses state-changing requests without it (or JSON):
+      // a page on another site cannot send it without a preflight the station never grants
+      headers:
+        body === undefined && rawBody === undefined
+          ? { "X-Touchline": "1" }
+          : { "Content-Type": "application/json", "X-Touchline": "1" },
       body: rawBody !== undefined ? rawBody : body === undefined ? undefined : JSON.stringify(body),
     });
   } catch (e) {

@@ -244,6 +244,9 @@ export interface Geometry {
 export interface StreamHealth {
   packets: number;
   errors: number;
+  /** refused datagrams (and, for vision, what the world model dropped) by reason:
+   * "truncated", "not protobuf", "missing required field", "time out of range", ... */
+  errors_by_reason?: Record<string, number>;
   rate_hz: number;
   last_age_s: number;
   last_error: string;

@@ -115,7 +115,38 @@ function Streams({ h }: { h: Health }) {
           ))}
         </tbody>
       </table>
+      <ErrorsByReason h={h} />
     </section>
+  );
+}
+
+/** Every refused datagram counted by reason, per stream (the last error as a tooltip). */
+export function ErrorsByReason({ h }: { h: Health }) {
+  const rows = Object.entries(h.streams).flatMap(([name, s]) =>
+    Object.entries(s.errors_by_reason ?? {})
+      .filter(([, n]) => n > 0)
+      .map(([reason, n]) => ({ name, reason, n, last: s.last_error })),
+  );
+  if (rows.length === 0) return null;
+  return (
+    <table className="htable" data-testid="health-errors">
+      <thead>
+        <tr>
+          <th className="hname">refused</th>
+          <th>reason</th>
+          <th className="num">count</th>
+        </tr>
+      </thead>
+      <tbody>
+        {rows.map((r) => (
+          <tr key={`${r.name}/${r.reason}`} title={r.last || undefined} data-testid={`health-error-${r.name}-${r.reason.replace(/ /g, "-")}`}>
+            <td className="hname">{r.name}</td>
+            <td>{r.reason}</td>
+            <td className="num hval warn">{r.n}</td>
+          </tr>
+        ))}
+      </tbody>
+    </table>
   );
 }
 

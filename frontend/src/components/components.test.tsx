@@ -7,6 +7,7 @@ import { health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
+import { ErrorsByReason } from "./HealthPanel";
 
 import { domPerTest } from "../testing/dom";
 
@@ -75,5 +76,21 @@ describe("TopBar", () => {
     );
     expect(q("connection-status")?.textContent).toContain("reconnecting");
     expect(q("connection-status")?.textContent).not.toContain("connected");
+  });
+});
+
+describe("ErrorsByReason", () => {
+  it("lists refused datagrams per stream and reason, and nothing when there are none", () => {
+    const h = health();
+    act(() => t.root.render(<ErrorsByReason h={h} />));
+    expect(q("health-errors")).toBeNull();
+    h.streams = {
+      vision: { packets: 100, rate_hz: 60, last_age_s: 0.01, errors: 3, errors_by_reason: { truncated: 2, "time out of range": 1 }, last_error: "time out of range: camera 0" },
+      "relay.referee": { packets: 5, errors: 1, errors_by_reason: { "not protobuf": 1 }, rate_hz: 20, last_age_s: 0.1, last_error: "not protobuf" },
+    };
+    act(() => t.root.render(<ErrorsByReason h={{ ...h }} />));
+    expect(q("health-error-vision-truncated")?.textContent).toBe("visiontruncated2");
+    expect(q("health-error-vision-time-out-of-range")?.getAttribute("title")).toBe("time out of range: camera 0");
+    expect(q("health-error-relay.referee-not-protobuf")?.textContent).toContain("1");
   });
 });

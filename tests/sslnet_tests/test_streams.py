@@ -1,0 +1,42 @@
+"""sslnet.streams: the reasons a datagram is refused, and the one stream counter."""
+
+from __future__ import annotations
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from sslnet.streams import NOT_PROTOBUF, TRUNCATED, StreamCounter, wire_problem
+from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+
+def _wrapper() -> bytes:
+    p = SSL_WrapperPacket()
+    d = p.detection
+    d.frame_number, d.t_capture, d.t_sent, d.camera_id = 1, 1.5, 1.5, 0
+    r = d.robots_blue.add()
+    r.confidence, r.robot_id, r.x, r.y, r.pixel_x, r.pixel_y = 1.0, 3, 10.0, 20.0, 0.0, 0.0
+    return p.SerializeToString()
+
+
+@given(st.integers(1, 200))
+def test_a_datagram_cut_short_is_truncated(cut: int) -> None:
+    data = _wrapper()
+    assert wire_problem(data[: min(cut, len(data) - 1)]) == TRUNCATED
+
+
+def test_garbage_is_not_protobuf() -> None:
+    assert wire_problem(b"\x07\x00") == NOT_PROTOBUF  # field 0
+    assert wire_problem(b"\x0f\x01") == NOT_PROTOBUF  # wire type 7
+    assert wire_problem(b"\xff" * 11) == NOT_PROTOBUF  # a varint longer than 64 bits
+
+
+def test_the_counter_keeps_every_reason_not_only_the_last() -> None:
+    c = StreamCounter("vision")
+    c.packet(100)
+    c.error(TRUNCATED, "cut at 40 bytes")
+    c.error(TRUNCATED)
+    c.error("time out of range", "camera 0", n=3)
+    d = c.to_dict()
+    assert d["errors"] == 5 and d["packets"] == 1
+    assert d["errors_by_reason"] == {"time out of range": 3, "truncated": 2}
+    assert d["last_error"] == "time out of range: camera 0"
