@@ -15,6 +15,7 @@ run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
 
 test: build multicast chromium octave lint typecheck test-py test-ts test-e2e
+	@scripts/test-summary.sh
 
 setup: .venv/.ok node_modules/.ok sslpb/__init__.py
 

@@ -28,6 +28,7 @@ MATCH_BOUND_S = 420.0  # the 0.5 min match must end (and tear down) within this
 
 pytestmark = [
     pytest.mark.match,
+    pytest.mark.timeout(900),
     pytest.mark.skipif(not loopback_multicast_ok(), reason="multicast on loopback is not set up"),
 ]
 

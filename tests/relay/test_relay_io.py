@@ -142,8 +142,12 @@ async def test_stats_published() -> None:
         assert topic == b"stats" and st.output_mode == "sim"
         names = {s.name for s in st.streams}
         assert {"vision", "referee", "tracker", "commands", "output", "sim_responses"} <= names
-        # wait for a stats message with a full second of cycles behind it
+        # wait for a stats message with a full second of cycles behind it (bounded: a slow
+        # machine fails here with the rate it reached instead of hanging CI)
+        deadline = time.monotonic() + 10.0
         while st.output_rate_hz < 100:
+            assert time.monotonic() < deadline, \
+                f"output rate stayed at {st.output_rate_hz:.0f} Hz (< 100) for 10 s"
             _, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
             st = touchline_pb2.RelayStats.FromString(body)
         assert st.output_rate_hz < 140
