@@ -590,7 +590,7 @@ class Station:
                                  == self.referee_state.source_identifier else "game-controller")
         out: dict[str, Any] = _finite({
             "ok": ok,
-            "warnings": _warnings(vision, relay, referee, world),
+            "warnings": [*_warnings(vision, relay, referee, world), *self.params.warnings],
             "world": world,
             "referee": referee,
             "uptime_s": time.monotonic() - self.started_mono,

@@ -8,6 +8,7 @@ import logging
 import os
 import re
 import tempfile
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -116,6 +117,10 @@ def atomic_write_json(path: Path, data: Any) -> None:
         raise
 
 
+#: the layout of params.json; a file with a newer schema is set aside, not misread
+FILE_SCHEMA = 1
+
+
 class ParamStore:
     def __init__(self, state_dir: Path | None) -> None:
         self.state_dir = state_dir
@@ -123,6 +128,8 @@ class ParamStore:
         self.current = StationParams()
         self.version = 0
         self._listeners: list[Callable[[StationParams, int], None]] = []
+        #: problems with the state folder found at start-up (health shows them)
+        self.warnings: list[str] = []
         if state_dir is not None:
             self._load()
 
@@ -135,22 +142,48 @@ class ParamStore:
         return None if self.state_dir is None else self.state_dir / "presets"
 
     def _load(self) -> None:
+        """The stored parameters, or the defaults. Whatever the state folder holds (another
+        JSON type, wrong field types, a newer file schema, invalid UTF-8, a folder in place of
+        the file, an unreadable file), the station starts: a file that cannot be used is set
+        aside under a new name (never deleted), the defaults are used, the log and
+        ``warnings`` (health, the page) say so, and nothing of the bad file stays in use."""
         f = self.file
         if f is None or not f.exists():
             return
         try:
-            data = json.loads(f.read_text())
+            data = json.loads(f.read_bytes().decode("utf-8"))
+            if not isinstance(data, dict):
+                raise ValueError(f"expected a JSON object, found {type(data).__name__}")
+            schema = data.get("schema", 1)
+            if not isinstance(schema, int) or isinstance(schema, bool) or schema > FILE_SCHEMA:
+                raise ValueError(f"file schema {schema!r} is newer than this station's "
+                                 f"({FILE_SCHEMA})")
             values = data.get("values", {})
+            if not isinstance(values, dict):
+                raise ValueError(f"'values' is a {type(values).__name__}, not an object")
+            version = data.get("version", 0)
+            if not isinstance(version, int) or isinstance(version, bool) or version < 0:
+                raise ValueError(f"'version' is {version!r}, not a whole number >= 0")
             # unknown or removed keys from an older version are dropped, not fatal
-            merged = _known_only(self.defaults.model_dump(), values)
-            self.current = StationParams.model_validate(merged)
-            self.version = int(data.get("version", 0))
-            log.info("parameters loaded from %s (version %d)", f, self.version)
-        except (ValueError, ValidationError, OSError) as exc:
-            bad = f.with_suffix(".invalid.json")
-            log.error("parameters in %s are invalid (%s); using defaults, file kept as %s",
-                      f, exc, bad)
+            current = StationParams.model_validate(
+                _known_only(self.defaults.model_dump(), values))
+        except (ValueError, ValidationError, OSError, RecursionError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            self._set_aside(f, reason)
+            return
+        self.current, self.version = current, version  # all of it, or nothing
+        log.info("parameters loaded from %s (version %d)", f, self.version)
+
+    def _set_aside(self, f: Path, reason: str) -> None:
+        bad = f.with_name(f"{f.stem}.invalid-{time.strftime('%Y%m%d-%H%M%S')}{f.suffix}")
+        try:
             os.replace(f, bad)
+            where = f"set aside as {bad.name}"
+        except OSError as exc:
+            where = f"could not be set aside ({exc}): fix or remove it"
+        msg = f"{f.name} was not usable ({reason}); {where}; default parameters in use"
+        log.error("parameters: %s", msg)
+        self.warnings.append(msg)
 
     def subscribe(self, fn: Callable[[StationParams, int], None]) -> None:
         self._listeners.append(fn)
@@ -193,7 +226,8 @@ class ParamStore:
         self.current = new
         self.version += 1
         if self.file is not None:
-            atomic_write_json(self.file, {"version": self.version, "values": self.values()})
+            atomic_write_json(self.file, {"schema": FILE_SCHEMA, "version": self.version,
+                                          "values": self.values()})
         for fn in self._listeners:
             fn(new, self.version)
         return new
@@ -226,7 +260,15 @@ class ParamStore:
         p = self._preset_path(name)
         if not p.exists():
             raise PresetNotFound(name)
-        values: dict[str, Any] = json.loads(p.read_text())["values"]
+        try:
+            data = json.loads(p.read_bytes().decode("utf-8"))
+            values = data["values"]
+            if not isinstance(values, dict):
+                raise ValueError("'values' is not an object")
+        except (ValueError, KeyError, TypeError, OSError, RecursionError) as exc:
+            raise ParamError([{"loc": ["path", "name"], "type": "value_error",
+                               "msg": f"preset {name!r} is not a valid preset file: {exc}"}]) \
+                from None
         return values
 
     def load_preset(self, name: str) -> StationParams:

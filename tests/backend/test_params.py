@@ -87,7 +87,7 @@ def test_corrupt_file_falls_back_to_defaults_and_is_kept(tmp_path: Path) -> None
         '{"version": 3, "values": {"strategy": {"formation_period_s": -5}}}')
     store = ParamStore(tmp_path)
     assert store.current == StationParams()
-    assert (tmp_path / "params.invalid.json").exists()
+    assert len(list(tmp_path.glob("params.invalid-*.json"))) == 1
 
 
 def test_presets_save_load_diff_delete(tmp_path: Path) -> None:
@@ -134,3 +134,31 @@ def test_null_removes_a_per_robot_override(tmp_path: Path) -> None:
     store.patch({"control": {"robots": {"blue/3": None}},
                  "filters": {"robot_overrides": {"blue/3": None}}})
     assert store.current.control.robots == {} and store.current.filters.robot_overrides == {}
+
+
+# ---- start-up with whatever the state folder holds ------------------------------------------
+
+from tests.backend.params_startup_cases import BAD_FILES, write_bad  # noqa: E402
+
+
+@pytest.mark.parametrize("name,content", BAD_FILES, ids=[n for n, _ in BAD_FILES])
+def test_a_bad_params_file_leaves_defaults_a_warning_and_the_file_set_aside(
+        tmp_path, name: str, content: bytes | None) -> None:  # type: ignore[no-untyped-def]
+    f = write_bad(tmp_path, content)
+    store = ParamStore(tmp_path)
+    assert store.current == StationParams() and store.version == 0, "defaults, nothing of the file"
+    assert len(store.warnings) == 1 and "default parameters in use" in store.warnings[0]
+    assert not f.exists()
+    aside = list(tmp_path.glob("params.invalid-*.json"))
+    assert len(aside) == 1, "set aside, never deleted"
+    # the station keeps working: a change is stored as a fresh file
+    store.patch({"safety": {"stop_speed_mps": 1.0}})
+    assert ParamStore(tmp_path).current.safety.stop_speed_mps == 1.0
+
+
+def test_a_bad_preset_file_is_a_422_not_a_crash(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    store = ParamStore(tmp_path)
+    (tmp_path / "presets").mkdir()
+    (tmp_path / "presets" / "junk.json").write_bytes(b"\xff[[")
+    with pytest.raises(ParamError):
+        store.read_preset("junk")
