@@ -37,12 +37,16 @@ def main() -> None:
                    help="a host name or address this station may be reached by besides the "
                         "bound address and localhost (repeatable; '*' for any: not on a "
                         "shared network). Other Host headers get 400 (DNS rebinding).")
+    p.add_argument("--relay-output", choices=["sim", "grsim", "robot-box"], default=None,
+                   help="the relay's output (the launcher passes it): on robot-box, whose "
+                        "datagrams have no team field, only our team is ever commanded")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
                         our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
+                        relay_output=a.relay_output,
                         play="idle" if a.no_demo else a.play, set_params=a.set_params,
                         state_dir=a.state_dir)
     app = create_app(settings)

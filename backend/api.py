@@ -24,6 +24,7 @@ from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
 from .security import EdgeGuard
 from .station import Station, _finite
+from .world.state import Team
 
 log = logging.getLogger("touchline.api")
 
@@ -140,8 +141,20 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                        f"(|x| <= {half_l:.0f}, |y| <= {half_w:.0f})",
                 "type": "outside_field"}])
 
+    def _check_simulator() -> None:
+        if st.relay_output() == "robot-box":
+            raise HTTPException(409, "no simulator: the relay drives real robots (robot-box), "
+                                     "teleports need a simulator output")
+
+    def _check_team(team: Team, rid: int) -> None:
+        why = st.other_team_refusal(team, rid)
+        if why is not None:
+            raise HTTPException(422, [{"loc": ["path", "team"], "msg": why,
+                                       "type": "other_team"}])
+
     @api.post("/robots/{team}/{rid}/target")
     async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> dict[str, Any]:
+        _check_team(team, rid)
         _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
         return {"team": team, "id": rid,
@@ -154,6 +167,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.post("/sim/ball")
     async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
+        _check_simulator()
         _check_on_field(body.x, body.y)
         await st.call(st.teleport_ball, body.x, body.y, body.vx, body.vy)
         return {"ball": body.model_dump()}
@@ -161,6 +175,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.post("/sim/robots/{team}/{rid}")
     async def teleport_robot(team: TeamParam, rid: IdParam,
                              body: TeleportRobotIn) -> dict[str, Any]:
+        _check_simulator()
         _check_on_field(body.x, body.y)
         await st.call(st.teleport_robot, team, rid, body.x, body.y, body.orientation,
                       body.present)

@@ -23,6 +23,9 @@ class Settings(BaseModel):
     set_params: list[str] = Field(default_factory=list)  # "group.key=value" (value JSON or text)
     static_dir: Path = ROOT / "frontend" / "dist"
     state_dir: Path | None = ROOT / "var"  # parameters and presets; None: not persisted
+    #: the relay's output as the launcher started it ("sim", "grsim", "robot-box"); the relay's
+    #: own stats confirm it. None: unknown until the relay says (the other team is refused)
+    relay_output: str | None = None
     #: names the Host header may carry besides the bound address and loopback ("*": any)
     allowed_hosts: list[str] = Field(default_factory=list)
     allowed_origins: list[str] = Field(

@@ -492,6 +492,9 @@ class ControlProcessor(Processor):
         self.last_commands: dict[tuple[Team, int], Command] = {}
         self.telemetry: dict[str, dict[str, Any]] = {}
         self.internal: InternalRefereeProcessor | None = None
+        #: whether commands for the other team may go out (the station says: a simulator
+        #: output and the operator's safety.other_team_in_simulator); else they never do
+        self.may_drive_other_team: Callable[[], bool] = lambda: False
         self._last_tick = time.monotonic()
         self.halt_reason = ""
 
@@ -537,7 +540,8 @@ class ControlProcessor(Processor):
             self.commands.write(CommandSet(created, 0, (), stop_all=True))
             self.last_commands = {}
             return
-        keys = sorted(targets)
+        other_ok = self.may_drive_other_team()
+        keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
         zero = LocalVelocity.zero()
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s

@@ -191,6 +191,7 @@ class Station:
         self.publisher = CommandPublisher(self.bus, pub)
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        self.control.may_drive_other_team = self.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
@@ -344,6 +345,41 @@ class Station:
             self.ctx = None
 
     # ---- commands from the API (written onto the bus; processors apply them) ----
+
+    def relay_output(self) -> str | None:
+        """The relay's output: what its stats say, else what the launcher said; when they
+        differ, robot-box (the one that cannot address a team) wins."""
+        rs = self.relay_stats.latest_value()
+        said = rs.get("output_mode") or None if rs is not None else None
+        flag = self.settings.relay_output
+        if said and flag and said != flag:
+            return "robot-box" if "robot-box" in (said, flag) else said
+        return said or flag
+
+    def other_team_refusal(self, team: Team, rid: int) -> str | None:
+        """Why robot ``team``/``rid`` must not be commanded, or None. Our team always may be;
+        the other team only on a simulator output and with safety.other_team_in_simulator
+        (robot-box datagrams have no team field: their robot 3 would be our robot 3)."""
+        our = self.params.current.team.our_team
+        if team == our:
+            return None
+        out = self.relay_output()
+        if out == "robot-box":
+            return (f"the relay drives real robots (robot-box), whose datagrams have no team "
+                    f"field: a command for {team} {rid} would drive our ({our}) robot {rid}; "
+                    f"only {our} robots can be commanded")
+        if out is None:
+            return (f"{team} is the other team and the relay's output is not known yet: only "
+                    f"{our} robots can be commanded")
+        if not self.params.current.safety.other_team_in_simulator:
+            return (f"{team} is the other team: set safety.other_team_in_simulator to drive it "
+                    f"in the simulator ({out})")
+        return None
+
+    def drives_other_team(self) -> bool:
+        """The control loop may command the other team (a simulator, and the operator said)."""
+        other: Team = "yellow" if self.params.current.team.our_team == "blue" else "blue"
+        return self.other_team_refusal(other, 0) is None
 
     def set_target(self, team: Team, rid: int, x: float, y: float,
                    orientation: float | None) -> None:

@@ -86,6 +86,10 @@ class Relay:
         self._wake: asyncio.Future[None] | None = None
         self._sim_host = config.sim_host
         self._box_host = config.robot_box_host
+        #: robot-box output: the only team it may drive (its datagrams cannot say which)
+        self._box_team: int | None = (
+            (codecs.TEAM_BLUE if config.our_team == "blue" else codecs.TEAM_YELLOW)
+            if config.output == "robot-box" else None)
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -317,9 +321,18 @@ class Relay:
         accepted: list[Command] = []
         for pc in cset.commands:
             try:
-                accepted.append(codecs.command_from_proto(pc))
+                c = codecs.command_from_proto(pc)
             except CommandError as exc:
                 self._command_error("commands", str(exc), "bad command")
+                continue
+            if self._box_team is not None and c.team != self._box_team:
+                # a robot-box datagram has no team: their robot 3 would be our robot 3
+                self._command_error(
+                    "commands", f"{codecs.team_name(c.team)} {c.id} dropped: robot-box "
+                    f"datagrams have no team field, only {self.config.our_team} is driven",
+                    "other team")
+                continue
+            accepted.append(c)
         if cset.stop_all:
             for c in accepted:
                 self.table.update(c.zero(), now)

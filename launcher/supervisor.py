@@ -122,11 +122,13 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
         "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
         "--pub", ports.relay_pub, "--sub", ports.relay_sub,
+        *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *cfg.relay_args,
     ]))
     children.append(Child("backend", [
         py, "-m", "backend", "--host", cfg.host, "--port", str(ports.http),
         "--relay-pub", ports.relay_pub, "--relay-sub", ports.relay_sub,
+        "--relay-output", cfg.output,
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *(["--state-dir", cfg.state_dir] if cfg.state_dir else []),
         *cfg.backend_args,

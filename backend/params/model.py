@@ -106,6 +106,9 @@ class SafetyParams(Group):
                                   "or crashed): every robot gets zero")
     stop_speed_mps: float = num(1.5, 0.1, 1.5, "m/s", 0.05,
                                 "speed cap during STOP (the rules allow 1.5 m/s)")
+    other_team_in_simulator: bool = Field(
+        default=False, description="let operators drive the other team's robots too, in a "
+        "simulator only (classroom); never on real robots, whose datagrams have no team")
 
 
 class ProcessorParams(Group):

@@ -402,3 +402,32 @@ def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # typ
         snap = json.loads(ws.receive_text(),
                           parse_constant=lambda s: pytest.fail(f"{s} in the websocket"))
         assert snap["geometry"]["field_length"] == 9000
+
+
+@pytest.mark.parametrize("output,other_param,status", [
+    ("robot-box", True, 422),  # never, whatever the parameter says
+    ("sim", False, 422),  # a simulator, but the operator has not said so
+    ("sim", True, 200),
+    (None, True, 422),  # the relay's output not known yet: the safe side
+])
+def test_the_other_team_is_commanded_only_where_it_can_be_addressed(  # type: ignore[no-untyped-def]
+        tmp_path, output: str | None, other_param: bool, status: int) -> None:
+    settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+                        state_dir=tmp_path / "state", allowed_hosts=["testserver"],
+                        relay_output=output)
+    st = Station(settings)
+    with TestClient(create_app(settings, st)) as c:
+        if other_param:
+            assert c.patch("/api/params", json={"safety": {"other_team_in_simulator": True}}
+                           ).status_code == 200
+        r = c.post("/api/robots/yellow/3/target", json={"x": 0, "y": 0})
+        assert r.status_code == status, r.text
+        if status == 422:
+            assert r.json()["detail"][0]["loc"] == ["path", "team"]
+            if output == "robot-box":
+                assert "would drive our (blue) robot 3" in r.json()["detail"][0]["msg"]
+        assert c.post("/api/robots/blue/3/target", json={"x": 0, "y": 0}).status_code == 200
+        teleport = c.post("/api/sim/robots/yellow/3", json={"x": 0, "y": 0})
+        assert teleport.status_code == (409 if output == "robot-box" else 200), teleport.text
+        assert st.drives_other_team() == (status == 200)

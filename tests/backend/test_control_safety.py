@@ -114,3 +114,21 @@ async def test_a_world_written_from_old_frames_is_stale_vision() -> None:
     v = stopped.commands[0].velocity
     assert (v.forward_mps, v.left_mps, v.angular_radps) == (0.0, 0.0, 0.0)
     assert c.halt_reason.startswith("no vision for 2.")
+
+
+async def test_control_never_commands_the_other_team_unless_the_station_allows_it() -> None:
+    """A target for the other team (an operator's click, a bug in a play) reaches no robot
+    unless the station says the output can address that team (a simulator, and the
+    operator's safety.other_team_in_simulator)."""
+    bus = DataBus({})
+    c = ControlProcessor(bus, max_wait_s=0.05, vision_stale_s=10.0)
+    c.strategy_stale_s = 10.0
+    robots = (RobotState("blue", 3, 0.0, 0.0, 0.0), RobotState("yellow", 3, 0.0, 0.0, 0.0))
+    bus.typed("world", WorldState).write(WorldState(0.0, 0, None, robots))
+    entry = TargetEntry(Target(2000.0, 0.0, 0.0), "operator", role="operator")
+    bus.typed("targets", dict).write({("blue", 3): entry, ("yellow", 3): entry})
+    cs = await last(c, bus)
+    assert [(k.team, k.id) for k in cs.commands] == [("blue", 3)]
+    c.may_drive_other_team = lambda: True
+    cs = await last(c, bus)
+    assert [(k.team, k.id) for k in cs.commands] == [("blue", 3), ("yellow", 3)]

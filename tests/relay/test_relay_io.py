@@ -374,6 +374,25 @@ async def test_robot_box_mode_datagram() -> None:
         assert data == expected
 
 
+async def test_robot_box_mode_never_drives_a_robot_for_the_other_team() -> None:
+    """A robot-box datagram has no team field: a command for yellow 3 would drive our robot
+    3. The relay drops it, counts it ("other team") and sends nothing for it."""
+    async with running_relay(output="robot-box", our_team="blue") as h:
+        pub = await connect_commands(h)
+        commands = h.relay.streams["commands"]
+        await pub.send_multipart(command_set(
+            touchline_pb2.RobotCommand(team=YELLOW, id=3, forward_mps=1.0)))
+        await wait_for(lambda: commands.by_reason.get("other team") == 1, what="dropped")
+        assert "yellow 3 dropped" in commands.last_error
+        # only our robot's datagram ever arrives, and it is robot 4's
+        await pub.send_multipart(command_set(
+            touchline_pb2.RobotCommand(team=BLUE, id=4, forward_mps=1.0)))
+        data, _ = await recv_udp(h.out_box)
+        assert data[1] == 4
+        drain_udp(h.out_box)
+        assert h.relay.table.known == 1
+
+
 async def test_tracker_input_when_enabled() -> None:
     from tests.relay.conftest import random_multicast_port
 
