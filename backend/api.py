@@ -81,6 +81,8 @@ class TeleportRobotIn(BaseModel):
 class EstopIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
     active: bool
+    confirm: bool = Field(default=False, description="required (true) to release the stop")
+    reason: str = Field(default="", max_length=200, description="why it is released (logged)")
 
 
 def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
@@ -234,11 +236,28 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         log.info("internal referee: %s card for %s", body.card, body.team)
         return st.referee_view()
 
-    @api.post("/estop")
-    async def estop(body: EstopIn) -> dict[str, bool]:
-        await st.call(st.set_estop, body.active)
-        log.warning("emergency stop %s", "ACTIVE" if body.active else "released")
-        return {"estop": body.active}
+    @api.get("/estop")
+    async def estop_get() -> dict[str, Any]:
+        return st.estop_view()
+
+    @api.post("/estop", response_model=None)
+    async def estop(body: EstopIn, request: Request) -> dict[str, Any] | JSONResponse:
+        """Pressing is one request; a release must say ``confirm: true`` (the page asks the
+        operator first) and is logged with who released it."""
+        client = request.client.host if request.client else "?"
+        if not body.active and not body.confirm:
+            return JSONResponse(status_code=409, content={"detail": (
+                "releasing the emergency stop must be confirmed: send "
+                '{"active": false, "confirm": true}')})
+        if body.active:
+            await st.call(st.set_estop, True, f"operator at {client}")
+            log.warning("emergency stop ACTIVE: pressed by %s", client)
+        else:
+            was = st.estop_latch.state
+            await st.call(st.set_estop, False, f"operator at {client}")
+            log.warning("emergency stop RELEASED by %s (pressed by %s)%s", client, was.by,
+                        f": {body.reason}" if body.reason else "")
+        return {"estop": body.active, **st.estop_view()}
 
     @api.websocket("/ws")
     async def ws_endpoint(ws: WebSocket) -> None:

@@ -172,6 +172,8 @@ def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
         "output_rate_hz": s.output_rate_hz,
         "command_latency_ms": s.command_latency_ms,
         "stale_stops": s.stale_stops,
+        "estop_latched": s.estop_latched,
+        "estop_by": s.estop_by,
         "streams": {
             st.name: {
                 "packets": st.packets,
@@ -706,6 +708,13 @@ class CommandPublisher(Processor):
         self.seq = 0
         self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
         self.sent = RateCounter()
+        self.estop = bus.typed("estop", bool)
+        self.relay_stats = bus.typed("relay-stats", dict)
+        #: called when the relay reports a latch this backend does not have
+        self.adopt_estop: Callable[[str], None] = lambda by: None
+        self.estop_by: Callable[[], str] = lambda: ""
+        self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
+        self._release_until = -1e9  # a release is being repeated until the relay confirms
 
     async def tick(self) -> None:
         for cs in self.reader.read_new():
@@ -734,6 +743,40 @@ class CommandPublisher(Processor):
             await self.sock.send_multipart([b"sim", raw])
         for raw in self.referee_out_reader.read_new():
             await self.sock.send_multipart([b"referee-out", raw])
+        await self._estop_latch()
+
+    async def _estop_latch(self) -> None:
+        """Keeps the relay's latch in step: PRESS on a press and every 0.5 s while active
+        (a relay that restarts, or a slow ZeroMQ join, gets it again); RELEASE only after an
+        operator's release, repeated until the relay's stats say it is released (3 s at
+        most). A latch the relay reports and this backend does not have is adopted."""
+        now = time.monotonic()
+        active = bool(self.estop.latest_value())
+        was, when = self._estop_sent
+        if active and (not was or now - when >= 0.5):
+            await self._send_estop(tl.EmergencyStop.PRESS)
+            self._estop_sent = (True, now)
+            self._release_until = -1e9
+            return
+        if not active and was:  # the operator released it
+            await self._send_estop(tl.EmergencyStop.RELEASE)
+            self._estop_sent = (False, now)
+            self._release_until = now + 3.0
+            return
+        rs = self.relay_stats.latest_value()
+        if active or rs is None or not rs.get("estop_latched"):
+            return
+        if now < self._release_until:  # not confirmed yet: say it again
+            if now - when >= 0.1:
+                await self._send_estop(tl.EmergencyStop.RELEASE)
+                self._estop_sent = (False, now)
+        elif now - rs["received_mono"] < 1.5:  # fresh stats: the relay holds a latch we lack
+            self.adopt_estop(str(rs.get("estop_by", "")))
+
+    async def _send_estop(self, action: int) -> None:
+        msg = tl.EmergencyStop(action=action, time_ns=time.time_ns(),  # type: ignore[arg-type]
+                               by=self.estop_by())
+        await self.sock.send_multipart([b"estop", msg.SerializeToString()])
 
     def latency_summary(self) -> dict[str, float]:
         return self.latency.summary()

@@ -26,6 +26,7 @@ from .bus import DataBus
 from .config import ROOT, Settings
 from .control.goto import Target
 from .engine import NumpyEngine, OctaveEngine, PoolEngine
+from .estop import EstopLatch
 from .params.model import PLAYS, StationParams, StrategyParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Every, OnTopic, Runner
@@ -82,6 +83,10 @@ class Station:
         # topics the API writes to
         self.operator_targets = self.bus.typed("operator-targets", OperatorTarget)
         self.estop_topic = self.bus.typed("estop", bool)
+        # the latched emergency stop: a persisted one is active from the first tick on
+        self.estop_latch = EstopLatch(settings.state_dir)
+        if self.estop_latch.active:
+            self.estop_topic.write(True)
         self.sim_commands = self.bus.typed("sim-commands", bytes)
         self.world_topic = self.bus.typed("world", WorldState)
         self.geometry_topic = self.bus.typed("geometry", dict)
@@ -189,6 +194,8 @@ class Station:
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
                                         prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus, pub)
+        self.publisher.adopt_estop = self.adopt_relay_estop
+        self.publisher.estop_by = lambda: self.estop_latch.state.by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
         self.control.may_drive_other_team = self.drives_other_team
@@ -388,8 +395,24 @@ class Station:
     def clear_target(self, team: Team, rid: int) -> None:
         self.operator_targets.write(OperatorTarget(team, rid, None))
 
-    def set_estop(self, active: bool) -> None:
+    def set_estop(self, active: bool, by: str = "") -> None:
+        """Press (``active``) or release the emergency stop: persisted, on the bus (control
+        stops every robot), and latched in or released from the relay (CommandPublisher)."""
+        self.estop_latch.set(active, by)
         self.estop_topic.write(active)
+
+    def adopt_relay_estop(self, by: str) -> None:
+        """The relay is latched although this backend is not (its file was lost, or another
+        backend pressed it): the stop is the relay's, and the station says so."""
+        if not self.estop:
+            log.warning("the relay's emergency stop is latched (by %s): active here too", by)
+            self.set_estop(True, f"relay latch ({by or '?'})")
+
+    def estop_view(self) -> dict[str, Any]:
+        s = self.estop_latch.state
+        rs = self.relay_stats.latest_value()
+        return {"active": self.estop, "since": s.since, "by": s.by,
+                "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
 
     def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
                       vy_mps: float = 0.0) -> None:
@@ -456,6 +479,7 @@ class Station:
             "cameras": [],
             "referee": None,
             "estop": self.estop,
+            "estop_info": self.estop_view(),
             "halt_reason": self.control.halt_reason if hasattr(self, "control") else "",
             "strategy": None,
         }

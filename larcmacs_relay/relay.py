@@ -86,6 +86,9 @@ class Relay:
         self._wake: asyncio.Future[None] | None = None
         self._sim_host = config.sim_host
         self._box_host = config.robot_box_host
+        #: the emergency stop, latched until an explicit release (EmergencyStop on "estop")
+        self.estop_latched = False
+        self.estop_by = ""
         #: robot-box output: the only team it may drive (its datagrams cannot say which)
         self._box_team: int | None = (
             (codecs.TEAM_BLUE if config.our_team == "blue" else codecs.TEAM_YELLOW)
@@ -128,6 +131,7 @@ class Relay:
             sub.setsockopt(zmq.SUBSCRIBE, b"commands")
             sub.setsockopt(zmq.SUBSCRIBE, b"sim")
             sub.setsockopt(zmq.SUBSCRIBE, b"referee-out")
+            sub.setsockopt(zmq.SUBSCRIBE, b"estop")
             sub.bind(cfg.sub_endpoint)
             self.sub_address = _endpoint(sub)
             compat_sub: zmq.asyncio.Socket | None = None
@@ -306,10 +310,18 @@ class Relay:
         if topic == b"referee-out":
             self._handle_referee_out(body)
             return
+        if topic == b"estop":
+            self._handle_estop(body, now)
+            return
         if topic != b"commands":
             self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
             return
         counter = self.streams["commands"]
+        if self.estop_latched:
+            # latched: whatever arrives, every robot gets zero until an explicit release
+            counter.packet(len(body), now)
+            self.table.stop_all(now)
+            return
         cset = touchline_pb2.RobotCommandSet()
         try:
             cset.ParseFromString(body)
@@ -346,6 +358,29 @@ class Relay:
             self._wake_output()
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
+
+    def _handle_estop(self, body: bytes, now: float) -> None:
+        msg = touchline_pb2.EmergencyStop()
+        try:
+            msg.ParseFromString(body)
+        except DecodeError as exc:
+            self._command_error("commands", f"EmergencyStop does not parse: {exc}",
+                                streams.wire_problem(body))
+            return
+        if msg.action == touchline_pb2.EmergencyStop.PRESS:
+            if not self.estop_latched:
+                log.warning("emergency stop latched (by %s): zeros to every robot until an "
+                            "explicit release", msg.by or "?")
+            self.estop_latched, self.estop_by = True, msg.by
+            self.table.stop_all(now)
+            self._wake_output()
+        elif msg.action == touchline_pb2.EmergencyStop.RELEASE:
+            if self.estop_latched:
+                log.warning("emergency stop released (by %s)", msg.by or "?")
+            self.estop_latched, self.estop_by = False, ""
+        else:
+            self._command_error("commands", f"EmergencyStop with action {msg.action}",
+                                "bad command")
 
     def _command_error(self, stream: str, reason: str, kind: str = "rejected") -> None:
         self.streams[stream].error(kind, reason)
@@ -557,6 +592,8 @@ class Relay:
             output_rate_hz=self.cycles.rate_hz(t),
             command_latency_ms=latency,
             stale_stops=self.table.stale_stops,
+            estop_latched=self.estop_latched,
+            estop_by=self.estop_by,
         )
 
     async def _stats_loop(self) -> None:

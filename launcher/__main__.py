@@ -103,6 +103,8 @@ def main() -> int:
         print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
         if own_state_dir is not None:
             print(f"TOUCHLINE_STATE_DIR {own_state_dir}", flush=True)  # noqa: T201
+        pids = {c.name: c.proc.pid for c in sup.children if c.proc is not None}
+        print(f"TOUCHLINE_PIDS {json.dumps(pids)}", flush=True)  # noqa: T201
         print(f"TOUCHLINE_READY {url}", flush=True)  # noqa: T201
     else:
         log.error("backend did not answer on %s within 30 s", url)

@@ -124,10 +124,17 @@ test("emergency stop (key E) stops every robot; Release lets them go", async ({ 
     await page.keyboard.press("e");
     await expect(page.getByTestId("estop-button")).toHaveAttribute("data-active", "true");
     await expect.poll(() => maxSpeed(page), { timeout: 5_000, intervals: [200] }).toBeLessThan(60);
+    // releasing asks first: "Keep stopped" keeps it, "Release" releases it
     await page.getByTestId("estop-button").click();
+    await expect(page.getByTestId("estop-release-dialog")).toBeVisible();
+    await page.getByTestId("estop-release-cancel").click();
+    await expect(page.getByTestId("estop-release-dialog")).toHaveCount(0);
+    await expect(page.getByTestId("estop-button")).toHaveAttribute("data-active", "true");
+    await page.getByTestId("estop-button").click();
+    await page.getByTestId("estop-release-confirm").click();
     await expect(page.getByTestId("estop-button")).toHaveAttribute("data-active", "false");
   } finally {
-    await page.request.post("/api/estop", { data: { active: false } });
+    await page.request.post("/api/estop", { data: { active: false, confirm: true } });
   }
   expect((await world(page)).estop).toBe(false);
 });

@@ -34,9 +34,11 @@ export async function clearTarget(robot: RobotKey): Promise<void> {
   }
 }
 
+/** Press the emergency stop (`true`), or release it (`false`): a release is only ever sent
+ * after the operator confirmed it in the page's dialog. */
 export async function setEstop(active: boolean): Promise<void> {
   try {
-    const reply = await postEstop(active);
+    const reply = await postEstop(active, !active);
     // Reflect the answer at once; the next world message confirms it.
     const world = appStore.getState().world;
     if (world && typeof reply?.estop === "boolean" && world.estop !== reply.estop) {

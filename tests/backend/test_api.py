@@ -90,10 +90,48 @@ def test_nan_and_infinity_are_rejected_cleanly(client, raw: str) -> None:  # typ
 
 def test_estop_is_reported_in_the_world(client) -> None:  # type: ignore[no-untyped-def]
     c, _ = client
-    assert c.post("/api/estop", json={"active": True}).json() == {"estop": True}
+    assert c.post("/api/estop", json={"active": True}).json()["estop"] is True
     assert c.get("/api/world").json()["estop"] is True
-    c.post("/api/estop", json={"active": False})
+    c.post("/api/estop", json={"active": False, "confirm": True})
     assert c.get("/api/world").json()["estop"] is False
+
+
+def test_estop_release_must_be_confirmed_and_the_stop_survives_a_restart(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The defect: the stop lived only in memory, so a restarted backend (the launcher
+    restarts it after a crash) was released without anyone pressing anything."""
+    def app() -> tuple[TestClient, Station]:
+        settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
+                            relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+                            state_dir=tmp_path / "state", allowed_hosts=["testserver"])
+        st = Station(settings)
+        return TestClient(create_app(settings, st)), st
+
+    c, _ = app()
+    with c:
+        assert c.post("/api/estop", json={"active": True}).status_code == 200
+    c, _ = app()  # a fresh backend on the same state folder
+    with c:
+        assert c.get("/api/world").json()["estop"] is True
+        info = c.get("/api/estop").json()
+        assert info["active"] is True and info["by"].startswith("operator at ")
+        with c.websocket_connect("/api/ws") as ws:  # every page is told at once
+            assert json.loads(ws.receive_text())["world"]["estop"] is True
+        r = c.post("/api/estop", json={"active": False})
+        assert r.status_code == 409 and "confirm" in r.json()["detail"]
+        assert c.get("/api/world").json()["estop"] is True
+        r = c.post("/api/estop", json={"active": False, "confirm": True, "reason": "field clear"})
+        assert r.status_code == 200 and r.json()["estop"] is False
+    c, _ = app()
+    with c:
+        assert c.get("/api/world").json()["estop"] is False
+
+
+def test_an_unreadable_estop_file_is_a_pressed_stop(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from backend.estop import EstopLatch
+
+    (tmp_path / "estop.json").write_text("{not json")
+    latch = EstopLatch(tmp_path)
+    assert latch.active and "not readable" in latch.warning
 
 
 def test_health_lists_processors_and_topics(client) -> None:  # type: ignore[no-untyped-def]

@@ -27,6 +27,7 @@ class StationHandle:
     url: str
     ports: dict[str, Any]
     log: list[str]
+    pids: dict[str, int]
 
     def get(self, path: str) -> Any:
         r = httpx.get(self.url + path, timeout=5.0)
@@ -53,6 +54,8 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
             lines.append(line.rstrip())
             if line.startswith("TOUCHLINE_PORTS "):
                 info["ports"] = json.loads(line.split(" ", 1)[1])
+            if line.startswith("TOUCHLINE_PIDS "):
+                info["pids"] = json.loads(line.split(" ", 1)[1])
             if line.startswith("TOUCHLINE_STATE_DIR "):
                 info["state_dir"] = line.split(" ", 1)[1].strip()
             if line.startswith("TOUCHLINE_READY "):
@@ -64,7 +67,7 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
         proc.kill()
         raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
     try:
-        yield StationHandle(info["url"], info["ports"], lines)
+        yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}))
     finally:
         proc.send_signal(signal.SIGTERM)
         try:

@@ -167,7 +167,7 @@ def test_emergency_stop_stops_every_robot(station: StationHandle) -> None:
         wait_until(lambda: _all_blue_still(station), 5, what="all robots stopped")
         assert station.get("/api/world")["estop"] is True
     finally:
-        httpx.post(station.url + "/api/estop", json={"active": False})
+        httpx.post(station.url + "/api/estop", json={"active": False, "confirm": True})
 
 
 def test_internal_referee_halt_travels_as_real_multicast_and_stops_robots(

@@ -487,3 +487,40 @@ async def test_datagram_errors_are_counted_by_reason_and_published() -> None:
             if by.get("vision", {}).get("oversized") == 1 and by.get("referee"):
                 break
         assert by["referee"] == {"truncated": 1}
+
+
+async def test_the_estop_is_latched_in_the_relay_until_an_explicit_release() -> None:
+    async with running_relay() as h:
+        pub = await connect_commands(h)
+        go = command_set(touchline_pb2.RobotCommand(team=BLUE, id=1, forward_mps=1.0))
+
+        def speed(data: bytes) -> float:
+            lv = decode_rc(data).robot_commands[0].move_command.local_velocity
+            return abs(lv.forward)
+        await pub.send_multipart(go)
+        data, _ = await recv_udp(h.sim_blue)
+        assert speed(data) > 0
+        press = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.PRESS, by="t")
+        await pub.send_multipart([b"estop", press.SerializeToString()])
+        await wait_for(lambda: h.relay.estop_latched, what="latched")
+        assert h.relay.stats().estop_latched and h.relay.stats().estop_by == "t"
+        # whatever arrives now, robot 1 gets zeros
+        for _ in range(5):
+            await pub.send_multipart(go)
+            await asyncio.sleep(0.02)
+        drain_udp(h.sim_blue)
+        for _ in range(5):
+            data, _ = await recv_udp(h.sim_blue)
+            assert speed(data) == 0
+        release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
+        await pub.send_multipart([b"estop", release.SerializeToString()])
+        await wait_for(lambda: not h.relay.estop_latched, what="released")
+        await pub.send_multipart(go)
+
+        async def moving() -> bool:
+            data, _ = await recv_udp(h.sim_blue)
+            return speed(data) > 0
+        deadline = time.monotonic() + 3
+        while not await moving():
+            assert time.monotonic() < deadline, "no motion after the release"
+            await pub.send_multipart(go)

@@ -99,8 +99,10 @@ export function deleteTarget(team: Team, id: number): Promise<unknown> {
   return request<unknown>("DELETE", `/api/robots/${team}/${id}/target`);
 }
 
-export function postEstop(active: boolean): Promise<{ estop: boolean }> {
-  return request<{ estop: boolean }>("POST", "/api/estop", { active });
+/** Press (one request) or release the emergency stop; the station refuses a release that is
+ * not confirmed (409), so the page asks the operator first (`confirm`). */
+export function postEstop(active: boolean, confirm = false): Promise<{ estop: boolean }> {
+  return request<{ estop: boolean }>("POST", "/api/estop", active ? { active } : { active, confirm });
 }
 
 // ---- parameters and presets ----

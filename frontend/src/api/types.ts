@@ -176,6 +176,8 @@ export interface World {
   cameras: RawCamera[];
   referee: Referee | null;
   estop: boolean;
+  /** the latched emergency stop: when and by whom; relay_latched from the relay's stats */
+  estop_info?: { active: boolean; since: number; by: string; relay_latched: boolean | null };
   /** Not in docs/api.md yet: why the station holds every robot ("emergency stop", "HALT", "no vision"), or "". */
   halt_reason?: string;
   /** The strategy's view of the game (absent before the strategy runs). */

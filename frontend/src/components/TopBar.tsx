@@ -1,3 +1,4 @@
+import { useState } from "react";
 import { setEstop } from "../actions";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
@@ -114,18 +115,52 @@ function ViewOptions() {
 
 function EstopButton() {
   const estop = useAppState((s) => s.world?.estop ?? false);
+  const info = useAppState((s) => s.world?.estop_info ?? null);
+  const [confirming, setConfirming] = useState(false);
+  // pressing is one click; releasing asks first (robots may start at once)
+  const since = info && info.active && info.since > 0 ? new Date(info.since * 1000).toLocaleTimeString() : "";
   return (
-    <button
-      type="button"
-      className={`estop ${estop ? "estop-active" : ""}`}
-      data-testid="estop-button"
-      data-active={estop ? "true" : "false"}
-      aria-pressed={estop}
-      onClick={() => void setEstop(!estop)}
-      title={estop ? "Release the emergency stop" : "Stop every robot now"}
-    >
-      {estop ? "Release" : "EMERGENCY STOP"}
-    </button>
+    <>
+      <button
+        type="button"
+        className={`estop ${estop ? "estop-active" : ""}`}
+        data-testid="estop-button"
+        data-active={estop ? "true" : "false"}
+        aria-pressed={estop}
+        onClick={() => (estop ? setConfirming(true) : void setEstop(true))}
+        title={estop ? `Emergency stop active${since ? ` since ${since}` : ""}${info?.by ? ` (${info.by})` : ""}: click to release` : "Stop every robot now"}
+      >
+        {estop ? "Release" : "EMERGENCY STOP"}
+      </button>
+      {confirming && estop && (
+        <div className="overlay" role="dialog" aria-modal="true" aria-label="Release the emergency stop" data-testid="estop-release-dialog">
+          <div className="overlay-box">
+            <h2>Release the emergency stop?</h2>
+            <p>
+              The robots may start moving at once, under the strategy and any operator targets.
+              {since ? ` Pressed at ${since}` : ""}
+              {info?.by ? ` by ${info.by}.` : since ? "." : ""}
+            </p>
+            <div className="row">
+              <button type="button" className="btn" data-testid="estop-release-cancel" autoFocus onClick={() => setConfirming(false)}>
+                Keep stopped
+              </button>
+              <button
+                type="button"
+                className="btn btn-danger"
+                data-testid="estop-release-confirm"
+                onClick={() => {
+                  setConfirming(false);
+                  void setEstop(false);
+                }}
+              >
+                Release
+              </button>
+            </div>
+          </div>
+        </div>
+      )}
+    </>
   );
 }
 

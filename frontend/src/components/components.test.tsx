@@ -1,6 +1,6 @@
 // @vitest-environment jsdom
 import { act } from "react";
-import { describe, expect, it } from "vitest";
+import { describe, expect, it, vi } from "vitest";
 import { robot } from "../field/testRobots";
 import { appStore, initialAppState } from "../store/appStore";
 import { health, world } from "../ws/fixtures";
@@ -92,5 +92,31 @@ describe("ErrorsByReason", () => {
     expect(q("health-error-vision-truncated")?.textContent).toBe("visiontruncated2");
     expect(q("health-error-vision-time-out-of-range")?.getAttribute("title")).toBe("time out of range: camera 0");
     expect(q("health-error-relay.referee-not-protobuf")?.textContent).toContain("1");
+  });
+});
+
+describe("Emergency stop release", () => {
+  it("asks before releasing, sends the confirmation, and presses in one click", async () => {
+    const fetchMock = vi.fn(async () => new Response('{"estop": false}'));
+    vi.stubGlobal("fetch", fetchMock);
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ world: world(1, { estop: true }) }));
+    act(() => (q("estop-button") as HTMLButtonElement).click());
+    expect(q("estop-release-dialog")).not.toBeNull();
+    expect(fetchMock).not.toHaveBeenCalled();
+    act(() => (q("estop-release-cancel") as HTMLButtonElement).click());
+    expect(q("estop-release-dialog")).toBeNull();
+    expect(fetchMock).not.toHaveBeenCalled();
+    act(() => (q("estop-button") as HTMLButtonElement).click());
+    await act(async () => (q("estop-release-confirm") as HTMLButtonElement).click());
+    expect(fetchMock).toHaveBeenCalledTimes(1);
+    const [, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
+    expect(JSON.parse(String(init.body))).toEqual({ active: false, confirm: true });
+    // pressing: no dialog, one request
+    act(() => appStore.setState({ world: world(1, { estop: false }) }));
+    await act(async () => (q("estop-button") as HTMLButtonElement).click());
+    expect(q("estop-release-dialog")).toBeNull();
+    const [, press] = fetchMock.mock.calls[1] as unknown as [string, RequestInit];
+    expect(JSON.parse(String(press.body))).toEqual({ active: true });
   });
 });

@@ -1,0 +1,64 @@
+"""The emergency stop, latched: it survives a backend restart (persisted in the state folder,
+written atomically) and is latched in the relay too (``EmergencyStop`` on ZeroMQ), so a
+restarting backend cannot drive until an operator releases it. Pressing is one click; a
+release is an explicit, confirmed action, logged with who released it."""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from .params.store import atomic_write_json
+
+log = logging.getLogger("touchline.estop")
+
+
+@dataclass(frozen=True)
+class EstopState:
+    active: bool = False
+    since: float = 0.0  # Unix s of the last press or release
+    by: str = ""  # who pressed (or released) it
+
+
+class EstopLatch:
+    """The latched state and its file (``estop.json``); no file: released."""
+
+    def __init__(self, state_dir: Path | None) -> None:
+        self.file = None if state_dir is None else state_dir / "estop.json"
+        self.state = EstopState()
+        self.warning = ""
+        if self.file is not None and self.file.exists():
+            try:
+                data: Any = json.loads(self.file.read_text())
+                self.state = EstopState(active=bool(data["active"]),
+                                        since=float(data.get("since", 0.0)),
+                                        by=str(data.get("by", "")))
+            except (ValueError, KeyError, TypeError, OSError) as exc:
+                # an unreadable latch is a pressed latch: the safe side
+                self.state = EstopState(True, time.time(), "estop.json unreadable")
+                self.warning = (f"estop.json is not readable ({exc}): the emergency stop is "
+                                f"active until an operator releases it")
+                log.error("%s", self.warning)
+        if self.state.active:
+            log.warning("emergency stop ACTIVE (latched since %s by %s): the robots stay "
+                        "stopped until an operator releases it",
+                        time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(self.state.since)),
+                        self.state.by or "?")
+
+    @property
+    def active(self) -> bool:
+        return self.state.active
+
+    def set(self, active: bool, by: str) -> EstopState:
+        self.state = EstopState(active, time.time(), by)
+        if self.file is not None:
+            try:
+                atomic_write_json(self.file, asdict(self.state))
+            except OSError as exc:  # the stop itself holds in memory and in the relay
+                log.error("emergency stop state not persisted: %s", exc)
+        self.warning = ""
+        return self.state

@@ -1,0 +1,123 @@
+"""The latched emergency stop through the real processes (launcher, relay, backend; a test
+program is the camera and the simulator): pressed, it survives a backend crash and the
+launcher's restart, the relay keeps every robot at zero throughout (it is latched there too),
+the new backend says "e-stop active" from its first answer, a release without confirmation is
+refused, and only a confirmed release drives again."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import socket
+import threading
+import time
+from collections.abc import Iterator
+
+import httpx
+import pytest
+
+from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
+
+from .conftest import StationHandle, launched, wait_until
+from .test_hostile_vision import Camera
+
+
+@pytest.fixture(scope="module")
+def bare() -> Iterator[StationHandle]:
+    with launched("--sim", "none") as st:
+        yield st
+
+
+class Simulator:
+    """Records every command datagram for blue robots: (arrival, id, speed)."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", port))
+        self.sock.settimeout(0.05)
+        self.log: list[tuple[float, int, float]] = []
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        end = time.monotonic() + 180  # bounded
+        while not self.stop.is_set() and time.monotonic() < end:
+            try:
+                data = self.sock.recv(65536)
+            except TimeoutError:
+                continue
+            now = time.monotonic()
+            for c in RobotControl.FromString(data).robot_commands:
+                lv = c.move_command.local_velocity
+                self.log.append((now, c.id, math.hypot(lv.forward, lv.left) + abs(lv.angular)))
+
+    def moving_since(self, t: float, rid: int = 0) -> bool:
+        return any(ts >= t and i == rid and s > 0.05 for ts, i, s in list(self.log))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
+        self.sock.close()
+
+
+def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: ignore[type-arg]
+    return httpx.post(st.url + path, json=body, timeout=5)
+
+
+def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
+        bare: StationHandle) -> None:
+    p = bare.ports
+    cam = Camera(p["vision_group"], p["vision"])
+    threading.Thread(target=cam.run, daemon=True).start()
+    sim = Simulator(p["sim_blue"])
+    try:
+        wait_until(lambda: any(r["id"] == 0 for r in bare.get("/api/world")["robots"]), 20,
+                   what="blue 0 seen")
+        t0 = time.monotonic()
+        assert _post(bare, "/api/robots/blue/0/target", {"x": 3000, "y": 0}).status_code == 200
+        wait_until(lambda: sim.moving_since(t0), 10, what="blue 0 driven before the stop")
+
+        assert _post(bare, "/api/estop", {"active": True}).status_code == 200
+        t_press = time.monotonic()
+        wait_until(lambda: bare.get("/api/health")["relay"]["estop_latched"], 5,
+                   what="the relay latched")
+        # from 0.2 s after the press on, nothing may drive blue 0, whatever happens
+        t_quiet = t_press + 0.2
+
+        old_pid = bare.pids["backend"]
+        os.kill(old_pid, signal.SIGKILL)  # a crash: no last stop, no goodbye
+
+        def restarted() -> dict | None:  # type: ignore[type-arg]
+            try:
+                h = httpx.get(bare.url + "/api/world", timeout=1).json()
+            except httpx.HTTPError:
+                return None
+            return h if h.get("estop_info") else None
+        w = wait_until(restarted, 30, what="the launcher's restarted backend")
+        assert w["estop"] is True, "a restarted backend must come up with the stop active"
+        assert w["estop_info"]["by"].startswith("operator at")
+        assert any("backend exited" in ln and "restarting" in ln for ln in bare.log)
+
+        # an operator (or a stale page) tries to drive: nothing moves
+        assert _post(bare, "/api/robots/blue/0/target", {"x": 3000, "y": 0}).status_code == 200
+        n = cam.frames
+        wait_until(lambda: cam.frames >= n + 60, 5, what="a second of frames")
+        r = _post(bare, "/api/estop", {"active": False})
+        assert r.status_code == 409
+        n = cam.frames
+        wait_until(lambda: cam.frames >= n + 30, 5, what="half a second of frames")
+        assert not sim.moving_since(t_quiet), [e for e in sim.log if e[0] >= t_quiet and e[2]]
+        assert bare.get("/api/world")["estop"] is True
+
+        t_release = time.monotonic()
+        r = _post(bare, "/api/estop", {"active": False, "confirm": True, "reason": "test"})
+        assert r.status_code == 200 and r.json()["estop"] is False
+        wait_until(lambda: sim.moving_since(t_release), 10, what="driving after the release")
+        wait_until(lambda: not bare.get("/api/health")["relay"]["estop_latched"], 5,
+                   what="the relay released")
+    finally:
+        cam.stop.set()
+        sim.close()
+        httpx.delete(bare.url + "/api/robots/blue/0/target", headers={"X-Touchline": "1"})
