@@ -120,15 +120,17 @@ test.describe("strategy", () => {
     const info = await (await page.request.get("/api/strategy")).json() as { plays: { name: string; description: string }[] };
     await expect(page.getByTestId("play-description")).toHaveText(info.plays.find((p) => p.name === "match")!.description);
 
-    let keeper: Robot | undefined;
-    await expect.poll(async () => {
-      keeper = ours(await world(page)).find((r) => r.role === "goalkeeper");
-      return keeper !== undefined;
-    }, { timeout: 15_000 }).toBe(true);
-    const row = page.getByTestId(`robot-row-${keeper!.team}-${keeper!.id}`);
-    await row.click();
-    await expect(page.getByTestId("robot-role-detail")).toHaveText("Goalkeeper (GK)");
-    await expect(row.getByTestId("robot-role")).toHaveText("GK");
+    // Without a referee keeper id the goalkeeper slot goes by cost: it can move to another
+    // robot between reading the world and the click. Select the keeper as it is now, again if
+    // it moved meanwhile; the panel must show the selected robot's role.
+    await expect(async () => {
+      const keeper: Robot | undefined = ours(await world(page)).find((r) => r.role === "goalkeeper");
+      expect(keeper).toBeDefined();
+      const row = page.getByTestId(`robot-row-${keeper!.team}-${keeper!.id}`);
+      await row.click();
+      await expect(page.getByTestId("robot-role-detail")).toHaveText("Goalkeeper (GK)", { timeout: 2_000 });
+      await expect(row.getByTestId("robot-role")).toHaveText("GK", { timeout: 1_000 });
+    }).toPass({ timeout: 20_000 });
   });
 
   test("the paths layer toggle hides and shows the planned paths", async ({ page }) => {
