@@ -8,11 +8,15 @@ many records it missed when it fell more than a ring behind.
 from __future__ import annotations
 
 import asyncio
+import os
 import time
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+if TYPE_CHECKING:
+    from .topics import TopicSpec
 
 T = TypeVar("T")
 
@@ -27,10 +31,11 @@ class Record(Generic[T]):
 class Topic(Generic[T]):
     """A bounded queue of records plus the latest value and a change notification."""
 
-    def __init__(self, name: str, capacity: int) -> None:
+    def __init__(self, name: str, capacity: int, check: type[Any] | None = None) -> None:
         if capacity < 1:
             raise ValueError(f"topic {name!r}: capacity must be >= 1, got {capacity}")
         self.name = name
+        self._check = check  # with DataBus(check_types=True): every record's type
         self._ring: deque[Record[T]] = deque(maxlen=capacity)
         self._seq = 0
         self._waiters: list[asyncio.Event] = []
@@ -54,6 +59,9 @@ class Topic(Generic[T]):
         return len(self._ring)
 
     def write(self, value: T) -> Record[T]:
+        if self._check is not None and not isinstance(value, self._check):
+            raise TypeError(f"topic {self.name!r} carries {self._check.__name__}, "
+                            f"not {type(value).__name__}")
         self._seq += 1
         rec = Record(self._seq, time.monotonic(), value)
         self._ring.append(rec)
@@ -125,24 +133,27 @@ class Reader(Generic[T]):
 
 
 class DataBus:
-    """The registry of topics. Topic sizes come from configuration."""
+    """The registry of topics, each declared once in ``backend.topics``. Capacities come from
+    the declaration unless ``sizes`` (the ``bus`` parameter group) sets one.
 
-    def __init__(self, sizes: dict[str, int] | None = None, default_size: int = 30) -> None:
-        self._topics: dict[str, Topic[object]] = {}
+    ``check_types``: every write is checked against the topic's declared type (default: the
+    environment's ``TOUCHLINE_CHECK_TOPICS=1``, which the test suite sets)."""
+
+    def __init__(self, sizes: dict[str, int] | None = None,
+                 check_types: bool | None = None) -> None:
+        self._topics: dict[str, Topic[Any]] = {}
         self._sizes = dict(sizes or {})
-        self._default = default_size
+        self.check_types = (os.environ.get("TOUCHLINE_CHECK_TOPICS") == "1"
+                            if check_types is None else check_types)
 
-    def topic(self, name: str, capacity: int | None = None) -> Topic[object]:
-        t = self._topics.get(name)
+    def of(self, spec: TopicSpec[T]) -> Topic[T]:
+        """The topic declared by ``spec`` (created on first use)."""
+        t = self._topics.get(spec.name)
         if t is None:
-            cap = self._sizes.get(name, capacity if capacity is not None else self._default)
-            t = Topic[object](name, cap)
-            self._topics[name] = t
+            t = Topic[T](spec.name, self._sizes.get(spec.name, spec.capacity),
+                         spec.type if self.check_types else None)
+            self._topics[spec.name] = t
         return t
 
-    def typed(self, name: str, _type: type[T], capacity: int | None = None) -> Topic[T]:
-        """The topic ``name``, typed for the caller (the bus stores objects)."""
-        return self.topic(name, capacity)  # type: ignore[return-value]
-
-    def topics(self) -> list[Topic[object]]:
+    def topics(self) -> list[Topic[Any]]:
         return list(self._topics.values())

@@ -31,19 +31,3 @@ class Settings(BaseModel):
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )
-    topic_sizes: dict[str, int] = Field(
-        default_factory=lambda: {
-            "vision-packets": 64,
-            "referee-packets": 30,
-            "vision-detections": 64,
-            "geometry": 4,
-            "referee": 30,
-            "world": 30,
-            "operator-targets": 30,
-            "targets": 10,
-            "robot-commands": 20,
-            "sim-commands": 20,
-            "relay-stats": 10,
-            "estop": 10,
-        }
-    )

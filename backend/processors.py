@@ -9,7 +9,6 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -26,12 +25,14 @@ from sslpb import touchline_pb2 as tl
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
+from . import topics
 from .bus import DataBus, Reader
 from .control.goto import LocalVelocity, Target
 from .control.motion import PHASE_NAMES, MotionBank, RobotMotionState
 from .control.params import ALGORITHMS, ControlSettings
 from .control.referee_limits import referee_limits
 from .engine import EngineError, PoolEngine
+from .messages import Command, CommandSet, TargetEntry
 from .params.model import StrategyParams
 from .processor import Every, OnTopic, Processor
 from .referee.internal import InternalReferee, RefereeCommandError
@@ -40,7 +41,7 @@ from .strategy.core import Prepared, StrategyCore
 from .world.decode import decode_detection, geometry_to_dict
 from .world.model import WorldModel
 from .world.referee import RefereeState, decode_referee
-from .world.state import CameraFrame, Team, WorldState
+from .world.state import Team
 
 log = logging.getLogger("touchline.processors")
 _badlog = RateLimitedLog(log, interval_s=10.0)
@@ -69,45 +70,6 @@ class LatencyStage:
         }
 
 
-@dataclass(frozen=True, slots=True)
-class Command:
-    team: Team
-    id: int
-    velocity: LocalVelocity
-    kick_speed_mps: float = 0.0
-    chip: bool = False
-    dribbler_rpm: float = 0.0
-
-
-@dataclass(frozen=True, slots=True)
-class CommandSet:
-    created_time_ns: int
-    source_receive_time_ns: int
-    commands: tuple[Command, ...]
-    stop_all: bool = False
-
-
-@dataclass(frozen=True, slots=True)
-class TargetEntry:
-    """Where one robot goes and what it does, as strategy (or an operator) decided."""
-
-    target: Target
-    source: str  # "operator" or "strategy"
-    role: str = ""
-    path: tuple[tuple[float, float], ...] = ()  # waypoints (mm) after the robot; last = target
-    kick_speed_mps: float = 0.0
-    chip: bool = False
-    dribbler_rpm: float = 0.0
-    max_speed_mps: float | None = None
-
-
-@dataclass(frozen=True, slots=True)
-class OperatorTarget:
-    team: Team
-    id: int
-    target: Target | None  # None: release the robot back to the strategy
-
-
 class RelayIngest(Processor):
     """Source: receives everything the relay publishes and puts it on the bus unchanged."""
 
@@ -116,9 +78,9 @@ class RelayIngest(Processor):
     def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
         super().__init__(None)
         self.sock = sock
-        self.vision_packets = bus.typed("vision-packets", tl.Envelope)
-        self.referee_packets = bus.typed("referee-packets", tl.Envelope)
-        self.relay_stats = bus.typed("relay-stats", dict)
+        self.vision_packets = bus.of(topics.VISION_PACKETS)
+        self.referee_packets = bus.of(topics.REFEREE_PACKETS)
+        self.relay_stats = bus.of(topics.RELAY_STATS)
         self.counters = {"zmq": StreamCounter("zmq")}
 
     async def wait_input(self) -> None:
@@ -206,11 +168,11 @@ class VisionIngest(Processor):
     name = "vision-ingest"
 
     def __init__(self, bus: DataBus) -> None:
-        packets = bus.typed("vision-packets", tl.Envelope)
+        packets = bus.of(topics.VISION_PACKETS)
         super().__init__(OnTopic(packets))
         self.reader = Reader(packets)
-        self.detections = bus.typed("vision-detections", CameraFrame)
-        self.geometry = bus.typed("geometry", dict)
+        self.detections = bus.of(topics.VISION_DETECTIONS)
+        self.geometry = bus.of(topics.GEOMETRY)
         self.counter = StreamCounter("vision")
         self.latency = LatencyStage()  # relay arrival -> decoded on the bus
         self._last_geometry_bytes = b""
@@ -242,10 +204,10 @@ class RefereeIngest(Processor):
     name = "referee-ingest"
 
     def __init__(self, bus: DataBus, watch: RefereeWatch | None = None) -> None:
-        packets = bus.typed("referee-packets", tl.Envelope)
+        packets = bus.of(topics.REFEREE_PACKETS)
         super().__init__(OnTopic(packets, max_wait_s=SILENCE_CHECK_S))
         self.reader = Reader(packets)
-        self.referee = bus.typed("referee", RefereeState)
+        self.referee = bus.of(topics.REFEREE)
         self.counter = StreamCounter("referee")
         self.watch = watch or RefereeWatch()
 
@@ -282,11 +244,11 @@ class WorldProcessor(Processor):
     name = "world-model"
 
     def __init__(self, bus: DataBus, model: WorldModel | None = None) -> None:
-        detections = bus.typed("vision-detections", CameraFrame)
+        detections = bus.of(topics.VISION_DETECTIONS)
         super().__init__(OnTopic(detections))
         self.reader = Reader(detections)
-        self.world = bus.typed("world", WorldState)
-        self.geometry = bus.typed("geometry", dict)
+        self.world = bus.of(topics.WORLD)
+        self.geometry = bus.of(topics.GEOMETRY)
         self._geometry_seq = -1
         self.model = model or WorldModel()
         self.latency = LatencyStage()  # relay arrival -> world written
@@ -353,11 +315,11 @@ class StrategyProcessor(Processor):
     def __init__(self, bus: DataBus, our_team: Team, params: StrategyParams | None = None,
                  hz: float = 20.0) -> None:
         super().__init__(Every(hz))
-        self.world = bus.typed("world", WorldState)
-        self.geometry = bus.typed("geometry", dict)
-        self.referee = bus.typed("referee", RefereeState)
-        self.operator = Reader(bus.typed("operator-targets", OperatorTarget))
-        self.targets = bus.typed("targets", dict)
+        self.world = bus.of(topics.WORLD)
+        self.geometry = bus.of(topics.GEOMETRY)
+        self.referee = bus.of(topics.REFEREE)
+        self.operator = Reader(bus.of(topics.OPERATOR_TARGETS))
+        self.targets = bus.of(topics.TARGETS)
         self.our_team: Team = our_team
         self.our_side_negative = True
         self.side_from_referee = True
@@ -479,13 +441,13 @@ class ControlProcessor(Processor):
 
     def __init__(self, bus: DataBus, max_wait_s: float, vision_stale_s: float,
                  settings: ControlSettings | None = None) -> None:
-        world = bus.typed("world", WorldState)
+        world = bus.of(topics.WORLD)
         super().__init__(OnTopic(world, max_wait_s=max_wait_s))
         self.world = world
-        self.targets = bus.typed("targets", dict)
-        self.referee = bus.typed("referee", RefereeState)
-        self.estop = bus.typed("estop", bool)
-        self.commands = bus.typed("robot-commands", CommandSet)
+        self.targets = bus.of(topics.TARGETS)
+        self.referee = bus.of(topics.REFEREE)
+        self.estop = bus.of(topics.ESTOP)
+        self.commands = bus.of(topics.ROBOT_COMMANDS)
         self.vision_stale_s = vision_stale_s
         self.strategy_stale_s = 0.5  # no targets for this long: the strategy is stuck, stop
         self.stop_speed_mps = 1.5
@@ -662,8 +624,8 @@ class InternalRefereeProcessor(Processor):
         self.enabled = False
         self.disabled_reason = ""
         self.last_foreign: tuple[float, str] | None = None
-        self.out = bus.typed("referee-out", bytes)
-        self.reader = Reader(bus.typed("referee", RefereeState))
+        self.out = bus.of(topics.REFEREE_OUT)
+        self.reader = Reader(bus.of(topics.REFEREE))
 
     def foreign_active(self) -> str | None:
         """The source id of another referee heard recently, if any."""
@@ -699,17 +661,17 @@ class CommandPublisher(Processor):
     name = "command-publisher"
 
     def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
-        cmds = bus.typed("robot-commands", CommandSet)
+        cmds = bus.of(topics.ROBOT_COMMANDS)
         super().__init__(OnTopic(cmds, max_wait_s=0.05))
         self.sock = sock
         self.reader = Reader(cmds)
-        self.sim_reader = Reader(bus.typed("sim-commands", bytes))
-        self.referee_out_reader = Reader(bus.typed("referee-out", bytes))
+        self.sim_reader = Reader(bus.of(topics.SIM_COMMANDS))
+        self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
         self.seq = 0
         self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
         self.sent = RateCounter()
-        self.estop = bus.typed("estop", bool)
-        self.relay_stats = bus.typed("relay-stats", dict)
+        self.estop = bus.of(topics.ESTOP)
+        self.relay_stats = bus.of(topics.RELAY_STATS)
         #: called when the relay reports a latch this backend does not have
         self.adopt_estop: Callable[[str], None] = lambda by: None
         self.estop_by: Callable[[], str] = lambda: ""

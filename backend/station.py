@@ -22,32 +22,30 @@ import zmq.asyncio
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
+from . import topics
 from .bus import DataBus
 from .config import ROOT, Settings
 from .control.goto import Target
 from .engine import NumpyEngine, OctaveEngine, PoolEngine
 from .estop import EstopLatch
+from .messages import OperatorTarget, TargetEntry
 from .params.model import PLAYS, StationParams, StrategyParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Every, OnTopic, Runner
 from .processors import (
     CommandPublisher,
-    CommandSet,
     ControlProcessor,
     InternalRefereeProcessor,
-    OperatorTarget,
     RefereeIngest,
     RelayIngest,
     StrategyProcessor,
-    TargetEntry,
     VisionIngest,
     WorldProcessor,
 )
 from .referee.internal import OPERATOR_COMMANDS, InternalReferee
 from .referee.watch import RefereeWatch
 from .strategy.plays import PLAY_INFO
-from .world.referee import RefereeState
-from .world.state import Team, WorldState
+from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
@@ -81,27 +79,27 @@ class Station:
             self.params.patch(changes)
         self.bus = DataBus(self.params.current.bus.sizes())
         # topics the API writes to
-        self.operator_targets = self.bus.typed("operator-targets", OperatorTarget)
-        self.estop_topic = self.bus.typed("estop", bool)
+        self.operator_targets = self.bus.of(topics.OPERATOR_TARGETS)
+        self.estop_topic = self.bus.of(topics.ESTOP)
         # the latched emergency stop: a persisted one is active from the first tick on
         self.estop_latch = EstopLatch(settings.state_dir)
         if self.estop_latch.active:
             self.estop_topic.write(True)
-        self.sim_commands = self.bus.typed("sim-commands", bytes)
-        self.world_topic = self.bus.typed("world", WorldState)
-        self.geometry_topic = self.bus.typed("geometry", dict)
-        self.referee_topic = self.bus.typed("referee", RefereeState)
-        self.targets_topic = self.bus.typed("targets", dict)
-        self.relay_stats = self.bus.typed("relay-stats", dict)
-        self.params_topic = self.bus.typed("params", int, capacity=4)
+        self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
+        self.world_topic = self.bus.of(topics.WORLD)
+        self.geometry_topic = self.bus.of(topics.GEOMETRY)
+        self.referee_topic = self.bus.of(topics.REFEREE)
+        self.targets_topic = self.bus.of(topics.TARGETS)
+        self.relay_stats = self.bus.of(topics.RELAY_STATS)
+        self.params_topic = self.bus.of(topics.PARAMS)
         self.referee_state = InternalReferee()
         self.referee_watch = RefereeWatch()
         self._engine_key: tuple[str, str] | None = None
         self._engine_gen = 0
         self._engine_tasks: set[asyncio.Task[None]] = set()
         self.engine_error = ""
-        for name in settings.topic_sizes:
-            self.bus.topic(name)
+        for spec in topics.ALL:  # every topic exists (and shows in health) from the start
+            self.bus.of(spec)
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
     # web traffic (JSON encoding, websocket sends) never delays control ----
@@ -236,8 +234,9 @@ class Station:
         wc.visible_timeout_s = p.world.visible_timeout_s
         wc.drop_timeout_s = p.world.drop_timeout_s
         self.world.model.configure(p.filters)
+        sized = {s.name: s for s in topics.ALL}
         for name, size in p.bus.sizes().items():
-            self.bus.topic(name).resize(size)
+            self.bus.of(sized[name]).resize(size)
         self.params_topic.write(version)
 
     # ---- the compute engine (started and replaced in the background; strategy uses it
@@ -713,4 +712,4 @@ def _stop_all_bytes() -> bytes:
     return tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True).SerializeToString()
 
 
-__all__ = ["CommandSet", "Station"]
+__all__ = ["Station"]

@@ -19,6 +19,10 @@ settings.register_profile("explore", deadline=None, print_blob=True,
                           suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
+# every Data Bus in the tests (and in the processes they start) checks each record's type
+# against its declaration in backend.topics
+os.environ["TOUCHLINE_CHECK_TOPICS"] = "1"
+
 
 # ---- suites that did not run: said loudly, and fatal under CI ------------------------------
 #

@@ -9,9 +9,10 @@ import zmq
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
+from backend import topics
 from backend.api import create_app
 from backend.config import Settings
-from backend.processors import OperatorTarget
+from backend.messages import OperatorTarget
 from backend.station import Station
 from backend.world.state import BallState, RobotState, WorldState
 
@@ -196,7 +197,7 @@ def test_params_patch_applies_live_and_reaches_every_client(client) -> None:  # 
             assert msg["values"]["processors"]["strategy_hz"] == 5
     # applied to the running processors and the bus
     assert st.strategy.trigger.hz == 5
-    assert st.bus.topic("world").capacity == 7
+    assert st.bus.of(topics.WORLD).capacity == 7
     assert c.get("/api/params").json()["values"]["bus"]["world"] == 7
 
 

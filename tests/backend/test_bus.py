@@ -1,4 +1,8 @@
+import pytest
+
+from backend import topics
 from backend.bus import DataBus, Reader, Topic
+from backend.params.model import StationParams
 
 
 def test_topic_evicts_oldest_and_keeps_latest() -> None:
@@ -41,12 +45,28 @@ def test_reader_created_late_starts_at_the_end_unless_asked() -> None:
     assert Reader(t, from_start=True).read_new() == [1]
 
 
-def test_bus_sizes_come_from_configuration() -> None:
-    bus = DataBus({"vision-detections": 30, "robot-commands": 20}, default_size=7)
-    assert bus.topic("vision-detections").capacity == 30
-    assert bus.topic("robot-commands").capacity == 20
-    assert bus.topic("other").capacity == 7
-    assert bus.topic("vision-detections") is bus.topic("vision-detections")
+def test_bus_sizes_come_from_the_declarations_unless_configured() -> None:
+    bus = DataBus({"vision-detections": 30, "robot-commands": 20})
+    assert bus.of(topics.VISION_DETECTIONS).capacity == 30
+    assert bus.of(topics.ROBOT_COMMANDS).capacity == 20
+    assert bus.of(topics.WORLD).capacity == topics.WORLD.capacity
+    assert bus.of(topics.VISION_DETECTIONS) is bus.of(topics.VISION_DETECTIONS)
+
+
+def test_every_topic_is_declared_once_with_a_type_and_a_capacity() -> None:
+    names = [s.name for s in topics.ALL]
+    assert len(names) == len(set(names))
+    assert all(isinstance(s.type, type) and s.capacity >= 1 and s.what for s in topics.ALL)
+    # every bus parameter sizes a declared topic
+    assert set(StationParams().bus.sizes()) <= set(names)
+
+
+def test_a_record_of_another_type_is_refused_when_types_are_checked() -> None:
+    checked = DataBus(check_types=True)
+    with pytest.raises(TypeError, match="topic 'world' carries WorldState, not dict"):
+        checked.of(topics.WORLD).write({"robots": []})  # type: ignore[arg-type]
+    assert checked.of(topics.WORLD).seq == 0
+    DataBus(check_types=False).of(topics.WORLD).write({"robots": []})  # type: ignore[arg-type]
 
 
 def test_resize_keeps_newest() -> None:

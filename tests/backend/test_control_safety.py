@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import math
 
+from backend import topics
 from backend.bus import DataBus
 from backend.control.goto import Target
-from backend.processors import CommandSet, ControlProcessor, TargetEntry, next_waypoint
+from backend.messages import CommandSet, TargetEntry
+from backend.processors import ControlProcessor, next_waypoint
 from backend.world.referee import RefereeState
 from backend.world.state import RobotState, WorldState
 
@@ -15,9 +17,9 @@ from backend.world.state import RobotState, WorldState
 def setup(entry: TargetEntry) -> tuple[ControlProcessor, DataBus]:
     bus = DataBus({})
     c = ControlProcessor(bus, max_wait_s=0.05, vision_stale_s=10.0)
-    bus.typed("world", WorldState).write(WorldState(
+    bus.of(topics.WORLD).write(WorldState(
         0.0, 0, None, (RobotState("blue", 1, 0.0, 0.0, 0.0),)))
-    bus.typed("targets", dict).write({("blue", 1): entry})
+    bus.of(topics.TARGETS).write({("blue", 1): entry})
     return c, bus
 
 
@@ -27,7 +29,7 @@ def referee(cmd: str) -> RefereeState:
 
 async def last(c: ControlProcessor, bus: DataBus) -> CommandSet:
     await c.tick()
-    cs = bus.typed("robot-commands", CommandSet).latest_value()
+    cs = bus.of(topics.ROBOT_COMMANDS).latest_value()
     assert cs is not None
     return cs
 
@@ -50,13 +52,13 @@ async def test_no_kick_under_stop_but_kicks_in_play_and_speed_caps_hold() -> Non
                         kick_speed_mps=5.0, max_speed_mps=0.4)
     c, bus = setup(entry)
     c.strategy_stale_s = 10.0
-    bus.typed("referee", RefereeState).write(referee("FORCE_START"))
+    bus.of(topics.REFEREE).write(referee("FORCE_START"))
     for _ in range(30):  # let the controller ramp up to its cap
         cs = await last(c, bus)
     cmd = cs.commands[0]
     assert cmd.kick_speed_mps == 5.0
     assert math.hypot(cmd.velocity.forward_mps, cmd.velocity.left_mps) <= 0.4 + 1e-9
-    bus.typed("referee", RefereeState).write(referee("STOP"))
+    bus.of(topics.REFEREE).write(referee("STOP"))
     assert (await last(c, bus)).commands[0].kick_speed_mps == 0.0
 
 
@@ -104,7 +106,7 @@ async def test_a_world_written_from_old_frames_is_stale_vision() -> None:
     c, bus = setup(entry)
     c.strategy_stale_s = 10.0
     c.vision_stale_s = 0.3
-    world = bus.typed("world", WorldState)
+    world = bus.of(topics.WORLD)
     world.write(WorldState(0.0, time.time_ns(), None, (RobotState("blue", 1, 0.0, 0.0, 0.0),)))
     moving = await last(c, bus)
     assert moving.commands[0].velocity.forward_mps > 0 and c.halt_reason == ""
@@ -124,9 +126,9 @@ async def test_control_never_commands_the_other_team_unless_the_station_allows_i
     c = ControlProcessor(bus, max_wait_s=0.05, vision_stale_s=10.0)
     c.strategy_stale_s = 10.0
     robots = (RobotState("blue", 3, 0.0, 0.0, 0.0), RobotState("yellow", 3, 0.0, 0.0, 0.0))
-    bus.typed("world", WorldState).write(WorldState(0.0, 0, None, robots))
+    bus.of(topics.WORLD).write(WorldState(0.0, 0, None, robots))
     entry = TargetEntry(Target(2000.0, 0.0, 0.0), "operator", role="operator")
-    bus.typed("targets", dict).write({("blue", 3): entry, ("yellow", 3): entry})
+    bus.of(topics.TARGETS).write({("blue", 3): entry, ("yellow", 3): entry})
     cs = await last(c, bus)
     assert [(k.team, k.id) for k in cs.commands] == [("blue", 3)]
     c.may_drive_other_team = lambda: True

@@ -31,6 +31,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from backend import topics
 from backend.config import Settings
 from backend.processors import RefereeIngest, VisionIngest, WorldProcessor
 from backend.referee.internal import InternalReferee
@@ -192,11 +193,11 @@ class Pipeline:
                           receive_time_ns=int(recv_s * 1e9), payload=data)
         bus = self.station.bus
         if stream == "vision":
-            bus.typed("vision-packets", tl.Envelope).write(env)
+            bus.of(topics.VISION_PACKETS).write(env)
             self.loop.run_until_complete(self.vision.tick())
             self.loop.run_until_complete(self.world.tick())
         else:
-            bus.typed("referee-packets", tl.Envelope).write(env)
+            bus.of(topics.REFEREE_PACKETS).write(env)
             self.loop.run_until_complete(self.referee.tick())
 
     def check(self, recv_s: float) -> None:

@@ -11,10 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from backend import topics
 from backend.bus import DataBus
 from backend.engine import NumpyEngine, OctaveEngine, PoolEngine, find_octave
+from backend.messages import TargetEntry
 from backend.params.model import StrategyParams
-from backend.processors import StrategyProcessor, TargetEntry
+from backend.processors import StrategyProcessor
 from backend.world.state import BallState, RobotState, WorldState
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -51,11 +53,11 @@ async def keeper_targets(engine: PoolEngine | None) -> list[tuple[float, float]]
     out = []
     for ball in BALLS:
         p, bus = make_processor(engine)
-        bus.typed("world", WorldState).write(world(ball))
+        bus.of(topics.WORLD).write(world(ball))
         await p.tick()  # asks the engine (never waits for it)
         await p.engine_settled()
         await p.tick()  # uses its answer
-        targets: dict[tuple[str, int], TargetEntry] = bus.typed("targets", dict).latest_value()
+        targets: dict[tuple[str, int], TargetEntry] = bus.of(topics.TARGETS).latest_value()
         keepers = [e for e in targets.values() if e.role == "goalkeeper"]
         assert len(keepers) == 1
         out.append((keepers[0].target.x, keepers[0].target.y))
@@ -90,11 +92,11 @@ async def test_a_failing_engine_falls_back_to_the_builtin_keeper(fn: str, expect
     async with NumpyEngine({"engine": "tests.backend.engine.engine_funcs"},
                            default_timeout_s=0.3) as eng:
         p, bus = make_processor(eng, fn, timeout_s=0.3)
-        bus.typed("world", WorldState).write(world(BALLS[0]))
+        bus.of(topics.WORLD).write(world(BALLS[0]))
         await p.tick()
         await p.engine_settled()
         await p.tick()  # the failure arrives: must not raise
-        targets = bus.typed("targets", dict).latest_value()
+        targets = bus.of(topics.TARGETS).latest_value()
         keeper = next(e for e in targets.values() if e.role == "goalkeeper")
         assert (keeper.target.x, keeper.target.y) == pytest.approx(builtin[0])
         assert p.engine_fallbacks == 1

@@ -1,0 +1,48 @@
+"""The messages the processors pass on the Data Bus (besides the world and referee states of
+``backend.world``): operator targets, the strategy's targets, the command sets."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .control.goto import LocalVelocity, Target
+from .world.state import Team
+
+
+@dataclass(frozen=True, slots=True)
+class Command:
+    team: Team
+    id: int
+    velocity: LocalVelocity
+    kick_speed_mps: float = 0.0
+    chip: bool = False
+    dribbler_rpm: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class CommandSet:
+    created_time_ns: int
+    source_receive_time_ns: int
+    commands: tuple[Command, ...]
+    stop_all: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class TargetEntry:
+    """Where one robot goes and what it does, as strategy (or an operator) decided."""
+
+    target: Target
+    source: str  # "operator" or "strategy"
+    role: str = ""
+    path: tuple[tuple[float, float], ...] = ()  # waypoints (mm) after the robot; last = target
+    kick_speed_mps: float = 0.0
+    chip: bool = False
+    dribbler_rpm: float = 0.0
+    max_speed_mps: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class OperatorTarget:
+    team: Team
+    id: int
+    target: Target | None  # None: release the robot back to the strategy
