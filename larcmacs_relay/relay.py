@@ -201,7 +201,10 @@ class Relay:
             for t in tasks:
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await t
-            self.last_word()
+            try:
+                self.last_word()
+            except Exception:  # the sockets are closed all the same
+                log.exception("last word failed")
             for s in udp:
                 with contextlib.suppress(Exception):
                     loop.remove_reader(s.fileno())
