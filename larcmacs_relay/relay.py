@@ -452,6 +452,9 @@ class Relay:
             counter.packet(len(body), now)
             for err in result.errors:
                 self._command_error("compat_commands", err)
+            if self.estop_latched:  # the latch holds for the seed's commands too
+                self.table.stop_all(now)
+                continue
             for c in result.commands:
                 self.table.update(c, now)
             if result.commands:
@@ -496,6 +499,9 @@ class Relay:
         due = self.table.due(now)
         if not due:
             return
+        if self.estop_latched:
+            # the latch is enforced here, where every command path meets: only zeros leave
+            due = [c.zero() for c in due]
         self._send_commands(due)
         if self._pending_latency_ns:
             sent_ns = time.time_ns()
