@@ -34,10 +34,12 @@ class EstopLatch:
         if self.file is not None and self.file.exists():
             try:
                 data: Any = json.loads(self.file.read_text())
-                self.state = EstopState(active=bool(data["active"]),
-                                        since=float(data.get("since", 0.0)),
+                active = data["active"]
+                if not isinstance(active, bool):  # null, "false", 0: not a released stop
+                    raise TypeError(f"active is {active!r}, not true or false")
+                self.state = EstopState(active=active, since=float(data.get("since", 0.0)),
                                         by=str(data.get("by", "")))
-            except (ValueError, KeyError, TypeError, OSError) as exc:
+            except (ValueError, KeyError, TypeError, AttributeError, OSError) as exc:
                 # an unreadable latch is a pressed latch: the safe side
                 self.state = EstopState(True, time.time(), "estop.json unreadable")
                 self.warning = (f"estop.json is not readable ({exc}): the emergency stop is "
@@ -55,10 +57,12 @@ class EstopLatch:
 
     def set(self, active: bool, by: str) -> EstopState:
         self.state = EstopState(active, time.time(), by)
+        self.warning = ""
         if self.file is not None:
             try:
                 atomic_write_json(self.file, asdict(self.state))
             except OSError as exc:  # the stop itself holds in memory and in the relay
-                log.error("emergency stop state not persisted: %s", exc)
-        self.warning = ""
+                self.warning = (f"emergency stop state not persisted ({exc}): a backend "
+                                f"restart would rely on the relay's latch alone")
+                log.error("%s", self.warning)
         return self.state

@@ -83,6 +83,8 @@ class Station:
         self.estop_topic = self.bus.of(topics.ESTOP)
         # the latched emergency stop: a persisted one is active from the first tick on
         self.estop_latch = EstopLatch(settings.state_dir)
+        #: monotonic time of the last press (or of start-up with a persisted stop)
+        self._estop_mono = time.monotonic()
         if self.estop_latch.active:
             self.estop_topic.write(True)
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
@@ -398,6 +400,7 @@ class Station:
         """Press (``active``) or release the emergency stop: persisted, on the bus (control
         stops every robot), and latched in or released from the relay (CommandPublisher)."""
         self.estop_latch.set(active, by)
+        self._estop_mono = time.monotonic()
         self.estop_topic.write(active)
 
     def adopt_relay_estop(self, by: str) -> None:
@@ -412,6 +415,24 @@ class Station:
         rs = self.relay_stats.latest_value()
         return {"active": self.estop, "since": s.since, "by": s.by,
                 "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
+
+    def _estop_warnings(self) -> list[str]:
+        """Health lines: an active stop (every page says so), a relay that has not latched it
+        a few seconds after the press, and a latch file that could not be read or written."""
+        out: list[str] = []
+        s = self.estop_latch.state
+        if self.estop:
+            when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
+            out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
+                       f"held at zero until an operator releases it")
+            rs = self.relay_stats.latest_value()
+            if rs is not None and time.monotonic() - rs["received_mono"] < 3.0 \
+                    and not rs.get("estop_latched") and time.monotonic() - self._estop_mono > 3.0:
+                out.append("the relay has not latched the emergency stop (the backend holds "
+                           "every robot at zero; a backend restart would rely on estop.json)")
+        if self.estop_latch.warning:
+            out.append(self.estop_latch.warning)
+        return out
 
     def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
                       vy_mps: float = 0.0) -> None:
@@ -649,7 +670,9 @@ class Station:
                                  == self.referee_state.source_identifier else "game-controller")
         out: dict[str, Any] = _finite({
             "ok": ok,
-            "warnings": [*_warnings(vision, relay, referee, world), *self.params.warnings],
+            "warnings": [*self._estop_warnings(), *_warnings(vision, relay, referee, world),
+                         *self.params.warnings],
+            "estop": self.estop_view(),
             "world": world,
             "referee": referee,
             "uptime_s": time.monotonic() - self.started_mono,

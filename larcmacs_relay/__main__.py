@@ -145,7 +145,9 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
 async def _main(cfg: RelayConfig) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    # every signal that ends the relay and can be caught: the relay stops through its
+    # shutdown path, which sends the last word (a stop to every robot); only SIGKILL cannot
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         loop.add_signal_handler(sig, stop.set)
     await run_relay(cfg, stop)
 

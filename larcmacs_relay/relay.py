@@ -201,7 +201,10 @@ class Relay:
             for t in tasks:
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await t
-            self.last_word()
+            try:
+                self.last_word()
+            except Exception:  # the sockets are closed all the same
+                log.exception("last word failed")
             for s in udp:
                 with contextlib.suppress(Exception):
                     loop.remove_reader(s.fileno())
@@ -449,6 +452,9 @@ class Relay:
             counter.packet(len(body), now)
             for err in result.errors:
                 self._command_error("compat_commands", err)
+            if self.estop_latched:  # the latch holds for the seed's commands too
+                self.table.stop_all(now)
+                continue
             for c in result.commands:
                 self.table.update(c, now)
             if result.commands:
@@ -493,6 +499,9 @@ class Relay:
         due = self.table.due(now)
         if not due:
             return
+        if self.estop_latched:
+            # the latch is enforced here, where every command path meets: only zeros leave
+            due = [c.zero() for c in due]
         self._send_commands(due)
         if self._pending_latency_ns:
             sent_ns = time.time_ns()

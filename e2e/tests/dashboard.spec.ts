@@ -130,6 +130,15 @@ test("emergency stop (key E) stops every robot; Release lets them go", async ({ 
     await page.getByTestId("estop-release-cancel").click();
     await expect(page.getByTestId("estop-release-dialog")).toHaveCount(0);
     await expect(page.getByTestId("estop-button")).toHaveAttribute("data-active", "true");
+    // the Health tab says the stop is active and latched in the relay as well
+    await page.getByTestId("tab-health").click();
+    await expect(page.getByTestId("health-estop")).toHaveAttribute("data-active", "true");
+    await expect(page.getByTestId("health-estop")).toHaveAttribute("data-relay-latched", "true", { timeout: 5_000 });
+    await expect(page.getByTestId("health-warnings")).toContainText("emergency stop active since");
+    // a release without the operator's confirmation is refused, with the reason
+    const refused = await page.request.post("/api/estop", { data: { active: false } });
+    expect(refused.status()).toBe(409);
+    expect(await refused.text()).toContain("confirm");
     await page.getByTestId("estop-button").click();
     await page.getByTestId("estop-release-confirm").click();
     await expect(page.getByTestId("estop-button")).toHaveAttribute("data-active", "false");

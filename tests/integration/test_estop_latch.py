@@ -81,7 +81,8 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
 
         assert _post(bare, "/api/estop", {"active": True}).status_code == 200
         t_press = time.monotonic()
-        wait_until(lambda: bare.get("/api/health")["relay"]["estop_latched"], 5,
+        # (health.relay is null until the backend's first relay statistics arrive)
+        wait_until(lambda: bare.get("/api/health")["estop"]["relay_latched"] is True, 5,
                    what="the relay latched")
         # from 0.2 s after the press on, nothing may drive blue 0, whatever happens
         t_quiet = t_press + 0.2
@@ -99,6 +100,13 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
         assert w["estop"] is True, "a restarted backend must come up with the stop active"
         assert w["estop_info"]["by"].startswith("operator at")
         assert any("backend exited" in ln and "restarting" in ln for ln in bare.log)
+        # every page's health says so too, and the relay's latch held through the crash
+        def relay_heard() -> dict | None:  # type: ignore[type-arg]
+            h = bare.get("/api/health")
+            return h if h["estop"]["relay_latched"] is not None else None
+        h = wait_until(relay_heard, 10, what="relay statistics in the new backend")
+        assert h["estop"]["active"] is True and h["estop"]["relay_latched"] is True
+        assert any(w.startswith("emergency stop active since") for w in h["warnings"])
 
         # an operator (or a stale page) tries to drive: nothing moves
         assert _post(bare, "/api/robots/blue/0/target", {"x": 3000, "y": 0}).status_code == 200
@@ -115,7 +123,7 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
         r = _post(bare, "/api/estop", {"active": False, "confirm": True, "reason": "test"})
         assert r.status_code == 200 and r.json()["estop"] is False
         wait_until(lambda: sim.moving_since(t_release), 10, what="driving after the release")
-        wait_until(lambda: not bare.get("/api/health")["relay"]["estop_latched"], 5,
+        wait_until(lambda: bare.get("/api/health")["estop"]["relay_latched"] is False, 5,
                    what="the relay released")
     finally:
         cam.stop.set()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import struct
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -319,3 +320,25 @@ def test_robot_box_always_13_bytes_in_range(
 def test_power_round_trip(px: int, py: int, pr: int) -> None:
     if math.hypot(px, py) <= 100:
         assert codecs.si_to_power(*codecs.power_to_si(px, py, pr)) == (px, py, pr)
+
+
+def test_validation_failures_are_classified_by_reason() -> None:
+    """The reason a refused datagram is counted under (sslnet.streams names)."""
+    from larcmacs_relay.codecs import classify, validate_referee, validate_tracker, validate_vision
+    from sslnet import streams
+
+    def kind(validate: Callable[[bytes], str | None], data: bytes) -> str:
+        reason = validate(data)
+        assert reason is not None, data
+        return classify(reason, data)
+
+    good = make_detection_wrapper(3)
+    assert kind(validate_vision, good[:-4]) == streams.TRUNCATED
+    assert kind(validate_vision, b"\xff\xfe garbage") == streams.NOT_PROTOBUF
+    assert kind(validate_vision, b"\x0a\x02\x08\x05") == streams.MISSING_FIELD
+    assert kind(validate_vision, b"") == streams.NO_CONTENT
+    ref = make_referee(Ref.HALT, 1)
+    assert kind(validate_referee, ref[:-1]) == streams.TRUNCATED
+    assert kind(validate_referee, b"\x08\x01") == streams.MISSING_FIELD
+    assert kind(validate_tracker, b"") == streams.NO_CONTENT
+    assert kind(validate_tracker, b"\x0f\x01") == streams.NOT_PROTOBUF

@@ -11,7 +11,14 @@ import zmq
 import zmq.asyncio
 
 from sslpb import ssl_gc_referee_message_pb2, ssl_simulation_robot_control_pb2
-from tests.relay.conftest import free_udp_port, recv_udp, running_relay, subscribed, wait_for
+from tests.relay.conftest import (
+    drain_udp,
+    free_udp_port,
+    recv_udp,
+    running_relay,
+    subscribed,
+    wait_for,
+)
 from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
 
 Ref = ssl_gc_referee_message_pb2.Referee
@@ -89,5 +96,81 @@ async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
             await bridge.send(m.tobytes())
             packets = counter.packets
             await wait_for(lambda: counter.packets > packets, what="relay still alive")
+    finally:
+        ctx.destroy(linger=0)
+
+
+async def test_the_estop_latch_holds_for_the_seed_commands_and_any_path() -> None:
+    """The latch is the relay's, whatever path a command takes: the seed's matrices (which
+    came in through their own socket and drove through a latched stop) get zeros, and the
+    output cycle zeroes anything due while latched."""
+    from larcmacs_relay.codecs import TEAM_BLUE, Command
+    from sslpb import touchline_pb2
+
+    ctx = zmq.asyncio.Context()
+    bridge = ctx.socket(zmq.PUB)
+    bridge.setsockopt(zmq.LINGER, 0)
+    port = free_udp_port()
+    bridge.bind(f"tcp://127.0.0.1:{port}")
+    m = np.zeros((32, 13), dtype=np.float64)
+    m[3, :12] = [1, 40, -20, 25, 0, 1, 0, 8, 1, 3, 1, 0]
+
+    def speeds(data: bytes) -> dict[int, float]:
+        rc = ssl_simulation_robot_control_pb2.RobotControl.FromString(data).robot_commands
+        return {c.id: abs(c.move_command.local_velocity.forward) + c.kick_speed
+                + c.dribbler_speed for c in rc}
+    try:
+        async with running_relay(compat=True, compat_commands=f"tcp://127.0.0.1:{port}") as h:
+            counter = h.relay.streams["compat_commands"]
+            deadline = time.monotonic() + 3.0
+            while counter.packets == 0:  # slow joiner: repeat like the bridge does each cycle
+                assert time.monotonic() < deadline, "relay never received the matrix"
+                await bridge.send(m.tobytes())
+                await asyncio.sleep(0.02)
+            while True:  # the seed drives robot 3
+                assert time.monotonic() < deadline, "the seed's matrix never drove robot 3"
+                await bridge.send(m.tobytes())
+                data, _ = await recv_udp(h.sim_blue)
+                if speeds(data).get(3, 0.0) > 0:
+                    break
+            pub = h.publisher()
+            press = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.PRESS, by="t")
+            deadline = time.monotonic() + 3.0
+            while not h.relay.estop_latched:
+                assert time.monotonic() < deadline, "the relay never latched"
+                await pub.send_multipart([b"estop", press.SerializeToString()])
+                await asyncio.sleep(0.02)
+            # the seed keeps sending its matrix: robot 3 gets zeros only
+            before = counter.packets
+            deadline = time.monotonic() + 3.0
+            while counter.packets < before + 5:
+                assert time.monotonic() < deadline, "relay never received the matrices"
+                await bridge.send(m.tobytes())
+                await asyncio.sleep(0.02)
+            drain_udp(h.sim_blue)
+            for _ in range(10):
+                await bridge.send(m.tobytes())
+                data, _ = await recv_udp(h.sim_blue)
+                assert speeds(data).get(3, 0.0) == 0.0, speeds(data)
+            # a command in the table by any other path goes out as zero while latched
+            h.relay.table.update(Command(TEAM_BLUE, 9, forward_mps=1.0, dribbler_rpm=500.0),
+                                 time.monotonic())
+            seen9 = False
+            for _ in range(10):
+                data, _ = await recv_udp(h.sim_blue)
+                got = speeds(data)
+                seen9 = seen9 or 9 in got
+                assert got.get(9, 0.0) == 0.0, got
+            assert seen9, "robot 9 never got its zero"
+            release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
+            await pub.send_multipart([b"estop", release.SerializeToString()])
+            await wait_for(lambda: not h.relay.estop_latched, what="released")
+            deadline = time.monotonic() + 3.0
+            while True:  # released: the seed's commands drive again
+                assert time.monotonic() < deadline, "no motion after the release"
+                await bridge.send(m.tobytes())
+                data, _ = await recv_udp(h.sim_blue)
+                if speeds(data).get(3, 0.0) > 0:
+                    break
     finally:
         ctx.destroy(linger=0)

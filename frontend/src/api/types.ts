@@ -168,6 +168,17 @@ export interface Referee {
   game_events?: RefereeGameEvent[];
 }
 
+/** The latched emergency stop (GET /api/estop, world.estop_info, health.estop). */
+export interface EstopInfo {
+  active: boolean;
+  /** Unix s of the last press or release (0: never) */
+  since: number;
+  /** who pressed (or released) it: "operator at <address>", "relay latch (...)" */
+  by: string;
+  /** the relay's latch from its statistics; null before any arrived */
+  relay_latched: boolean | null;
+}
+
 export interface World {
   seq: number;
   t_capture: number;
@@ -177,7 +188,7 @@ export interface World {
   referee: Referee | null;
   estop: boolean;
   /** the latched emergency stop: when and by whom; relay_latched from the relay's stats */
-  estop_info?: { active: boolean; since: number; by: string; relay_latched: boolean | null };
+  estop_info?: EstopInfo;
   /** Not in docs/api.md yet: why the station holds every robot ("emergency stop", "HALT", "no vision"), or "". */
   halt_reason?: string;
   /** The strategy's view of the game (absent before the strategy runs). */
@@ -283,6 +294,9 @@ export interface RelayHealth {
   active_robots: number;
   stale_robots: number;
   command_latency_ms: number;
+  /** the relay's own e-stop latch: only zeros leave it while true */
+  estop_latched?: boolean;
+  estop_by?: string;
 }
 
 export interface LatencyHealth {
@@ -342,6 +356,8 @@ export interface Health {
   topics: TopicHealth[];
   relay: RelayHealth | null;
   websocket_clients: number;
+  /** The latched emergency stop (absent from an older backend). */
+  estop?: EstopInfo;
 }
 
 /** Parameter values: nested groups of leaves (numbers, strings, booleans). */

@@ -223,12 +223,28 @@ export function EnginePanel({ h }: { h: Health }) {
   );
 }
 
+/** The latched emergency stop as the station and the relay report it. */
+export function EstopHealth({ h }: { h: Health }) {
+  const e = h.estop;
+  if (!e) return null;
+  const since = e.since > 0 ? new Date(e.since * 1000).toLocaleTimeString() : "";
+  const relay = e.relay_latched === null ? "relay latch unknown" : e.relay_latched ? "latched in the relay" : "not latched in the relay";
+  return (
+    <p className={e.active ? "notice" : "muted"} data-testid="health-estop" data-active={e.active ? "true" : "false"} data-relay-latched={String(e.relay_latched)}>
+      {e.active ? "Emergency stop ACTIVE" : "Emergency stop released"}
+      {since ? ` since ${since}` : ""}
+      {e.by ? ` (${e.by})` : ""} · {relay}
+    </p>
+  );
+}
+
 export function HealthPanel() {
   const h = useAppState((s) => s.health);
   if (!h) return <p className="muted">No health data yet.</p>;
   return (
     <div className="health-panel" data-testid="health-panel">
       <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
+      <EstopHealth h={h} />
       {(h.warnings ?? []).length > 0 && (
         <ul className="health-warnings" data-testid="health-warnings">
           {(h.warnings ?? []).map((w, i) => (

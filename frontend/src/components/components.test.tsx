@@ -7,7 +7,7 @@ import { health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { ErrorsByReason } from "./HealthPanel";
+import { ErrorsByReason, EstopHealth } from "./HealthPanel";
 
 import { domPerTest } from "../testing/dom";
 
@@ -118,5 +118,25 @@ describe("Emergency stop release", () => {
     expect(q("estop-release-dialog")).toBeNull();
     const [, press] = fetchMock.mock.calls[1] as unknown as [string, RequestInit];
     expect(JSON.parse(String(press.body))).toEqual({ active: true });
+  });
+});
+
+describe("EstopHealth", () => {
+  it("says whether the stop is active, since when, by whom, and whether the relay latched it", () => {
+    const h = health();
+    act(() => t.root.render(<EstopHealth h={h} />));
+    expect(q("health-estop")).toBeNull(); // an older backend says nothing
+    const since = Date.UTC(2026, 0, 1, 12, 0, 0) / 1000;
+    act(() => t.root.render(<EstopHealth h={{ ...h, estop: { active: true, since, by: "operator at 10.0.0.9", relay_latched: true } }} />));
+    const p = q("health-estop");
+    expect(p?.getAttribute("data-active")).toBe("true");
+    expect(p?.textContent).toContain("Emergency stop ACTIVE since");
+    expect(p?.textContent).toContain("(operator at 10.0.0.9)");
+    expect(p?.textContent).toContain("latched in the relay");
+    act(() => t.root.render(<EstopHealth h={{ ...h, estop: { active: true, since, by: "", relay_latched: false } }} />));
+    expect(q("health-estop")?.textContent).toContain("not latched in the relay");
+    act(() => t.root.render(<EstopHealth h={{ ...h, estop: { active: false, since: 0, by: "", relay_latched: null } }} />));
+    expect(q("health-estop")?.getAttribute("data-active")).toBe("false");
+    expect(q("health-estop")?.textContent).toBe("Emergency stop released · relay latch unknown");
   });
 });

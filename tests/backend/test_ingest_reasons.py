@@ -1,0 +1,65 @@
+"""The backend's own ingest counts refused datagrams by reason (sslnet.streams), per stream,
+with the total and the last error kept: the same names as the relay and the Health tab."""
+
+from __future__ import annotations
+
+import time
+
+from backend.bus import DataBus
+from backend.processors import RefereeIngest, StreamCounter, VisionIngest
+from sslpb import touchline_pb2 as tl
+from sslpb.ssl_gc_referee_message_pb2 import Referee as Ref
+from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
+
+
+def _env(stream: int, payload: bytes, seq: int) -> tl.Envelope:
+    return tl.Envelope(stream=stream, receive_time_ns=time.time_ns(), sequence=seq,
+                       source="127.0.0.1:1", payload=payload)
+
+
+async def test_vision_ingest_counts_each_reason() -> None:
+    bus = DataBus({})
+    ingest = VisionIngest(bus)
+    packets = bus.typed("vision-packets", tl.Envelope)
+    good = make_detection_wrapper(7)
+    payloads = [
+        good[: len(good) // 2],  # cut short
+        good[:-1],  # cut by one byte
+        b"\x07\x00 not a wrapper",  # field number 0: not the wire format
+        b"\x0a\x02\x08\x05",  # a detection without its required fields
+        good,
+    ]
+    for i, p in enumerate(payloads):
+        packets.write(_env(tl.STREAM_VISION, p, i + 1))
+    await ingest.tick()
+    c = ingest.counter
+    assert c.by_reason == {"truncated": 2, "not protobuf": 1, "missing required field": 1}
+    assert c.errors == 4 and c.packets == 5
+    assert c.last_error.startswith("missing required field: ")
+    assert ingest.detections.latest_value() is not None
+    d = c.to_dict()
+    assert d["errors_by_reason"] == {"missing required field": 1, "not protobuf": 1,
+                                     "truncated": 2}
+
+
+async def test_referee_ingest_counts_bad_strings_and_uses_the_message() -> None:
+    bus = DataBus({})
+    ingest = RefereeIngest(bus)
+    packets = bus.typed("referee-packets", tl.Envelope)
+    good = make_referee(Ref.STOP, 1)
+    packets.write(_env(tl.STREAM_REFEREE, good.replace(b"\x0a\x01x", b"\x0a\x01\xff", 1), 1))
+    packets.write(_env(tl.STREAM_REFEREE, good[:-2], 2))
+    await ingest.tick()
+    assert ingest.counter.by_reason == {"bad string": 1, "truncated": 1}
+    assert ingest.counter.errors == 2
+    assert ingest.referee.latest_value() is not None  # used all the same
+
+
+def test_the_counter_api_the_world_model_uses() -> None:
+    """Other stages count through the same API (e.g. the world model's capture-time check):
+    the total, the reason and the last error move together."""
+    c = StreamCounter("vision")
+    c.error("time out of range", "camera 1: 3600 s ahead of the receive clock")
+    c.error("truncated")
+    assert (c.errors, c.by_reason) == (2, {"time out of range": 1, "truncated": 1})
+    assert c.last_error == "truncated"
