@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import time
 
+from backend import topics
 from backend.bus import DataBus
-from backend.processors import RefereeIngest, StreamCounter, VisionIngest
+from backend.processors import RefereeIngest, VisionIngest
+from sslnet.streams import StreamCounter
 from sslpb import touchline_pb2 as tl
 from sslpb.ssl_gc_referee_message_pb2 import Referee as Ref
 from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
@@ -20,7 +22,7 @@ def _env(stream: int, payload: bytes, seq: int) -> tl.Envelope:
 async def test_vision_ingest_counts_each_reason() -> None:
     bus = DataBus({})
     ingest = VisionIngest(bus)
-    packets = bus.typed("vision-packets", tl.Envelope)
+    packets = bus.of(topics.VISION_PACKETS)
     good = make_detection_wrapper(7)
     payloads = [
         good[: len(good) // 2],  # cut short
@@ -45,7 +47,7 @@ async def test_vision_ingest_counts_each_reason() -> None:
 async def test_referee_ingest_counts_bad_strings_and_uses_the_message() -> None:
     bus = DataBus({})
     ingest = RefereeIngest(bus)
-    packets = bus.typed("referee-packets", tl.Envelope)
+    packets = bus.of(topics.REFEREE_PACKETS)
     good = make_referee(Ref.STOP, 1)
     packets.write(_env(tl.STREAM_REFEREE, good.replace(b"\x0a\x01x", b"\x0a\x01\xff", 1), 1))
     packets.write(_env(tl.STREAM_REFEREE, good[:-2], 2))
