@@ -10,11 +10,19 @@ import uvicorn
 
 from .api import create_app
 from .config import Settings
+from .security import MAX_BODY_BYTES, MAX_JSON_DEPTH
 
 
 def main() -> None:
     d = Settings()
-    p = argparse.ArgumentParser(prog="python -m backend", description=__doc__)
+    p = argparse.ArgumentParser(
+        prog="python -m backend", description=__doc__,
+        epilog="Web security (docs/api.md, Security): the Host header must be the bound "
+               "address, localhost, 127.0.0.1, ::1 or an --allow-host name (else 400); a "
+               "browser's Origin must be one of those too; POST/PUT/PATCH/DELETE need "
+               "Content-Type: application/json or X-Touchline: 1; bodies and websocket "
+               f"messages at most {MAX_BODY_BYTES / (1 << 20):g} MiB, JSON at most "
+               f"{MAX_JSON_DEPTH} levels deep.")
     p.add_argument("--host", default=d.host, help="bind address (default %(default)s)")
     p.add_argument("--port", type=int, default=d.port)
     p.add_argument("--relay-pub", default=d.relay_pub, help="relay PUB endpoint to subscribe to")
@@ -50,8 +58,9 @@ def main() -> None:
                         play="idle" if a.no_demo else a.play, set_params=a.set_params,
                         state_dir=a.state_dir)
     app = create_app(settings)
+    # the page sends nothing on the websocket: a client's message is capped like a body
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,
-                log_level=a.log_level.lower(), access_log=False)
+                ws_max_size=MAX_BODY_BYTES, log_level=a.log_level.lower(), access_log=False)
 
 
 if __name__ == "__main__":

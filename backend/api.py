@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from .config import Settings
+from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
 from .security import EdgeGuard
@@ -96,7 +97,9 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         finally:
             await asyncio.to_thread(st.stop_thread)
 
-    app = FastAPI(title="Touchline", version="0.1.0", lifespan=lifespan)
+    # every answer renders, whatever a value in it is (backend.jsonsafe): never a 500 for it
+    app = FastAPI(title="Touchline", version="0.1.0", lifespan=lifespan,
+                  default_response_class=SafeJSONResponse)
     app.state.station = st
     # host allowlist, Origin, cross-site requests and body limits, before any route
     app.add_middleware(EdgeGuard, bound_host=settings.host, allow_hosts=settings.allowed_hosts,
@@ -105,32 +108,34 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @app.exception_handler(RequestValidationError)
     async def validation_handler(_req: Request, exc: RequestValidationError) -> JSONResponse:
         # The default handler echoes the input, and a NaN input makes it fail with a 500.
-        return JSONResponse(status_code=422, content={"detail": format_errors(exc.errors())})
+        return SafeJSONResponse(status_code=422,
+                                content={"detail": format_errors(exc.errors())})
 
     @app.exception_handler(ParamError)
     async def param_error_handler(_req: Request, exc: ParamError) -> JSONResponse:
-        return JSONResponse(status_code=422, content={"detail": exc.errors})
+        return SafeJSONResponse(status_code=422, content={"detail": exc.errors})
 
     @app.exception_handler(PresetNotFound)
     async def preset_not_found_handler(_req: Request, exc: PresetNotFound) -> JSONResponse:
-        return JSONResponse(status_code=404, content={"detail": f"no preset named {exc.args[0]!r}"})
+        return SafeJSONResponse(status_code=404,
+                                content={"detail": f"no preset named {exc.args[0]!r}"})
 
     api = APIRouter(prefix="/api")
 
     @api.get("/health")
     async def health() -> JSONResponse:
-        return JSONResponse(st.health())
+        return SafeJSONResponse(st.health(), what="health")
 
     @api.get("/world")
     async def world() -> JSONResponse:
-        return JSONResponse(_finite(st.world_dict()))
+        return SafeJSONResponse(_finite(st.world_dict()), what="world")
 
     @api.get("/geometry")
     async def geometry() -> JSONResponse:
         geo = st.geometry()
         if geo is None:
             raise HTTPException(404, "no geometry packet received yet")
-        return JSONResponse(geo)
+        return SafeJSONResponse(geo, what="geometry")
 
     def _check_on_field(x: float, y: float, what: str = "point") -> None:
         geo = st.geometry()
@@ -184,14 +189,15 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         return {"team": team, "id": rid, **body.model_dump()}
 
     @api.get("/strategy")
-    async def strategy_get() -> dict[str, Any]:
+    async def strategy_get() -> JSONResponse:
         """The play, the plays to choose from (choose with PATCH /api/params
         {"strategy": {"play": name}}), the referee situation as our team sees it, roles."""
-        return await st.call(st.strategy_view)
+        return SafeJSONResponse(await st.call(st.strategy_view), what="strategy")
 
     @api.get("/referee")
-    async def referee_get() -> dict[str, Any]:
-        return {**st.referee_view(), "active": st.world_dict()["referee"]}
+    async def referee_get() -> JSONResponse:
+        return SafeJSONResponse({**st.referee_view(), "active": st.world_dict()["referee"]},
+                                what="referee")
 
     @api.post("/referee/internal/enabled", response_model=None)
     async def referee_enable(body: EnableIn) -> dict[str, Any] | JSONResponse:
@@ -373,11 +379,11 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
 
     rx = asyncio.create_task(receive())
     try:
-        await ws.send_text(json.dumps(_finite({
+        await ws.send_text(dumps(_finite({
             "type": "snapshot", "world": st.world_dict(), "geometry": st.geometry(),
             "health": st.health(),
             "params": {"version": st.params.version, "values": st.params.values()},
-        })))
+        }), "snapshot"))
         geo_seq = st.geometry_topic.seq
         params_version = st.params.version
         last_health = time.monotonic()
@@ -394,11 +400,12 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                 break
             if st.params.version != params_version:
                 params_version = st.params.version
-                await ws.send_text(json.dumps({"type": "params", "version": params_version,
-                                               "values": st.params.values()}))
+                await ws.send_text(dumps({"type": "params", "version": params_version,
+                                          "values": st.params.values()}, "params"))
             if st.geometry_topic.seq != geo_seq:
                 geo_seq = st.geometry_topic.seq
-                await ws.send_text(json.dumps({"type": "geometry", "geometry": st.geometry()}))
+                await ws.send_text(dumps({"type": "geometry", "geometry": st.geometry()},
+                                         "geometry"))
             key = st.world_version()
             if key != sent_key:
                 sent_key = key

@@ -176,6 +176,7 @@ class VisionIngest(Processor):
         self.counter = StreamCounter("vision")
         self.latency = LatencyStage()  # relay arrival -> decoded on the bus
         self._last_geometry_bytes = b""
+        self._last_geometry_bad: list[str] = []  # its names that are not UTF-8
 
     async def tick(self) -> None:
         for env in self.reader.read_new():
@@ -194,7 +195,13 @@ class VisionIngest(Processor):
                 raw = pkt.geometry.field.SerializeToString()
                 if raw != self._last_geometry_bytes:  # only a change goes on the bus
                     self._last_geometry_bytes = raw
-                    self.geometry.write(geometry_to_dict(pkt.geometry))
+                    self._last_geometry_bad = []
+                    self.geometry.write(geometry_to_dict(pkt.geometry, self._last_geometry_bad))
+                if self._last_geometry_bad:  # used all the same, counted in every packet
+                    bad = ", ".join(sorted(set(self._last_geometry_bad)))
+                    self.counter.error(streams.BAD_STRING, "not UTF-8: " + bad)
+                    _badlog.warning("vision-string", "geometry from %s: not UTF-8 (%s); "
+                                    "decoded with replacement characters", env.source, bad)
 
 
 class RefereeIngest(Processor):

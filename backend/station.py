@@ -6,7 +6,6 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import json
 import logging
 import math
 import sys
@@ -28,6 +27,7 @@ from .config import ROOT, Settings
 from .control.goto import Target
 from .engine import NumpyEngine, OctaveEngine, PoolEngine
 from .estop import EstopLatch
+from .jsonsafe import dumps
 from .messages import OperatorTarget, TargetEntry
 from .params.model import PLAYS, StationParams, StrategyParams
 from .params.store import ParamStore, deep_merge, parse_setting
@@ -600,8 +600,8 @@ class Station:
         """The world as JSON, encoded once per world update and shared by every client."""
         key = self.world_version()
         if self._world_json_cache[0] != key:
-            self._world_json_cache = (key, json.dumps({"type": "world",
-                                                       "world": _finite(self.world_dict())}))
+            self._world_json_cache = (key, dumps({"type": "world",
+                                                  "world": _finite(self.world_dict())}, "world"))
         return self._world_json_cache[1]
 
     def health_json(self, max_age_s: float = 0.25) -> str:
@@ -609,8 +609,8 @@ class Station:
         (like the world), instead of once per client."""
         now = time.monotonic()
         if now - self._health_json_cache[0] > max_age_s:
-            self._health_json_cache = (now, json.dumps({"type": "health",
-                                                        "health": self.health()}))
+            self._health_json_cache = (now, dumps({"type": "health", "health": self.health()},
+                                                  "health"))
         return self._health_json_cache[1]
 
     def geometry(self) -> dict[str, Any] | None:

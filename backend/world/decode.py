@@ -40,16 +40,16 @@ def decode_detection(frame: SSL_DetectionFrame, receive_time_ns: int) -> CameraF
     )
 
 
-def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
+def geometry_to_dict(geo: SSL_GeometryData, bad: list[str] | None = None) -> dict[str, Any]:
     """The field part of a geometry packet as the JSON the browser draws from (mm, rad).
 
-    Cleaned at the edge: names are valid UTF-8 (decoded with replacement), a line or arc with
-    a non-finite number is left out, a non-finite or non-positive radius takes its default; so
-    nothing that cannot be JSON reaches the page or the API."""
+    Cleaned at the edge: names are valid UTF-8 (decoded with replacement, and named in
+    ``bad``), a line or arc with a non-finite number is left out, a non-finite or non-positive
+    radius takes its default; so nothing that cannot be JSON reaches the page or the API."""
     f = geo.field
     lines = [
         {
-            "name": wire_str(ln.name),
+            "name": wire_str(ln.name, bad, "field line name"),
             "p1": {"x": ln.p1.x, "y": ln.p1.y},
             "p2": {"x": ln.p2.x, "y": ln.p2.y},
             "thickness": ln.thickness,
@@ -59,7 +59,7 @@ def geometry_to_dict(geo: SSL_GeometryData) -> dict[str, Any]:
     ]
     arcs = [
         {
-            "name": wire_str(a.name),
+            "name": wire_str(a.name, bad, "field arc name"),
             "center": {"x": a.center.x, "y": a.center.y},
             "radius": a.radius,
             "a1": a.a1,

@@ -443,6 +443,127 @@ def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # typ
         assert snap["geometry"]["field_length"] == 9000
 
 
+def _strict(text: str, where: str) -> Any:
+    """``text`` as strict JSON (no NaN, no lone surrogate), else the test fails."""
+    text.encode("utf-8")
+    return json.loads(text, parse_constant=lambda s: pytest.fail(f"{s} in {where}"))
+
+
+def _ws_until(ws, cond, what: str, timeout_s: float = 10.0) -> Any:  # type: ignore[no-untyped-def]
+    """Receives websocket messages until ``cond(message)`` holds (health arrives twice a
+    second, so each receive returns); every message must be strict JSON."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        msg = _strict(ws.receive_text(), "the websocket")
+        if cond(msg):
+            return msg
+    raise AssertionError(f"timed out waiting for {what} on the websocket")
+
+
+def _geometry_envelope(seq: int, **names: str) -> bytes:
+    """A geometry packet with NaN in a line and in the ball radius, and a line named after
+    each keyword; the name BADNAME is made invalid UTF-8 on the wire."""
+    from sslpb import touchline_pb2 as tl
+    from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+    pkt = SSL_WrapperPacket()
+    f = pkt.geometry.field
+    f.field_length, f.field_width, f.goal_width, f.goal_depth, f.boundary_width = \
+        9000, 6000, 1000, 180, 300
+    f.ball_radius = float("nan")
+    ln = f.field_lines.add()
+    ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = "Nan", float("nan"), 0, 1, 0, 10
+    for i, name in enumerate(names.values()):
+        ln = f.field_lines.add()
+        ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = name, 0, i, 1, i, 10
+    payload = pkt.SerializeToString().replace(b"BADNAME", b"Bad\xffame")  # same length
+    return tl.Envelope(stream=tl.STREAM_VISION, receive_time_ns=time.time_ns(), sequence=seq,
+                       source="127.0.0.1:10020", payload=payload).SerializeToString()
+
+
+def test_geometry_arriving_while_a_page_is_connected_reaches_it_clean(  # type: ignore[no-untyped-def]
+        client, relay) -> None:
+    """The websocket's geometry message (pushed when the field changes) is cleaned like
+    the snapshot: no NaN, names decoded with replacement, counted as bad strings."""
+    c, st = client
+    with c.websocket_connect("/api/ws") as ws:
+        assert _strict(ws.receive_text(), "the snapshot")["geometry"] is None
+        seq = 0
+
+        def step() -> Any:
+            nonlocal seq
+            seq += 1
+            relay.sock.send_multipart([b"vision", _geometry_envelope(seq, a="Good",
+                                                                     b="BADNAME")])
+            return st.geometry()
+        _until(step, "the geometry")
+        msg = _ws_until(ws, lambda m: m["type"] == "geometry", "the geometry message")
+    g = msg["geometry"]
+    assert [ln["name"] for ln in g["lines"]] == ["Good", "Bad\ufffdame"]
+    assert g["ball_radius"] == 21.5
+    assert _strict(c.get("/api/geometry").text, "/api/geometry") == g
+    vision = c.get("/api/health").json()["streams"]["vision"]
+    assert vision["errors_by_reason"]["bad string"] >= 1
+    assert "field line name" in vision["last_error"]
+
+
+def test_values_that_cannot_be_json_break_no_endpoint_and_no_stream(  # type: ignore[no-untyped-def]
+        client, caplog) -> None:
+    """The last line of defence (backend.jsonsafe): should a value that JSON cannot carry get
+    past the decoders (bytes, a lone surrogate, NaN, an object), every endpoint still answers
+    200 with strict JSON, an open websocket keeps streaming, and it is logged once."""
+    import dataclasses
+    import logging
+
+    from backend.world.referee import RefereeState
+
+    c, st = client
+    with c.websocket_connect("/api/ws") as ws:
+        _strict(ws.receive_text(), "the snapshot")
+        ref = RefereeState("STOP", "NORMAL_FIRST_HALF", 1, None, {"name": b"\xffblue"},
+                           {"name": "yellow\udcff"}, None, None, 0, source_identifier="gc")
+        with caplog.at_level(logging.WARNING, logger="touchline.json"):
+            st.referee_topic.write(dataclasses.replace(
+                ref, game_events=({"id": object(), "created_s": float("nan")},)))
+            st.relay_stats.write({"time_ns": 0, "received_mono": time.monotonic(),
+                                  "output_mode": b"\xfe", "streams": {}})
+            st.geometry_topic.write({"field_length": 9000, "field_width": 6000,
+                                     "boundary_width": 300, "lines": [{"name": b"\xff"}],
+                                     "ball_radius": float("inf")})
+            st.world_topic.write(_world(1))
+            got: dict[str, Any] = {}
+
+            def seen(m: dict[str, Any]) -> bool:
+                if m["type"] != "world" or m["world"]["referee"]:  # the world with the referee
+                    got.setdefault(m["type"], m)
+                return {"world", "geometry"} <= got.keys() and bool(
+                    got.get("health", {}).get("health", {}).get("relay"))
+            _ws_until(ws, seen, "world, geometry and health")
+            ref_out = got["world"]["world"]["referee"]
+            assert ref_out["blue"]["name"] == "\ufffdblue"
+            assert ref_out["yellow"]["name"] == "yellow\ufffd"
+            assert ref_out["game_events"] == [{"id": None, "created_s": None}]
+            g = got["geometry"]["geometry"]
+            assert g["lines"] == [{"name": "\ufffd"}] and g["ball_radius"] is None
+            assert got["health"]["health"]["relay"]["output_mode"] == "\ufffd"
+            for path in ("/api/world", "/api/referee", "/api/health", "/api/strategy",
+                         "/api/geometry"):
+                r = c.get(path)
+                assert r.status_code == 200, (path, r.text)
+                _strict(r.text, path)
+            for _ in range(3):
+                assert c.get("/api/world").status_code == 200
+            # the stream is still open and carries the next world
+            st.world_topic.write(_world(2))
+            _ws_until(ws, lambda m: m["type"] == "world" and len(m["world"]["robots"]) == 2,
+                      "the next world")
+    logged = [r.getMessage() for r in caplog.records if r.name == "touchline.json"]
+    # once per kind of message (world, referee, health, ...), not once per request
+    kinds = [line.split(" message:")[0] for line in logged]
+    assert len(kinds) == len(set(kinds)) and "world" in kinds, logged
+    assert any("$.world.referee.blue.name: bytes" in line for line in logged), logged
+
+
 @pytest.mark.parametrize("output,other_param,status", [
     ("robot-box", True, 422),  # never, whatever the parameter says
     ("sim", False, 422),  # a simulator, but the operator has not said so

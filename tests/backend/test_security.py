@@ -17,7 +17,7 @@ from starlette.websockets import WebSocketDisconnect
 
 from backend.api import create_app
 from backend.config import Settings
-from backend.security import MAX_JSON_DEPTH, allowed_hosts, host_name, json_depth
+from backend.security import _STRING, MAX_JSON_DEPTH, allowed_hosts, host_name, json_depth
 from backend.station import Station
 
 
@@ -106,6 +106,63 @@ def test_json_depth_ignores_brackets_in_strings(s: str) -> None:
     assert json_depth(json.dumps({"k": s}).encode()) == 1
 
 
+def _depth_reference(raw: bytes) -> int:
+    """The depth as a plain scanner reads it: brackets outside strings, escapes inside."""
+    depth = deepest = 0
+    in_str = esc = False
+    for c in raw:
+        if in_str:
+            if esc:
+                esc = False
+            elif c == ord("\\"):
+                esc = True
+            elif c == ord('"'):
+                in_str = False
+        elif c == ord('"'):
+            in_str = True
+        elif c in b"[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in b"]}":
+            depth = max(0, depth - 1)
+    return deepest
+
+
+_tricky = st.lists(st.sampled_from([b"[", b"]", b"{", b"}", b'"', b"\\", b"a", b":", b","]),
+                   max_size=120).map(b"".join)
+
+
+@given(_tricky)
+def test_json_depth_reads_like_a_plain_scanner_whatever_the_bytes(raw: bytes) -> None:
+    assert json_depth(raw) == _depth_reference(raw)
+
+
+@given(_tricky)
+def test_a_string_match_never_fails_at_a_quote(raw: bytes) -> None:
+    """What keeps the scan linear: a match that started at a quote and failed was retried at
+    the next quote, so ``"\\"\\"\\"...`` (1 MiB of it) took an hour with the GIL held."""
+    for i, c in enumerate(raw):
+        if c == ord('"'):
+            assert _STRING.match(raw, i) is not None, (raw, i)
+    adversarial = b'"' + b'\\"' * 50_000
+    assert json_depth(adversarial + b"[[1]]") == 0  # the open string runs to the end
+    assert json_depth(b'"' + b'\\"' * 1000 + b'"[[1]]') == 2
+
+
+def test_deep_bodies_are_refused_whatever_the_content_type(app) -> None:  # type: ignore[no-untyped-def]
+    c, station = app
+    deep = "[" * 10_000 + "]" * 10_000
+    for ctype in ("application/json", "text/plain", "application/vnd.touchline+json",
+                  "application/x-www-form-urlencoded"):
+        for method, path in (("PATCH", "/api/params"), ("POST", "/api/estop"),
+                             ("POST", "/api/params/import")):
+            r = c.request(method, path, content=deep,
+                          headers={"content-type": ctype, "x-touchline": "1"})
+            assert r.status_code == 400 and "nested deeper" in r.json()["detail"], \
+                (ctype, path, r.text)
+    assert not station.estop
+
+
 _json = st.recursive(
     st.none() | st.booleans() | st.floats(allow_nan=True) | st.integers() | st.text(max_size=8),
     lambda kids: st.lists(kids, max_size=4) | st.dictionaries(st.text(max_size=6), kids,
@@ -130,3 +187,55 @@ def test_any_body_on_any_endpoint_gets_an_answer_below_500(  # type: ignore[no-u
         assert r.status_code < 500, (method, path, r.status_code, r.text[:200])
         if depth > MAX_JSON_DEPTH:
             assert r.status_code == 400
+
+
+def _routes(client: TestClient) -> list[tuple[str, str]]:
+    """Every HTTP route of the app as (method, path with its parameters filled), read from
+    the app itself, so a route added later is covered without editing this test."""
+    fill = {"{team}": "blue", "{rid}": "1", "{name}": "p1"}
+    out = []
+    for path, ops in client.app.openapi()["paths"].items():  # type: ignore[attr-defined]
+        for k, v in fill.items():
+            path = path.replace(k, v)
+        out += [(m.upper(), path) for m in sorted(ops)]
+    assert len(out) > 20 and ("PATCH", "/api/params") in out, out
+    return out
+
+
+# text with every code point, lone surrogates included (json.dumps writes them as \udxxx,
+# which json.loads turns back into lone surrogates: what a hostile client can send)
+_wild_text = st.text(alphabet=st.characters(exclude_categories=()), max_size=8)
+_wild_json = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=True) | st.integers() | _wild_text,
+    lambda kids: st.lists(kids, max_size=4) | st.dictionaries(_wild_text, kids, max_size=4),
+    max_leaves=20)
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(body=_wild_json.map(json.dumps).map(str.encode) | st.binary(max_size=64),
+       depth=st.integers(0, 40),
+       ctype=st.sampled_from([None, "application/json", "application/json; charset=latin-1",
+                              "text/plain", "application/x-www-form-urlencoded",
+                              "multipart/form-data; boundary=x", "application/x+json"]),
+       header=st.booleans(),
+       origin=st.sampled_from([None, "http://testserver", "https://evil.example", "null"]),
+       name=_wild_text)
+def test_any_request_to_any_route_is_answered_below_500_with_a_reason(  # type: ignore[no-untyped-def]
+        app, body: bytes, depth: int, ctype: str | None, header: bool, origin: str | None,
+        name: str) -> None:
+    c, _ = app
+    raw = b"[" * depth + body + b"]" * depth
+    headers = {k: v for k, v in (("content-type", ctype), ("origin", origin),
+                                 ("x-touchline", "1" if header else None)) if v is not None}
+    for method, path in _routes(c):
+        if name and "/presets/p1" in path:  # any preset name, URL-encoded
+            from urllib.parse import quote
+
+            path = path.replace("p1", quote(name.encode("utf-8", "surrogatepass"), safe=""))
+        r = c.request(method, path, headers=headers,
+                      content=raw if method in ("POST", "PUT", "PATCH", "DELETE") else None)
+        assert r.status_code < 500, (method, path, headers, r.status_code, r.text[:200])
+        if r.status_code >= 400:
+            detail = r.json()["detail"]
+            assert detail, (method, path, r.text[:200])
