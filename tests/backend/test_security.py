@@ -13,7 +13,7 @@ import pytest
 from fastapi.testclient import TestClient
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from starlette.websockets import WebSocketDisconnect
+from starlette.testclient import WebSocketDenialResponse
 
 from backend.api import create_app
 from backend.config import Settings
@@ -54,13 +54,17 @@ def test_dns_rebinding_a_foreign_host_gets_400_on_http_and_websocket(app) -> Non
     assert c.get("/api/world", headers={"host": "127.0.0.1:8000"}).status_code == 200
     assert c.get("/api/world", headers={"host": "field-laptop.local:8000"}).status_code == 200
     # Host and Origin both the attacker's: the Origin check no longer trusts the Host
-    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+    # the upgrade is answered like HTTP: the status and the JSON reason
+    with pytest.raises(WebSocketDenialResponse) as refused, c.websocket_connect(
             "/api/ws", headers={"host": "evil.example.com",
                                 "origin": "http://evil.example.com"}) as ws:
         ws.receive_text()
-    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+    assert refused.value.status_code == 400
+    assert "evil.example.com" in refused.value.json()["detail"]
+    with pytest.raises(WebSocketDenialResponse) as refused, c.websocket_connect(
             "/api/ws", headers={"origin": "http://evil.example.com"}) as ws:
         ws.receive_text()
+    assert refused.value.status_code == 403 and "origin" in refused.value.json()["detail"]
     with c.websocket_connect("/api/ws", headers={"origin": "http://127.0.0.1:8000"}) as ws:
         assert json.loads(ws.receive_text())["type"] == "snapshot"
 
