@@ -2,7 +2,8 @@
 
 * **Host allowlist** (DNS rebinding): the Host header must name this station: the address
   it is bound to, a loopback name, or a name given with ``--allow-host``; anything else gets
-  400 (a websocket is refused before it is accepted). ``--allow-host '*'`` turns it off.
+  400, a websocket upgrade too (refused before it is accepted, with the same JSON reason).
+  ``--allow-host '*'`` turns it off.
 * **Origin**: a request that carries an Origin (every browser request that changes state,
   every websocket) must come from an allowed host or a configured dev origin (Vite); the
   request's own Host is never trusted for it. Else 403.
@@ -124,7 +125,12 @@ class EdgeGuard:
             status, reason = why
             self._refuse(reason, scope, headers)
             if kind == "websocket":
-                await send({"type": "websocket.close", "code": 1008, "reason": reason[:120]})
+                if "websocket.http.response" in scope.get("extensions", {}):
+                    # the same answer as HTTP (status and JSON reason) to the upgrade request
+                    await _answer(send, status, reason, prefix="websocket.")
+                else:  # a server without the denial extension: a plain refusal
+                    await send({"type": "websocket.close", "code": 1008,
+                                "reason": reason[:120]})
                 return
             await _answer(send, status, reason)
             return
@@ -211,8 +217,8 @@ def _replay(body: bytes, then: Receive) -> Receive:
     return receive
 
 
-async def _answer(send: Send, status: int, reason: str) -> None:
+async def _answer(send: Send, status: int, reason: str, prefix: str = "") -> None:
     body = json.dumps({"detail": reason}).encode()
-    await send({"type": "http.response.start", "status": status, "headers": [
+    await send({"type": f"{prefix}http.response.start", "status": status, "headers": [
         (b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]})
-    await send({"type": "http.response.body", "body": body})
+    await send({"type": f"{prefix}http.response.body", "body": body})

@@ -7,7 +7,7 @@ from typing import Any
 import pytest
 import zmq
 from fastapi.testclient import TestClient
-from starlette.websockets import WebSocketDisconnect
+from starlette.testclient import WebSocketDenialResponse
 
 from backend import topics
 from backend.api import create_app
@@ -164,10 +164,10 @@ def test_websocket_snapshot_then_world(client) -> None:  # type: ignore[no-untyp
 
 def test_websocket_from_a_foreign_origin_is_refused(client) -> None:  # type: ignore[no-untyped-def]
     c, _ = client
-    with pytest.raises(WebSocketDisconnect) as exc, \
+    with pytest.raises(WebSocketDenialResponse) as exc, \
             c.websocket_connect("/api/ws", headers={"origin": "http://evil.example"}) as ws:
         ws.receive_json()
-    assert exc.value.code == 1008
+    assert exc.value.status_code == 403 and "evil.example" in exc.value.json()["detail"]
 
 
 def test_geometry_404_before_first_packet(client) -> None:  # type: ignore[no-untyped-def]

@@ -8,12 +8,13 @@ import json
 import socket
 from collections.abc import Iterator
 from typing import Any
+from urllib.parse import quote
 
 import pytest
 from fastapi.testclient import TestClient
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from starlette.websockets import WebSocketDisconnect
+from starlette.testclient import WebSocketDenialResponse
 
 from backend.api import create_app
 from backend.config import Settings
@@ -54,13 +55,17 @@ def test_dns_rebinding_a_foreign_host_gets_400_on_http_and_websocket(app) -> Non
     assert c.get("/api/world", headers={"host": "127.0.0.1:8000"}).status_code == 200
     assert c.get("/api/world", headers={"host": "field-laptop.local:8000"}).status_code == 200
     # Host and Origin both the attacker's: the Origin check no longer trusts the Host
-    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+    # the upgrade is answered like HTTP: the status and the JSON reason
+    with pytest.raises(WebSocketDenialResponse) as refused, c.websocket_connect(
             "/api/ws", headers={"host": "evil.example.com",
                                 "origin": "http://evil.example.com"}) as ws:
         ws.receive_text()
-    with pytest.raises(WebSocketDisconnect), c.websocket_connect(
+    assert refused.value.status_code == 400
+    assert "evil.example.com" in refused.value.json()["detail"]
+    with pytest.raises(WebSocketDenialResponse) as refused, c.websocket_connect(
             "/api/ws", headers={"origin": "http://evil.example.com"}) as ws:
         ws.receive_text()
+    assert refused.value.status_code == 403 and "origin" in refused.value.json()["detail"]
     with c.websocket_connect("/api/ws", headers={"origin": "http://127.0.0.1:8000"}) as ws:
         assert json.loads(ws.receive_text())["type"] == "snapshot"
 
@@ -189,14 +194,17 @@ def test_any_body_on_any_endpoint_gets_an_answer_below_500(  # type: ignore[no-u
             assert r.status_code == 400
 
 
-def _routes(client: TestClient) -> list[tuple[str, str]]:
-    """Every HTTP route of the app as (method, path with its parameters filled), read from
-    the app itself, so a route added later is covered without editing this test."""
+def _routes(client: TestClient, wild: str = "") -> list[tuple[str, str]]:
+    """Every HTTP route of the app as (method, path), read from the app itself, so a route
+    added later is covered without editing this test. Path parameters are valid values, or,
+    with ``wild``, that text URL-encoded in every one."""
     fill = {"{team}": "blue", "{rid}": "1", "{name}": "p1"}
     out = []
     for path, ops in client.app.openapi()["paths"].items():  # type: ignore[attr-defined]
         for k, v in fill.items():
-            path = path.replace(k, v)
+            path = path.replace(k, quote(wild.encode("utf-8", "surrogatepass"), safe="")
+                                if wild else v)
+        assert "{" not in path, f"a path parameter this test does not fill: {path}"
         out += [(m.upper(), path) for m in sorted(ops)]
     assert len(out) > 20 and ("PATCH", "/api/params") in out, out
     return out
@@ -228,11 +236,7 @@ def test_any_request_to_any_route_is_answered_below_500_with_a_reason(  # type: 
     raw = b"[" * depth + body + b"]" * depth
     headers = {k: v for k, v in (("content-type", ctype), ("origin", origin),
                                  ("x-touchline", "1" if header else None)) if v is not None}
-    for method, path in _routes(c):
-        if name and "/presets/p1" in path:  # any preset name, URL-encoded
-            from urllib.parse import quote
-
-            path = path.replace("p1", quote(name.encode("utf-8", "surrogatepass"), safe=""))
+    for method, path in _routes(c, name):
         r = c.request(method, path, headers=headers,
                       content=raw if method in ("POST", "PUT", "PATCH", "DELETE") else None)
         assert r.status_code < 500, (method, path, headers, r.status_code, r.text[:200])
