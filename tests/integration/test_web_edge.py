@@ -197,14 +197,21 @@ def test_hosts_origins_and_cross_site_posts_on_the_real_port(station: StationHan
 
 def test_an_oversized_websocket_message_closes_only_that_socket(
         station: StationHandle) -> None:
+    closed: BaseException | None = None
     with _ws(station, max_size=None) as ws:
         _strict(ws.recv(timeout=10), "the snapshot")
-        ws.send(b"x" * (2 << 20))
         deadline = time.monotonic() + 10
-        with pytest.raises(ConnectionClosed) as closed:
+        try:
+            ws.send(b"x" * (2 << 20))
             while time.monotonic() < deadline:  # health keeps coming until it is closed
                 ws.recv(timeout=10)
-        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009
+        except (ConnectionClosed, OSError) as exc:
+            closed = exc
+        # the server closes with 1009 while the client may still be sending the 2 MiB: then
+        # the client sees a reset instead of the close frame; either way the socket is closed
+        assert closed is not None, "the oversized message did not close the socket"
+        if isinstance(closed, ConnectionClosed) and closed.rcvd is not None:
+            assert closed.rcvd.code == 1009
     assert httpx.get(station.url + "/api/health", timeout=5).status_code == 200
     with _ws(station) as ws:
         assert _strict(ws.recv(timeout=10), "the snapshot")["type"] == "snapshot"
