@@ -11,16 +11,13 @@ import re
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
-from pydantic.config import JsonDict
+
+from ..params.fields import num
 
 AlgorithmName = Literal["algorithm1", "algorithm2", "proportional"]
 ALGORITHMS: tuple[AlgorithmName, ...] = ("algorithm1", "algorithm2", "proportional")
 
 _ROBOT_KEY = re.compile(r"^(blue|yellow)/(1[0-5]|[0-9])$")
-
-
-def _u(unit: str, step: float) -> JsonDict:
-    return {"unit": unit, "step": step}
 
 
 class _Model(BaseModel):
@@ -30,212 +27,72 @@ class _Model(BaseModel):
 class LimitsParams(_Model):
     """What the robot can be commanded (in command units, i.e. before the robot's gain C)."""
 
-    max_speed_mps: float = Field(
-        default=3.0,
-        ge=0.1,
-        le=6.0,
-        description="Maximum commanded speed",
-        json_schema_extra=_u("m/s", 0.1),
-    )
-    max_accel_mps2: float = Field(
-        default=5.0,
-        ge=0.1,
-        le=20.0,
-        description="Maximum change of the commanded velocity vector "
-        "per second (outer safety limit, shared by all algorithms)",
-        json_schema_extra=_u("m/s^2", 0.1),
-    )
-    max_angular_radps: float = Field(
-        default=6.0,
-        ge=0.1,
-        le=20.0,
-        description="Maximum commanded angular speed",
-        json_schema_extra=_u("rad/s", 0.1),
-    )
-    position_tolerance_mm: float = Field(
-        default=10.0,
-        ge=0.0,
-        le=200.0,
-        description="Within this distance of the target the robot holds still (noise deadband)",
-        json_schema_extra=_u("mm", 1.0),
-    )
+    max_speed_mps: float = num(3.0, 0.1, 6.0, "m/s", 0.1, "Maximum commanded speed")
+    max_accel_mps2: float = num(5.0, 0.1, 20.0, "m/s^2", 0.1,
+        "Maximum change of the commanded velocity vector per second (outer safety limit, shared "
+        "by all algorithms)")
+    max_angular_radps: float = num(6.0, 0.1, 20.0, "rad/s", 0.1, "Maximum commanded angular speed")
+    position_tolerance_mm: float = num(10.0, 0.0, 200.0, "mm", 1.0,
+        "Within this distance of the target the robot holds still (noise deadband)")
 
 
 class HeadingParams(_Model):
     """Heading control: a separate proportional controller, limited by max_angular_radps."""
 
-    kp_per_s: float = Field(
-        default=4.0,
-        ge=0.0,
-        le=30.0,
-        description="Angular speed per radian of heading error",
-        json_schema_extra=_u("1/s", 0.1),
-    )
-    tolerance_rad: float = Field(
-        default=0.02,
-        ge=0.0,
-        le=0.5,
-        description="Heading error treated as zero",
-        json_schema_extra=_u("rad", 0.005),
-    )
+    kp_per_s: float = num(4.0, 0.0, 30.0, "1/s", 0.1, "Angular speed per radian of heading error")
+    tolerance_rad: float = num(0.02, 0.0, 0.5, "rad", 0.005, "Heading error treated as zero")
 
 
 class LateralParams(_Model):
     """Correction towards the straight line A-B (perpendicular offset)."""
 
-    kp_per_s: float = Field(
-        default=3.0,
-        ge=0.0,
-        le=20.0,
-        description="Sideways speed per metre of offset from the line",
-        json_schema_extra=_u("1/s", 0.1),
-    )
-    max_mps: float = Field(
-        default=0.5,
-        ge=0.0,
-        le=3.0,
-        description="Maximum sideways correction speed",
-        json_schema_extra=_u("m/s", 0.05),
-    )
+    kp_per_s: float = num(3.0, 0.0, 20.0, "1/s", 0.1,
+        "Sideways speed per metre of offset from the line")
+    max_mps: float = num(0.5, 0.0, 3.0, "m/s", 0.05, "Maximum sideways correction speed")
 
 
 class Algorithm1Params(_Model):
     """Trapezoid reference x*(t) + online estimate of the gain C + feedback K (paper eq. 3)."""
 
-    v_mps: float = Field(
-        default=1.0,
-        ge=0.05,
-        le=5.0,
-        description="Speed limit v of the reference",
-        json_schema_extra=_u("m/s", 0.05),
-    )
-    w_mps2: float = Field(
-        default=3.0,
-        ge=0.1,
-        le=10.0,
-        description="Acceleration limit w of the reference",
-        json_schema_extra=_u("m/s^2", 0.1),
-    )
-    k_per_s: float = Field(
-        default=3.0,
-        ge=0.0,
-        le=20.0,
-        description="Feedback gain K on the lag x*(t) - x(t)",
-        json_schema_extra=_u("1/s", 0.1),
-    )
-    c_smoothing: float = Field(
-        default=0.997,
-        ge=0.0,
-        le=0.99999,
-        description="C <- s*C + (1-s)*distance/integral(u) each tick "
-        "(public scripts: 0.997 / 0.003)",
-        json_schema_extra=_u("", 0.001),
-    )
-    c_initial: float = Field(
-        default=1.0,
-        ge=0.05,
-        le=5.0,
-        description="Estimate of C before any motion (the public scripts "
-        "start at 0.01, which is outside the clamp range and would command "
-        "100x the reference speed)",
-        json_schema_extra=_u("", 0.01),
-    )
-    c_min: float = Field(
-        default=0.05,
-        ge=0.01,
-        le=1.0,
-        description="Lower clamp of the C estimate",
-        json_schema_extra=_u("", 0.01),
-    )
-    c_max: float = Field(
-        default=5.0,
-        ge=1.0,
-        le=20.0,
-        description="Upper clamp of the C estimate",
-        json_schema_extra=_u("", 0.1),
-    )
-    c_min_integral_m: float = Field(
-        default=0.2,
-        ge=0.0,
-        le=5.0,
-        description="Update C only once integral(u) dt of this move exceeds this (command-metres)",
-        json_schema_extra=_u("m", 0.05),
-    )
-    blocked_time_s: float = Field(
-        default=0.5,
-        ge=0.05,
-        le=5.0,
-        description="Commanded but not moving for this long: blocked, "
-        "restart the profile from where the robot is",
-        json_schema_extra=_u("s", 0.05),
-    )
-    blocked_move_mm: float = Field(
-        default=30.0,
-        ge=1.0,
-        le=500.0,
-        description="Moving less than this counts as not moving",
-        json_schema_extra=_u("mm", 1.0),
-    )
-    blocked_speed_mps: float = Field(
-        default=0.2,
-        ge=0.0,
-        le=3.0,
-        description="Commanded speed above which the robot should be moving",
-        json_schema_extra=_u("m/s", 0.05),
-    )
-    retarget_mm: float = Field(
-        default=50.0,
-        ge=0.0,
-        le=1000.0,
-        description="A target moved less than this keeps A and the "
-        "profile time (only B moves); more restarts from the current "
-        "position",
-        json_schema_extra=_u("mm", 5.0),
-    )
+    v_mps: float = num(1.0, 0.05, 5.0, "m/s", 0.05, "Speed limit v of the reference")
+    w_mps2: float = num(3.0, 0.1, 10.0, "m/s^2", 0.1, "Acceleration limit w of the reference")
+    k_per_s: float = num(3.0, 0.0, 20.0, "1/s", 0.1, "Feedback gain K on the lag x*(t) - x(t)")
+    c_smoothing: float = num(0.997, 0.0, 0.99999, "", 0.001,
+        "C <- s*C + (1-s)*distance/integral(u) each tick (public scripts: 0.997 / 0.003)")
+    c_initial: float = num(1.0, 0.05, 5.0, "", 0.01,
+        "Estimate of C before any motion (the public scripts start at 0.01, which is outside "
+        "the clamp range and would command 100x the reference speed)")
+    c_min: float = num(0.05, 0.01, 1.0, "", 0.01, "Lower clamp of the C estimate")
+    c_max: float = num(5.0, 1.0, 20.0, "", 0.1, "Upper clamp of the C estimate")
+    c_min_integral_m: float = num(0.2, 0.0, 5.0, "m", 0.05,
+        "Update C only once integral(u) dt of this move exceeds this (command-metres)")
+    blocked_time_s: float = num(0.5, 0.05, 5.0, "s", 0.05,
+        "Commanded but not moving for this long: blocked, restart the profile from where the "
+        "robot is")
+    blocked_move_mm: float = num(30.0, 1.0, 500.0, "mm", 1.0,
+        "Moving less than this counts as not moving")
+    blocked_speed_mps: float = num(0.2, 0.0, 3.0, "m/s", 0.05,
+        "Commanded speed above which the robot should be moving")
+    retarget_mm: float = num(50.0, 0.0, 1000.0, "mm", 5.0,
+        "A target moved less than this keeps A and the profile time (only B moves); more "
+        "restarts from the current position")
 
 
 class Algorithm2Params(_Model):
     """V = sqrt(2 a S) towards the goal, limited by v and w from the last step's speed only."""
 
-    v_mps: float = Field(
-        default=1.0, ge=0.05, le=5.0, description="Speed limit v", json_schema_extra=_u("m/s", 0.05)
-    )
-    w_mps2: float = Field(
-        default=3.0,
-        ge=0.1,
-        le=10.0,
-        description="Acceleration limit w",
-        json_schema_extra=_u("m/s^2", 0.1),
-    )
-    a_mps2: float = Field(
-        default=1.5,
-        ge=0.05,
-        le=10.0,
-        description="Braking acceleration a in V = sqrt(2 a S), set by hand",
-        json_schema_extra=_u("m/s^2", 0.05),
-    )
+    v_mps: float = num(1.0, 0.05, 5.0, "m/s", 0.05, "Speed limit v")
+    w_mps2: float = num(3.0, 0.1, 10.0, "m/s^2", 0.1, "Acceleration limit w")
+    a_mps2: float = num(1.5, 0.05, 10.0, "m/s^2", 0.05,
+        "Braking acceleration a in V = sqrt(2 a S), set by hand")
 
 
 class ProportionalParams(_Model):
     """Baseline: the placeholder proportional go-to controller (backend/control/goto.py)."""
 
-    kp_per_s: float = Field(
-        default=2.5,
-        ge=0.0,
-        le=20.0,
-        description="Speed per metre of error",
-        json_schema_extra=_u("1/s", 0.1),
-    )
-    v_mps: float = Field(
-        default=1.0, ge=0.05, le=5.0, description="Speed limit", json_schema_extra=_u("m/s", 0.05)
-    )
-    w_mps2: float = Field(
-        default=3.0,
-        ge=0.1,
-        le=10.0,
-        description="Acceleration limit",
-        json_schema_extra=_u("m/s^2", 0.1),
-    )
+    kp_per_s: float = num(2.5, 0.0, 20.0, "1/s", 0.1, "Speed per metre of error")
+    v_mps: float = num(1.0, 0.05, 5.0, "m/s", 0.05, "Speed limit")
+    w_mps2: float = num(3.0, 0.1, 10.0, "m/s^2", 0.1, "Acceleration limit")
 
 
 class ControllerParams(_Model):
@@ -253,34 +110,11 @@ class RobotOverride(_Model):
     """Per-robot choice of algorithm and overrides of v / w / K / a (None: the global value)."""
 
     algorithm: AlgorithmName | None = Field(default=None, description="Algorithm of this robot")
-    v_mps: float | None = Field(
-        default=None,
-        ge=0.05,
-        le=5.0,
-        description="Speed limit v (all algorithms)",
-        json_schema_extra=_u("m/s", 0.05),
-    )
-    w_mps2: float | None = Field(
-        default=None,
-        ge=0.1,
-        le=10.0,
-        description="Acceleration limit w (all algorithms)",
-        json_schema_extra=_u("m/s^2", 0.1),
-    )
-    k_per_s: float | None = Field(
-        default=None,
-        ge=0.0,
-        le=20.0,
-        description="Algorithm 1 feedback K",
-        json_schema_extra=_u("1/s", 0.1),
-    )
-    a_mps2: float | None = Field(
-        default=None,
-        ge=0.05,
-        le=10.0,
-        description="Algorithm 2 braking a",
-        json_schema_extra=_u("m/s^2", 0.05),
-    )
+    v_mps: float | None = num(None, 0.05, 5.0, "m/s", 0.05, "Speed limit v (all algorithms)")
+    w_mps2: float | None = num(None, 0.1, 10.0, "m/s^2", 0.1,
+        "Acceleration limit w (all algorithms)")
+    k_per_s: float | None = num(None, 0.0, 20.0, "1/s", 0.1, "Algorithm 1 feedback K")
+    a_mps2: float | None = num(None, 0.05, 10.0, "m/s^2", 0.05, "Algorithm 2 braking a")
 
 
 class ControlSettings(_Model):

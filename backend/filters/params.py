@@ -10,7 +10,8 @@ import re
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
-from pydantic.config import JsonDict
+
+from ..params.fields import num
 
 FilterKind = Literal["raw", "median", "paper", "kalman"]
 FILTER_KINDS: tuple[FilterKind, ...] = ("raw", "median", "paper", "kalman")
@@ -18,33 +19,23 @@ FILTER_KINDS: tuple[FilterKind, ...] = ("raw", "median", "paper", "kalman")
 _CFG = ConfigDict(allow_inf_nan=False, extra="forbid", frozen=True)
 
 
-def _unit(unit: str, step: float) -> JsonDict:
-    return {"unit": unit, "step": step}
-
-
 class RawParams(BaseModel):
     """No filtering: the latest measurement. Velocity from a line fit over recent measurements."""
 
     model_config = _CFG
-    velocity_window_s: float = Field(
-        default=0.1, ge=0.02, le=1.0,
-        description="time window of the line fit that gives the velocity",
-        json_schema_extra=_unit("s", 0.01))
+    velocity_window_s: float = num(0.1, 0.02, 1.0, "s", 0.01,
+        "time window of the line fit that gives the velocity")
 
 
 class MedianParams(BaseModel):
     """Median of the last N measurements per coordinate (removes isolated outliers)."""
 
     model_config = _CFG
-    window: int = Field(default=5, ge=1, le=31, description="number of measurements in the median",
-                        json_schema_extra=_unit("samples", 1))
-    gap_s: float = Field(default=1.0, ge=0.01, le=10.0,
-                         description="no measurement for longer than this: start over",
-                         json_schema_extra=_unit("s", 0.05))
-    velocity_window_s: float = Field(
-        default=0.1, ge=0.02, le=1.0,
-        description="time window of the line fit that gives the velocity",
-        json_schema_extra=_unit("s", 0.01))
+    window: int = num(5, 1, 31, "samples", 1, "number of measurements in the median")
+    gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,
+        "no measurement for longer than this: start over")
+    velocity_window_s: float = num(0.1, 0.02, 1.0, "s", 0.01,
+        "time window of the line fit that gives the velocity")
 
 
 class PaperParams(BaseModel):
@@ -52,25 +43,16 @@ class PaperParams(BaseModel):
     est = w_prev * est_prev + w_new * median with w_prev = 1 - w_new, per measurement step."""
 
     model_config = _CFG
-    window: int = Field(default=5, ge=1, le=31, description="number of measurements in the median",
-                        json_schema_extra=_unit("samples", 1))
-    w_new: float = Field(default=0.05, ge=0.001, le=1.0,
-                         description="weight of the new median (w_prev = 1 - w_new)",
-                         json_schema_extra=_unit("", 0.01))
-    gap_s: float = Field(default=1.0, ge=0.01, le=10.0,
-                         description="no measurement for longer than this: re-initialise",
-                         json_schema_extra=_unit("s", 0.05))
-    jump_mm: float = Field(default=200.0, ge=1.0, le=10000.0,
-                           description="median this far from the estimate: re-initialise to it",
-                           json_schema_extra=_unit("mm", 10.0))
-    jump_rad: float = Field(default=0.5, ge=0.01, le=3.1416,
-                            description="orientation: median this far from the estimate: "
-                                        "re-initialise to it",
-                            json_schema_extra=_unit("rad", 0.05))
-    velocity_window_s: float = Field(
-        default=0.1, ge=0.02, le=1.0,
-        description="time window of the line fit that gives the velocity",
-        json_schema_extra=_unit("s", 0.01))
+    window: int = num(5, 1, 31, "samples", 1, "number of measurements in the median")
+    w_new: float = num(0.05, 0.001, 1.0, "", 0.01, "weight of the new median (w_prev = 1 - w_new)")
+    gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,
+        "no measurement for longer than this: re-initialise")
+    jump_mm: float = num(200.0, 1.0, 10000.0, "mm", 10.0,
+        "median this far from the estimate: re-initialise to it")
+    jump_rad: float = num(0.5, 0.01, 3.1416, "rad", 0.05,
+        "orientation: median this far from the estimate: re-initialise to it")
+    velocity_window_s: float = num(0.1, 0.02, 1.0, "s", 0.01,
+        "time window of the line fit that gives the velocity")
 
     @property
     def w_prev(self) -> float:
@@ -81,26 +63,18 @@ class KalmanParams(BaseModel):
     """Constant-velocity Kalman filter (state x, y, vx, vy; white-noise acceleration)."""
 
     model_config = _CFG
-    accel_noise_mm_s2: float = Field(
-        default=4000.0, ge=1.0, le=1e6, description="process noise: std of the white acceleration",
-        json_schema_extra=_unit("mm/s^2", 100.0))
-    meas_noise_mm: float = Field(default=3.0, ge=0.01, le=1000.0,
-                                 description="measurement noise: std of one position",
-                                 json_schema_extra=_unit("mm", 0.5))
-    gate_mm: float = Field(default=0.0, ge=0.0, le=10000.0,
-                           description="reject a measurement this far from the prediction "
-                                       "(0 = accept all)",
-                           json_schema_extra=_unit("mm", 10.0))
-    gap_s: float = Field(default=1.0, ge=0.01, le=10.0,
-                         description="no measurement for longer than this: re-initialise",
-                         json_schema_extra=_unit("s", 0.05))
-    angle_accel_noise_rad_s2: float = Field(
-        default=40.0, ge=0.01, le=1e4,
-        description="orientation: std of the white angular acceleration",
-        json_schema_extra=_unit("rad/s^2", 1.0))
-    angle_meas_noise_rad: float = Field(default=0.01, ge=1e-4, le=1.0,
-                                        description="orientation: std of one measurement",
-                                        json_schema_extra=_unit("rad", 0.005))
+    accel_noise_mm_s2: float = num(4000.0, 1.0, 1e6, "mm/s^2", 100.0,
+        "process noise: std of the white acceleration")
+    meas_noise_mm: float = num(3.0, 0.01, 1000.0, "mm", 0.5,
+        "measurement noise: std of one position")
+    gate_mm: float = num(0.0, 0.0, 10000.0, "mm", 10.0,
+        "reject a measurement this far from the prediction (0 = accept all)")
+    gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,
+        "no measurement for longer than this: re-initialise")
+    angle_accel_noise_rad_s2: float = num(40.0, 0.01, 1e4, "rad/s^2", 1.0,
+        "orientation: std of the white angular acceleration")
+    angle_meas_noise_rad: float = num(0.01, 1e-4, 1.0, "rad", 0.005,
+        "orientation: std of one measurement")
 
 
 _ROBOT_KEY = re.compile(r"^(blue|yellow)/([0-9]|1[0-5])$")

@@ -3,18 +3,13 @@ of ``StationParams``: each number has a default, a range, a step, a unit and a d
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..control.params import ControlSettings
 from ..filters.params import FilterSettings
-
-
-def num(default: float, ge: float, le: float, unit: str, step: float, description: str) -> Any:
-    """A tunable number: its bounds, unit and step travel in the schema to the UI."""
-    return Field(default=default, ge=ge, le=le, description=description,
-                 json_schema_extra={"unit": unit, "step": step})
+from .fields import num
 
 
 class Group(BaseModel):
