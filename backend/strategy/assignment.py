@@ -7,9 +7,8 @@ goes to each of those points. That is an assignment problem: robots are rows, ta
 are columns, the cost of a pair is how far (mm) the robot has to drive, plus any extra
 penalty the play wants to add. This module solves it in three layers:
 
-- ``min_cost_assignment``: the assignment with the least total cost (Hungarian /
-  Kuhn-Munkres with potentials, O(n^2 m) for n <= m), rectangular matrices allowed;
-  ``+inf`` marks a forbidden pair.
+- ``min_cost_assignment``: the assignment with the least total cost (scipy's
+  ``linear_sum_assignment``), rectangular matrices allowed; ``+inf`` marks a forbidden pair.
 - ``bottleneck_assignment``: the assignment whose *largest* cost is least (the slowest robot
   arrives as early as possible), ties broken by least total cost.
 - ``StableAssigner``: the per-tick helper the strategy calls. It keeps the previous
@@ -18,7 +17,8 @@ penalty the play wants to add. This module solves it in three layers:
   and forth every tick; it also honours fixed pairs (the goalkeeper the referee names) and
   the slots' priority order.
 
-Everything is plain numpy + Python on small matrices (11 x 11 at most in a match).
+The solver is scipy's ``linear_sum_assignment`` (also for the bottleneck's matching test); this
+module adds the conventions a team needs (forbidden pairs, rows left out, bottleneck first).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
 
 __all__ = ["StableAssigner", "bottleneck_assignment", "min_cost_assignment"]
 
@@ -44,58 +45,6 @@ def _check_cost(cost: ArrayLike) -> FloatArray:
     if np.isneginf(c).any():
         raise ValueError("cost contains -inf; costs must be finite numbers or +inf (forbidden)")
     return c
-
-
-def _hungarian(a: list[list[float]], n: int, m: int) -> list[int]:
-    """Min-cost assignment of every row of the finite n x m matrix ``a`` (n <= m) to distinct
-    columns: the shortest-augmenting-path Hungarian algorithm with row/column potentials,
-    O(n^2 m). Pure Python on lists: for the matrices a team has (up to 11 x 11) this beats
-    a numpy inner loop, whose per-call overhead dominates at that size."""
-    inf = float("inf")
-    u = [0.0] * (n + 1)
-    v = [0.0] * (m + 1)
-    p = [0] * (m + 1)  # p[j]: row (1-based) matched to column j (1-based), 0 = free
-    way = [0] * (m + 1)
-    cols = range(1, m + 1)
-    for i in range(1, n + 1):
-        p[0] = i
-        j0 = 0
-        minv = [inf] * (m + 1)
-        used = [False] * (m + 1)
-        while True:
-            used[j0] = True
-            i0 = p[j0]
-            row = a[i0 - 1]
-            ui0 = u[i0]
-            delta = inf
-            j1 = 0
-            for j in cols:
-                if not used[j]:
-                    cur = row[j - 1] - ui0 - v[j]
-                    if cur < minv[j]:
-                        minv[j] = cur
-                        way[j] = j0
-                    if minv[j] < delta:
-                        delta = minv[j]
-                        j1 = j
-            for j in range(m + 1):
-                if used[j]:
-                    u[p[j]] += delta
-                    v[j] -= delta
-                else:
-                    minv[j] -= delta
-            j0 = j1
-            if p[j0] == 0:
-                break
-        while j0:
-            j1 = way[j0]
-            p[j0] = p[j1]
-            j0 = j1
-    out = [-1] * n
-    for j in cols:
-        if p[j]:
-            out[p[j] - 1] = j - 1
-    return out
 
 
 def min_cost_assignment(cost: ArrayLike) -> IntArray:
@@ -122,14 +71,9 @@ def min_cost_assignment(cost: ArrayLike) -> IntArray:
     k = min(n, m)
     big = hi + (k + 1) * (hi - lo + 1.0)
     work = np.where(allowed, c, big)
-    if n <= m:
-        cols = _hungarian(work.tolist(), n, m)
-        res = np.asarray(cols, dtype=np.int64)
-    else:
-        rows = _hungarian(work.T.tolist(), m, n)
-        res = np.full(n, -1, dtype=np.int64)
-        for j, i in enumerate(rows):
-            res[i] = j
+    rows, cols = linear_sum_assignment(work)
+    res = np.full(n, -1, dtype=np.int64)
+    res[rows] = cols
     assigned = res >= 0
     idx = np.nonzero(assigned)[0]
     bad = idx[~allowed[idx, res[idx]]]
@@ -137,26 +81,13 @@ def min_cost_assignment(cost: ArrayLike) -> IntArray:
     return res
 
 
-def _max_matching(adj: list[list[int]], m: int, limit: int) -> int:
-    """Size of a maximum bipartite matching (Kuhn's augmenting paths), stopping at limit."""
-    match_col = [-1] * m
-
-    def augment(i: int, seen: list[bool]) -> bool:
-        for j in adj[i]:
-            if not seen[j]:
-                seen[j] = True
-                if match_col[j] < 0 or augment(match_col[j], seen):
-                    match_col[j] = i
-                    return True
-        return False
-
-    size = 0
-    for i in range(len(adj)):
-        if adj[i] and augment(i, [False] * m):
-            size += 1
-            if size >= limit:
-                break
-    return size
+def _matching_size(mask: NDArray[np.bool_]) -> int:
+    """Size of a maximum bipartite matching on the allowed pairs of ``mask`` (rows x cols):
+    a full assignment that uses as few disallowed pairs as possible uses that many allowed
+    ones (on these small matrices scipy's dense solver beats building a sparse graph)."""
+    bad = (~mask).astype(np.float64)
+    rows, cols = linear_sum_assignment(bad)
+    return int(len(rows) - bad[rows, cols].sum())
 
 
 def _bottleneck_value(c: FloatArray) -> float | None:
@@ -166,19 +97,12 @@ def _bottleneck_value(c: FloatArray) -> float | None:
     allowed = np.isfinite(c)
     if n == 0 or m == 0 or not allowed.any():
         return None
-    if n > m:  # search on the smaller side: shorter adjacency walks
-        c, allowed = c.T, allowed.T
-        n, m = m, n
-
-    def size_at(mask: NDArray[np.bool_], limit: int) -> int:
-        return _max_matching([np.nonzero(row)[0].tolist() for row in mask], m, limit)
-
-    target = size_at(allowed, n)
+    target = _matching_size(allowed)
     values = np.unique(c[allowed])
     lo, hi = 0, len(values) - 1  # values[hi] always admits the target size
     while lo < hi:
         mid = (lo + hi) // 2
-        if size_at(c <= values[mid], target) >= target:
+        if _matching_size(c <= values[mid]) >= target:
             hi = mid
         else:
             lo = mid + 1
