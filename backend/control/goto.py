@@ -1,5 +1,6 @@
-"""A proportional go-to controller with speed and acceleration limits (the placeholder
-controller of the end-to-end loop; the paper's Algorithms 1 and 2 replace it later)."""
+"""A proportional go-to controller with speed and acceleration limits: the baseline the
+paper's Algorithms 1 and 2 (control/motion.py) are compared with, selectable per robot as
+"proportional"."""
 
 from __future__ import annotations
 

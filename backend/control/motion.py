@@ -8,7 +8,7 @@ turns to the target orientation with a separate P controller. Along the line:
   estimated online, C <- s C + (1 - s) (x - x(0)) / integral(u), and u = (x*' + K (x* - x)) / C.
 - ``Algorithm2``: V = sqrt(2 a S) towards B (S the remaining distance), capped by v and changed
   by at most w dt from the last step's speed (the only state).
-- ``Proportional``: the placeholder go-to controller of ``goto.py``, wrapped.
+- ``Proportional``: the baseline proportional go-to controller of ``goto.py``, wrapped.
 
 All three add a sideways P correction towards the line, hold still inside the position
 tolerance, and pass through the same command limiter (max speed, max change of the velocity
@@ -470,7 +470,7 @@ class Algorithm2(LineController):
 
 
 class Proportional(LineController):
-    """The placeholder proportional controller of goto.py, wrapped for the common interface."""
+    """The baseline proportional controller of goto.py, wrapped for the common interface."""
 
     algorithm: AlgorithmName = "proportional"
 

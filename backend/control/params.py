@@ -88,7 +88,7 @@ class Algorithm2Params(_Model):
 
 
 class ProportionalParams(_Model):
-    """Baseline: the placeholder proportional go-to controller (backend/control/goto.py)."""
+    """Baseline: the proportional go-to controller (backend/control/goto.py)."""
 
     kp_per_s: float = num(2.5, 0.0, 20.0, "1/s", 0.1, "Speed per metre of error")
     v_mps: float = num(1.0, 0.05, 5.0, "m/s", 0.05, "Speed limit")

@@ -1,1 +1,1 @@
-"""Strategy: who goes where. The end-to-end loop ships a formation demo."""
+"""Strategy: who goes where (plays, roles, assignment, paths, the classroom formations)."""

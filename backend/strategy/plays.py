@@ -35,7 +35,7 @@ import numpy as np
 from domain.field import Field
 
 from .assignment import StableAssigner
-from .demo import DemoConfig, formation
+from .formations import FormationConfig, formation
 from .model import ROBOT_RADIUS_MM, Ball, Bot, Intent
 from .roles import (
     CONTACT_MM,
@@ -402,8 +402,9 @@ class Strategy:
 
     def _formation(self, inp: StrategyInput) -> list[Slot]:
         fs = inp.fs
-        cfg = DemoConfig(period_s=inp.tuning.formation_period_s, field_length_mm=fs.field_length,
-                         field_width_mm=fs.field_width, own_half_sign=-1)
+        cfg = FormationConfig(period_s=inp.tuning.formation_period_s,
+                              field_length_mm=fs.field_length, field_width_mm=fs.field_width,
+                              own_half_sign=-1)
         pts = formation(int(inp.t // cfg.period_s), len(inp.ours), cfg)
         return [Slot(f"formation-{k + 1}", "formation", p, _hold("formation", p, 0.0))
                 for k, p in enumerate(pts)]
