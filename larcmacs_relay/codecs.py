@@ -20,7 +20,6 @@ from sslpb import (
     ssl_simulation_control_pb2,
     ssl_simulation_robot_control_pb2,
     ssl_simulation_robot_feedback_pb2,
-    ssl_vision_wrapper_pb2,
     touchline_pb2,
 )
 
@@ -62,28 +61,22 @@ def classify(reason: str, data: bytes) -> str:
         return streams.wire_problem(data)
     if "misses required fields" in reason:
         return streams.MISSING_FIELD
-    if "has neither detection nor geometry" in reason or reason.startswith("empty "):
+    if reason.startswith("empty "):
         return streams.NO_CONTENT
     return streams.OTHER
 
 
-def validate_vision(data: bytes) -> str | None:
-    """None if ``data`` is a complete SSL_WrapperPacket with detection or geometry, else why."""
-    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
-    err = _parse(wrapper, data)
-    if err is None and not (wrapper.HasField("detection") or wrapper.HasField("geometry")):
-        err = "SSL_WrapperPacket has neither detection nor geometry"
-    return err
+def check_forwarded(data: bytes) -> str | None:
+    """Vision and referee datagrams are forwarded unchanged and decoded once, by the backend
+    (which counts what does not parse, by reason): here only an empty datagram is refused."""
+    return None if data else "empty datagram"
 
 
-def validate_referee(data: bytes) -> str | None:
-    """None if ``data`` is a complete Referee message, else the reason."""
-    return _parse(ssl_gc_referee_message_pb2.Referee(), data)
-
-
-def parse_referee(data: bytes) -> ssl_gc_referee_message_pb2.Referee | None:
+def parse_referee(data: bytes) -> tuple[ssl_gc_referee_message_pb2.Referee | None, str | None]:
+    """The Referee in ``data`` (for the compat output, which re-encodes it), or the reason."""
     ref = ssl_gc_referee_message_pb2.Referee()
-    return ref if _parse(ref, data) is None else None
+    reason = _parse(ref, data)
+    return (ref, None) if reason is None else (None, reason)
 
 
 def validate_tracker(data: bytes) -> str | None:

@@ -149,8 +149,8 @@ class Relay:
                 compat_sub.connect(cfg.compat_commands)
 
             inputs: list[tuple[str, str, int, Callable[[bytes], str | None]]] = [
-                ("vision", cfg.vision_group, cfg.vision_port, codecs.validate_vision),
-                ("referee", cfg.referee_group, cfg.referee_port, codecs.validate_referee),
+                ("vision", cfg.vision_group, cfg.vision_port, codecs.check_forwarded),
+                ("referee", cfg.referee_group, cfg.referee_port, codecs.check_forwarded),
             ]
             if cfg.tracker_enabled:
                 inputs.append(
@@ -277,9 +277,12 @@ class Relay:
             if name == "vision" and self._compat_vision is not None:
                 self._publish(self._compat_vision, [data])
             elif name == "referee" and self._compat_referee is not None:
-                ref = codecs.parse_referee(data)
+                ref, why = codecs.parse_referee(data)
                 if ref is not None:
                     self._publish(self._compat_referee, [self._referee_mapper.encode(ref)])
+                else:
+                    self._ratelog.warning("compat-referee", "Referee from %s:%d not re-encoded "
+                                          "for the compat output: %s", addr[0], addr[1], why)
 
     def _publish(self, sock: zmq.Socket[bytes] | None, frames: list[bytes]) -> None:
         if sock is None:
@@ -421,8 +424,8 @@ class Relay:
             self._command_error("referee_out", "referee output is off (interface is not "
                                 "loopback; start with --referee-out to allow it)")
             return
-        reason = codecs.validate_referee(body)
-        if reason is not None:
+        ref, reason = codecs.parse_referee(body)
+        if ref is None:
             self._command_error("referee_out", f"Referee rejected: {reason}")
             return
         try:

@@ -39,7 +39,7 @@ from backend.station import Station
 from fieldsim.config import SimConfig
 from fieldsim.vision import Vision
 from fieldsim.world import Team, World
-from larcmacs_relay.codecs import validate_referee, validate_vision
+from larcmacs_relay.codecs import check_forwarded, parse_referee
 from sslpb import touchline_pb2 as tl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
@@ -186,9 +186,11 @@ class Pipeline:
     last_t: float = -math.inf
 
     def feed(self, stream: str, data: bytes, recv_s: float) -> None:
-        # the relay's codecs: never raise (the relay forwards only what passes; the backend
-        # must survive anything arriving on ZeroMQ all the same, so everything goes on)
-        (validate_vision if stream == "vision" else validate_referee)(data)
+        # the relay's checks never raise; it forwards every non-empty datagram undecoded (the
+        # backend is the one decoder and must survive anything arriving on ZeroMQ)
+        check_forwarded(data)
+        if stream == "referee":
+            parse_referee(data)  # the compat and referee-out paths re-encode a Referee
         env = tl.Envelope(stream=tl.STREAM_VISION if stream == "vision" else tl.STREAM_REFEREE,
                           receive_time_ns=int(recv_s * 1e9), payload=data)
         bus = self.station.bus

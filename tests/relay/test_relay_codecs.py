@@ -66,16 +66,16 @@ def make_referee(
 # ----------------------------------------------------------------- validation
 
 
-def test_validation_accepts_good_and_rejects_bad() -> None:
-    assert codecs.validate_vision(make_detection_wrapper()) is None
-    assert codecs.validate_vision(b"\xff\xff\xff\xff garbage") is not None
-    incomplete = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
-    incomplete.detection.frame_number = 3  # t_capture, t_sent, camera_id missing
-    reason = codecs.validate_vision(incomplete.SerializePartialToString())
-    assert reason is not None and "required" in reason
-    assert codecs.validate_vision(b"") is not None
-    assert codecs.validate_referee(make_referee(Ref.HALT, 1)) is None
-    assert codecs.validate_referee(uv(1, 5)) is not None  # only packet_timestamp
+def test_vision_and_referee_are_forwarded_without_decoding() -> None:
+    """The backend decodes them once (and counts what does not parse); the relay refuses only
+    an empty datagram, and parses a Referee only where it re-encodes it (compat, referee out)."""
+    assert codecs.check_forwarded(make_detection_wrapper()) is None
+    assert codecs.check_forwarded(b"\xff\xff\xff\xff garbage") is None
+    assert codecs.check_forwarded(b"") == "empty datagram"
+    ref, why = codecs.parse_referee(make_referee(Ref.HALT, 1))
+    assert ref is not None and why is None and ref.command == Ref.HALT
+    ref, why = codecs.parse_referee(uv(1, 5))  # only packet_timestamp
+    assert ref is None and why is not None and "required" in why
 
 
 # ----------------------------------------------------------------- wire compatibility
@@ -324,7 +324,7 @@ def test_power_round_trip(px: int, py: int, pr: int) -> None:
 
 def test_validation_failures_are_classified_by_reason() -> None:
     """The reason a refused datagram is counted under (sslnet.streams names)."""
-    from larcmacs_relay.codecs import classify, validate_referee, validate_tracker, validate_vision
+    from larcmacs_relay.codecs import check_forwarded, classify, validate_tracker
     from sslnet import streams
 
     def kind(validate: Callable[[bytes], str | None], data: bytes) -> str:
@@ -332,13 +332,10 @@ def test_validation_failures_are_classified_by_reason() -> None:
         assert reason is not None, data
         return classify(reason, data)
 
-    good = make_detection_wrapper(3)
-    assert kind(validate_vision, good[:-4]) == streams.TRUNCATED
-    assert kind(validate_vision, b"\xff\xfe garbage") == streams.NOT_PROTOBUF
-    assert kind(validate_vision, b"\x0a\x02\x08\x05") == streams.MISSING_FIELD
-    assert kind(validate_vision, b"") == streams.NO_CONTENT
+    assert kind(check_forwarded, b"") == streams.NO_CONTENT
     ref = make_referee(Ref.HALT, 1)
-    assert kind(validate_referee, ref[:-1]) == streams.TRUNCATED
-    assert kind(validate_referee, b"\x08\x01") == streams.MISSING_FIELD
+    for cut, expected in ((ref[:-1], streams.TRUNCATED), (b"\x08\x01", streams.MISSING_FIELD)):
+        why = codecs.parse_referee(cut)[1]
+        assert why is not None and classify(why, cut) == expected
     assert kind(validate_tracker, b"") == streams.NO_CONTENT
     assert kind(validate_tracker, b"\x0f\x01") == streams.NOT_PROTOBUF
