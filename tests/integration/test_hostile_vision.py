@@ -149,3 +149,43 @@ def test_a_frame_from_the_future_neither_freezes_the_world_nor_drives_blind(
         cam.stop.set()
         sender.join(5)
         robots.sock.close()
+
+
+def test_undecodable_datagrams_are_counted_once_by_the_backend(bare: StationHandle) -> None:
+    """The relay forwards vision undecoded; the backend is the one decoder: what does not parse
+    is counted there by reason (shown in health), the relay counts nothing for it, and good
+    frames around it still reach the world."""
+    p = bare.ports
+    cam = Camera(p["vision_group"], p["vision"])
+    sender = threading.Thread(target=cam.run, daemon=True)
+    bad = open_multicast_sender("127.0.0.1")
+    sender.start()
+    try:
+        wait_until(lambda: _blue0(bare), 20, what="blue 0 seen")
+        good = SSL_WrapperPacket()
+        d = good.detection
+        d.frame_number, d.t_capture, d.t_sent, d.camera_id = 1, time.time(), time.time(), 0
+        whole = good.SerializeToString()
+
+        def reasons() -> dict[str, int]:
+            h = bare.get("/api/health")
+            return h["streams"]["vision"]["errors_by_reason"]  # type: ignore[no-any-return]
+
+        before = reasons()
+
+        def counted() -> bool:
+            for data in (whole[:-3], b"\xff\xfe not a wrapper"):
+                bad.sendto(data, (p["vision_group"], p["vision"]))
+            now = reasons()
+            return all(now.get(k, 0) > before.get(k, 0) for k in ("truncated", "not protobuf"))
+        wait_until(counted, 10, what="the backend counting truncated and not-protobuf vision")
+        relay_vision = bare.get("/api/health")["streams"]["relay.vision"]
+        assert relay_vision["errors_by_reason"] == {}, relay_vision
+        n = cam.frames
+        wait_until(lambda: cam.frames >= n + 10, 5, what="10 more good frames")
+        wait_until(lambda: (b := _blue0(bare)) is not None and abs(b["raw_x"] - cam.x) < 100.0,
+                   5, what="blue 0 following the camera")
+    finally:
+        cam.stop.set()
+        sender.join(5)
+        bad.close()
