@@ -13,15 +13,15 @@ or from synchronous code / another thread: ``with FieldSimThread(config) as sim:
 from __future__ import annotations
 
 import asyncio
-import concurrent.futures
 import contextlib
 import json
 import logging
 import socket
-import threading
 import time
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
+
+from anyio.from_thread import BlockingPortal, start_blocking_portal
 
 from fieldsim.config import SimConfig
 from fieldsim.protocol import CommandHandler
@@ -310,7 +310,8 @@ class FieldSim:
 
 
 class FieldSimThread:
-    """Runs a FieldSim on its own event loop in a daemon thread (for synchronous callers).
+    """Runs a FieldSim on its own event loop in a daemon thread (for synchronous callers), via
+    anyio's blocking portal (the loop-in-a-thread bridge).
 
     ``start()`` returns once every socket is bound (``ports`` filled) or raises what start
     raised; ``call(fn)`` runs ``fn(sim)`` on the simulator's loop and returns its result.
@@ -319,54 +320,39 @@ class FieldSimThread:
     def __init__(self, config: SimConfig) -> None:
         self.config = config
         self.sim: FieldSim | None = None
-        self._loop: asyncio.AbstractEventLoop | None = None
-        self._thread: threading.Thread | None = None
-        self._ready: concurrent.futures.Future[None] = concurrent.futures.Future()
-        self._stop: asyncio.Event | None = None
+        self._portal_cm: contextlib.AbstractContextManager[BlockingPortal] | None = None
+        self._portal: BlockingPortal | None = None
 
     @property
     def ports(self) -> dict[str, int]:
         return dict(self.sim.ports) if self.sim is not None else {}
 
     def start(self, timeout: float = 10.0) -> None:
-        self._thread = threading.Thread(target=self._main, name="fieldsim", daemon=True)
-        self._thread.start()
-        self._ready.result(timeout)
-
-    def _main(self) -> None:
-        asyncio.run(self._amain())
-
-    async def _amain(self) -> None:
-        self._loop = asyncio.get_running_loop()
-        self._stop = asyncio.Event()
+        self._portal_cm = start_blocking_portal("asyncio")
+        self._portal = self._portal_cm.__enter__()
         sim = FieldSim(self.config)
         try:
-            await sim.start()
-        except BaseException as exc:
-            self._ready.set_exception(exc)
-            return
+            self._portal.start_task_soon(sim.start).result(timeout)
+        except BaseException:
+            self._close_portal()
+            raise
         self.sim = sim
-        self._ready.set_result(None)
-        try:
-            await self._stop.wait()
-        finally:
-            await sim.stop()
 
     def call(self, fn: Callable[[FieldSim], T], timeout: float = 5.0) -> T:
-        assert self._loop is not None and self.sim is not None
-        sim = self.sim
-
-        async def run() -> T:
-            return fn(sim)
-
-        return asyncio.run_coroutine_threadsafe(run(), self._loop).result(timeout)
+        assert self._portal is not None and self.sim is not None
+        return self._portal.start_task_soon(fn, self.sim).result(timeout)
 
     def stop(self, timeout: float = 10.0) -> None:
-        if self._loop is not None and self._stop is not None:
-            with contextlib.suppress(RuntimeError):  # loop already closed
-                self._loop.call_soon_threadsafe(self._stop.set)
-        if self._thread is not None:
-            self._thread.join(timeout)
+        if self._portal is not None and self.sim is not None:
+            with contextlib.suppress(Exception):  # stopping what may be half started
+                self._portal.start_task_soon(self.sim.stop).result(timeout)
+        self.sim = None
+        self._close_portal()
+
+    def _close_portal(self) -> None:
+        cm, self._portal_cm, self._portal = self._portal_cm, None, None
+        if cm is not None:
+            cm.__exit__(None, None, None)
 
     def __enter__(self) -> FieldSimThread:
         self.start()
