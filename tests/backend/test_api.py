@@ -1,5 +1,4 @@
 import json
-import socket
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -15,18 +14,13 @@ from backend.config import Settings
 from backend.messages import OperatorTarget
 from backend.station import Station
 from backend.world.state import BallState, RobotState, WorldState
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+from launcher.supervisor import free_tcp_port
 
 
 @pytest.fixture
 def client(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
-    settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+    settings = Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
                         state_dir=tmp_path / "state",
                         allowed_hosts=["testserver"])  # the test client's Host header
     st = Station(settings)
@@ -101,8 +95,8 @@ def test_estop_release_must_be_confirmed_and_the_stop_survives_a_restart(tmp_pat
     """The defect: the stop lived only in memory, so a restarted backend (the launcher
     restarts it after a crash) was released without anyone pressing anything."""
     def app() -> tuple[TestClient, Station]:
-        settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
-                            relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+        settings = Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                            relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
                             state_dir=tmp_path / "state", allowed_hosts=["testserver"])
         st = Station(settings)
         return TestClient(create_app(settings, st)), st
@@ -572,8 +566,8 @@ def test_values_that_cannot_be_json_break_no_endpoint_and_no_stream(  # type: ig
 ])
 def test_the_other_team_is_commanded_only_where_it_can_be_addressed(  # type: ignore[no-untyped-def]
         tmp_path, output: str | None, other_param: bool, status: int) -> None:
-    settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+    settings = Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
                         state_dir=tmp_path / "state", allowed_hosts=["testserver"],
                         relay_output=output)
     st = Station(settings)

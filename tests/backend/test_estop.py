@@ -4,7 +4,6 @@ or missing file means (a pressed stop where in doubt), and a folder that cannot 
 from __future__ import annotations
 
 import json
-import socket
 import time
 from pathlib import Path
 
@@ -15,6 +14,7 @@ from backend.api import create_app
 from backend.config import Settings
 from backend.estop import EstopLatch
 from backend.station import Station
+from launcher.supervisor import free_tcp_port
 
 
 def test_a_press_survives_a_restart_and_only_a_release_ends_it(tmp_path: Path) -> None:
@@ -62,18 +62,12 @@ def test_a_folder_that_cannot_be_written_is_said_and_the_stop_holds(tmp_path: Pa
     assert latch.active and "not persisted" in latch.warning
 
 
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_a_fresh_backend_with_a_persisted_stop_says_so_in_health_and_to_every_page(
         tmp_path: Path) -> None:
     state = tmp_path / "state"
     EstopLatch(state).set(True, "operator at 10.0.0.9")  # pressed under an earlier backend
-    settings = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+    settings = Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
                         state_dir=state, allowed_hosts=["testserver"])
     st = Station(settings)
     with TestClient(create_app(settings, st), headers={"X-Touchline": "1"}) as c:

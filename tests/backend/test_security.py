@@ -5,7 +5,6 @@ size and JSON depth. Each defect of the black-box test has its regression here."
 from __future__ import annotations
 
 import json
-import socket
 from collections.abc import Iterator
 from typing import Any
 from urllib.parse import quote
@@ -20,17 +19,12 @@ from backend.api import create_app
 from backend.config import Settings
 from backend.security import _STRING, MAX_JSON_DEPTH, allowed_hosts, host_name, json_depth
 from backend.station import Station
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+from launcher.supervisor import free_tcp_port
 
 
 @pytest.fixture
 def app(tmp_path) -> Iterator[tuple[TestClient, Station]]:  # type: ignore[no-untyped-def]
-    cfg = Settings(relay_pub=f"tcp://127.0.0.1:{_port()}", relay_sub=f"tcp://127.0.0.1:{_port()}",
+    cfg = Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}", relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}",
                    static_dir=tmp_path, state_dir=tmp_path / "state",
                    allowed_hosts=["testserver", "field-laptop.local"])
     station = Station(cfg)

@@ -17,12 +17,7 @@ from backend.api import create_app
 from backend.config import Settings
 from backend.station import Station
 from backend.world.state import RobotState, WorldState
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+from launcher.supervisor import free_tcp_port
 
 
 def _big_world(k: int) -> WorldState:
@@ -32,9 +27,9 @@ def _big_world(k: int) -> WorldState:
 
 
 def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    port = _port()
-    settings = Settings(port=port, relay_pub=f"tcp://127.0.0.1:{_port()}",
-                        relay_sub=f"tcp://127.0.0.1:{_port()}", static_dir=tmp_path,
+    port = free_tcp_port()
+    settings = Settings(port=port, relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                        relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
                         state_dir=tmp_path / "state")
     st = Station(settings)
     server = uvicorn.Server(uvicorn.Config(create_app(settings, st), host="127.0.0.1", port=port,

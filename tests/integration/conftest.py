@@ -86,6 +86,23 @@ def station() -> Iterator[StationHandle]:
         yield st
 
 
+@pytest.fixture(scope="module")
+def bare() -> Iterator[StationHandle]:
+    """Relay + backend and no simulator: the test program is the camera and the robots."""
+    with launched("--sim", "none") as st:
+        yield st
+
+
+def stop_process(proc: subprocess.Popen[str], timeout_s: float = 10.0) -> None:
+    """SIGTERM, then SIGKILL if it does not end within ``timeout_s``."""
+    proc.terminate()
+    try:
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(timeout=timeout_s)
+
+
 def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") -> Any:  # type: ignore[no-untyped-def]
     """Polls ``cond`` until it returns a truthy value; bounded."""
     deadline = time.monotonic() + timeout_s

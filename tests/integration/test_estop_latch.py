@@ -12,21 +12,13 @@ import signal
 import socket
 import threading
 import time
-from collections.abc import Iterator
 
 import httpx
-import pytest
 
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 
-from .conftest import StationHandle, launched, wait_until
+from .conftest import StationHandle, wait_until
 from .test_hostile_vision import Camera
-
-
-@pytest.fixture(scope="module")
-def bare() -> Iterator[StationHandle]:
-    with launched("--sim", "none") as st:
-        yield st
 
 
 class Simulator:

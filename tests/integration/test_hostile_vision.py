@@ -10,17 +10,15 @@ import math
 import socket
 import threading
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import httpx
-import pytest
 
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
-from .conftest import StationHandle, launched, wait_until
+from .conftest import StationHandle, wait_until
 
 
 @dataclass
@@ -63,12 +61,6 @@ class Camera:
                 self.stop.wait(1 / 60)
         finally:
             sock.close()
-
-
-@pytest.fixture(scope="module")
-def bare() -> Iterator[StationHandle]:
-    with launched("--sim", "none") as st:
-        yield st
 
 
 class Robots:

@@ -4,7 +4,6 @@ file with a bad version set aside while its values stayed in use."""
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 import time
@@ -14,27 +13,23 @@ import httpx
 import pytest
 
 from backend.params.model import StationParams
+from launcher.supervisor import free_tcp_port
 from tests.backend.params_startup_cases import BAD_FILES, write_bad
 
-ROOT = Path(__file__).resolve().parents[2]
+from .conftest import ROOT, stop_process
+
 CASES = [c for c in BAD_FILES if c[0] in ("a JSON array", "a bad version",
                                           "a folder in its place")]
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @pytest.mark.parametrize("name,content", CASES, ids=[n for n, _ in CASES])
 def test_the_backend_starts_with_a_bad_params_file(tmp_path: Path, name: str,
                                                    content: bytes | None) -> None:
     write_bad(tmp_path, content)
-    port = _port()
+    port = free_tcp_port()
     proc = subprocess.Popen(
         [sys.executable, "-m", "backend", "--port", str(port), "--state-dir", str(tmp_path),
-         "--relay-pub", f"tcp://127.0.0.1:{_port()}", "--relay-sub", f"tcp://127.0.0.1:{_port()}"],
+         "--relay-pub", f"tcp://127.0.0.1:{free_tcp_port()}", "--relay-sub", f"tcp://127.0.0.1:{free_tcp_port()}"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     url = f"http://127.0.0.1:{port}"
     try:
@@ -55,10 +50,6 @@ def test_the_backend_starts_with_a_bad_params_file(tmp_path: Path, name: str,
             StationParams().model_dump(mode="json")
         assert len(list(tmp_path.glob("params.invalid-*.json"))) == 1
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        stop_process(proc, 15)
     log = proc.stdout.read() if proc.stdout else ""
     assert "default parameters in use" in log

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-import socket
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -17,17 +16,12 @@ import httpx
 import pytest
 import zmq
 
+from launcher.supervisor import free_tcp_port
+
 from .conftest import launched, wait_until
 
 R = 90.0
 HL, HW = 4500.0, 3000.0  # division B
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
 
 
 @dataclass
@@ -103,7 +97,7 @@ def ball_dist(r: dict[str, Any], t: dict[str, Any]) -> float:
 
 @pytest.fixture(scope="module")
 def sim() -> Iterator[Sim]:
-    truth = f"tcp://127.0.0.1:{_free_port()}"
+    truth = f"tcp://127.0.0.1:{free_tcp_port()}"
     ctx: zmq.Context[Any] = zmq.Context()
     with launched(f"--sim-arg=--truth-pub={truth}", "--backend-arg=--play",
                   "--backend-arg=match") as st:

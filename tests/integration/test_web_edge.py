@@ -22,11 +22,12 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 from websockets.typing import Origin
 
+from launcher.supervisor import free_tcp_port
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
-from .conftest import ROOT, StationHandle, launched, wait_until
+from .conftest import ROOT, StationHandle, launched, stop_process, wait_until
 
 ALLOWED = "field-laptop.local"
 
@@ -217,12 +218,6 @@ def test_an_oversized_websocket_message_closes_only_that_socket(
         assert _strict(ws.recv(timeout=10), "the snapshot")["type"] == "snapshot"
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.mark.parametrize("mode", ["dev", "preview"])
 def test_the_vite_servers_proxy_http_and_the_websocket_to_the_station(
         station: StationHandle, mode: str) -> None:
@@ -232,7 +227,7 @@ def test_the_vite_servers_proxy_http_and_the_websocket_to_the_station(
     assert vite.exists(), "node_modules missing: run make setup"
     if mode == "preview":
         assert (ROOT / "frontend" / "dist" / "index.html").exists(), "run make build"
-    port = _free_port()
+    port = free_tcp_port()
     args = [str(vite), *(["preview"] if mode == "preview" else []), "--config",
             "frontend/vite.config.ts", "--port", str(port), "--strictPort"]
     proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -253,10 +248,5 @@ def test_the_vite_servers_proxy_http_and_the_websocket_to_the_station(
                      open_timeout=10) as ws:
             assert _strict(ws.recv(timeout=10), "the snapshot")["type"] == "snapshot"
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+        stop_process(proc)
 
