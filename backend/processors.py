@@ -188,6 +188,11 @@ class VisionIngest(Processor):
                 _badlog.warning("vision", "bad vision packet from %s: %s", env.source,
                                 self.counter.last_error)
                 continue
+            if not (pkt.HasField("detection") or pkt.HasField("geometry")):
+                self.counter.error(streams.NO_CONTENT, "SSL_WrapperPacket has neither "
+                                   "detection nor geometry")
+                _badlog.warning("vision", "empty vision packet from %s", env.source)
+                continue
             if pkt.HasField("detection"):
                 self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
                 self.latency.add_since(env.receive_time_ns)

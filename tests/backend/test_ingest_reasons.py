@@ -29,19 +29,21 @@ async def test_vision_ingest_counts_each_reason() -> None:
         good[:-1],  # cut by one byte
         b"\x07\x00 not a wrapper",  # field number 0: not the wire format
         b"\x0a\x02\x08\x05",  # a detection without its required fields
+        b"\x1a\x03cam",  # a wrapper with only a source: neither detection nor geometry
         good,
     ]
     for i, p in enumerate(payloads):
         packets.write(_env(tl.STREAM_VISION, p, i + 1))
     await ingest.tick()
     c = ingest.counter
-    assert c.by_reason == {"truncated": 2, "not protobuf": 1, "missing required field": 1}
-    assert c.errors == 4 and c.packets == 5
-    assert c.last_error.startswith("missing required field: ")
+    assert c.by_reason == {"truncated": 2, "not protobuf": 1, "missing required field": 1,
+                           "no content": 1}
+    assert c.errors == 5 and c.packets == 6
+    assert c.last_error.startswith("no content: ")
     assert ingest.detections.latest_value() is not None
     d = c.to_dict()
-    assert d["errors_by_reason"] == {"missing required field": 1, "not protobuf": 1,
-                                     "truncated": 2}
+    assert d["errors_by_reason"] == {"missing required field": 1, "no content": 1,
+                                     "not protobuf": 1, "truncated": 2}
 
 
 async def test_referee_ingest_counts_bad_strings_and_uses_the_message() -> None:
