@@ -8,7 +8,7 @@ PORT ?= 8000
 RUN_ARGS ?=
 MINUTES ?= 3
 
-.PHONY: run test setup proto build multicast chromium octave lint typecheck test-py test-ts \
+.PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
         test-e2e bench experiments clean match fuzz
 
 run: build multicast
@@ -35,6 +35,10 @@ sslpb/__init__.py: .venv/.ok node_modules/.ok $(wildcard proto/sslpb/*.proto) sc
 
 proto: .venv/.ok node_modules/.ok
 	TOUCHLINE_REQUIRE_TS_PROTO=1 $(PY) scripts/gen_proto.py
+
+# The browser contract: TypeScript types and the docs/api.md reference from backend/contract.py.
+contract: .venv/.ok
+	$(PY) scripts/gen_contract.py
 
 build: setup
 	npm run build

@@ -19,6 +19,7 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
+from . import contract
 from .config import Settings
 from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
@@ -200,7 +201,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                                 what="referee")
 
     @api.post("/referee/internal/enabled", response_model=None)
-    async def referee_enable(body: EnableIn) -> dict[str, Any] | JSONResponse:
+    async def referee_enable(body: EnableIn) -> contract.RefereeView | JSONResponse:
         try:
             await st.call(st.internal_referee.enable, body.enabled)
         except RefereeCommandError as exc:
@@ -208,7 +209,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         return st.referee_view()
 
     @api.post("/referee/internal/command", response_model=None)
-    async def referee_command(body: RefereeCommandIn) -> dict[str, Any] | JSONResponse:
+    async def referee_command(body: RefereeCommandIn) -> contract.RefereeView | JSONResponse:
         dp = body.designated_position
         if dp is not None:
             _check_on_field(dp.x, dp.y)
@@ -228,22 +229,23 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         return st.referee_view()
 
     @api.post("/referee/internal/card", response_model=None)
-    async def referee_card(body: CardIn) -> dict[str, Any] | JSONResponse:
+    async def referee_card(body: CardIn) -> contract.RefereeView | JSONResponse:
         other = st.internal_referee.foreign_active()
         if other is not None:
             return JSONResponse(status_code=409, content={
                 "detail": f"a game controller is active ({other}): the internal referee "
                           "stays off"})
-        geo = st.geometry() or {}
+        geo = st.geometry()
         # the division's robots per team, from the field size (A: 12 m x 9 m, 11 robots)
-        st.referee_state.robots_per_team = 11 if geo.get("field_length", 0) >= 11000 else 6
+        st.referee_state.robots_per_team = \
+            11 if geo is not None and geo["field_length"] >= 11000 else 6
         await st.call(st.referee_state.card, body.team, body.card)
         await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s card for %s", body.card, body.team)
         return st.referee_view()
 
     @api.get("/estop")
-    async def estop_get() -> dict[str, Any]:
+    async def estop_get() -> contract.EstopInfo:
         return st.estop_view()
 
     @api.post("/estop", response_model=None)

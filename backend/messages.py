@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .contract import TargetSource
 from .control.goto import LocalVelocity, Target
 from .world.state import Team
 
@@ -32,7 +33,7 @@ class TargetEntry:
     """Where one robot goes and what it does, as strategy (or an operator) decided."""
 
     target: Target
-    source: str  # "operator" or "strategy"
+    source: TargetSource
     role: str = ""
     path: tuple[tuple[float, float], ...] = ()  # waypoints (mm) after the robot; last = target
     kick_speed_mps: float = 0.0

@@ -13,7 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import zmq
 import zmq.asyncio
@@ -21,7 +21,7 @@ import zmq.asyncio
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import topics
+from . import contract, topics
 from .bus import DataBus
 from .config import ROOT, Settings
 from .control.goto import Target
@@ -307,7 +307,7 @@ class Station:
             out["last_error"] = self.strategy.engine_last_error
         return out
 
-    def strategy_state(self) -> dict[str, Any]:
+    def strategy_state(self) -> contract.StrategyState:
         """What the strategy is doing now (sent with every world update: kept small)."""
         core = self.strategy.core if hasattr(self, "strategy") else None
         sit = core.situation if core is not None else None
@@ -321,7 +321,7 @@ class Station:
             "tick_ms": core.last_tick_ms if core is not None else 0.0,
         }
 
-    def strategy_view(self) -> dict[str, Any]:
+    def strategy_view(self) -> contract.StrategyView:
         """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
         core = self.strategy.core if hasattr(self, "strategy") else None
         team = self.params.current.team.our_team
@@ -410,7 +410,7 @@ class Station:
             log.warning("the relay's emergency stop is latched (by %s): active here too", by)
             self.set_estop(True, f"relay latch ({by or '?'})")
 
-    def estop_view(self) -> dict[str, Any]:
+    def estop_view(self) -> contract.EstopInfo:
         s = self.estop_latch.state
         rs = self.relay_stats.latest_value()
         return {"active": self.estop, "since": s.since, "by": s.by,
@@ -456,7 +456,7 @@ class Station:
         t.present = present
         self.sim_commands.write(cmd.SerializeToString())
 
-    def referee_view(self) -> dict[str, Any]:
+    def referee_view(self) -> contract.RefereeView:
         ir = self.internal_referee
         st = self.referee_state
         return {
@@ -482,7 +482,7 @@ class Station:
 
     # ---- views ----
 
-    def world_dict(self) -> dict[str, Any]:
+    def world_dict(self) -> contract.World:
         world = self.world_topic.latest_value()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets_topic.latest_value() or {}
         ref = self.referee_topic.latest()
@@ -491,7 +491,7 @@ class Station:
         commands = self.control.last_commands if hasattr(self, "control") else {}
         telemetry = self.control.telemetry if hasattr(self, "control") else {}
         now_unix = time.time()
-        out: dict[str, Any] = {
+        out: contract.World = {
             "seq": self.world_topic.seq,
             "t_capture": world.t_capture if world else 0.0,
             "ball": None,
@@ -506,21 +506,20 @@ class Station:
         if hasattr(self, "strategy"):
             out["strategy"] = self.strategy_state()
         if ref is not None:
-            rd = ref.value.to_dict()
-            rd["age_s"] = time.monotonic() - ref.time_mono
-            if ref.value.source_identifier == self.referee_state.source_identifier:
-                rd["source"] = "internal"
-            out["referee"] = rd
+            internal = ref.value.source_identifier == self.referee_state.source_identifier
+            out["referee"] = ref.value.to_dict(time.monotonic() - ref.time_mono,
+                                               "internal" if internal else None)
         if world is None:
             return out
         t_ref = world.t_capture
         if world.ball is not None:
             b = world.ball
-            out["ball"] = {"x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
-                           "age_s": t_ref - b.t_seen, "cameras": list(b.cameras),
-                           "raw_x": b.raw_x, "raw_y": b.raw_y, "predicted": b.predicted,
-                           "lost": b.lost, "filter": b.filter}
-        robots = []
+            ball: contract.Ball = {
+                "x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
+                "age_s": t_ref - b.t_seen, "cameras": list(b.cameras), "raw_x": b.raw_x,
+                "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter}
+            out["ball"] = ball
+        robots: list[contract.Robot] = []
         for r in world.robots:
             entry = targets.get((r.team, r.id))
             cmd = commands.get((r.team, r.id))
@@ -541,7 +540,8 @@ class Station:
                 "controlled": entry is not None,
                 "raw_x": r.raw_x, "raw_y": r.raw_y, "raw_orientation": r.raw_orientation,
                 "predicted": r.predicted, "lost": r.lost, "filter": r.filter,
-                "control": telemetry.get(f"{r.team}/{r.id}") if entry is not None else None,
+                "control": (cast(contract.RobotControl, telemetry.get(f"{r.team}/{r.id}"))
+                            if entry is not None else None),
                 "command": None if cmd is None else {
                     "forward_mps": cmd.velocity.forward_mps,
                     "left_mps": cmd.velocity.left_mps,
@@ -558,7 +558,7 @@ class Station:
         } for c in world.cameras]
         return out
 
-    def _world_health(self) -> dict[str, Any] | None:
+    def _world_health(self) -> contract.WorldHealth | None:
         """The world model's view: its age by the receive clock, what it dropped and why,
         each camera's clock offset."""
         if not hasattr(self, "world"):
@@ -575,15 +575,14 @@ class Station:
             "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
         }
 
-    def _latency_stages(self) -> list[dict[str, Any]]:
+    def _latency_stages(self) -> list[contract.LatencyStage]:
         """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
         if not hasattr(self, "publisher"):
             return []
-        stages: list[dict[str, Any]] = [
-            {"stage": "decoded (vision ingest)", **self.vision.latency.summary()},
-            {"stage": "world model written", **self.world.latency.summary()},
-            {"stage": "commands sent to relay", **self.publisher.latency.summary()},
-        ]
+        stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
+                  for name, stage in (("decoded (vision ingest)", self.vision.latency),
+                                      ("world model written", self.world.latency),
+                                      ("commands sent to relay", self.publisher.latency))]
         rs = self.relay_stats.latest_value()
         if rs is not None and rs.get("command_latency_ms", -1) >= 0:
             stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
@@ -613,13 +612,13 @@ class Station:
                                                   "health"))
         return self._health_json_cache[1]
 
-    def geometry(self) -> dict[str, Any] | None:
+    def geometry(self) -> contract.Geometry | None:
         """The field as decoded (cleaned at decode time; non-finite numbers, should any get
         through, become null here rather than break the JSON)."""
         g = self.geometry_topic.latest_value()
-        return None if g is None else dict(_finite(g))
+        return None if g is None else cast(contract.Geometry, _finite(g))
 
-    def health(self) -> dict[str, Any]:
+    def health(self) -> contract.Health:
         procs = []
         for p in self.runner.processors:
             trig = p.trigger
@@ -668,7 +667,7 @@ class Station:
         if referee is not None:
             referee["source"] = ("internal" if referee["source_identifier"]
                                  == self.referee_state.source_identifier else "game-controller")
-        out: dict[str, Any] = _finite({
+        out: contract.Health = _finite({
             "ok": ok,
             "warnings": [*self._estop_warnings(), *_warnings(vision, relay, referee, world),
                          *self.params.warnings],
@@ -689,7 +688,8 @@ class Station:
 
 
 def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
-              referee: dict[str, Any] | None, world: dict[str, Any] | None = None) -> list[str]:
+              referee: dict[str, Any] | None,
+              world: contract.WorldHealth | None = None) -> list[str]:
     """One line per problem: why ``ok`` is false, and a silent referee."""
     out: list[str] = []
     if world is not None:

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 from sslpb.ssl_gc_common_pb2 import Team
 from sslpb.ssl_gc_game_event_pb2 import GameEvent
 from sslpb.ssl_gc_referee_message_pb2 import MatchType, Referee
+
+from .. import contract
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,16 +46,17 @@ class RefereeState:
     def halted(self) -> bool:
         return self.command == "HALT"
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, age_s: float, source: str | None = None) -> contract.Referee:
+        """The browser's view (``source``: overrides this state's, e.g. "internal")."""
         return {
-            "source": self.source,
+            "source": source or self.source,
             "source_identifier": self.source_identifier,
             "command": self.command,
             "stage": self.stage,
             "command_counter": self.command_counter,
             "stage_time_left_s": self.stage_time_left_s,
-            "blue": self.blue,
-            "yellow": self.yellow,
+            "blue": cast(contract.RefereeTeam, self.blue),
+            "yellow": cast(contract.RefereeTeam, self.yellow),
             "designated_position": (
                 None if self.designated_position is None
                 else {"x": self.designated_position[0], "y": self.designated_position[1]}
@@ -63,7 +66,8 @@ class RefereeState:
             "status_message": self.status_message,
             "match_type": self.match_type,
             "current_action_time_remaining_s": self.current_action_time_remaining_s,
-            "game_events": list(self.game_events),
+            "game_events": cast(list[contract.RefereeGameEvent], list(self.game_events)),
+            "age_s": age_s,
         }
 
 

@@ -228,7 +228,7 @@ class Pipeline:
             _strict_json(geo)
         ref = st_.referee_topic.latest_value()
         if ref is not None:
-            _strict_json(ref.to_dict())
+            _strict_json(ref.to_dict(0.0))
 
 
 def _strict_json(obj: Any) -> None:

@@ -70,7 +70,7 @@ def test_cards_next_command_status_and_events_are_carried() -> None:
                                  "by_team": "BLUE", "origin": ["TIGERs AutoRef"],
                                  "created_s": float(newest)}
     assert st.game_events[1]["by_team"] == "YELLOW"
-    d = st.to_dict()
+    d = st.to_dict(0.0)
     assert d["next_command"] == "DIRECT_FREE_YELLOW" and len(d["game_events"]) == MAX_GAME_EVENTS
 
 

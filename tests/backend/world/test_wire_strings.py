@@ -88,7 +88,7 @@ def test_every_referee_string_is_decoded_with_replacement_and_named() -> None:
     parsed = Referee.FromString(_corrupt(ref))
     assert isinstance(parsed.blue.name, bytes)  # what upb hands over for a bad proto2 string
     bad: list[str] = []
-    out = decode_referee(parsed, bad).to_dict()
+    out = decode_referee(parsed, bad).to_dict(0.0)
     _strict_json(out)
     texts = _strings(out)
     assert not any(MARK in s or "Zq9" in s for s in texts)

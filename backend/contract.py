@@ -1,0 +1,557 @@
+"""The browser contract, defined once: every websocket message and every JSON body the station
+sends, as typed dictionaries.
+
+The station builds these dictionaries directly (mypy checks every builder against them, at no
+cost at run time); the tests validate real payloads against them with pydantic, refusing any key
+not declared here; ``scripts/gen_contract.py`` generates the TypeScript types
+(``frontend/src/api/contract.gen.ts``) and the message reference of ``docs/api.md`` from them,
+and a test fails when either is out of date. Units: lengths mm, angles rad, speeds m/s where the
+name says ``_mps`` (else mm/s), times s. HTTP request bodies are the pydantic models of
+``backend/api.py`` (their schema is in ``/openapi.json``).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, NotRequired
+
+from pydantic import ConfigDict, Field, with_config
+from typing_extensions import TypedDict
+
+Team = Literal["blue", "yellow"]
+Side = Literal["negative-x", "positive-x"]
+ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
+#: the filter in use for an object: "raw", "median", "paper", "kalman" ("" before any)
+FilterName = Annotated[str, Field(description='"raw", "median", "paper" or "kalman"')]
+#: who set a robot's target: an operator's click, or the strategy
+TargetSource = Literal["operator", "strategy"]
+
+_STRICT = ConfigDict(extra="forbid")
+
+
+@with_config(_STRICT)
+class Vec(TypedDict):
+    x: float
+    y: float
+
+
+# ------------------------------------------------------------------------------ world
+
+
+@with_config(_STRICT)
+class Ball(TypedDict):
+    """The filtered ball."""
+
+    x: float
+    y: float
+    vx: float
+    vy: float
+    visible: bool
+    age_s: Annotated[float, Field(description="since the ball was last seen")]
+    cameras: list[int]
+    raw_x: Annotated[float | None, Field(description="latest merged measurement, mm")]
+    raw_y: float | None
+    predicted: Annotated[bool, Field(description="position extrapolated: no fresh detection")]
+    lost: Annotated[bool, Field(description="not seen for long: dropped from the world soon")]
+    filter: FilterName
+
+
+@with_config(_STRICT)
+class RobotControl(TypedDict):
+    """Telemetry of a robot's controller (when the station commands it)."""
+
+    algorithm: ControlAlgorithm
+    phase: str
+    t_s: float
+    ref_x_m: float
+    has_reference: float
+    x_m: float
+    path_length_m: float
+    lateral_m: float
+    cmd_speed_mps: float
+    meas_speed_mps: float
+    c_estimate: float
+    heading_error_rad: float
+    restarts: float
+
+
+@with_config(_STRICT)
+class RobotTarget(TypedDict):
+    x: float
+    y: float
+    orientation: float | None
+    source: TargetSource
+
+
+@with_config(_STRICT)
+class RobotCommand(TypedDict):
+    """The velocity the station commands, in the robot's frame."""
+
+    forward_mps: float
+    left_mps: float
+    angular_radps: float
+
+
+@with_config(_STRICT)
+class RobotKick(TypedDict):
+    """Kicker armed: the kick speed and whether it chips."""
+
+    speed_mps: float
+    chip: bool
+
+
+@with_config(_STRICT)
+class Robot(TypedDict):
+    team: Team
+    id: int
+    x: float
+    y: float
+    orientation: float
+    vx: float
+    vy: float
+    omega: float
+    visible: bool
+    age_s: float
+    cameras: list[int]
+    target: RobotTarget | None
+    role: Annotated[str | None, Field(description="strategy role (goalkeeper, attacker, ...)")]
+    path: Annotated[list[Vec] | None, Field(
+        description="planned waypoints to the target; the last one is the target")]
+    kick: RobotKick | None
+    dribbler: bool
+    controlled: Annotated[bool, Field(description="the station commands this robot")]
+    raw_x: float | None
+    raw_y: float | None
+    raw_orientation: float | None
+    predicted: bool
+    lost: bool
+    filter: FilterName
+    control: RobotControl | None
+    command: RobotCommand | None
+
+
+@with_config(_STRICT)
+class RawRobot(TypedDict):
+    team: Team
+    id: int
+    x: float
+    y: float
+    orientation: float
+
+
+@with_config(_STRICT)
+class RawCamera(TypedDict):
+    """One camera's latest frame, as detected (before merging and filtering)."""
+
+    camera_id: int
+    frame_number: int
+    t_capture: float
+    age_s: float
+    balls: list[Vec]
+    robots: list[RawRobot]
+
+
+@with_config(_STRICT)
+class RefereeTeam(TypedDict):
+    name: str
+    score: int
+    yellow_cards: int
+    red_cards: int
+    goalkeeper: int
+    yellow_card_times_s: Annotated[list[float], Field(
+        description="seconds left on each active yellow card")]
+    timeouts: int
+    timeout_time_s: float
+    foul_counter: int | None
+    ball_placement_failures: int | None
+    can_place_ball: bool | None
+    max_allowed_bots: Annotated[int | None, Field(
+        description="robots the team may have on the field now (cards lower it)")]
+    bot_substitution_intent: bool | None
+    bot_substitution_allowed: bool | None
+
+
+@with_config(_STRICT)
+class RefereeGameEvent(TypedDict):
+    """A game event as the game controller reports it (newest first)."""
+
+    id: str
+    type: Annotated[str, Field(description='proto enum name ("BOT_CRASH_UNIQUE", ...)')]
+    by_team: Annotated[str | None, Field(description='"BLUE", "YELLOW"; null: no team')]
+    origin: list[str]
+    created_s: Annotated[float | None, Field(description="Unix s; null when not sent")]
+
+
+@with_config(_STRICT)
+class Referee(TypedDict):
+    """The referee the station obeys (the game controller's or the internal one)."""
+
+    source: Annotated[str, Field(description='"game-controller", "internal" or "none"')]
+    source_identifier: str
+    command: str
+    stage: str
+    command_counter: int
+    stage_time_left_s: float | None
+    blue: RefereeTeam
+    yellow: RefereeTeam
+    designated_position: Annotated[Vec | None, Field(
+        description="the placement position; the official controller sends its last one "
+                    "always: use placementTarget (referee.ts)")]
+    blue_team_on_positive_half: bool | None
+    next_command: str | None
+    status_message: str
+    match_type: str | None
+    current_action_time_remaining_s: float | None
+    game_events: list[RefereeGameEvent]
+    age_s: float
+
+
+@with_config(_STRICT)
+class EstopInfo(TypedDict):
+    """The latched emergency stop."""
+
+    active: bool
+    since: Annotated[float, Field(description="Unix s of the last press or release (0: never)")]
+    by: Annotated[str, Field(description="who pressed or released it")]
+    relay_latched: Annotated[bool | None, Field(
+        description="the relay's latch from its statistics; null before any arrived")]
+
+
+@with_config(_STRICT)
+class StrategyState(TypedDict):
+    """What the strategy is doing now (sent with every world update)."""
+
+    play: str
+    situation: str
+    situation_text: str
+    our_team: Team
+    our_side: Side
+    side_from_referee: Annotated[bool, Field(
+        description="our side comes from the referee (blue_team_on_positive_half)")]
+    tick_ms: float
+
+
+@with_config(_STRICT)
+class World(TypedDict):
+    """The world as the station sees it, with what it commands."""
+
+    seq: int
+    t_capture: float
+    ball: Ball | None
+    robots: list[Robot]
+    cameras: list[RawCamera]
+    referee: Referee | None
+    estop: bool
+    estop_info: EstopInfo
+    halt_reason: Annotated[str, Field(
+        description='why every robot is held ("emergency stop", "HALT", "no vision ..."), or ""')]
+    strategy: StrategyState | None
+
+
+# ------------------------------------------------------------------------------ geometry
+
+
+@with_config(_STRICT)
+class FieldLine(TypedDict):
+    name: str
+    p1: Vec
+    p2: Vec
+    thickness: float
+
+
+@with_config(_STRICT)
+class FieldArc(TypedDict):
+    name: str
+    center: Vec
+    radius: float
+    a1: float
+    a2: float
+    thickness: float
+
+
+@with_config(_STRICT)
+class Geometry(TypedDict):
+    """The field from the geometry packet (mm)."""
+
+    field_length: float
+    field_width: float
+    goal_width: float
+    goal_depth: float
+    boundary_width: float
+    penalty_area_depth: float
+    penalty_area_width: float
+    center_circle_radius: float
+    ball_radius: float
+    max_robot_radius: float
+    lines: list[FieldLine]
+    arcs: list[FieldArc]
+
+
+# ------------------------------------------------------------------------------ health
+
+
+@with_config(_STRICT)
+class StreamHealth(TypedDict):
+    packets: int
+    errors: int
+    errors_by_reason: Annotated[dict[str, int], Field(
+        description='refused datagrams (for vision also what the world model dropped) by '
+                    'reason: "truncated", "not protobuf", "time out of range", ...')]
+    rate_hz: float
+    last_age_s: float
+    last_error: str
+
+
+@with_config(_STRICT)
+class ProcessorHealth(TypedDict):
+    name: str
+    trigger: str
+    configured_hz: float | None
+    measured_hz: float
+    tick_mean_ms: float
+    tick_p99_ms: float
+    overruns: int
+    runs: int
+    errors: int
+    last_error: str
+
+
+@with_config(_STRICT)
+class TopicHealth(TypedDict):
+    name: str
+    size: int
+    capacity: int
+    seq: int
+    age_s: Annotated[float, Field(description="since the last write; -1: never written")]
+
+
+@with_config(_STRICT)
+class RelayHealth(TypedDict):
+    """The relay's statistics, as it last published them."""
+
+    time_ns: int
+    output_mode: str
+    active_robots: int
+    stale_robots: int
+    output_rate_hz: float
+    command_latency_ms: float
+    stale_stops: int
+    estop_latched: Annotated[bool, Field(description="only zeros leave the relay while true")]
+    estop_by: str
+    alive: bool
+    age_s: float
+
+
+@with_config(_STRICT)
+class LatencyHealth(TypedDict):
+    mean_ms: float
+    p50_ms: float
+    p99_ms: float
+    n: int
+
+
+@with_config(_STRICT)
+class LatencyStage(TypedDict):
+    """One stage from a vision datagram's arrival at the relay, in pipeline order."""
+
+    stage: str
+    mean_ms: float
+    p50_ms: float | None
+    p99_ms: float | None
+    n: int | None
+
+
+@with_config(_STRICT)
+class EngineHealth(TypedDict):
+    """The compute engine the strategy calls (null when off)."""
+
+    kind: str
+    function: str
+    running: bool
+    calls_per_s: float
+    latency_mean_ms: float
+    latency_p99_ms: float
+    calls: int
+    ok: int
+    errors: int
+    timeouts: int
+    crashes: int
+    restarts: int
+    start_failures: int
+    last_error: str
+    workers: int
+    busy: int
+    idle: int
+    fallbacks: Annotated[int, Field(
+        description="strategy ticks that used the built-in code because the engine failed")]
+
+
+@with_config(_STRICT)
+class RefereeHealth(TypedDict):
+    """The newest referee message as health sees it."""
+
+    last_heard_s: float
+    source_identifier: str
+    source: Literal["game-controller", "internal"]
+    command: Annotated[str, Field(description="what the station still obeys")]
+    obeyed: Annotated[bool, Field(description="false: the internal referee, switched off")]
+    silent: bool
+    silent_after_s: float
+
+
+@with_config(_STRICT)
+class WorldHealth(TypedDict):
+    """The world model: its age by the receive clock, what it dropped and why."""
+
+    age_s: float | None
+    stale: bool
+    rejected: dict[str, int]
+    recent_rejections: dict[str, int]
+    last_rejection: str
+    clock_resyncs: int
+    camera_clock_offsets_s: Annotated[dict[str, float | None], Field(
+        description="per camera: receive - capture (s)")]
+
+
+@with_config(_STRICT)
+class Health(TypedDict):
+    """The station's health (GET /api/health and the websocket)."""
+
+    ok: Annotated[bool, Field(
+        description="the loop works (fresh vision, relay alive); a silent referee leaves it true")]
+    warnings: Annotated[list[str], Field(description="one line per problem")]
+    estop: EstopInfo
+    world: WorldHealth | None
+    referee: RefereeHealth | None
+    uptime_s: float
+    streams: dict[str, StreamHealth]
+    processors: list[ProcessorHealth]
+    topics: list[TopicHealth]
+    relay: RelayHealth | None
+    latency: LatencyHealth | None
+    latency_stages: list[LatencyStage]
+    websocket_clients: int
+    engine: EngineHealth | None
+
+
+# ------------------------------------------------------------------------------ parameters
+
+
+#: parameter values: nested groups of leaves (numbers, strings, booleans)
+ParamValues = dict[str, object]
+
+
+# ------------------------------------------------------------------------------ HTTP bodies
+
+
+@with_config(_STRICT)
+class PlayInfo(TypedDict):
+    name: str
+    title: str
+    description: str
+
+
+@with_config(_STRICT)
+class StrategyView(StrategyState):
+    """GET /api/strategy: the strategy state, the plays to choose from and the roles."""
+
+    plays: list[PlayInfo]
+    roles: Annotated[dict[str, str], Field(description='role of each robot, keyed "blue/3"')]
+
+
+@with_config(_STRICT)
+class Score(TypedDict):
+    blue: int
+    yellow: int
+
+
+@with_config(_STRICT)
+class InternalReferee(TypedDict):
+    """The station's own referee."""
+
+    enabled: bool
+    disabled_reason: str
+    foreign_source: Annotated[str | None, Field(
+        description="a game controller heard on the network (the internal referee steps aside)")]
+    command: str
+    stage: str
+    command_counter: int
+    designated_position: Vec | None
+    score: Score
+    max_allowed_bots: Score
+    commands: Annotated[list[str], Field(description="the commands an operator may give")]
+
+
+@with_config(_STRICT)
+class RefereeView(TypedDict):
+    """GET /api/referee (and the answer of every internal-referee POST, without ``active``)."""
+
+    internal: InternalReferee
+    active: NotRequired[Annotated[Referee | None, Field(
+        description="the referee the station obeys (as in the world message)")]]
+
+
+@with_config(_STRICT)
+class EstopAnswer(EstopInfo):
+    """The answer of POST /api/estop."""
+
+    estop: bool
+
+
+# ------------------------------------------------------------------------------ websocket
+
+
+@with_config(_STRICT)
+class ParamsState(TypedDict):
+    """The parameters in force (GET /api/params) and their version."""
+
+    version: int
+    values: ParamValues
+
+
+@with_config(_STRICT)
+class SnapshotMessage(TypedDict):
+    """The first message on every websocket."""
+
+    type: Literal["snapshot"]
+    world: World
+    geometry: Geometry | None
+    health: Health
+    params: ParamsState
+
+
+@with_config(_STRICT)
+class WorldMessage(TypedDict):
+    type: Literal["world"]
+    world: World
+
+
+@with_config(_STRICT)
+class GeometryMessage(TypedDict):
+    type: Literal["geometry"]
+    geometry: Geometry
+
+
+@with_config(_STRICT)
+class HealthMessage(TypedDict):
+    type: Literal["health"]
+    health: Health
+
+
+@with_config(_STRICT)
+class ParamsMessage(TypedDict):
+    """A parameter change (any client's), with the new version."""
+
+    type: Literal["params"]
+    version: int
+    values: ParamValues
+
+
+ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
+
+#: what scripts/gen_contract.py exports to TypeScript, in this order
+EXPORTS: dict[str, object] = {
+    "Team": Team, "Side": Side, "ControlAlgorithm": ControlAlgorithm,
+    "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
+    "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
+    "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
+}
