@@ -226,7 +226,6 @@ export function EnginePanel({ h }: { h: Health }) {
 /** The latched emergency stop as the station and the relay report it. */
 export function EstopHealth({ h }: { h: Health }) {
   const e = h.estop;
-  if (!e) return null;
   const since = e.since > 0 ? new Date(e.since * 1000).toLocaleTimeString() : "";
   const relay = e.relay_latched === null ? "relay latch unknown" : e.relay_latched ? "latched in the relay" : "not latched in the relay";
   return (

@@ -34,16 +34,15 @@ export function strategyTexts(robot: Robot): { role: string; path: string; kick:
   };
 }
 
-/** Role, planned path, kicker and dribbler, as far as the station reports them. */
+/** Role, planned path, kicker and dribbler. */
 function StrategyFields({ robot }: { robot: Robot }) {
-  if (robot.role === undefined && robot.path === undefined && robot.kick === undefined && robot.dribbler === undefined) return null;
   const t = strategyTexts(robot);
   return (
     <>
       <Row label="role" value={t.role} testId="robot-role-detail" />
       <Row label="path" value={t.path} testId="robot-path" />
       <Row label="kicker" value={t.kick} testId="robot-kick" />
-      {robot.dribbler !== undefined && <Row label="dribbler" value={t.dribbler} testId="robot-dribbler" />}
+      <Row label="dribbler" value={t.dribbler} testId="robot-dribbler" />
     </>
   );
 }

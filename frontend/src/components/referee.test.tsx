@@ -6,7 +6,7 @@ import type { Health, RefereeGameEvent, RefereeHealth, Robot, Team } from "../ap
 import { robot } from "../field/testRobots";
 import { placementTarget, refereeSilentFor } from "../referee";
 import { appStore, initialAppState } from "../store/appStore";
-import { health, referee, refereeTeam, world } from "../ws/fixtures";
+import { health, referee, refereeTeam, stream, world } from "../ws/fixtures";
 import { HealthPanel } from "./HealthPanel";
 import { HealthSummary } from "./HealthSummary";
 import { EVENTS_SHOWN, fmtCards, RefereePanel, RefereeState } from "./RefereePanel";
@@ -159,7 +159,7 @@ describe("a silent referee", () => {
     ...health(60),
     streams: {
       ...health(60).streams,
-      referee: { packets: 900, errors: 0, rate_hz: r?.silent ? 0 : 40, last_age_s: r?.last_heard_s ?? -1, last_error: "" },
+      referee: stream({ packets: 900, rate_hz: r?.silent ? 0 : 40, last_age_s: r?.last_heard_s ?? -1 }),
     },
     referee: r,
     warnings,

@@ -42,6 +42,11 @@ const strategyInfo: StrategyInfo = {
   ],
   situation: "running",
   situation_text: "Game running",
+  our_team: "blue",
+  our_side: "negative-x",
+  side_from_referee: false,
+  tick_ms: 0.5,
+  roles: {},
 };
 
 type Handler = (method: string, body: unknown) => { status: number; body: unknown };
@@ -231,10 +236,12 @@ describe("roles in the robot table and panel, situation banner", () => {
     expect(q("robot-extra-path")).toBeNull();
   });
 
-  it("leaves the strategy rows out for a robot without strategy fields", () => {
+  it("says so for a robot the strategy gives nothing", () => {
     act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 4 }} robot={robot("blue", 4, 0, 0)} />));
-    expect(q("robot-role-detail")).toBeNull();
-    expect(q("robot-kick")).toBeNull();
+    expect(q("robot-role-detail")?.textContent).toBe("—");
+    expect(q("robot-path")?.textContent).toBe("—");
+    expect(q("robot-kick")?.textContent).toBe("not armed");
+    expect(q("robot-dribbler")?.textContent).toBe("off");
   });
 
   it("banners the situation and the side we defend", () => {

@@ -11,6 +11,11 @@ const info: StrategyInfo = {
   ],
   situation: "running",
   situation_text: "Game running",
+  our_team: "blue",
+  our_side: "negative-x",
+  side_from_referee: false,
+  tick_ms: 0.5,
+  roles: {},
 };
 
 describe("playList", () => {

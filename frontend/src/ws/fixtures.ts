@@ -1,5 +1,13 @@
 // Test fixtures (only imported by tests).
-import type { EngineHealth, Geometry, Health, Referee, RefereeTeam, World } from "../api/types";
+import type {
+  EngineHealth,
+  Geometry,
+  Health,
+  Referee,
+  RefereeTeam,
+  StreamHealth,
+  World,
+} from "../api/types";
 import { DEFAULT_GEOMETRY } from "../field/defaultGeometry";
 import { robot } from "../field/testRobots";
 
@@ -7,11 +15,17 @@ export function world(seq: number, extra: Partial<World> = {}): World {
   return {
     seq,
     t_capture: 1_700_000_000 + seq / 60,
-    ball: { x: 10, y: 20, vx: 0, vy: 0, visible: true, age_s: 0, cameras: [0] },
+    ball: {
+      x: 10, y: 20, vx: 0, vy: 0, visible: true, age_s: 0, cameras: [0],
+      raw_x: 10, raw_y: 20, predicted: false, lost: false, filter: "kalman",
+    },
     robots: [robot("blue", 0, -1000, 0), robot("yellow", 0, 1000, 0)],
     cameras: [],
     referee: null,
     estop: false,
+    estop_info: { active: false, since: 0, by: "", relay_latched: false },
+    halt_reason: "",
+    strategy: null,
     ...extra,
   };
 }
@@ -19,19 +33,38 @@ export function world(seq: number, extra: Partial<World> = {}): World {
 export function health(rate = 60): Health {
   return {
     ok: true,
-    streams: { vision: { packets: 100, errors: 0, rate_hz: rate, last_age_s: 0.01, last_error: "" } },
+    warnings: [],
+    estop: { active: false, since: 0, by: "", relay_latched: false },
+    world: null,
+    referee: null,
+    uptime_s: 10,
+    streams: { vision: stream({ rate_hz: rate }) },
     processors: [],
     topics: [],
     relay: null,
+    latency: null,
+    latency_stages: [],
     websocket_clients: 1,
+    engine: null,
   };
 }
+
+export const stream = (extra: Partial<StreamHealth> = {}): StreamHealth => ({
+  packets: 100,
+  errors: 0,
+  errors_by_reason: {},
+  rate_hz: 60,
+  last_age_s: 0.01,
+  last_error: "",
+  ...extra,
+});
 
 export const geometry: Geometry = { ...DEFAULT_GEOMETRY, field_length: 12000, field_width: 9000 };
 
 export const engineHealth = (extra: Partial<EngineHealth> = {}): EngineHealth => ({
   kind: "octave",
   function: "goalkeeper",
+  running: true,
   calls_per_s: 19.96,
   latency_mean_ms: 3.214,
   latency_p99_ms: 11.5,
@@ -56,6 +89,15 @@ export const refereeTeam = (name: string, extra: Partial<RefereeTeam> = {}): Ref
   yellow_cards: 0,
   red_cards: 0,
   goalkeeper: 0,
+  yellow_card_times_s: [],
+  timeouts: 4,
+  timeout_time_s: 300,
+  foul_counter: null,
+  ball_placement_failures: null,
+  can_place_ball: null,
+  max_allowed_bots: null,
+  bot_substitution_intent: null,
+  bot_substitution_allowed: null,
   ...extra,
 });
 
@@ -71,6 +113,11 @@ export const referee = (command: string, extra: Partial<Referee> = {}): Referee 
   yellow: refereeTeam("Yellow"),
   designated_position: null,
   blue_team_on_positive_half: false,
+  next_command: null,
+  status_message: "",
+  match_type: null,
+  current_action_time_remaining_s: null,
+  game_events: [],
   age_s: 0.02,
   ...extra,
 });
