@@ -7,9 +7,10 @@ import math
 
 from backend import topics
 from backend.bus import DataBus
+from backend.control.follow import next_waypoint
 from backend.control.goto import Target
 from backend.messages import CommandSet, TargetEntry
-from backend.processors import ControlProcessor, next_waypoint
+from backend.processors import ControlProcessor
 from backend.world.referee import RefereeState
 from backend.world.state import RobotState, WorldState
 

@@ -9,11 +9,11 @@ import math
 
 import pytest
 
+from backend.control.follow import next_waypoint
 from backend.control.goto import Target
 from backend.control.motion import MotionBank
 from backend.control.params import ControlSettings
 from backend.messages import TargetEntry
-from backend.processors import next_waypoint
 from tests.backend.control.sim import Plant
 
 DT = 1.0 / 60.0

@@ -1,0 +1,16 @@
+"""The station's processors, one per file: relay ingest, vision ingest, referee ingest, world
+model, strategy, control, the internal referee and command publishing. Each is a
+``backend.processor.Processor``; path following is in ``backend/control/follow.py``."""
+
+from .common import LatencyStage
+from .control import ControlProcessor
+from .internal_referee import InternalRefereeProcessor
+from .publisher import CommandPublisher
+from .referee import RefereeIngest
+from .relay_ingest import RelayIngest
+from .strategy import StrategyProcessor
+from .vision import VisionIngest
+from .world import WorldProcessor
+
+__all__ = ["CommandPublisher", "ControlProcessor", "InternalRefereeProcessor", "LatencyStage",
+           "RefereeIngest", "RelayIngest", "StrategyProcessor", "VisionIngest", "WorldProcessor"]

@@ -1,0 +1,51 @@
+"""Shared by the processors: a latency stage, the rate-limited log of bad input, parsing
+with a reason."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import deque
+
+from google.protobuf.message import DecodeError, Message
+
+from sslnet import streams
+from sslnet.ratelog import RateLimitedLog
+
+log = logging.getLogger("touchline.processors")
+badlog = RateLimitedLog(log, interval_s=10.0)
+
+
+class LatencyStage:
+    """Milliseconds from a vision datagram's arrival at the relay to one point of the
+    pipeline, over the last few hundred samples."""
+
+    def __init__(self, maxlen: int = 500) -> None:
+        self.samples: deque[float] = deque(maxlen=maxlen)
+
+    def add_since(self, receive_time_ns: int) -> None:
+        if receive_time_ns > 0:
+            self.samples.append((time.time_ns() - receive_time_ns) / 1e6)
+
+    def summary(self) -> dict[str, float]:
+        vals = sorted(self.samples)
+        if not vals:
+            return {"mean_ms": 0.0, "p50_ms": 0.0, "p99_ms": 0.0, "n": 0}
+        return {
+            "mean_ms": sum(vals) / len(vals),
+            "p50_ms": vals[len(vals) // 2],
+            "p99_ms": vals[min(len(vals) - 1, int(0.99 * len(vals)))],
+            "n": len(vals),
+        }
+
+
+def parse_into(msg: Message, data: bytes) -> tuple[str, str] | None:
+    """Parses ``data`` into ``msg``; on failure the reason (sslnet.streams) and the detail."""
+    try:
+        msg.ParseFromString(data)
+    except (DecodeError, RuntimeError, ValueError) as exc:
+        return streams.wire_problem(data), str(exc)
+    if not msg.IsInitialized():
+        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
+        return streams.MISSING_FIELD, ", ".join(errors[:5])
+    return None

@@ -1,0 +1,153 @@
+"""The control processor: the speed controllers, the rules and every safety stop."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+from domain.rules import kick_allowed
+
+from .. import topics
+from ..bus import DataBus
+from ..control.follow import next_waypoint
+from ..control.goto import LocalVelocity
+from ..control.motion import PHASE_NAMES, MotionBank, RobotMotionState
+from ..control.params import ALGORITHMS, ControlSettings
+from ..control.referee_limits import referee_limits
+from ..messages import Command, CommandSet, TargetEntry
+from ..processor import OnTopic, Processor
+from ..world.referee import RefereeState
+from ..world.state import Team
+from .internal_referee import InternalRefereeProcessor
+
+
+class ControlProcessor(Processor):
+    """Turns targets into robot commands on every world update with each robot's chosen
+    controller (the paper's Algorithm 1 or 2, or the proportional baseline), then the safety
+    rules: emergency stop and HALT zero every robot; a stale world zeroes every robot, a robot
+    not seen gets zero; STOP and the other team's ball placement cap the speed."""
+
+    name = "control"
+
+    def __init__(self, bus: DataBus, max_wait_s: float, vision_stale_s: float,
+                 settings: ControlSettings | None = None) -> None:
+        world = bus.of(topics.WORLD)
+        super().__init__(OnTopic(world, max_wait_s=max_wait_s))
+        self.world = world
+        self.targets = bus.of(topics.TARGETS)
+        self.referee = bus.of(topics.REFEREE)
+        self.estop = bus.of(topics.ESTOP)
+        self.commands = bus.of(topics.ROBOT_COMMANDS)
+        self.vision_stale_s = vision_stale_s
+        self.strategy_stale_s = 0.5  # no targets for this long: the strategy is stuck, stop
+        self.stop_speed_mps = 1.5
+        self.our_team: Team = "blue"
+        self.motion = MotionBank(settings or ControlSettings())
+        self.last_commands: dict[tuple[Team, int], Command] = {}
+        self.telemetry: dict[str, dict[str, Any]] = {}
+        self.internal: InternalRefereeProcessor | None = None
+        #: whether commands for the other team may go out (the station says: a simulator
+        #: output and the operator's safety.other_team_in_simulator); else they never do
+        self.may_drive_other_team: Callable[[], bool] = lambda: False
+        self._last_tick = time.monotonic()
+        self.halt_reason = ""
+
+    def active_referee(self) -> RefereeState | None:
+        """The referee the robots obey: the newest state, except the internal referee's own
+        once the operator switched it off (then there is no referee until one is heard)."""
+        ref = self.referee.latest_value()
+        ir = self.internal
+        if (ref is not None and ir is not None and not ir.enabled
+                and ref.source_identifier == ir.referee.source_identifier):
+            return None
+        return ref
+
+    def vision_age_s(self, now_mono: float) -> float:
+        """How old the robots' view of the world is: since the world was last written, and
+        since the relay received the newest frame merged into it (this machine's clock; a
+        world written again and again from nothing new is as stale as one not written)."""
+        rec = self.world.latest()
+        if rec is None:
+            return math.inf
+        age = now_mono - rec.time_mono
+        recv_ns = rec.value.receive_time_ns
+        if recv_ns > 0:
+            age = max(age, (time.time_ns() - recv_ns) / 1e9)
+        return age
+
+    def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
+        self.motion.apply_settings(settings)
+        self.our_team = our_team
+
+    async def tick(self) -> None:
+        now = time.monotonic()
+        dt = min(0.1, now - self._last_tick)
+        self._last_tick = now
+        rec = self.world.latest()
+        targets: dict[tuple[Team, int], TargetEntry] = self.targets.latest_value() or {}
+        ref = self.active_referee()
+        estop = bool(self.estop.latest_value())
+        created = time.time_ns()
+        if estop:
+            self.halt_reason = "emergency stop"
+            self.motion.reset_all()
+            self.commands.write(CommandSet(created, 0, (), stop_all=True))
+            self.last_commands = {}
+            return
+        other_ok = self.may_drive_other_team()
+        keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
+        zero = LocalVelocity.zero()
+        targets_age = self.targets.age_s(now)
+        stalled = targets_age > self.strategy_stale_s
+        vision_age = self.vision_age_s(now)
+        blind = vision_age > self.vision_stale_s
+        if rec is None or blind or (ref and ref.halted) or stalled:
+            self.halt_reason = ("HALT" if ref and ref.halted else
+                                "no vision" if vision_age == math.inf else
+                                f"no vision for {vision_age:.1f} s" if blind
+                                else f"strategy stalled ({targets_age:.1f} s)")
+            self.motion.reset_all()
+            cmds = tuple(Command(t, i, zero) for t, i in keys)
+            self.commands.write(CommandSet(created, 0, cmds))
+            self.last_commands = {(c.team, c.id): c for c in cmds}
+            return
+        self.halt_reason = ""
+        world = rec.value
+        out: list[Command] = []
+        command = ref.command if ref is not None else None
+        for key in keys:
+            robot = world.robot(*key)
+            m = self.motion.get(key[0], key[1])
+            if robot is None or not robot.visible:
+                m.step(_UNSEEN, targets[key].target, dt)  # zero, and restart when seen again
+                out.append(Command(key[0], key[1], zero))
+                continue
+            entry = targets[key]
+            vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
+                         next_waypoint(entry, robot.x, robot.y), dt)
+            vel = referee_limits(
+                vel, command, our_team=self.our_team, stop_speed_mps=self.stop_speed_mps,
+                max_speed_mps=math.inf if entry.max_speed_mps is None else entry.max_speed_mps)
+            kick_ok = kick_allowed(command)
+            out.append(Command(key[0], key[1], vel,
+                               kick_speed_mps=entry.kick_speed_mps if kick_ok else 0.0,
+                               chip=entry.chip and kick_ok,
+                               dribbler_rpm=entry.dribbler_rpm))
+        cmds = tuple(out)
+        self.last_commands = {(c.team, c.id): c for c in cmds}
+        self.telemetry = self._telemetry()
+        self.commands.write(CommandSet(created, world.receive_time_ns, cmds))
+
+    def _telemetry(self) -> dict[str, dict[str, Any]]:
+        out: dict[str, dict[str, Any]] = {}
+        for key, tel in self.motion.telemetry().items():
+            entry: dict[str, Any] = dict(tel)
+            entry["algorithm"] = ALGORITHMS[int(tel["algorithm"])]
+            entry["phase"] = PHASE_NAMES[int(tel["phase"])]
+            out[key] = entry
+        return out
+
+
+_UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)

@@ -1,0 +1,106 @@
+"""The command publisher: command sets, simulator commands and the e-stop to the relay."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import zmq
+import zmq.asyncio
+
+from sslnet.rate import RateCounter
+from sslpb import touchline_pb2 as tl
+
+from .. import topics
+from ..bus import DataBus, Reader
+from ..processor import OnTopic, Processor
+from .common import LatencyStage
+
+
+class CommandPublisher(Processor):
+    """Sends each command set and simulator command to the relay."""
+
+    name = "command-publisher"
+
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+        cmds = bus.of(topics.ROBOT_COMMANDS)
+        super().__init__(OnTopic(cmds, max_wait_s=0.05))
+        self.sock = sock
+        self.reader = Reader(cmds)
+        self.sim_reader = Reader(bus.of(topics.SIM_COMMANDS))
+        self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
+        self.seq = 0
+        self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
+        self.sent = RateCounter()
+        self.estop = bus.of(topics.ESTOP)
+        self.relay_stats = bus.of(topics.RELAY_STATS)
+        #: called when the relay reports a latch this backend does not have
+        self.adopt_estop: Callable[[str], None] = lambda by: None
+        self.estop_by: Callable[[], str] = lambda: ""
+        self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
+        self._release_until = -1e9  # a release is being repeated until the relay confirms
+
+    async def tick(self) -> None:
+        for cs in self.reader.read_new():
+            self.seq += 1
+            msg = tl.RobotCommandSet(
+                created_time_ns=cs.created_time_ns,
+                source_receive_time_ns=cs.source_receive_time_ns,
+                sequence=self.seq,
+                stop_all=cs.stop_all,
+            )
+            for c in cs.commands:
+                msg.commands.add(
+                    team=tl.TEAM_BLUE if c.team == "blue" else tl.TEAM_YELLOW,
+                    id=c.id,
+                    forward_mps=c.velocity.forward_mps,
+                    left_mps=c.velocity.left_mps,
+                    angular_radps=c.velocity.angular_radps,
+                    kick_speed_mps=c.kick_speed_mps,
+                    chip=c.chip,
+                    dribbler_rpm=c.dribbler_rpm,
+                )
+            await self.sock.send_multipart([b"commands", msg.SerializeToString()])
+            self.sent.add()
+            self.latency.add_since(cs.source_receive_time_ns)
+        for raw in self.sim_reader.read_new():
+            await self.sock.send_multipart([b"sim", raw])
+        for raw in self.referee_out_reader.read_new():
+            await self.sock.send_multipart([b"referee-out", raw])
+        await self._estop_latch()
+
+    async def _estop_latch(self) -> None:
+        """Keeps the relay's latch in step: PRESS on a press and every 0.5 s while active
+        (a relay that restarts, or a slow ZeroMQ join, gets it again); RELEASE only after an
+        operator's release, repeated until the relay's stats say it is released (3 s at
+        most). A latch the relay reports and this backend does not have is adopted."""
+        now = time.monotonic()
+        active = bool(self.estop.latest_value())
+        was, when = self._estop_sent
+        if active and (not was or now - when >= 0.5):
+            await self._send_estop(tl.EmergencyStop.PRESS)
+            self._estop_sent = (True, now)
+            self._release_until = -1e9
+            return
+        if not active and was:  # the operator released it
+            await self._send_estop(tl.EmergencyStop.RELEASE)
+            self._estop_sent = (False, now)
+            self._release_until = now + 3.0
+            return
+        rs = self.relay_stats.latest_value()
+        if active or rs is None or not rs.get("estop_latched"):
+            return
+        if now < self._release_until:  # not confirmed yet: say it again
+            if now - when >= 0.1:
+                await self._send_estop(tl.EmergencyStop.RELEASE)
+                self._estop_sent = (False, now)
+        elif now - rs["received_mono"] < 1.5:  # fresh stats: the relay holds a latch we lack
+            self.adopt_estop(str(rs.get("estop_by", "")))
+
+    async def _send_estop(self, action: int) -> None:
+        msg = tl.EmergencyStop(action=action, time_ns=time.time_ns(),  # type: ignore[arg-type]
+                               by=self.estop_by())
+        await self.sock.send_multipart([b"estop", msg.SerializeToString()])
+
+    def latency_summary(self) -> dict[str, float]:
+        return self.latency.summary()

@@ -1,0 +1,99 @@
+"""The relay's ZeroMQ PUB onto the bus: datagram envelopes and the relay's statistics."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import zmq
+import zmq.asyncio
+from google.protobuf.message import DecodeError
+
+from sslnet import streams
+from sslnet.streams import StreamCounter
+from sslpb import touchline_pb2 as tl
+
+from .. import topics
+from ..bus import DataBus
+from ..processor import Processor
+from .common import badlog
+
+
+class RelayIngest(Processor):
+    """Source: receives everything the relay publishes and puts it on the bus unchanged."""
+
+    name = "relay-ingest"
+
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+        super().__init__(None)
+        self.sock = sock
+        self.vision_packets = bus.of(topics.VISION_PACKETS)
+        self.referee_packets = bus.of(topics.REFEREE_PACKETS)
+        self.relay_stats = bus.of(topics.RELAY_STATS)
+        self.counters = {"zmq": StreamCounter("zmq")}
+
+    async def wait_input(self) -> None:
+        await self.sock.poll()
+
+    async def tick(self) -> None:
+        for _ in range(1000):  # drain what is there, bounded so other tasks get a turn
+            try:
+                frames = await self.sock.recv_multipart(flags=zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            self._handle(frames)
+
+    def _handle(self, frames: list[bytes]) -> None:
+        c = self.counters["zmq"]
+        c.rate.add()
+        if len(frames) != 2:
+            c.error("bad frames", f"expected 2 frames, got {len(frames)}")
+            badlog.warning("zmq-frames", "relay message with %d frames ignored", len(frames))
+            return
+        topic, body = frames
+        if topic == b"stats":
+            stats = tl.RelayStats()
+            try:
+                stats.ParseFromString(body)
+            except DecodeError as exc:
+                c.error(streams.wire_problem(body), f"stats: {exc}")
+                return
+            self.relay_stats.write(_relay_stats_dict(stats))
+            return
+        env = tl.Envelope()
+        try:
+            env.ParseFromString(body)
+        except DecodeError as exc:
+            c.error(streams.wire_problem(body), f"envelope: {exc}")
+            badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, exc)
+            return
+        if topic == b"vision":
+            self.vision_packets.write(env)
+        elif topic == b"referee":
+            self.referee_packets.write(env)
+
+
+def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
+    return {
+        "time_ns": s.time_ns,
+        "received_mono": time.monotonic(),
+        "output_mode": s.output_mode,
+        "active_robots": s.active_robots,
+        "stale_robots": s.stale_robots,
+        "output_rate_hz": s.output_rate_hz,
+        "command_latency_ms": s.command_latency_ms,
+        "stale_stops": s.stale_stops,
+        "estop_latched": s.estop_latched,
+        "estop_by": s.estop_by,
+        "streams": {
+            st.name: {
+                "packets": st.packets,
+                "errors": st.errors,
+                "rate_hz": st.rate_hz,
+                "last_age_s": st.last_age_s,
+                "last_error": st.last_error,
+                "errors_by_reason": dict(sorted(st.errors_by_reason.items())),
+            }
+            for st in s.streams
+        },
+    }

@@ -1,0 +1,145 @@
+"""The strategy processor: plays, roles and paths into targets; the compute engine."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from .. import topics
+from ..bus import DataBus, Reader
+from ..control.goto import Target
+from ..engine import EngineError, PoolEngine
+from ..messages import TargetEntry
+from ..params.model import StrategyParams
+from ..processor import Every, Processor
+from ..strategy.core import Prepared, StrategyCore
+from ..world.referee import RefereeState
+from ..world.state import Team
+from .common import badlog
+
+#: an engine answer older than this is not used (the built-in code is, as a fallback)
+ENGINE_MAX_AGE_S = 0.25
+DRIBBLER_RPM = 3000.0
+
+class StrategyProcessor(Processor):
+    """Decides targets: operator targets first, the selected play for the rest of our team
+    (roles, referee-driven behaviour, planned paths). The keeper's spot may come from the
+    compute engine; a failed or late engine call falls back to the built-in code."""
+
+    name = "strategy"
+
+    def __init__(self, bus: DataBus, our_team: Team, params: StrategyParams | None = None,
+                 hz: float = 20.0) -> None:
+        super().__init__(Every(hz))
+        self.world = bus.of(topics.WORLD)
+        self.geometry = bus.of(topics.GEOMETRY)
+        self.referee = bus.of(topics.REFEREE)
+        self.operator = Reader(bus.of(topics.OPERATOR_TARGETS))
+        self.targets = bus.of(topics.TARGETS)
+        self.our_team: Team = our_team
+        self.our_side_negative = True
+        self.side_from_referee = True
+        self.params = params or StrategyParams()
+        self.core = StrategyCore()
+        self.referee_source: Callable[[], RefereeState | None] = self.referee.latest_value
+        self.operator_targets: dict[tuple[Team, int], Target] = {}
+        self.engine: PoolEngine | None = None
+        self.engine_fallbacks = 0
+        self.engine_last_error = ""
+        self._engine_task: asyncio.Task[tuple[float, float]] | None = None
+        self._engine_point: tuple[float, tuple[float, float]] | None = None
+        self._t0 = time.monotonic()
+
+    async def tick(self) -> None:
+        for op in self.operator.read_new():
+            if op.target is None:
+                self.operator_targets.pop((op.team, op.id), None)
+            else:
+                self.operator_targets[(op.team, op.id)] = op.target
+        out: dict[tuple[Team, int], TargetEntry] = {
+            k: TargetEntry(t, "operator", role="operator")
+            for k, t in self.operator_targets.items()
+        }
+        world = self.world.latest_value()
+        if world is not None and self.params.play != "idle":
+            now = time.monotonic() - self._t0
+            prep = self.core.prepare(world, self.geometry.latest_value(), self.referee_source(),
+                                     self.params, self.our_team, self.our_side_negative,
+                                     self.side_from_referee, now)
+            keeper = await self._engine_keeper(prep)
+            for rid, mv in self.core.decide(prep, keeper).items():
+                key = (self.our_team, rid)
+                if key in out:
+                    continue
+                out[key] = TargetEntry(
+                    Target(mv.x, mv.y, mv.orientation), "strategy", role=mv.role,
+                    path=mv.path, kick_speed_mps=mv.kick_speed_mps, chip=mv.chip,
+                    dribbler_rpm=DRIBBLER_RPM if mv.dribbler else 0.0,
+                    max_speed_mps=mv.max_speed_mps)
+        self.targets.write(out)
+
+    async def _engine_keeper(self, prep: Prepared) -> tuple[float, float] | None:
+        """The keeper's spot (field frame) from the compute engine, or None (built-in code).
+
+        The tick never waits for the engine: one call is in flight at a time, and the tick
+        uses the newest answer if it is at most ``ENGINE_MAX_AGE_S`` old (the answer to the
+        previous tick's ball, normally). A failed, late or malformed answer is a fallback."""
+        eng = self.engine
+        if eng is None or prep.ball_field is None or self.params.play in ("formation", "idle"):
+            return None
+        task = self._engine_task
+        if task is not None and task.done():
+            self._engine_task = None
+            try:
+                point = task.result()
+                self._engine_point = (time.monotonic(), point)
+            except Exception as exc:
+                self.engine_fallbacks += 1
+                msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                self.engine_last_error = msg
+                badlog.warning("engine-keeper", "engine keeper call failed, built-in code "
+                                "used: %s", msg)
+                self._engine_point = None
+                return None
+        if self._engine_task is None:
+            self._engine_task = asyncio.get_running_loop().create_task(
+                self._call_keeper(eng, prep))
+        got = self._engine_point
+        if got is None or time.monotonic() - got[0] > ENGINE_MAX_AGE_S:
+            if got is not None:
+                self.engine_fallbacks += 1  # the engine is late: use the built-in code
+            return None
+        return got[1]
+
+    async def _call_keeper(self, eng: PoolEngine, prep: Prepared) -> tuple[float, float]:
+        p = self.params
+        res = await eng.call(p.goalkeeper_function,
+                             np.array([prep.ball_field], dtype=np.float64),
+                             np.array([prep.ball_velocity_field], dtype=np.float64),
+                             prep.goal_x_field, prep.inp.fs.goal_width,
+                             45.0, p.keeper_min_speed_mmps, timeout_s=p.engine_timeout_s)
+        try:
+            arr = np.asarray(res, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]") \
+                from exc
+        if arr.size < 2 or not np.all(np.isfinite(arr[:2])):
+            raise EngineError(f"{p.goalkeeper_function} returned {res!r}, expected [x y]")
+        return (float(arr[0]), float(arr[1]))
+
+    async def engine_settled(self) -> None:
+        """Waits until the engine call in flight (if any) has finished (tests, shutdown)."""
+        task = self._engine_task
+        if task is not None:
+            await asyncio.wait([task])
+
+    def drop_engine(self) -> None:
+        """Forget the engine (being replaced): its answers no longer count."""
+        self.engine = None
+        self._engine_point = None
+        if self._engine_task is not None:
+            self._engine_task.cancel()
+            self._engine_task = None

@@ -1,0 +1,60 @@
+"""Vision ingest: the one decoder of vision datagrams."""
+
+from __future__ import annotations
+
+from sslnet import streams
+from sslnet.streams import StreamCounter
+from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+from .. import topics
+from ..bus import DataBus, Reader
+from ..processor import OnTopic, Processor
+from ..world.decode import decode_detection, geometry_to_dict
+from .common import LatencyStage, badlog, parse_into
+
+
+class VisionIngest(Processor):
+    """Decodes vision datagrams: detection frames and geometry onto their topics."""
+
+    name = "vision-ingest"
+
+    def __init__(self, bus: DataBus) -> None:
+        packets = bus.of(topics.VISION_PACKETS)
+        super().__init__(OnTopic(packets))
+        self.reader = Reader(packets)
+        self.detections = bus.of(topics.VISION_DETECTIONS)
+        self.geometry = bus.of(topics.GEOMETRY)
+        self.counter = StreamCounter("vision")
+        self.latency = LatencyStage()  # relay arrival -> decoded on the bus
+        self._last_geometry_bytes = b""
+        self._last_geometry_bad: list[str] = []  # its names that are not UTF-8
+
+    async def tick(self) -> None:
+        for env in self.reader.read_new():
+            self.counter.rate.add()
+            pkt = SSL_WrapperPacket()
+            reason = parse_into(pkt, env.payload)
+            if reason is not None:
+                self.counter.error(*reason)
+                badlog.warning("vision", "bad vision packet from %s: %s", env.source,
+                                self.counter.last_error)
+                continue
+            if not (pkt.HasField("detection") or pkt.HasField("geometry")):
+                self.counter.error(streams.NO_CONTENT, "SSL_WrapperPacket has neither "
+                                   "detection nor geometry")
+                badlog.warning("vision", "empty vision packet from %s", env.source)
+                continue
+            if pkt.HasField("detection"):
+                self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
+                self.latency.add_since(env.receive_time_ns)
+            if pkt.HasField("geometry"):
+                raw = pkt.geometry.field.SerializeToString()
+                if raw != self._last_geometry_bytes:  # only a change goes on the bus
+                    self._last_geometry_bytes = raw
+                    self._last_geometry_bad = []
+                    self.geometry.write(geometry_to_dict(pkt.geometry, self._last_geometry_bad))
+                if self._last_geometry_bad:  # used all the same, counted in every packet
+                    bad = ", ".join(sorted(set(self._last_geometry_bad)))
+                    self.counter.error(streams.BAD_STRING, "not UTF-8: " + bad)
+                    badlog.warning("vision-string", "geometry from %s: not UTF-8 (%s); "
+                                    "decoded with replacement characters", env.source, bad)

@@ -1,0 +1,81 @@
+"""The world processor: camera frames merged into the world model."""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+
+from .. import topics
+from ..bus import DataBus, Reader
+from ..processor import OnTopic, Processor
+from ..world.model import WorldModel
+from .common import LatencyStage, badlog
+
+
+class WorldProcessor(Processor):
+    """Merges camera frames into the world, on every new frame. The world is written only when
+    a frame was merged: frames that are all dropped (capture time far from the receive clock,
+    a camera id that cannot be) leave the world to age, so the lost-vision stop fires."""
+
+    name = "world-model"
+
+    def __init__(self, bus: DataBus, model: WorldModel | None = None) -> None:
+        detections = bus.of(topics.VISION_DETECTIONS)
+        super().__init__(OnTopic(detections))
+        self.reader = Reader(detections)
+        self.world = bus.of(topics.WORLD)
+        self.geometry = bus.of(topics.GEOMETRY)
+        self._geometry_seq = -1
+        self.model = model or WorldModel()
+        self.latency = LatencyStage()  # relay arrival -> world written
+        self._rejected_total = 0
+        # (monotonic time, counts by reason) when the counts changed, the last 10 s
+        self._rejection_log: deque[tuple[float, dict[str, int]]] = deque(maxlen=32)
+
+    def recent_rejections(self, window_s: float = 10.0) -> dict[str, int]:
+        """What the world model dropped in the last ``window_s``, by reason."""
+        now = time.monotonic()
+        base: dict[str, int] | None = None
+        for t, counts in self._rejection_log:
+            if now - t > window_s:
+                base = counts
+        cur = self.model.rejected
+        if not self._rejection_log or now - self._rejection_log[-1][0] > window_s:
+            return {}
+        base = base or {}
+        return {k: v - base.get(k, 0) for k, v in sorted(cur.items()) if v - base.get(k, 0) > 0}
+
+    def _field_from_geometry(self) -> None:
+        if self.geometry.seq == self._geometry_seq:
+            return
+        self._geometry_seq = self.geometry.seq
+        g = self.geometry.latest_value()
+        if g is not None:
+            self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
+                                 g["boundary_width"])
+
+    async def tick(self) -> None:
+        frames = self.reader.read_new()
+        if not frames:
+            return
+        self._field_from_geometry()
+        merged = [f for f in frames if self.model.update(f)]
+        total = sum(self.model.rejected.values())
+        if total != self._rejected_total:
+            self._rejected_total = total
+            now, log_ = time.monotonic(), self._rejection_log
+            if log_ and now - log_[-1][0] < 1.0:  # one entry a second at most
+                log_[-1] = (log_[-1][0], dict(self.model.rejected))
+            else:
+                log_.append((now, dict(self.model.rejected)))
+            badlog.warning("world-rejected", "vision dropped by the world model (%s so far): "
+                            "%s", _reasons(self.model.rejected), self.model.last_rejection)
+        if not merged:
+            return
+        self.world.write(self.model.snapshot())
+        for f in merged:
+            self.latency.add_since(f.receive_time_ns)
+
+
+def _reasons(counts: dict[str, int]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
