@@ -14,12 +14,15 @@ import math
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
 
 from .bus import Topic
+
+if TYPE_CHECKING:
+    from .params.model import StationParams
 
 log = logging.getLogger("touchline.processor")
 
@@ -63,6 +66,11 @@ class Processor:
         raise NotImplementedError
 
     async def teardown(self) -> None:
+        return None
+
+    def configure(self, params: StationParams) -> None:
+        """Takes what this processor uses from a validated parameter set (the station calls it
+        on every processor at start and on every change, between two ticks)."""
         return None
 
     def set_rate(self, hz: float) -> None:

@@ -31,7 +31,7 @@ from .jsonsafe import dumps
 from .messages import OperatorTarget, TargetEntry
 from .params.model import PLAYS, StationParams, StrategyParams
 from .params.store import ParamStore, deep_merge, parse_setting
-from .processor import Every, OnTopic, Runner
+from .processor import Every, OnTopic, Processor, Runner
 from .processors import (
     CommandPublisher,
     ControlProcessor,
@@ -102,6 +102,28 @@ class Station:
         self.engine_error = ""
         for spec in topics.ALL:  # every topic exists (and shows in health) from the start
             self.bus.of(spec)
+        # the processors, built here and configured from the parameters; start() only gives
+        # the two ZeroMQ ones their sockets and runs them
+        prm = self.params.current
+        self.ingest = RelayIngest(self.bus)
+        self.vision = VisionIngest(self.bus)
+        self.referee = RefereeIngest(self.bus, self.referee_watch)
+        self.world = WorldProcessor(self.bus)
+        self.strategy = StrategyProcessor(self.bus, prm.team.our_team, prm.strategy)
+        self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
+                                        prm.safety.vision_stale_s)
+        self.publisher = CommandPublisher(self.bus)
+        self.publisher.adopt_estop = self.adopt_relay_estop
+        self.publisher.estop_by = lambda: self.estop_latch.state.by
+        self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
+        self.control.internal = self.internal_referee
+        self.control.may_drive_other_team = self.drives_other_team
+        # the internal referee switched off is not obeyed: its silence is no warning
+        self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
+        self.strategy.referee_source = self.control.active_referee
+        self.processors: tuple[Processor, ...] = (
+            self.ingest, self.vision, self.referee, self.world, self.strategy, self.control,
+            self.internal_referee, self.publisher)
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
     # web traffic (JSON encoding, websocket sends) never delays control ----
@@ -183,30 +205,13 @@ class Station:
     async def start(self) -> None:
         s = self.settings
         self.ctx = zmq.asyncio.Context()
-        sub = sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"])
-        pub = pub_socket(self.ctx, s.relay_sub)
+        self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"]))
+        self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
-        self.ingest = RelayIngest(self.bus, sub)
-        self.vision = VisionIngest(self.bus)
-        self.referee = RefereeIngest(self.bus, self.referee_watch)
-        self.world = WorldProcessor(self.bus)
-        self.strategy = StrategyProcessor(self.bus, prm.team.our_team, prm.strategy)
-        self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
-                                        prm.safety.vision_stale_s)
-        self.publisher = CommandPublisher(self.bus, pub)
-        self.publisher.adopt_estop = self.adopt_relay_estop
-        self.publisher.estop_by = lambda: self.estop_latch.state.by
-        self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
-        self.control.internal = self.internal_referee
-        self.control.may_drive_other_team = self.drives_other_team
-        # the internal referee switched off is not obeyed: its silence is no warning
-        self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
-        self.strategy.referee_source = self.control.active_referee
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
-        for p in (self.ingest, self.vision, self.referee, self.world, self.strategy,
-                  self.control, self.internal_referee, self.publisher):
+        for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
@@ -215,27 +220,11 @@ class Station:
     def apply_params(self, p: StationParams, version: int) -> None:
         """Applies a validated parameter set to every part at once (between two ticks: the
         event loop runs one thing at a time), then tells the clients."""
-        self.strategy.our_team = p.team.our_team
-        self.strategy.our_side_negative = p.team.our_side == "negative-x"
-        self.strategy.side_from_referee = p.team.side_from_referee
-        self.strategy.params = p.strategy
-        self.strategy.set_rate(p.processors.strategy_hz)
+        for proc in self.processors:
+            proc.configure(p)
         self._configure_engine(p.strategy)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
-        self.control.apply_settings(p.control, p.team.our_team)
-        self.control.vision_stale_s = p.safety.vision_stale_s
-        # a slow strategy rate must not look like a stall: at least 2.5 of its periods
-        self.control.strategy_stale_s = max(p.safety.strategy_stale_s,
-                                            2.5 / p.processors.strategy_hz)
-        self.control.stop_speed_mps = p.safety.stop_speed_mps
-        self.control.trigger = OnTopic(self.world_topic, max_wait_s=p.processors.control_max_wait_s)
-        wc = self.world.model.config
-        wc.merge_window_s = p.world.merge_window_s
-        wc.predict_after_s = p.world.predict_after_s
-        wc.visible_timeout_s = p.world.visible_timeout_s
-        wc.drop_timeout_s = p.world.drop_timeout_s
-        self.world.model.configure(p.filters)
         sized = {s.name: s for s in topics.ALL}
         for name, size in p.bus.sizes().items():
             self.bus.of(sized[name]).resize(size)
@@ -289,8 +278,6 @@ class Station:
                  sp.goalkeeper_function)
 
     def engine_health(self) -> dict[str, Any] | None:
-        if not hasattr(self, "strategy"):
-            return None
         sp = self.strategy.params
         if sp.engine == "off":
             return None
@@ -309,7 +296,7 @@ class Station:
 
     def strategy_state(self) -> contract.StrategyState:
         """What the strategy is doing now (sent with every world update: kept small)."""
-        core = self.strategy.core if hasattr(self, "strategy") else None
+        core = self.strategy.core
         sit = core.situation if core is not None else None
         return {
             "play": self.params.current.strategy.play,
@@ -323,7 +310,7 @@ class Station:
 
     def strategy_view(self) -> contract.StrategyView:
         """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
-        core = self.strategy.core if hasattr(self, "strategy") else None
+        core = self.strategy.core
         team = self.params.current.team.our_team
         return {
             **self.strategy_state(),
@@ -335,7 +322,7 @@ class Station:
 
     async def stop(self) -> None:
         # a last stop to every robot we drive, then shut down
-        if self.ctx is not None and hasattr(self, "publisher"):
+        if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
@@ -343,11 +330,10 @@ class Station:
             task.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
-        if hasattr(self, "strategy"):
-            eng = self.strategy.engine
-            self.strategy.drop_engine()
-            if eng is not None:
-                await eng.close()
+        eng = self.strategy.engine
+        self.strategy.drop_engine()
+        if eng is not None:
+            await eng.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None
@@ -486,10 +472,10 @@ class Station:
         world = self.world_topic.latest_value()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets_topic.latest_value() or {}
         ref = self.referee_topic.latest()
-        if ref is not None and hasattr(self, "control") and self.control.active_referee() is None:
+        if ref is not None and self.control.active_referee() is None:
             ref = None  # the internal referee's own state after it was switched off
-        commands = self.control.last_commands if hasattr(self, "control") else {}
-        telemetry = self.control.telemetry if hasattr(self, "control") else {}
+        commands = self.control.last_commands
+        telemetry = self.control.telemetry
         now_unix = time.time()
         out: contract.World = {
             "seq": self.world_topic.seq,
@@ -500,11 +486,10 @@ class Station:
             "referee": None,
             "estop": self.estop,
             "estop_info": self.estop_view(),
-            "halt_reason": self.control.halt_reason if hasattr(self, "control") else "",
+            "halt_reason": self.control.halt_reason,
             "strategy": None,
         }
-        if hasattr(self, "strategy"):
-            out["strategy"] = self.strategy_state()
+        out["strategy"] = self.strategy_state()
         if ref is not None:
             internal = ref.value.source_identifier == self.referee_state.source_identifier
             out["referee"] = ref.value.to_dict(time.monotonic() - ref.time_mono,
@@ -561,8 +546,6 @@ class Station:
     def _world_health(self) -> contract.WorldHealth | None:
         """The world model's view: its age by the receive clock, what it dropped and why,
         each camera's clock offset."""
-        if not hasattr(self, "world"):
-            return None
         model = self.world.model
         age = self.control.vision_age_s(time.monotonic())
         return {
@@ -577,8 +560,6 @@ class Station:
 
     def _latency_stages(self) -> list[contract.LatencyStage]:
         """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
-        if not hasattr(self, "publisher"):
-            return []
         stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
                   for name, stage in (("decoded (vision ingest)", self.vision.latency),
                                       ("world model written", self.world.latency),
@@ -592,7 +573,7 @@ class Station:
     def world_version(self) -> tuple[int, bool, str]:
         """Changes whenever the world message would: a new world, the e-stop, or why the
         robots are stopped (that changes while no world is written: vision lost)."""
-        halt = self.control.halt_reason if hasattr(self, "control") else ""
+        halt = self.control.halt_reason
         return (self.world_topic.seq, self.estop, halt)
 
     def world_json(self) -> str:
@@ -636,15 +617,14 @@ class Station:
         topics = [{"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
                    "age_s": t.age_s()} for t in self.bus.topics()]
         streams: dict[str, Any] = {}
-        if hasattr(self, "vision"):
-            vis = self.vision.counter.to_dict()
-            # what the world model dropped, by the same reasons ("time out of range", ...)
-            for reason, n in self.world.model.rejected.items():
-                vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
-                vis["errors"] += n
-            streams["vision"] = vis
-            streams["referee"] = self.referee.counter.to_dict()
-            streams["zmq"] = self.ingest.counters["zmq"].to_dict()
+        vis = self.vision.counter.to_dict()
+        # what the world model dropped, by the same reasons ("time out of range", ...)
+        for reason, n in self.world.model.rejected.items():
+            vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
+            vis["errors"] += n
+        streams["vision"] = vis
+        streams["referee"] = self.referee.counter.to_dict()
+        streams["zmq"] = self.ingest.counters["zmq"].to_dict()
         relay = None
         rs = self.relay_stats.latest_value()
         if rs is not None:
@@ -679,7 +659,7 @@ class Station:
             "processors": procs,
             "topics": topics,
             "relay": relay,
-            "latency": self.publisher.latency_summary() if hasattr(self, "publisher") else None,
+            "latency": self.publisher.latency_summary(),
             "latency_stages": self._latency_stages(),
             "websocket_clients": self.ws_clients,
             "engine": self.engine_health(),

@@ -17,6 +17,7 @@ from ..control.motion import PHASE_NAMES, MotionBank, RobotMotionState
 from ..control.params import ALGORITHMS, ControlSettings
 from ..control.referee_limits import referee_limits
 from ..messages import Command, CommandSet, TargetEntry
+from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.referee import RefereeState
 from ..world.state import Team
@@ -80,6 +81,16 @@ class ControlProcessor(Processor):
     def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
         self.motion.apply_settings(settings)
         self.our_team = our_team
+
+    def configure(self, params: StationParams) -> None:
+        self.apply_settings(params.control, params.team.our_team)
+        safety = params.safety
+        self.vision_stale_s = safety.vision_stale_s
+        # a slow strategy rate must not look like a stall: at least 2.5 of its periods
+        self.strategy_stale_s = max(safety.strategy_stale_s,
+                                    2.5 / params.processors.strategy_hz)
+        self.stop_speed_mps = safety.stop_speed_mps
+        self.trigger = OnTopic(self.world, max_wait_s=params.processors.control_max_wait_s)
 
     async def tick(self) -> None:
         now = time.monotonic()

@@ -22,10 +22,10 @@ class CommandPublisher(Processor):
 
     name = "command-publisher"
 
-    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket | None = None) -> None:
         cmds = bus.of(topics.ROBOT_COMMANDS)
         super().__init__(OnTopic(cmds, max_wait_s=0.05))
-        self.sock = sock
+        self._sock = sock
         self.reader = Reader(cmds)
         self.sim_reader = Reader(bus.of(topics.SIM_COMMANDS))
         self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
@@ -39,6 +39,21 @@ class CommandPublisher(Processor):
         self.estop_by: Callable[[], str] = lambda: ""
         self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
         self._release_until = -1e9  # a release is being repeated until the relay confirms
+
+    def attach(self, sock: zmq.asyncio.Socket) -> None:
+        """The ZeroMQ socket, made by the station on its loop when it starts."""
+        self._sock = sock
+
+    @property
+    def attached(self) -> bool:
+        return self._sock is not None
+
+    @property
+    def sock(self) -> zmq.asyncio.Socket:
+        if self._sock is None:
+            raise RuntimeError("command-publisher: no socket attached (the station attaches "
+                               "it in start)")
+        return self._sock
 
     async def tick(self) -> None:
         for cs in self.reader.read_new():

@@ -24,13 +24,28 @@ class RelayIngest(Processor):
 
     name = "relay-ingest"
 
-    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket) -> None:
+    def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket | None = None) -> None:
         super().__init__(None)
-        self.sock = sock
+        self._sock = sock
         self.vision_packets = bus.of(topics.VISION_PACKETS)
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
         self.counters = {"zmq": StreamCounter("zmq")}
+
+    def attach(self, sock: zmq.asyncio.Socket) -> None:
+        """The ZeroMQ socket, made by the station on its loop when it starts."""
+        self._sock = sock
+
+    @property
+    def attached(self) -> bool:
+        return self._sock is not None
+
+    @property
+    def sock(self) -> zmq.asyncio.Socket:
+        if self._sock is None:
+            raise RuntimeError("relay-ingest: no socket attached (the station attaches it "
+                               "in start)")
+        return self._sock
 
     async def wait_input(self) -> None:
         await self.sock.poll()

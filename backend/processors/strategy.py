@@ -13,7 +13,7 @@ from ..bus import DataBus, Reader
 from ..control.goto import Target
 from ..engine import EngineError, PoolEngine
 from ..messages import TargetEntry
-from ..params.model import StrategyParams
+from ..params.model import StationParams, StrategyParams
 from ..processor import Every, Processor
 from ..strategy.core import Prepared, StrategyCore
 from ..world.referee import RefereeState
@@ -52,6 +52,14 @@ class StrategyProcessor(Processor):
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
+
+    def configure(self, params: StationParams) -> None:
+        t = params.team
+        self.our_team = t.our_team
+        self.our_side_negative = t.our_side == "negative-x"
+        self.side_from_referee = t.side_from_referee
+        self.params = params.strategy
+        self.set_rate(params.processors.strategy_hz)
 
     async def tick(self) -> None:
         for op in self.operator.read_new():

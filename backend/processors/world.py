@@ -7,6 +7,7 @@ from collections import deque
 
 from .. import topics
 from ..bus import DataBus, Reader
+from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.model import WorldModel
 from .common import LatencyStage, badlog
@@ -53,6 +54,14 @@ class WorldProcessor(Processor):
         if g is not None:
             self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
                                  g["boundary_width"])
+
+    def configure(self, params: StationParams) -> None:
+        w, wc = params.world, self.model.config
+        wc.merge_window_s = w.merge_window_s
+        wc.predict_after_s = w.predict_after_s
+        wc.visible_timeout_s = w.visible_timeout_s
+        wc.drop_timeout_s = w.drop_timeout_s
+        self.model.configure(params.filters)
 
     async def tick(self) -> None:
         frames = self.reader.read_new()
