@@ -25,7 +25,7 @@ from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
 from .security import EdgeGuard
-from .station import Station, _finite
+from .station import Station
 from .world.state import Team
 
 log = logging.getLogger("touchline.api")
@@ -125,21 +125,21 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.get("/health")
     async def health() -> JSONResponse:
-        return SafeJSONResponse(st.health(), what="health")
+        return SafeJSONResponse(st.views.health, what="health")
 
     @api.get("/world")
     async def world() -> JSONResponse:
-        return SafeJSONResponse(_finite(st.world_dict()), what="world")
+        return SafeJSONResponse(st.views.world, what="world")
 
     @api.get("/geometry")
     async def geometry() -> JSONResponse:
-        geo = st.geometry()
+        geo = st.views.geometry
         if geo is None:
             raise HTTPException(404, "no geometry packet received yet")
         return SafeJSONResponse(geo, what="geometry")
 
     def _check_on_field(x: float, y: float, what: str = "point") -> None:
-        geo = st.geometry()
+        geo = st.views.geometry
         half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
         half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
         if abs(x) > half_l or abs(y) > half_w:
@@ -197,7 +197,9 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.get("/referee")
     async def referee_get() -> JSONResponse:
-        return SafeJSONResponse({**st.referee_view(), "active": st.world_dict()["referee"]},
+        world = st.views.world
+        return SafeJSONResponse({**st.referee_view(),
+                                 "active": None if world is None else world["referee"]},
                                 what="referee")
 
     @api.post("/referee/internal/enabled", response_model=None)
@@ -235,11 +237,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             return JSONResponse(status_code=409, content={
                 "detail": f"a game controller is active ({other}): the internal referee "
                           "stays off"})
-        geo = st.geometry()
-        # the division's robots per team, from the field size (A: 12 m x 9 m, 11 robots)
-        st.referee_state.robots_per_team = \
-            11 if geo is not None and geo["field_length"] >= 11000 else 6
-        await st.call(st.referee_state.card, body.team, body.card)
+        await st.call(st.give_card, body.team, body.card)
         await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s card for %s", body.card, body.team)
         return st.referee_view()
@@ -362,13 +360,16 @@ def _params_routes(api: APIRouter, st: Station) -> None:
 
 
 async def _serve_client(ws: WebSocket, st: Station) -> None:
-    """Sends a snapshot, then the latest world at up to ``stream.ws_max_hz``; a slow client
-    only delays itself: it always gets the newest world, never a backlog. Parameter changes
-    and geometry are pushed when they change, health twice a second.
-
-    The bus lives on the station thread, so this loop looks at the world's sequence number
-    at the stream rate instead of waiting on the bus."""
+    """Sends a snapshot, then every change of the station's published views: the latest world
+    at up to ``stream.ws_max_hz`` (a slow client only delays itself: it always gets the newest
+    world, never a backlog), parameters and geometry when they change, health as published
+    (about four times a second). The station notifies; this loop never polls its state."""
     closed = asyncio.Event()
+    changed = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    def notify() -> None:  # on the station thread: only hand over to this client's loop
+        loop.call_soon_threadsafe(changed.set)
+    unsubscribe = st.subscribe_views(notify)
 
     async def receive() -> None:
         try:
@@ -378,44 +379,46 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                     break
         finally:
             closed.set()
+            changed.set()
 
     rx = asyncio.create_task(receive())
     try:
-        await ws.send_text(dumps(_finite({
-            "type": "snapshot", "world": st.world_dict(), "geometry": st.geometry(),
-            "health": st.health(),
-            "params": {"version": st.params.version, "values": st.params.values()},
-        }), "snapshot"))
-        geo_seq = st.geometry_topic.seq
+        v = st.views
         params_version = st.params.version
-        last_health = time.monotonic()
-        sent_key = st.world_version()
-        next_t = time.monotonic()
+        await ws.send_text(dumps({
+            "type": "snapshot", "world": v.world, "geometry": v.geometry, "health": v.health,
+            "params": {"version": params_version, "values": st.params.values()},
+        }, "snapshot"))
+        sent = v
+        next_world = time.monotonic()
         while not closed.is_set():
-            next_t += 1.0 / st.params.current.stream.ws_max_hz
-            now = time.monotonic()
-            if next_t < now:  # this client is behind: skip, don't catch up
-                next_t = now
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(closed.wait(), next_t - now)
+            await changed.wait()
+            changed.clear()
             if closed.is_set() or ws.application_state != WebSocketState.CONNECTED:
                 break
             if st.params.version != params_version:
                 params_version = st.params.version
                 await ws.send_text(dumps({"type": "params", "version": params_version,
                                           "values": st.params.values()}, "params"))
-            if st.geometry_topic.seq != geo_seq:
-                geo_seq = st.geometry_topic.seq
-                await ws.send_text(dumps({"type": "geometry", "geometry": st.geometry()},
+            v = st.views
+            if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
+                await ws.send_text(dumps({"type": "geometry", "geometry": v.geometry},
                                          "geometry"))
-            key = st.world_version()
-            if key != sent_key:
-                sent_key = key
-                await ws.send_text(st.world_json())
-            if time.monotonic() - last_health >= 0.5:
-                last_health = time.monotonic()
-                await ws.send_text(st.health_json())
+            if v.world_key != sent.world_key:
+                now = time.monotonic()
+                if now < next_world:  # at most ws_max_hz: wait, then send the newest
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(closed.wait(), next_world - now)
+                    if closed.is_set():
+                        break
+                    v = st.views
+                next_world = max(next_world, now) + 1.0 / st.params.current.stream.ws_max_hz
+                await ws.send_text(v.world_json)
+            if v.health_mono != sent.health_mono:
+                await ws.send_text(v.health_json)
+            sent = v
     finally:
+        unsubscribe()
         rx.cancel()
 
 

@@ -1,5 +1,6 @@
 """The composition root of the backend: bus, processors and ZeroMQ, started and stopped in
-mirror order. The API reads through this object and writes only onto bus topics."""
+mirror order. The station thread is the only writer of station state: the API reads the
+immutable ``views`` it publishes and changes state only through ``call`` (the command queue)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar, cast
 
@@ -52,6 +54,38 @@ log = logging.getLogger("touchline.station")
 T = TypeVar("T")
 
 
+@dataclass(frozen=True)
+class Views:
+    """What the web side reads: built on the station thread (the only writer of station
+    state) and replaced whole, never changed, so a web thread never sees a half-made one."""
+
+    world_key: tuple[int, bool, str] = (-1, False, "")
+    world: contract.World | None = None
+    world_json: str = ""
+    health: contract.Health | None = None
+    health_json: str = ""
+    health_mono: float = -1e9
+    geometry: contract.Geometry | None = None
+    geometry_seq: int = -1
+    #: counts every publication that changed something (websocket clients wait on it)
+    serial: int = 0
+
+
+class ViewPublisher(Processor):
+    """Publishes the station's views for the web side on every world update (at least every
+    0.1 s, so a stopped world still shows why), health at most every 0.25 s."""
+
+    name = "views"
+    health_period_s = 0.25
+
+    def __init__(self, station: Station) -> None:
+        super().__init__(OnTopic(station.world_topic, max_wait_s=0.1))
+        self.station = station
+
+    async def tick(self) -> None:
+        self.station.publish_views()
+
+
 class Station:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
@@ -61,8 +95,6 @@ class Station:
         self._stop_event: asyncio.Event | None = None
         self.runner = Runner()
         self.started_mono = time.monotonic()
-        self._world_json_cache: tuple[tuple[int, bool, str], str] = ((-1, False, ""), "")
-        self._health_json_cache: tuple[float, str] = (-1e9, "")
         self.ws_clients = 0
         self.params = ParamStore(settings.state_dir)
         overrides: dict[str, Any] = {}
@@ -121,9 +153,11 @@ class Station:
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        self.views = Views()
+        self._view_listeners: set[Callable[[], None]] = set()
         self.processors: tuple[Processor, ...] = (
             self.ingest, self.vision, self.referee, self.world, self.strategy, self.control,
-            self.internal_referee, self.publisher)
+            self.internal_referee, self.publisher, ViewPublisher(self))
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
     # web traffic (JSON encoding, websocket sends) never delays control ----
@@ -195,12 +229,25 @@ class Station:
     def _apply_params_soon(self, p: StationParams, version: int) -> None:
         self._schedule(self.apply_params, p, version)
 
+    def _command(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
+        """Queues ``fn(*args)`` for the station loop (between two ticks); once it ran, fresh
+        views are published, so the next read sees the change."""
+        def command() -> T:
+            try:
+                return fn(*args)
+            finally:
+                if self._loop is not None:
+                    self.publish_views(force=True)
+        return self._schedule(command)
+
     async def call(self, fn: Callable[..., T], *args: Any) -> T:
-        """Runs ``fn(*args)`` on the station loop (between two ticks) and returns its result."""
-        return await asyncio.wrap_future(self._schedule(fn, *args))
+        """The one way the web side changes station state (the command queue): runs
+        ``fn(*args)`` on the station loop and returns its result."""
+        return await asyncio.wrap_future(self._command(fn, *args))
 
     def call_sync(self, fn: Callable[..., T], *args: Any, timeout_s: float = 5.0) -> T:
-        return self._schedule(fn, *args).result(timeout=timeout_s)
+        """``call`` for a thread without an event loop (tests, scripts)."""
+        return self._command(fn, *args).result(timeout=timeout_s)
 
     async def start(self) -> None:
         s = self.settings
@@ -214,6 +261,7 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        self.publish_views(force=True)
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
 
@@ -229,6 +277,7 @@ class Station:
         for name, size in p.bus.sizes().items():
             self.bus.of(sized[name]).resize(size)
         self.params_topic.write(version)
+        self._notify_views()
 
     # ---- the compute engine (started and replaced in the background; strategy uses it
     # once it runs and falls back to the built-in code meanwhile) ----
@@ -462,6 +511,14 @@ class Station:
             },
         }
 
+    def give_card(self, team: Team, card: str) -> None:
+        """A card from the internal referee; the division's robots per team come from the
+        field size (A: 12 m x 9 m, 11 robots)."""
+        geo = self.geometry()
+        self.referee_state.robots_per_team = \
+            11 if geo is not None and geo["field_length"] >= 11000 else 6
+        self.referee_state.card(team, card)
+
     @property
     def estop(self) -> bool:
         return bool(self.estop_topic.latest_value())
@@ -577,21 +634,42 @@ class Station:
         return (self.world_topic.seq, self.estop, halt)
 
     def world_json(self) -> str:
-        """The world as JSON, encoded once per world update and shared by every client."""
-        key = self.world_version()
-        if self._world_json_cache[0] != key:
-            self._world_json_cache = (key, dumps({"type": "world",
-                                                  "world": _finite(self.world_dict())}, "world"))
-        return self._world_json_cache[1]
+        """The world message as JSON (what every websocket client gets)."""
+        return dumps({"type": "world", "world": _finite(self.world_dict())}, "world")
 
-    def health_json(self, max_age_s: float = 0.25) -> str:
-        """The health message, encoded at most every ``max_age_s`` and shared by every client
-        (like the world), instead of once per client."""
+    def publish_views(self, force: bool = False) -> None:
+        """Builds what changed of the web side's views (on the station thread) and tells the
+        websocket clients. The web side only ever reads ``self.views``."""
+        v = self.views
+        changes: dict[str, Any] = {}
+        key = self.world_version()
+        if force or key != v.world_key:
+            world = cast(contract.World, _finite(self.world_dict()))
+            changes.update(world_key=key, world=world,
+                           world_json=dumps({"type": "world", "world": world}, "world"))
         now = time.monotonic()
-        if now - self._health_json_cache[0] > max_age_s:
-            self._health_json_cache = (now, dumps({"type": "health", "health": self.health()},
-                                                  "health"))
-        return self._health_json_cache[1]
+        if force or now - v.health_mono >= ViewPublisher.health_period_s:
+            health = self.health()
+            changes.update(health=health, health_mono=now,
+                           health_json=dumps({"type": "health", "health": health}, "health"))
+        if force or self.geometry_topic.seq != v.geometry_seq:
+            changes.update(geometry=self.geometry(), geometry_seq=self.geometry_topic.seq)
+        if changes:
+            self.views = replace(v, serial=v.serial + 1, **changes)
+            self._notify_views()
+
+    def subscribe_views(self, listener: Callable[[], None]) -> Callable[[], None]:
+        """``listener()`` is called (on the station thread: it must only hand over, e.g. with
+        ``loop.call_soon_threadsafe``) after every publication; returns the unsubscribe."""
+        self._view_listeners.add(listener)
+        return lambda: self._view_listeners.discard(listener)
+
+    def _notify_views(self) -> None:
+        for listener in list(self._view_listeners):
+            try:
+                listener()
+            except RuntimeError:  # its web loop has closed
+                self._view_listeners.discard(listener)
 
     def geometry(self) -> contract.Geometry | None:
         """The field as decoded (cleaned at decode time; non-finite numbers, should any get

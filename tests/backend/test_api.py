@@ -37,7 +37,7 @@ def _world(n: int = 2) -> WorldState:
 def test_world_reports_robots_in_mm_and_rad(client) -> None:  # type: ignore[no-untyped-def]
     c, st = client
     assert c.get("/api/world").json()["robots"] == []
-    st.world_topic.write(_world(3))
+    st.call_sync(st.world_topic.write, _world(3))  # the station thread is the only writer
     w = c.get("/api/world").json()
     assert [(r["team"], r["id"], r["x"], r["y"]) for r in w["robots"]] == [
         ("blue", 0, 0.0, -50.0), ("blue", 1, 100.0, -50.0), ("blue", 2, 200.0, -50.0)]
@@ -318,6 +318,18 @@ def _until(cond, what: str, timeout_s: float = 10.0) -> Any:  # type: ignore[no-
     raise AssertionError(f"timed out waiting for {what}")
 
 
+def _fresh(c: TestClient, st: Station, path: str) -> Any:
+    """``path`` after a no-op command: the station publishes fresh views after each command,
+    so this sees every change made before (here: the test's clock moved)."""
+    st.call_sync(lambda: None)
+    return c.get(path).json()
+
+
+def _fresh_text(c: TestClient, st: Station, path: str) -> str:
+    st.call_sync(lambda: None)
+    return c.get(path).text
+
+
 def _health_when(c: TestClient, relay: _Relay, command: str, source: str, cond) -> Any:  # type: ignore[no-untyped-def]
     """Sends referee packets until the station's health satisfies ``cond`` (a subscriber
     connecting to a PUB socket misses what was sent before it joined)."""
@@ -333,7 +345,7 @@ def test_health_flags_a_silent_game_controller_and_clears_when_it_speaks(  # typ
     c, st = client
     clock = _Clock()
     st.referee_watch.clock = clock
-    h = c.get("/api/health").json()
+    h = _fresh(c, st, "/api/health")
     assert h["referee"] is None and not any("referee" in w for w in h["warnings"])
     h = _health_when(c, relay, "STOP", "gc-test", lambda h: h["referee"] is not None)
     assert h["referee"] == {"last_heard_s": 0.0, "source_identifier": "gc-test",
@@ -342,15 +354,15 @@ def test_health_flags_a_silent_game_controller_and_clears_when_it_speaks(  # typ
     ok_heard = h["ok"]
 
     clock.t += 3.0  # at the threshold: not yet
-    assert c.get("/api/health").json()["referee"]["silent"] is False
+    assert _fresh(c, st, "/api/health")["referee"]["silent"] is False
     clock.t += 0.5
-    h = c.get("/api/health").json()
+    h = _fresh(c, st, "/api/health")
     assert h["referee"]["silent"] is True and h["referee"]["last_heard_s"] == 3.5
     assert "referee silent 3 s: still obeying STOP from gc-test" in h["warnings"]
     assert h["ok"] == ok_heard  # a warning, not a broken loop (docs/api.md)
     # the station keeps obeying the last command
     assert st.control.active_referee() is not None
-    assert c.get("/api/world").json()["referee"]["command"] == "STOP"
+    assert _fresh(c, st, "/api/world")["referee"]["command"] == "STOP"
 
     h = _health_when(c, relay, "FORCE_START", "gc-test",
                      lambda h: h["referee"]["command"] == "FORCE_START")
@@ -368,10 +380,10 @@ def test_the_internal_referee_switched_off_is_no_silent_referee(  # type: ignore
     # the relay loops the internal referee's multicast back to the station
     _health_when(c, relay, "STOP", own, lambda h: h["referee"] is not None)
     clock.t += 10.0
-    h = c.get("/api/health").json()
+    h = _fresh(c, st, "/api/health")
     assert h["referee"]["source"] == "internal" and h["referee"]["silent"] is True
     assert c.post("/api/referee/internal/enabled", json={"enabled": False}).status_code == 200
-    h = c.get("/api/health").json()
+    h = _fresh(c, st, "/api/health")
     assert h["referee"]["obeyed"] is False and h["referee"]["silent"] is False
     assert not any("referee" in w for w in h["warnings"])
 
@@ -398,7 +410,7 @@ def test_a_referee_name_that_is_not_utf8_breaks_no_endpoint_and_no_stream(  # ty
     for path in ("/api/world", "/api/referee", "/api/health"):
         r = c.get(path)
         assert r.status_code == 200, (path, r.text)
-    assert "bad string" in c.get("/api/health").json()["streams"]["referee"]["last_error"]
+    assert "bad string" in _fresh(c, st, "/api/health")["streams"]["referee"]["last_error"]
     with c.websocket_connect("/api/ws") as ws:
         snap = json.loads(ws.receive_text())
         assert snap["type"] == "snapshot"
@@ -427,6 +439,7 @@ def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # typ
         relay.sock.send_multipart([b"vision", env.SerializeToString()])
         return st.geometry()
     _until(step, "the geometry")
+    st.call_sync(lambda: None)  # fresh views: the geometry as published
     r = c.get("/api/geometry")
     assert r.status_code == 200
     g = json.loads(r.text, parse_constant=lambda s: pytest.fail(f"{s} in /api/geometry"))
@@ -495,8 +508,8 @@ def test_geometry_arriving_while_a_page_is_connected_reaches_it_clean(  # type: 
     g = msg["geometry"]
     assert [ln["name"] for ln in g["lines"]] == ["Good", "Bad\ufffdame"]
     assert g["ball_radius"] == 21.5
-    assert _strict(c.get("/api/geometry").text, "/api/geometry") == g
-    vision = c.get("/api/health").json()["streams"]["vision"]
+    assert _strict(_fresh_text(c, st, "/api/geometry"), "/api/geometry") == g
+    vision = _fresh(c, st, "/api/health")["streams"]["vision"]
     assert vision["errors_by_reason"]["bad string"] >= 1
     assert "field line name" in vision["last_error"]
 

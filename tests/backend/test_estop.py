@@ -82,9 +82,11 @@ def test_a_fresh_backend_with_a_persisted_stop_says_so_in_health_and_to_every_pa
             assert snap["world"]["estop"] is True
 
         # a relay that reports no latch long after the press is a problem worth a line
-        st.relay_stats.write({"estop_latched": False, "estop_by": "",
-                              "received_mono": time.monotonic(), "streams": {}})
-        st._estop_mono = time.monotonic() - 10
+        def relay_without_latch() -> None:  # through the station: its one writer
+            st.relay_stats.write({"estop_latched": False, "estop_by": "",
+                                  "received_mono": time.monotonic(), "streams": {}})
+            st._estop_mono = time.monotonic() - 10
+        st.call_sync(relay_without_latch)
         h = c.get("/api/health").json()
         assert h["estop"]["relay_latched"] is False
         assert any("relay has not latched" in w for w in h["warnings"]), h["warnings"]
