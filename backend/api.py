@@ -198,7 +198,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.get("/referee")
     async def referee_get() -> JSONResponse:
         world = st.views.world
-        return SafeJSONResponse({**st.referee_view(),
+        return SafeJSONResponse({**await st.call(st.referee_view),
                                  "active": None if world is None else world["referee"]},
                                 what="referee")
 
@@ -208,7 +208,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             await st.call(st.internal_referee.enable, body.enabled)
         except RefereeCommandError as exc:
             return JSONResponse(status_code=409, content={"detail": str(exc)})
-        return st.referee_view()
+        return await st.call(st.referee_view)
 
     @api.post("/referee/internal/command", response_model=None)
     async def referee_command(body: RefereeCommandIn) -> contract.RefereeView | JSONResponse:
@@ -228,7 +228,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 {"loc": ["body", "command"], "msg": str(exc), "type": "value_error"}]})
         await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s", body.command)
-        return st.referee_view()
+        return await st.call(st.referee_view)
 
     @api.post("/referee/internal/card", response_model=None)
     async def referee_card(body: CardIn) -> contract.RefereeView | JSONResponse:
@@ -240,11 +240,11 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         await st.call(st.give_card, body.team, body.card)
         await st.call(st.internal_referee.enable, True)
         log.info("internal referee: %s card for %s", body.card, body.team)
-        return st.referee_view()
+        return await st.call(st.referee_view)
 
     @api.get("/estop")
     async def estop_get() -> contract.EstopInfo:
-        return st.estop_view()
+        return await st.call(st.estop_view)
 
     @api.post("/estop", response_model=None)
     async def estop(body: EstopIn, request: Request) -> dict[str, Any] | JSONResponse:
@@ -263,7 +263,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             await st.call(st.set_estop, False, f"operator at {client}")
             log.warning("emergency stop RELEASED by %s (pressed by %s)%s", client, was.by,
                         f": {body.reason}" if body.reason else "")
-        return {"estop": body.active, **st.estop_view()}
+        return {"estop": body.active, **await st.call(st.estop_view)}
 
     @api.websocket("/ws")
     async def ws_endpoint(ws: WebSocket) -> None:
