@@ -231,6 +231,29 @@ class StrategyState(TypedDict):
 
 
 @with_config(_STRICT)
+class Score(TypedDict):
+    blue: int
+    yellow: int
+
+
+@with_config(_STRICT)
+class InternalReferee(TypedDict):
+    """The station's own referee."""
+
+    enabled: bool
+    disabled_reason: str
+    foreign_source: Annotated[str | None, Field(
+        description="a game controller heard on the network (the internal referee steps aside)")]
+    command: str
+    stage: str
+    command_counter: int
+    designated_position: Vec | None
+    score: Score
+    max_allowed_bots: Score
+    commands: Annotated[list[str], Field(description="the commands an operator may give")]
+
+
+@with_config(_STRICT)
 class World(TypedDict):
     """The world as the station sees it, with what it commands."""
 
@@ -245,6 +268,8 @@ class World(TypedDict):
     halt_reason: Annotated[str, Field(
         description='why every robot is held ("emergency stop", "HALT", "no vision ..."), or ""')]
     strategy: StrategyState | None
+    internal_referee: Annotated[InternalReferee, Field(
+        description="the station's own referee (the referee panel shows it)")]
 
 
 # ------------------------------------------------------------------------------ geometry
@@ -456,29 +481,6 @@ class StrategyView(StrategyState):
 
     plays: list[PlayInfo]
     roles: Annotated[dict[str, str], Field(description='role of each robot, keyed "blue/3"')]
-
-
-@with_config(_STRICT)
-class Score(TypedDict):
-    blue: int
-    yellow: int
-
-
-@with_config(_STRICT)
-class InternalReferee(TypedDict):
-    """The station's own referee."""
-
-    enabled: bool
-    disabled_reason: str
-    foreign_source: Annotated[str | None, Field(
-        description="a game controller heard on the network (the internal referee steps aside)")]
-    command: str
-    stage: str
-    command_counter: int
-    designated_position: Vec | None
-    score: Score
-    max_allowed_bots: Score
-    commands: Annotated[list[str], Field(description="the commands an operator may give")]
 
 
 @with_config(_STRICT)

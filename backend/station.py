@@ -59,7 +59,7 @@ class Views:
     """What the web side reads: built on the station thread (the only writer of station
     state) and replaced whole, never changed, so a web thread never sees a half-made one."""
 
-    world_key: tuple[int, bool, str] = (-1, False, "")
+    world_key: tuple[object, ...] = ()
     world: contract.World | None = None
     world_json: str = ""
     health: contract.Health | None = None
@@ -545,6 +545,7 @@ class Station:
             "estop_info": self.estop_view(),
             "halt_reason": self.control.halt_reason,
             "strategy": None,
+            "internal_referee": self.referee_view()["internal"],
         }
         out["strategy"] = self.strategy_state()
         if ref is not None:
@@ -627,11 +628,14 @@ class Station:
                            "p50_ms": None, "p99_ms": None, "n": None})
         return stages
 
-    def world_version(self) -> tuple[int, bool, str]:
-        """Changes whenever the world message would: a new world, the e-stop, or why the
-        robots are stopped (that changes while no world is written: vision lost)."""
-        halt = self.control.halt_reason
-        return (self.world_topic.seq, self.estop, halt)
+    def world_version(self) -> tuple[object, ...]:
+        """Changes whenever the world message would: a new world, the e-stop, why the robots
+        are stopped (that changes while no world is written: vision lost), or the internal
+        referee (its panel follows the world message)."""
+        ir, rs = self.internal_referee, self.referee_state
+        return (self.world_topic.seq, self.estop, self.control.halt_reason, rs.command_counter,
+                ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
+                rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
 
     def world_json(self) -> str:
         """The world message as JSON (what every websocket client gets)."""

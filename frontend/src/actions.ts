@@ -1,7 +1,18 @@
 // User actions that talk to the backend and update the store.
 
-import { ApiError, deleteTarget, postEstop, postTarget } from "./api/http";
-import type { RobotKey } from "./api/types";
+import {
+  ApiError,
+  deleteTarget,
+  postEstop,
+  postRefereeCard,
+  postRefereeCommand,
+  postRefereeEnabled,
+  postTarget,
+  teleportBall,
+  teleportRobot,
+  type Card,
+} from "./api/http";
+import type { RobotKey, Team } from "./api/types";
 import type { Point } from "./field/transform";
 import { appStore } from "./store/appStore";
 import { pushToast } from "./store/toasts";
@@ -28,7 +39,7 @@ export async function sendTarget(robot: RobotKey, p: Point, orientation?: number
 export async function clearTarget(robot: RobotKey): Promise<void> {
   try {
     await deleteTarget(robot.team, robot.id);
-    pushToast("info", `${robot.team} ${robot.id} back to demo behaviour`);
+    pushToast("info", `${robot.team} ${robot.id} back to the strategy`);
   } catch (e) {
     pushToast("error", `Cannot clear target of ${robot.team} ${robot.id}: ${errorText(e)}`);
   }
@@ -46,5 +57,50 @@ export async function setEstop(active: boolean): Promise<void> {
     }
   } catch (e) {
     pushToast("error", `Emergency stop request failed: ${errorText(e)}`);
+  }
+}
+
+/** Give a command to the internal referee; resolves to an error text or null (a toast shows
+ * it too). Its new state arrives with the next world message. */
+export async function giveRefereeCommand(command: string, at?: { x: number; y: number }): Promise<string | null> {
+  try {
+    await postRefereeCommand(command, at);
+    return null;
+  } catch (e) {
+    const msg = errorText(e);
+    pushToast("error", `Referee ${command}: ${msg}`);
+    return msg;
+  }
+}
+
+/** A card from the internal referee; resolves to an error text or null (a toast shows it too). */
+export async function giveRefereeCard(team: Team, card: Card): Promise<string | null> {
+  try {
+    await postRefereeCard(team, card);
+    return null;
+  } catch (e) {
+    const msg = errorText(e);
+    pushToast("error", `Referee ${card === "clear" ? "clear cards" : `${card} card`} for ${team}: ${msg}`);
+    return msg;
+  }
+}
+
+/** Switch the internal referee off; resolves to an error text or null. */
+export async function turnInternalRefereeOff(): Promise<string | null> {
+  try {
+    await postRefereeEnabled(false);
+    return null;
+  } catch (e) {
+    return errorText(e);
+  }
+}
+
+/** Teleport the ball, or a robot, through the simulator (a toast says why it failed). */
+export async function teleport(what: "ball" | RobotKey, p: Point): Promise<void> {
+  try {
+    if (what === "ball") await teleportBall(p.x, p.y);
+    else await teleportRobot(what.team, what.id, p.x, p.y);
+  } catch (e) {
+    pushToast("error", `Teleport failed: ${errorText(e)}`);
   }
 }

@@ -1,7 +1,7 @@
 // Keyboard shortcuts of the whole page (shown by the `?` overlay).
 
 import { selectRobot, setEstop } from "./actions";
-import { giveRefereeCommand } from "./components/RefereePanel";
+import { giveRefereeCommand } from "./actions";
 import { fitView } from "./field/viewState";
 import { togglePaused } from "./plots/sampler";
 import { setTab, TABS, uiStore } from "./store/uiStore";

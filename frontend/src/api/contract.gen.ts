@@ -458,6 +458,8 @@ export interface World {
   /** why every robot is held ("emergency stop", "HALT", "no vision ..."), or "" */
   halt_reason: string;
   strategy: StrategyState | null;
+  /** the station's own referee (the referee panel shows it) */
+  internal_referee: InternalReferee;
 }
 
 /** The world model: its age by the receive clock, what it dropped and why. */

@@ -1,6 +1,6 @@
 // HTTP calls to the backend (docs/api.md, "HTTP"). Errors carry the server's message.
 
-import type { StrategyInfo, Team } from "./types";
+import type { RefereeView, StrategyInfo, Team } from "./types";
 
 export class ApiError extends Error {
   readonly status: number;
@@ -78,10 +78,6 @@ export interface TargetReply {
   target: { x: number; y: number; orientation: number | null };
 }
 
-export function postTargetWithOrientation(team: Team, id: number, x: number, y: number, orientation: number): Promise<TargetReply> {
-  return postTarget(team, id, { x, y, orientation });
-}
-
 export function postTarget(
   team: Team,
   id: number,
@@ -119,9 +115,7 @@ export interface DiffEntry {
 }
 
 export const getParamsSchema = () => request<Record<string, unknown>>("GET", "/api/params/schema");
-export const getParams = () => request<ParamsReply>("GET", "/api/params");
 export const patchParams = (patch: Record<string, unknown>) => request<ParamsReply>("PATCH", "/api/params", patch);
-export const getParamsDiff = () => request<{ version: number; changes: DiffEntry[] }>("GET", "/api/params/diff");
 export const importParams = (text: string) => request<ParamsReply>("POST", "/api/params/import", undefined, text);
 export const listPresets = () => request<{ presets: string[] }>("GET", "/api/presets");
 export const savePreset = (name: string) => request<{ presets: string[] }>("PUT", `/api/presets/${encodeURIComponent(name)}`);
@@ -140,34 +134,19 @@ export const getStrategy = () => request<StrategyInfo>("GET", "/api/strategy");
 
 // ---- referee and simulator ----
 
-export interface InternalReferee {
-  enabled: boolean;
-  disabled_reason: string;
-  foreign_source: string | null;
-  command: string;
-  stage: string;
-  command_counter: number;
-  designated_position: { x: number; y: number } | null;
-  score: { blue: number; yellow: number };
-  /** Robots per team the internal referee allows now (cards lower it; absent from an older backend). */
-  max_allowed_bots?: { blue: number; yellow: number };
-  commands: string[];
-}
-
 /** A card from the internal referee: yellow (one robot fewer for 120 s), red (for the rest of
  * the game), or clear (withdraw the team's cards). */
 export type Card = "yellow" | "red" | "clear";
 
-export const getReferee = () => request<{ internal: InternalReferee; active: unknown }>("GET", "/api/referee");
 export const postRefereeCommand = (command: string, designated_position?: { x: number; y: number }) =>
-  request<InternalReferee>(
+  request<RefereeView>(
     "POST",
     "/api/referee/internal/command",
     designated_position ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } } : { command },
   );
 export const postRefereeCard = (team: Team, card: Card) =>
-  request<{ internal: InternalReferee }>("POST", "/api/referee/internal/card", { team, card });
-export const postRefereeEnabled = (enabled: boolean) => request<InternalReferee>("POST", "/api/referee/internal/enabled", { enabled });
+  request<RefereeView>("POST", "/api/referee/internal/card", { team, card });
+export const postRefereeEnabled = (enabled: boolean) => request<RefereeView>("POST", "/api/referee/internal/enabled", { enabled });
 
 export const teleportBall = (x: number, y: number) => request<unknown>("POST", "/api/sim/ball", { x: Math.round(x), y: Math.round(y) });
 export const teleportRobot = (team: Team, id: number, x: number, y: number, orientation?: number) =>

@@ -11,6 +11,7 @@ export type {
   FieldLine,
   Geometry,
   Health,
+  InternalReferee,
   LatencyHealth,
   LatencyStage,
   ParamsState,

@@ -1,9 +1,7 @@
 import { useEffect, useRef, useState } from "react";
 import type { RobotKey } from "../api/types";
 import { sameRobot } from "../api/types";
-import { teleportBall, teleportRobot } from "../api/http";
-import { selectRobot, sendTarget } from "../actions";
-import { giveRefereeCommand } from "./RefereePanel";
+import { giveRefereeCommand, selectRobot, sendTarget, teleport } from "../actions";
 import { SituationBanner } from "./SituationBanner";
 import { decideClick } from "../field/clickAction";
 import { effectiveGeometry } from "../field/defaultGeometry";
@@ -14,7 +12,6 @@ import { canvasToWorld, type FieldTransform, type Point } from "../field/transfo
 import { fitView, panBy, registerFieldCanvas, transformFor, viewVersion, zoomAt } from "../field/viewState";
 import { appStore, type AppState } from "../store/appStore";
 import { useAppState } from "../store/hooks";
-import { pushToast } from "../store/toasts";
 import { LAYER_LABELS, toggleLayer, uiStore, useUi, type UiState } from "../store/uiStore";
 
 /** Frames the field drew (for window.__touchline.stats and bench/page_fps.mjs). */
@@ -32,9 +29,6 @@ interface Menu {
   p: Point;
 }
 
-function errText(e: unknown): string {
-  return e instanceof Error ? e.message : String(e);
-}
 
 function LayersPanel() {
   const layers = useUi((s) => s.layers);
@@ -312,16 +306,12 @@ export function FieldView() {
 
   const selected = useAppState((s) => s.selected);
 
-  const teleport = async (what: "ball" | "robot") => {
+  const teleportHere = async (what: "ball" | "robot") => {
     const m = menu;
     setMenu(null);
     if (!m) return;
-    try {
-      if (what === "ball") await teleportBall(m.p.x, m.p.y);
-      else if (selected) await teleportRobot(selected.team, selected.id, m.p.x, m.p.y);
-    } catch (e) {
-      pushToast("error", `Teleport failed: ${errText(e)}`);
-    }
+    if (what === "ball") await teleport("ball", m.p);
+    else if (selected) await teleport(selected, m.p);
   };
 
   return (
@@ -339,11 +329,11 @@ export function FieldView() {
           <div className="ctxmenu-title num">
             {Math.round(menu.p.x)}, {Math.round(menu.p.y)} mm
           </div>
-          <button type="button" role="menuitem" data-testid="menu-teleport-ball" onClick={() => void teleport("ball")}>
+          <button type="button" role="menuitem" data-testid="menu-teleport-ball" onClick={() => void teleportHere("ball")}>
             Teleport ball here
           </button>
           {selected && (
-            <button type="button" role="menuitem" data-testid="menu-teleport-robot" onClick={() => void teleport("robot")}>
+            <button type="button" role="menuitem" data-testid="menu-teleport-robot" onClick={() => void teleportHere("robot")}>
               Teleport {selected.team} {selected.id} here
             </button>
           )}

@@ -1,10 +1,10 @@
-import { useCallback, useEffect, useState } from "react";
-import { ApiError, getReferee, postRefereeCard, postRefereeCommand, postRefereeEnabled, type Card, type InternalReferee } from "../api/http";
+import { useState } from "react";
+import type { Card } from "../api/http";
+import { giveRefereeCard, giveRefereeCommand, turnInternalRefereeOff } from "../actions";
 import type { Referee, RefereeGameEvent, RefereeTeam, Robot, Team } from "../api/types";
 import { fmtFixed, fmtInt } from "../format";
 import { placementTarget, visibleRobots } from "../referee";
 import { useThrottledWorld } from "../store/hooks";
-import { pushToast } from "../store/toasts";
 import { uiStore, useUi } from "../store/uiStore";
 
 export function fmtClock(s: number | null | undefined): string {
@@ -184,18 +184,6 @@ const GRID: { label: string; cmds: [string, string] | [string] }[] = [
   { label: "Timeout", cmds: ["TIMEOUT_BLUE", "TIMEOUT_YELLOW"] },
 ];
 
-/** Give a command to the internal referee; resolves to an error text or null. */
-export async function giveRefereeCommand(command: string, at?: { x: number; y: number }): Promise<string | null> {
-  try {
-    await postRefereeCommand(command, at);
-    return null;
-  } catch (e) {
-    const msg = e instanceof ApiError ? `${e.message} (HTTP ${e.status})` : (e as Error).message;
-    pushToast("error", `Referee ${command}: ${msg}`);
-    return msg;
-  }
-}
-
 /** The internal referee's card buttons: a row per card, a button per team. */
 const CARD_ROWS: { card: Card; label: string; help: string }[] = [
   { card: "yellow", label: "Yellow card", help: "one robot fewer for 120 s" },
@@ -203,34 +191,12 @@ const CARD_ROWS: { card: Card; label: string; help: string }[] = [
   { card: "clear", label: "Clear cards", help: "withdraw the team's yellow and red cards" },
 ];
 
-/** A card from the internal referee; resolves to an error text or null (a toast shows it too). */
-export async function giveRefereeCard(team: Team, card: Card): Promise<string | null> {
-  try {
-    await postRefereeCard(team, card);
-    return null;
-  } catch (e) {
-    const msg = e instanceof ApiError ? `${e.message} (HTTP ${e.status})` : (e as Error).message;
-    pushToast("error", `Referee ${card === "clear" ? "clear cards" : `${card} card`} for ${team}: ${msg}`);
-    return msg;
-  }
-}
-
 export function RefereePanel() {
   const world = useThrottledWorld(250);
   const placing = useUi((s) => s.placing);
-  const [internal, setInternal] = useState<InternalReferee | null>(null);
+  // the internal referee arrives with every world message: no polling beside the websocket
+  const internal = world?.internal_referee ?? null;
   const [msg, setMsg] = useState<string | null>(null);
-
-  const refresh = useCallback(() => {
-    getReferee()
-      .then((r) => setInternal(r.internal))
-      .catch((e) => setMsg((e as Error).message));
-  }, []);
-  useEffect(() => {
-    refresh();
-    const t = setInterval(refresh, 1000);
-    return () => clearInterval(t);
-  }, [refresh]);
 
   const foreign = internal?.foreign_source ?? null;
   const disabled = foreign !== null;
@@ -239,14 +205,10 @@ export function RefereePanel() {
       uiStore.setState({ placing: placing === cmd ? null : cmd });
       return;
     }
-    const err = await giveRefereeCommand(cmd);
-    setMsg(err);
-    refresh();
+    setMsg(await giveRefereeCommand(cmd));
   };
   const card = async (team: Team, kind: Card) => {
-    const err = await giveRefereeCard(team, kind);
-    setMsg(err);
-    refresh();
+    setMsg(await giveRefereeCard(team, kind));
   };
   const cardBtn = (team: Team, row: (typeof CARD_ROWS)[number]) => (
     <button
@@ -346,12 +308,7 @@ export function RefereePanel() {
           disabled={disabled || !internal?.enabled}
           data-testid="internal-ref-off"
           onClick={() =>
-            void postRefereeEnabled(false)
-              .then(() => {
-                setMsg(null);
-                refresh();
-              })
-              .catch((e) => setMsg((e as Error).message))
+            void turnInternalRefereeOff().then(setMsg)
           }
         >
           Turn internal referee off

@@ -1,7 +1,7 @@
 // @vitest-environment jsdom
 import { act } from "react";
 import { beforeEach, describe, expect, it, vi } from "vitest";
-import type { InternalReferee } from "../api/http";
+import type { InternalReferee } from "../api/types";
 import type { Health, RefereeGameEvent, RefereeHealth, Robot, Team } from "../api/types";
 import { robot } from "../field/testRobots";
 import { placementTarget, refereeSilentFor } from "../referee";
@@ -222,14 +222,14 @@ describe("the internal referee's card buttons", () => {
   });
 
   type Reply = { status: number; body: unknown };
-  /** fetch for GET /api/referee and POST /api/referee/internal/card (`card` answers the POST). */
+  /** The internal referee's state as the world message brings it, and fetch for
+   * POST /api/referee/internal/card (`card` answers it; the panel polls nothing). */
   function stubApi(state: InternalReferee, card: (body: { team: string; card: string }) => Reply) {
+    appStore.setState({ world: world(1, { internal_referee: state }) });
     const fetchMock = vi.fn(async (url: string, init?: RequestInit) => {
       const key = `${init?.method ?? "GET"} ${url}`;
       const r: Reply =
-        key === "GET /api/referee"
-          ? { status: 200, body: { internal: state, active: null } }
-          : key === "POST /api/referee/internal/card"
+        key === "POST /api/referee/internal/card"
             ? card(JSON.parse(String(init?.body)))
             : { status: 404, body: { detail: "Not Found" } };
       return new Response(JSON.stringify(r.body), { status: r.status });
@@ -257,9 +257,10 @@ describe("the internal referee's card buttons", () => {
   beforeEach(() => appStore.setState(initialAppState()));
 
   it("has a yellow card, red card and clear cards button per team, named for screen readers", async () => {
-    stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
+    const fetchMock = stubApi(internal(), () => ({ status: 200, body: { internal: internal() } }));
     act(() => t.root.render(<RefereePanel />));
     await settle();
+    expect(fetchMock).not.toHaveBeenCalled(); // its state comes with the world: no polling
     for (const team of ["blue", "yellow"]) {
       for (const [card, name] of [["yellow", "Yellow card"], ["red", "Red card"], ["clear", "Clear cards"]]) {
         const b = q(`ref-card-${card}-${team}`) as HTMLButtonElement;

@@ -3,6 +3,7 @@ import type {
   EngineHealth,
   Geometry,
   Health,
+  InternalReferee,
   Referee,
   RefereeTeam,
   StreamHealth,
@@ -26,9 +27,25 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     estop_info: { active: false, since: 0, by: "", relay_latched: false },
     halt_reason: "",
     strategy: null,
+    internal_referee: internalReferee(),
     ...extra,
   };
 }
+
+/** The internal referee, off (as a station starts). */
+export const internalReferee = (extra: Partial<InternalReferee> = {}): InternalReferee => ({
+  enabled: false,
+  disabled_reason: "",
+  foreign_source: null,
+  command: "HALT",
+  stage: "NORMAL_FIRST_HALF_PRE",
+  command_counter: 0,
+  designated_position: null,
+  score: { blue: 0, yellow: 0 },
+  max_allowed_bots: { blue: 6, yellow: 6 },
+  commands: ["HALT", "STOP", "FORCE_START"],
+  ...extra,
+});
 
 export function health(rate = 60): Health {
   return {
