@@ -7,10 +7,13 @@ import logging
 import time
 from collections import deque
 
+import zmq.asyncio
 from google.protobuf.message import DecodeError, Message
 
 from sslnet import streams
 from sslnet.ratelog import RateLimitedLog
+
+from ..processor import Processor
 
 log = logging.getLogger("touchline.processors")
 badlog = RateLimitedLog(log, interval_s=10.0)
@@ -49,3 +52,24 @@ def parse_into(msg: Message, data: bytes) -> tuple[str, str] | None:
         errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
         return streams.MISSING_FIELD, ", ".join(errors[:5])
     return None
+
+
+class SocketProcessor(Processor):
+    """A processor that talks to the relay through a ZeroMQ socket, which the station makes
+    on its own loop when it starts and attaches (the processor itself is built earlier)."""
+
+    _sock: zmq.asyncio.Socket | None = None
+
+    def attach(self, sock: zmq.asyncio.Socket) -> None:
+        self._sock = sock
+
+    @property
+    def attached(self) -> bool:
+        return self._sock is not None
+
+    @property
+    def sock(self) -> zmq.asyncio.Socket:
+        if self._sock is None:
+            raise RuntimeError(f"{self.name}: no socket attached (the station attaches it "
+                               "in start)")
+        return self._sock

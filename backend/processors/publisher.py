@@ -13,11 +13,11 @@ from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus, Reader
-from ..processor import OnTopic, Processor
-from .common import LatencyStage
+from ..processor import OnTopic
+from .common import LatencyStage, SocketProcessor
 
 
-class CommandPublisher(Processor):
+class CommandPublisher(SocketProcessor):
     """Sends each command set and simulator command to the relay."""
 
     name = "command-publisher"
@@ -39,21 +39,6 @@ class CommandPublisher(Processor):
         self.estop_by: Callable[[], str] = lambda: ""
         self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
         self._release_until = -1e9  # a release is being repeated until the relay confirms
-
-    def attach(self, sock: zmq.asyncio.Socket) -> None:
-        """The ZeroMQ socket, made by the station on its loop when it starts."""
-        self._sock = sock
-
-    @property
-    def attached(self) -> bool:
-        return self._sock is not None
-
-    @property
-    def sock(self) -> zmq.asyncio.Socket:
-        if self._sock is None:
-            raise RuntimeError("command-publisher: no socket attached (the station attaches "
-                               "it in start)")
-        return self._sock
 
     async def tick(self) -> None:
         for cs in self.reader.read_new():

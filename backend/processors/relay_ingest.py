@@ -15,11 +15,10 @@ from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus
-from ..processor import Processor
-from .common import badlog
+from .common import SocketProcessor, badlog
 
 
-class RelayIngest(Processor):
+class RelayIngest(SocketProcessor):
     """Source: receives everything the relay publishes and puts it on the bus unchanged."""
 
     name = "relay-ingest"
@@ -31,21 +30,6 @@ class RelayIngest(Processor):
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
         self.counters = {"zmq": StreamCounter("zmq")}
-
-    def attach(self, sock: zmq.asyncio.Socket) -> None:
-        """The ZeroMQ socket, made by the station on its loop when it starts."""
-        self._sock = sock
-
-    @property
-    def attached(self) -> bool:
-        return self._sock is not None
-
-    @property
-    def sock(self) -> zmq.asyncio.Socket:
-        if self._sock is None:
-            raise RuntimeError("relay-ingest: no socket attached (the station attaches it "
-                               "in start)")
-        return self._sock
 
     async def wait_input(self) -> None:
         await self.sock.poll()
