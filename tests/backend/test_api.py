@@ -419,24 +419,11 @@ def test_a_referee_name_that_is_not_utf8_breaks_no_endpoint_and_no_stream(  # ty
 
 def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # type: ignore[no-untyped-def]
         client, relay) -> None:
-    from sslpb import touchline_pb2 as tl
-    from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
-
     c, st = client
-    pkt = SSL_WrapperPacket()
-    f = pkt.geometry.field
-    f.field_length, f.field_width, f.goal_width, f.goal_depth, f.boundary_width = \
-        9000, 6000, 1000, 180, 300
-    f.ball_radius = float("nan")
-    ln = f.field_lines.add()
-    ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = "Bad", float("nan"), 0, 1, 0, 10
-    ln = f.field_lines.add()
-    ln.name, ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = "Good", 0, 0, 1, 0, 10
-    env = tl.Envelope(stream=tl.STREAM_VISION, receive_time_ns=time.time_ns(), sequence=1,
-                      source="127.0.0.1:10020", payload=pkt.SerializeToString())
+    env = _geometry_envelope(1, a="Good")  # and a line with NaN, and NaN as the ball radius
 
     def step() -> Any:
-        relay.sock.send_multipart([b"vision", env.SerializeToString()])
+        relay.sock.send_multipart([b"vision", env])
         return st.geometry()
     _until(step, "the geometry")
     st.call_sync(lambda: None)  # fresh views: the geometry as published

@@ -12,6 +12,7 @@ import zmq.asyncio
 
 from sslpb import ssl_gc_referee_message_pb2, ssl_simulation_robot_control_pb2
 from tests.relay.conftest import (
+    Harness,
     drain_udp,
     free_udp_port,
     recv_udp,
@@ -22,6 +23,19 @@ from tests.relay.conftest import (
 from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
 
 Ref = ssl_gc_referee_message_pb2.Referee
+
+
+async def _send_until_received(h: Harness, bridge: zmq.asyncio.Socket,
+                               m: np.ndarray) -> float:
+    """Sends the matrix until the relay has one (a slow joiner: the bridge repeats it every
+    cycle anyway); returns the deadline (3 s) for what the test waits for next."""
+    counter = h.relay.streams["compat_commands"]
+    deadline = time.monotonic() + 3.0
+    while counter.packets == 0:
+        assert time.monotonic() < deadline, "relay never received the matrix"
+        await bridge.send(m.tobytes())
+        await asyncio.sleep(0.02)
+    return deadline
 
 
 async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
@@ -76,12 +90,7 @@ async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
             # --- commands: 32x13 float64 matrix, row 3 valid
             m = np.zeros((32, 13), dtype=np.float64)
             m[3, :12] = [1, 40, -20, 25, 0, 1, 0, 8, 1, 3, 1, 0]
-            counter = h.relay.streams["compat_commands"]
-            deadline = time.monotonic() + 3.0
-            while counter.packets == 0:  # slow joiner: repeat like the bridge does each cycle
-                assert time.monotonic() < deadline, "relay never received the matrix"
-                await bridge.send(m.tobytes())
-                await asyncio.sleep(0.02)
+            await _send_until_received(h, bridge, m)
             data, _ = await recv_udp(h.sim_blue)
             rc = ssl_simulation_robot_control_pb2.RobotControl.FromString(data).robot_commands
             r = next(c for c in rc if c.id == 3)
@@ -90,6 +99,7 @@ async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
             assert (r.kick_speed, r.kick_angle, r.dribbler_speed) == (4.0, 0.0, 3000.0)
 
             # --- a wrong-size matrix is an error, not fatal
+            counter = h.relay.streams["compat_commands"]
             before = counter.errors
             await bridge.send(b"\x00" * 100)
             await wait_for(lambda: counter.errors == before + 1, what="size error")
@@ -121,12 +131,7 @@ async def test_the_estop_latch_holds_for_the_seed_commands_and_any_path() -> Non
                 + c.dribbler_speed for c in rc}
     try:
         async with running_relay(compat=True, compat_commands=f"tcp://127.0.0.1:{port}") as h:
-            counter = h.relay.streams["compat_commands"]
-            deadline = time.monotonic() + 3.0
-            while counter.packets == 0:  # slow joiner: repeat like the bridge does each cycle
-                assert time.monotonic() < deadline, "relay never received the matrix"
-                await bridge.send(m.tobytes())
-                await asyncio.sleep(0.02)
+            deadline = await _send_until_received(h, bridge, m)
             while True:  # the seed drives robot 3
                 assert time.monotonic() < deadline, "the seed's matrix never drove robot 3"
                 await bridge.send(m.tobytes())
@@ -141,6 +146,7 @@ async def test_the_estop_latch_holds_for_the_seed_commands_and_any_path() -> Non
                 await pub.send_multipart([b"estop", press.SerializeToString()])
                 await asyncio.sleep(0.02)
             # the seed keeps sending its matrix: robot 3 gets zeros only
+            counter = h.relay.streams["compat_commands"]
             before = counter.packets
             deadline = time.monotonic() + 3.0
             while counter.packets < before + 5:

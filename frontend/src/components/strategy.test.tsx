@@ -6,7 +6,7 @@ import { robot } from "../field/testRobots";
 import { formStore } from "../params/paramsStore";
 import { appStore, initialAppState } from "../store/appStore";
 import { playsStore } from "../strategy/playsStore";
-import { engineHealth, health, world } from "../ws/fixtures";
+import { engineHealth, health, strategyView, world } from "../ws/fixtures";
 import { EnginePanel } from "./HealthPanel";
 import { HealthSummary } from "./HealthSummary";
 import { PlaySelector } from "./PlaySelector";
@@ -33,21 +33,11 @@ async function settle() {
   for (let i = 0; i < 5; i++) await act(async () => new Promise((r) => setTimeout(r, 0)));
 }
 
-const strategyInfo: StrategyInfo = {
-  play: "match",
-  plays: [
+const strategyInfo: StrategyInfo = strategyView([
     { name: "match", title: "Match", description: "Full game with a keeper, attackers and defenders" },
     { name: "defend", title: "Defend", description: "Park the bus" },
     { name: "formation", title: "Classroom formation", description: "The formation demo" },
-  ],
-  situation: "running",
-  situation_text: "Game running",
-  our_team: "blue",
-  our_side: "negative-x",
-  side_from_referee: false,
-  tick_ms: 0.5,
-  roles: {},
-};
+  ]);
 
 type Handler = (method: string, body: unknown) => { status: number; body: unknown };
 

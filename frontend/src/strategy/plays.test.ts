@@ -1,22 +1,13 @@
 import { describe, expect, it } from "vitest";
 import type { StrategyInfo } from "../api/types";
+import { strategyView } from "../ws/fixtures";
 import { currentPlay, humanizePlay, playList, situationLine } from "./plays";
 
-const info: StrategyInfo = {
-  play: "match",
-  plays: [
+const info: StrategyInfo = strategyView([
     { name: "match", title: "Match", description: "Full game: keeper, attackers, supporters, defenders" },
     { name: "defend", title: "Defend", description: "Everyone behind the ball" },
     { name: "formation", title: "", description: "" },
-  ],
-  situation: "running",
-  situation_text: "Game running",
-  our_team: "blue",
-  our_side: "negative-x",
-  side_from_referee: false,
-  tick_ms: 0.5,
-  roles: {},
-};
+  ]);
 
 describe("playList", () => {
   it("lists the station's plays in its order, a missing title from the name", () => {

@@ -6,6 +6,7 @@ import type {
   InternalReferee,
   Referee,
   RefereeTeam,
+  StrategyView,
   StreamHealth,
   World,
 } from "../api/types";
@@ -136,5 +137,19 @@ export const referee = (command: string, extra: Partial<Referee> = {}): Referee 
   current_action_time_remaining_s: null,
   game_events: [],
   age_s: 0.02,
+  ...extra,
+});
+
+/** GET /api/strategy with three plays (`plays` replaces them). */
+export const strategyView = (plays: StrategyView["plays"], extra: Partial<StrategyView> = {}): StrategyView => ({
+  play: "match",
+  plays,
+  situation: "running",
+  situation_text: "Game running",
+  our_team: "blue",
+  our_side: "negative-x",
+  side_from_referee: false,
+  tick_ms: 0.5,
+  roles: {},
   ...extra,
 });
