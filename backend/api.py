@@ -125,7 +125,8 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.get("/health")
     async def health() -> JSONResponse:
-        return SafeJSONResponse(st.views.health, what="health")
+        # current, computed on the station thread (the websocket gets the published one)
+        return SafeJSONResponse(await st.read(st.health), what="health")
 
     @api.get("/world")
     async def world() -> JSONResponse:

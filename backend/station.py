@@ -245,6 +245,11 @@ class Station:
         ``fn(*args)`` on the station loop and returns its result."""
         return await asyncio.wrap_future(self._command(fn, *args))
 
+    async def read(self, fn: Callable[..., T], *args: Any) -> T:
+        """Runs ``fn(*args)`` on the station loop for an answer that must be current (not the
+        published views): the station thread reads its own state."""
+        return await asyncio.wrap_future(self._schedule(fn, *args))
+
     def call_sync(self, fn: Callable[..., T], *args: Any, timeout_s: float = 5.0) -> T:
         """``call`` for a thread without an event loop (tests, scripts)."""
         return self._command(fn, *args).result(timeout=timeout_s)
@@ -629,11 +634,12 @@ class Station:
         return stages
 
     def world_version(self) -> tuple[object, ...]:
-        """Changes whenever the world message would: a new world, the e-stop, why the robots
-        are stopped (that changes while no world is written: vision lost), or the internal
-        referee (its panel follows the world message)."""
+        """Changes whenever the world message would: a new world, a referee message, the
+        e-stop, why the robots are stopped (that changes while no world is written: vision
+        lost), or the internal referee (its panel follows the world message)."""
         ir, rs = self.internal_referee, self.referee_state
-        return (self.world_topic.seq, self.estop, self.control.halt_reason, rs.command_counter,
+        return (self.world_topic.seq, self.referee_topic.seq, self.estop,
+                self.control.halt_reason, rs.command_counter,
                 ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
                 rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
 
