@@ -162,7 +162,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                                        "type": "other_team"}])
 
     @api.post("/robots/{team}/{rid}/target")
-    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> dict[str, Any]:
+    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> contract.TargetAnswer:
         _check_team(team, rid)
         _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
@@ -170,7 +170,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
 
     @api.delete("/robots/{team}/{rid}/target")
-    async def clear_target(team: TeamParam, rid: IdParam) -> dict[str, Any]:
+    async def clear_target(team: TeamParam, rid: IdParam) -> contract.TargetAnswer:
         await st.call(st.clear_target, team, rid)
         return {"team": team, "id": rid, "target": None}
 
@@ -300,7 +300,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
     reason) and a missing preset PresetNotFound (404), both answered by the app's handlers."""
     store = st.params
 
-    async def _applied() -> dict[str, Any]:
+    async def _applied() -> contract.ParamsState:
         await st.call(lambda: None)  # the station loop has applied it before we answer
         return {"version": store.version, "values": store.values()}
 
@@ -309,17 +309,17 @@ def _params_routes(api: APIRouter, st: Station) -> None:
         return store.schema()
 
     @api.get("/params")
-    async def params_get() -> dict[str, Any]:
+    async def params_get() -> contract.ParamsState:
         return {"version": store.version, "values": store.values()}
 
     @api.patch("/params")
-    async def params_patch(request: Request) -> dict[str, Any]:
+    async def params_patch(request: Request) -> contract.ParamsState:
         store.patch(await _json_body(request))
         log.info("parameters changed to version %d", store.version)
         return await _applied()
 
     @api.get("/params/diff")
-    async def params_diff() -> dict[str, Any]:
+    async def params_diff() -> contract.ParamsDiff:
         return {"version": store.version, "changes": store.diff_from_defaults()}
 
     @api.get("/params/export")
@@ -328,34 +328,34 @@ def _params_routes(api: APIRouter, st: Station) -> None:
             "content-disposition": 'attachment; filename="touchline-params.json"'})
 
     @api.post("/params/import")
-    async def params_import(request: Request) -> dict[str, Any]:
+    async def params_import(request: Request) -> contract.ParamsState:
         body = await _json_body(request)
         store.replace(body["values"] if isinstance(body, dict) and "values" in body else body)
         return await _applied()
 
     @api.get("/presets")
-    async def presets_list() -> dict[str, Any]:
+    async def presets_list() -> contract.PresetList:
         return {"presets": store.list_presets()}
 
     @api.put("/presets/{name}")
-    async def preset_save(name: str) -> dict[str, Any]:
+    async def preset_save(name: str) -> contract.PresetList:
         store.save_preset(name)
         return {"presets": store.list_presets()}
 
     @api.get("/presets/{name}")
-    async def preset_get(name: str) -> dict[str, Any]:
+    async def preset_get(name: str) -> contract.PresetDetail:
         values = store.read_preset(name)
         return {"name": name, "values": values,
                 "diff_from_defaults": diff(store.defaults.model_dump(mode="json"), values),
                 "diff_from_current": diff(store.values(), values)}
 
     @api.post("/presets/{name}/load")
-    async def preset_load(name: str) -> dict[str, Any]:
+    async def preset_load(name: str) -> contract.ParamsState:
         store.load_preset(name)
         return await _applied()
 
     @api.delete("/presets/{name}")
-    async def preset_delete(name: str) -> dict[str, Any]:
+    async def preset_delete(name: str) -> contract.PresetList:
         store.delete_preset(name)
         return {"presets": store.list_presets()}
 

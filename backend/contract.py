@@ -493,6 +493,54 @@ class RefereeView(TypedDict):
 
 
 @with_config(_STRICT)
+class TargetPoint(TypedDict):
+    x: float
+    y: float
+    orientation: float | None
+
+
+@with_config(_STRICT)
+class TargetAnswer(TypedDict):
+    """POST /api/robots/{team}/{id}/target (``target`` null after DELETE)."""
+
+    team: Team
+    id: int
+    target: TargetPoint | None
+
+
+#: one parameter that differs: its dotted path and both values ("from" is a Python keyword,
+#: hence the functional form)
+ParamChange = TypedDict("ParamChange", {"path": str, "from": object, "to": object})
+with_config(_STRICT)(ParamChange)
+
+
+@with_config(_STRICT)
+class ParamsDiff(TypedDict):
+    """GET /api/params/diff: what differs from the defaults."""
+
+    version: int
+    changes: list[ParamChange]
+
+
+@with_config(_STRICT)
+class PresetList(TypedDict):
+    """GET /api/presets (and the answer of PUT and DELETE /api/presets/{name})."""
+
+    presets: list[str]
+
+
+@with_config(_STRICT)
+class PresetDetail(TypedDict):
+    """GET /api/presets/{name}: its values and how they differ from the defaults and from
+    the parameters in force."""
+
+    name: str
+    values: ParamValues
+    diff_from_defaults: list[ParamChange]
+    diff_from_current: list[ParamChange]
+
+
+@with_config(_STRICT)
 class EstopAnswer(EstopInfo):
     """The answer of POST /api/estop."""
 
@@ -556,4 +604,6 @@ EXPORTS: dict[str, object] = {
     "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
+    "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff, "PresetList": PresetList,
+    "PresetDetail": PresetDetail,
 }

@@ -15,6 +15,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from ..contract import ParamChange
 from .model import StationParams
 
 log = logging.getLogger("touchline.params")
@@ -67,9 +68,10 @@ def deep_merge(base: dict[str, Any], patch: dict[str, Any],
     return out
 
 
-def diff(a: dict[str, Any], b: dict[str, Any], path: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+def diff(a: dict[str, Any], b: dict[str, Any],
+         path: tuple[str, ...] = ()) -> list[ParamChange]:
     """Leaves that differ between two parameter trees: ``{"path", "from", "to"}``."""
-    out: list[dict[str, Any]] = []
+    out: list[ParamChange] = []
     for k in sorted(set(a) | set(b)):
         va, vb = a.get(k), b.get(k)
         if isinstance(va, dict) and isinstance(vb, dict):
@@ -232,7 +234,7 @@ class ParamStore:
             fn(new, self.version)
         return new
 
-    def diff_from_defaults(self) -> list[dict[str, Any]]:
+    def diff_from_defaults(self) -> list[ParamChange]:
         return diff(self.defaults.model_dump(mode="json"), self.values())
 
     # ---- presets ----

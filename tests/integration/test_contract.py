@@ -43,9 +43,8 @@ def test_every_answer_and_message_matches_the_contract(busy: StationHandle) -> N
     st = busy
     _valid(contract.RefereeView, _post(st, "/api/referee/internal/command",
                                        {"command": "FORCE_START"}), "POST referee command")
-    r = httpx.post(st.url + "/api/robots/blue/0/target", json={"x": 1000.0, "y": 500.0},
-                   timeout=5)
-    assert r.status_code == 200, r.text
+    _valid(contract.TargetAnswer, _post(st, "/api/robots/blue/0/target",
+                                        {"x": 1000.0, "y": 500.0}), "POST target")
 
     def rich() -> Any:
         w = st.get("/api/world")
@@ -69,6 +68,15 @@ def test_every_answer_and_message_matches_the_contract(busy: StationHandle) -> N
     _valid(contract.RefereeView, st.get("/api/referee"), "GET /api/referee")
     _valid(contract.EstopInfo, st.get("/api/estop"), "GET /api/estop")
     _valid(contract.ParamsState, st.get("/api/params"), "GET /api/params")
+    _valid(contract.ParamsDiff, st.get("/api/params/diff"), "GET /api/params/diff")
+    for method, path, kind in (("PUT", "/api/presets/contract", contract.PresetList),
+                               ("GET", "/api/presets", contract.PresetList),
+                               ("GET", "/api/presets/contract", contract.PresetDetail),
+                               ("POST", "/api/presets/contract/load", contract.ParamsState),
+                               ("DELETE", "/api/presets/contract", contract.PresetList)):
+        r = httpx.request(method, st.url + path, headers={"x-touchline": "1"}, timeout=5)
+        assert r.status_code == 200, (method, path, r.text)
+        _valid(kind, r.json(), f"{method} {path}")
     _valid(contract.EstopAnswer, _post(st, "/api/estop", {"active": True}), "POST /api/estop")
     _valid(contract.EstopAnswer, _post(st, "/api/estop", {"active": False, "confirm": True}),
            "POST /api/estop (release)")

@@ -172,6 +172,18 @@ export interface LatencyStage {
   n: number | null;
 }
 
+export interface ParamChange {
+  path: string;
+  from: unknown;
+  to: unknown;
+}
+
+/** GET /api/params/diff: what differs from the defaults. */
+export interface ParamsDiff {
+  version: number;
+  changes: ParamChange[];
+}
+
 /** A parameter change (any client's), with the new version. */
 export interface ParamsMessage {
   type: "params";
@@ -189,6 +201,22 @@ export interface PlayInfo {
   name: string;
   title: string;
   description: string;
+}
+
+/**
+ * GET /api/presets/{name}: its values and how they differ from the defaults and from
+ * the parameters in force.
+ */
+export interface PresetDetail {
+  name: string;
+  values: { [key: string]: unknown };
+  diff_from_defaults: ParamChange[];
+  diff_from_current: ParamChange[];
+}
+
+/** GET /api/presets (and the answer of PUT and DELETE /api/presets/{name}). */
+export interface PresetList {
+  presets: string[];
 }
 
 export interface ProcessorHealth {
@@ -429,6 +457,19 @@ export interface StreamHealth {
   rate_hz: number;
   last_age_s: number;
   last_error: string;
+}
+
+/** POST /api/robots/{team}/{id}/target (``target`` null after DELETE). */
+export interface TargetAnswer {
+  team: Team;
+  id: number;
+  target: TargetPoint | null;
+}
+
+export interface TargetPoint {
+  x: number;
+  y: number;
+  orientation: number | null;
 }
 
 export interface TopicHealth {

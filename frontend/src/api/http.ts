@@ -1,6 +1,16 @@
 // HTTP calls to the backend (docs/api.md, "HTTP"). Errors carry the server's message.
 
-import type { RefereeView, StrategyInfo, Team } from "./types";
+import type {
+  EstopAnswer,
+  ParamChange,
+  ParamsState,
+  PresetDetail,
+  PresetList,
+  RefereeView,
+  StrategyInfo,
+  TargetAnswer,
+  Team,
+} from "./types";
 
 export class ApiError extends Error {
   readonly status: number;
@@ -72,11 +82,8 @@ export async function request<T>(method: string, path: string, body?: unknown, r
   return parsed as T;
 }
 
-export interface TargetReply {
-  team: Team;
-  id: number;
-  target: { x: number; y: number; orientation: number | null };
-}
+/** POST /api/robots/{team}/{id}/target. */
+export type TargetReply = TargetAnswer;
 
 export function postTarget(
   team: Team,
@@ -92,40 +99,32 @@ export function postTarget(
 }
 
 export function deleteTarget(team: Team, id: number): Promise<unknown> {
-  return request<unknown>("DELETE", `/api/robots/${team}/${id}/target`);
+  return request<TargetAnswer>("DELETE", `/api/robots/${team}/${id}/target`);
 }
 
 /** Press (one request) or release the emergency stop; the station refuses a release that is
  * not confirmed (409), so the page asks the operator first (`confirm`). */
-export function postEstop(active: boolean, confirm = false): Promise<{ estop: boolean }> {
-  return request<{ estop: boolean }>("POST", "/api/estop", active ? { active } : { active, confirm });
+export function postEstop(active: boolean, confirm = false): Promise<EstopAnswer> {
+  return request<EstopAnswer>("POST", "/api/estop", active ? { active } : { active, confirm });
 }
 
 // ---- parameters and presets ----
 
-export interface ParamsReply {
-  version: number;
-  values: Record<string, unknown>;
-}
-
-export interface DiffEntry {
-  path: string;
-  from: unknown;
-  to: unknown;
-}
+export type ParamsReply = ParamsState;
+export type DiffEntry = ParamChange;
 
 export const getParamsSchema = () => request<Record<string, unknown>>("GET", "/api/params/schema");
 export const patchParams = (patch: Record<string, unknown>) => request<ParamsReply>("PATCH", "/api/params", patch);
 export const importParams = (text: string) => request<ParamsReply>("POST", "/api/params/import", undefined, text);
-export const listPresets = () => request<{ presets: string[] }>("GET", "/api/presets");
-export const savePreset = (name: string) => request<{ presets: string[] }>("PUT", `/api/presets/${encodeURIComponent(name)}`);
+export const listPresets = () => request<PresetList>("GET", "/api/presets");
+export const savePreset = (name: string) => request<PresetList>("PUT", `/api/presets/${encodeURIComponent(name)}`);
 export const getPreset = (name: string) =>
-  request<{ name: string; values: Record<string, unknown>; diff_from_defaults: DiffEntry[]; diff_from_current: DiffEntry[] }>(
+  request<PresetDetail>(
     "GET",
     `/api/presets/${encodeURIComponent(name)}`,
   );
 export const loadPreset = (name: string) => request<ParamsReply>("POST", `/api/presets/${encodeURIComponent(name)}/load`);
-export const deletePreset = (name: string) => request<{ presets: string[] }>("DELETE", `/api/presets/${encodeURIComponent(name)}`);
+export const deletePreset = (name: string) => request<PresetList>("DELETE", `/api/presets/${encodeURIComponent(name)}`);
 
 // ---- strategy ----
 
