@@ -460,7 +460,8 @@ async def test_referee_out_is_off_on_a_non_loopback_interface_unless_asked() -> 
 async def test_datagram_errors_are_counted_by_reason_and_published() -> None:
     """Every stream counts its refused datagrams by reason (sslnet.streams), not only the
     last error, and RelayStats carries the counts to the backend's health. (What does not
-    decode is forwarded and counted by the backend: tests/backend/test_ingest_reasons.py.)"""
+    decode is forwarded and counted by the backend:
+    tests/backend/processors/test_ingest_reasons.py.)"""
     async with running_relay() as h:
         sub = h.subscriber(b"stats")
         vision = h.relay.streams["vision"]
