@@ -1,23 +1,21 @@
 import { useEffect, useRef, useState } from "react";
+import { commitPatch, ensureSchema, useParamForm } from "../params/paramsStore";
 import {
-  ApiError,
-  deletePreset,
-  getPreset,
-  importParams,
-  listPresets,
-  loadPreset,
-  savePreset,
-  type DiffEntry,
-} from "../api/http";
-import { acceptParams, commitPatch, ensureSchema, useParamForm } from "../params/paramsStore";
+  applyPreset,
+  importParamsText,
+  presetDetail,
+  presetErrorText,
+  presetNames,
+  removePreset,
+  saveCurrentAs,
+  type ParamChange,
+} from "../params/presets";
 import { changedFields, getAt, groupResetPatch, type GroupDesc } from "../params/schema";
 import { useAppState } from "../store/hooks";
 import { pushToast } from "../store/toasts";
 import { ParamField } from "./ParamField";
 
-function errText(e: unknown): string {
-  return e instanceof ApiError ? e.message : e instanceof Error ? e.message : String(e);
-}
+const errText = presetErrorText;
 
 function Group({ g, values, open }: { g: GroupDesc; values: unknown; open: boolean }) {
   const changed = changedFields([g], values).length;
@@ -56,7 +54,7 @@ function Group({ g, values, open }: { g: GroupDesc; values: unknown; open: boole
   );
 }
 
-function DiffTable({ rows, fromLabel, toLabel }: { rows: DiffEntry[]; fromLabel: string; toLabel: string }) {
+function DiffTable({ rows, fromLabel, toLabel }: { rows: ParamChange[]; fromLabel: string; toLabel: string }) {
   if (rows.length === 0) return <p className="muted">No differences.</p>;
   return (
     <table className="difftable" data-testid="preset-diff">
@@ -83,14 +81,14 @@ function DiffTable({ rows, fromLabel, toLabel }: { rows: DiffEntry[]; fromLabel:
 function Presets() {
   const [presets, setPresets] = useState<string[]>([]);
   const [name, setName] = useState("");
-  const [diff, setDiff] = useState<{ name: string; rows: DiffEntry[]; against: "defaults" | "current" } | null>(null);
+  const [diff, setDiff] = useState<{ name: string; rows: ParamChange[]; against: "defaults" | "current" } | null>(null);
   const [msg, setMsg] = useState<string | null>(null);
   const fileRef = useRef<HTMLInputElement>(null);
   const version = useAppState((s) => s.params?.version ?? -1);
 
   const refresh = () =>
-    listPresets()
-      .then((r) => setPresets(r.presets))
+    presetNames()
+      .then(setPresets)
       .catch((e) => setMsg(errText(e)));
   useEffect(() => {
     void refresh();
@@ -109,7 +107,7 @@ function Presets() {
 
   const showDiff = async (p: string, against: "defaults" | "current") => {
     try {
-      const r = await getPreset(p);
+      const r = await presetDetail(p);
       setDiff({ name: p, rows: against === "defaults" ? r.diff_from_defaults : r.diff_from_current, against });
     } catch (e) {
       setMsg(errText(e));
@@ -124,7 +122,7 @@ function Presets() {
         onSubmit={(ev) => {
           ev.preventDefault();
           const n = name.trim();
-          if (n) void run(`Saved preset ${n}`, () => savePreset(n)).then(() => setName(""));
+          if (n) void run(`Saved preset ${n}`, () => saveCurrentAs(n)).then(() => setName(""));
         }}
       >
         <input
@@ -149,7 +147,7 @@ function Presets() {
         {presets.map((p) => (
           <li key={p} data-testid={`preset-${p}`}>
             <span className="preset-name">{p}</span>
-            <button type="button" className="btn btn-small" onClick={() => void run(`Loaded preset ${p}`, () => loadPreset(p).then(acceptParams))}>
+            <button type="button" className="btn btn-small" onClick={() => void run(`Loaded preset ${p}`, () => applyPreset(p))}>
               Load
             </button>
             <button type="button" className="btn btn-small" onClick={() => void showDiff(p, "defaults")} title="Differences from the defaults">
@@ -158,7 +156,7 @@ function Presets() {
             <button type="button" className="btn btn-small" onClick={() => void showDiff(p, "current")} title="What loading it would change">
               vs now
             </button>
-            <button type="button" className="btn btn-small btn-danger" onClick={() => void run(`Deleted preset ${p}`, () => deletePreset(p))}>
+            <button type="button" className="btn btn-small btn-danger" onClick={() => void run(`Deleted preset ${p}`, () => removePreset(p))}>
               Delete
             </button>
           </li>
@@ -193,7 +191,7 @@ function Presets() {
           onChange={(ev) => {
             const file = ev.target.files?.[0];
             ev.target.value = "";
-            if (file) void file.text().then((text) => run(`Imported ${file.name}`, () => importParams(text).then(acceptParams)));
+            if (file) void file.text().then((text) => run(`Imported ${file.name}`, () => importParamsText(text)));
           }}
         />
       </div>
