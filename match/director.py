@@ -22,41 +22,24 @@ from typing import Any
 
 from domain.field import division
 from domain.rules import (
-    BALL_RADIUS_MM,
-    COLLISION_SPEED_MPS,
     PLACEMENT_TOLERANCE_MM,
-    ROBOT_RADIUS_MM,
 )
+from match.events import EventDetector
+from match.judge import Judge
 from match.referee import MatchReferee
 from match.rules import (
     BALL_IN_PLAY_MM,
-    COLLISION_DRAWN_MPS,
-    DISTANCE_TOLERANCE_MM,
-    HALT_SPEED_LIMIT_MMPS,
     NO_PROGRESS_MM,
     NO_PROGRESS_S,
-    PENALTY_BEHIND_BALL_MM,
     PLACEMENT_STILL_MMPS,
-    POSSESSION_DISTANCE_MM,
-    STOP_SPEED_LIMIT_MMPS,
-    TOO_CLOSE_MM,
     TOUCH_DISTANCE_MM,
     Grace,
     Timing,
     dist,
-    dist_to_segment,
     placement_position,
 )
-from match.truth import TEAMS, RobotKey, RobotView, Snapshot, num, other, parse_truth, robot_key
-
-# Violations judged continuously (counted once per episode, plus robot-seconds in violation)
-EPISODE_KINDS = (
-    "halt_moving", "stop_speed", "stop_distance", "set_piece_distance", "placement_distance",
-    "defense_area",
-)
-# Violations judged at one instant (counted once per robot) or from events
-SNAPSHOT_KINDS = ("kickoff_position", "penalty_position", "collision")
-VIOLATION_KINDS = EPISODE_KINDS + SNAPSHOT_KINDS
+from match.stats import TeamStats
+from match.truth import TEAMS, RobotKey, Snapshot, other, parse_truth
 
 # The scripted interludes: (name, half, fraction of the half's clock)
 INTERLUDES: tuple[tuple[str, int, float], ...] = (
@@ -105,24 +88,6 @@ class Step:
 
 
 @dataclass
-class Violation:
-    count: int = 0
-    seconds: float = 0.0
-
-
-@dataclass
-class TeamStats:
-    goals: int = 0
-    possession_s: float = 0.0
-    kicks: int = 0
-    placements_ok: int = 0
-    placements_failed: int = 0
-    placement_times_s: list[float] = field(default_factory=list)
-    violations: dict[str, Violation] = field(
-        default_factory=lambda: {k: Violation() for k in VIOLATION_KINDS})
-
-
-@dataclass
 class _Interlude:
     name: str
     half: int
@@ -150,8 +115,6 @@ class Director:
         self.command_seconds: dict[str, float] = {}
         self.stage_seconds: dict[str, float] = {}
         self.timeline: list[dict[str, Any]] = []
-        self.event_counts: dict[str, int] = {}
-        self.events_source: str | None = None  # "fieldsim" or "director" (self-detected)
         self.finished = False
         self.half = 1
         self.clock_left = self.cfg.half_s
@@ -173,18 +136,12 @@ class Director:
         self.set_piece: tuple[str, str, float] | None = None  # team, kind, since
         self._progress_anchor: tuple[float, float] | None = None
         self._progress_since = 0.0
-        self._last_seq = -1
-        self._seen_unsequenced: set[tuple[Any, ...]] = set()
         self._kicks_seen: dict[RobotKey, int] = {}
         self.last_touch: RobotKey | None = None
-        self._active: dict[str, set[RobotKey]] = {k: set() for k in EPISODE_KINDS}
-        #: since when each robot of the non-placing team is inside the placement corridor
-        self._in_corridor_since: dict[RobotKey, float] = {}
-        self._halt_flagged: set[RobotKey] = set()
         self._actions: list[TeleportBall] = []
         self._issued = False  # the first HALT is issued even though the referee starts in HALT
-        self._outside_since: float | None = None
-        self._inside_in_running = False
+        self.judge = Judge(self)
+        self.events = EventDetector(self)
         self.interludes = [
             _Interlude(n, h, a) for n, h, a in INTERLUDES] if self.cfg.interludes else []
 
@@ -233,7 +190,7 @@ class Director:
             self._observe(snap)
         self._advance()
         if snap is not None:
-            self._events(snap)
+            self.events.frame(snap)
         if self.running:
             self._running_checks()
         self._advance()
@@ -241,7 +198,7 @@ class Director:
             tdt = 0.0 if self._last_truth_now is None else min(now - self._last_truth_now,
                                                                MAX_DT_S)
             self._last_truth_now = now
-            self._judge(snap, max(0.0, tdt))
+            self.judge.frame(snap, max(0.0, tdt))
         self._update_timers()
         return self._actions
 
@@ -266,7 +223,7 @@ class Director:
         self.command_counts[command] = self.command_counts.get(command, 0) + 1
         self.command_since = self.now
         if command == "HALT":
-            self._halt_flagged = set()
+            self.judge.new_halt()
         self.revision += 1
         detail = "" if pos is None else f"designated ({pos[0]:.0f}, {pos[1]:.0f})"
         self._log("command", detail=f"{command} {detail}".strip())
@@ -392,8 +349,7 @@ class Director:
         self.set_piece = None
         self._progress_anchor = None
         self._progress_since = self.now
-        self._outside_since = None
-        self._inside_in_running = False
+        self.events.running_resumed()
         if self.in_interlude is not None:
             self._log("interlude_end", detail=self.in_interlude)
         self.in_interlude = None
@@ -432,9 +388,9 @@ class Director:
             self.set_piece = (step.team, step.set_piece, self.now)
         if step.kind == "kick" and step.team and step.set_piece:
             if step.set_piece == "kickoff":
-                self._judge_kickoff(step.team)
+                self.judge.kickoff(step.team)
             elif step.set_piece == "penalty":
-                self._judge_penalty(step.team)
+                self.judge.penalty(step.team)
             if self.set_piece is None or step.set_piece == "free":
                 self.set_piece = (step.team, step.set_piece, self.now)
         if step.kind == "force":
@@ -538,7 +494,7 @@ class Director:
 
     def _running_checks(self) -> None:
         s = self.snap
-        if s is not None and s.ball is not None and self._ball_outside(s):
+        if s is not None and s.ball is not None and self.events.ball_outside(s):
             return
         if s is not None and s.ball is not None:
             b = s.ball
@@ -635,106 +591,8 @@ class Director:
             tx, ty = bx, by + (-PLACEMENT_INTERLUDE_MM if by > 0 else PLACEMENT_INTERLUDE_MM)
         return placement_position(self.field, tx, ty)
 
-    # -- events --------------------------------------------------------------------------------
-
     def _count_event(self, kind: str) -> None:
-        self.event_counts[kind] = self.event_counts.get(kind, 0) + 1
-
-    def _events(self, snap: Snapshot) -> None:
-        if snap.events is None:
-            return  # goals and balls out are then seen in _running_checks
-        self.events_source = "fieldsim"
-        fresh: list[Mapping[str, Any]] = []
-        for ev in snap.events:
-            seq = ev.get("seq")
-            if isinstance(seq, int) and not isinstance(seq, bool):
-                if seq > self._last_seq:
-                    fresh.append(ev)
-            else:
-                key = (ev.get("kind"), num(ev.get("t")), num(ev.get("x")), num(ev.get("y")))
-                if key not in self._seen_unsequenced:
-                    self._seen_unsequenced.add(key)
-                    fresh.append(ev)
-        fresh.sort(key=lambda e: e["seq"] if isinstance(e.get("seq"), int) else 0)
-        for ev in fresh:
-            seq = ev.get("seq")
-            if isinstance(seq, int) and not isinstance(seq, bool):
-                self._last_seq = max(self._last_seq, seq)
-            self._handle_event(ev)
-
-    def _handle_event(self, ev: Mapping[str, Any]) -> None:
-        kind = ev.get("kind")
-        s = self.snap
-        bx = s.ball.x if s is not None and s.ball is not None else 0.0
-        by = s.ball.y if s is not None and s.ball is not None else 0.0
-        x, y = num(ev.get("x")), num(ev.get("y"))
-        if kind == "collision":
-            self._collision(ev)
-            return
-        if kind not in ("goal", "ball_out"):
-            return
-        self._count_event(str(kind))
-        if not self.running:
-            self._log(f"{kind}_ignored", detail="not in running play")
-            return
-        last = robot_key(ev.get("last_touch")) if "last_touch" in ev else self.last_touch
-        if kind == "goal":
-            side_txt = ev.get("side")
-            if side_txt in ("positive", "negative"):
-                side = 1 if side_txt == "positive" else -1
-            elif x is not None and x != 0.0:
-                side = 1 if x > 0 else -1
-            else:
-                self._log("goal_ignored", detail="event without side or x")
-                return
-            self._goal(side, last)
-        else:
-            x = bx if x is None else x
-            y = by if y is None else y
-            line = ev.get("line")
-            if line not in ("touch", "goal"):
-                line = "goal" if abs(x) >= self.field.half_length else "touch"
-            self._ball_out(str(line), x, y, last)
-
-    def _ball_outside(self, snap: Snapshot) -> bool:
-        """Running play with the ball fully over a line: True (nothing else is judged then).
-
-        With a fieldsim that reports no events, a ball that crosses a line in running play is a
-        goal or a ball out at once. Otherwise this is the safety net for a ball that is outside
-        while no event of fieldsim's stopped play (it left while play was stopped, so its event
-        was ignored, and FORCE_START followed): after 1 s it is a ball out, never a goal."""
-        b = snap.ball
-        assert b is not None
-        f = self.field
-        if abs(b.x) <= f.half_length + BALL_RADIUS_MM and abs(b.y) <= f.half_width + BALL_RADIUS_MM:
-            self._outside_since = None
-            self._inside_in_running = True
-            return False
-        if self._outside_since is None:
-            self._outside_since = self.now
-        crossed = self._inside_in_running
-        self._inside_in_running = False
-        if snap.events is None and crossed:
-            if self.events_source is None:
-                self.events_source = "director"
-            self._detect_lines(b.x, b.y, goal_possible=True)
-        elif self.now - self._outside_since >= 1.0:
-            self._detect_lines(b.x, b.y, goal_possible=False)
-        return True
-
-    def _detect_lines(self, bx: float, by: float, goal_possible: bool) -> None:
-        """A goal or a ball out seen from the ball position (no event for it)."""
-        self._outside_since = None
-        f = self.field
-        over_goal = abs(bx) > f.half_length + BALL_RADIUS_MM
-        if goal_possible and over_goal and abs(by) < f.goal_width / 2.0:
-            self._count_event("goal")
-            self._goal(1 if bx > 0 else -1, self.last_touch)
-            return
-        self._count_event("ball_out")
-        x = max(-f.half_length, min(f.half_length, bx))
-        y = max(-f.half_width, min(f.half_width, by))
-        self._ball_out("goal" if over_goal else "touch", x, y, self.last_touch)
+        self.events.count(kind)
 
     def _goal(self, side: int, last: RobotKey | None) -> None:
         defending = self.team_on_side(side)
@@ -762,171 +620,6 @@ class Director:
             Step("placement", f"BALL_PLACEMENT_{team.upper()}", team=team, pos=pos),
             Step("kick", f"DIRECT_FREE_{team.upper()}", team=team, set_piece="free"),
         ])
-
-    def _collision(self, ev: Mapping[str, Any]) -> None:
-        self._count_event("collision")
-        rel = num(ev.get("relative_speed_mps"))
-        a, b = ev.get("a"), ev.get("b")
-        ka, kb = robot_key(a), robot_key(b)
-        if rel is None or rel <= COLLISION_SPEED_MPS or (ka is None and kb is None):
-            return
-        sa = num(a.get("speed_mps")) if isinstance(a, Mapping) else None
-        sb = num(b.get("speed_mps")) if isinstance(b, Mapping) else None
-        culprits: list[RobotKey]
-        if ka is None or kb is None:
-            culprits = [k for k in (ka, kb) if k is not None]
-        elif sa is None or sb is None or abs(sa - sb) <= COLLISION_DRAWN_MPS:
-            culprits = [ka, kb]
-        else:
-            culprits = [ka if sa > sb else kb]
-        for team, rid in culprits:
-            self.stats[team].violations["collision"].count += 1
-            self._log("violation", team=team, robot=rid,
-                      detail=f"collision at {rel:.2f} m/s relative")
-
-    # -- violations and possession -------------------------------------------------------------
-
-    def _episodes(self, kind: str, offenders: set[RobotKey], dt: float,
-                  latched: set[RobotKey] | None = None) -> None:
-        prev = self._active[kind]
-        for key in offenders:
-            v = self.stats[key[0]].violations[kind]
-            v.seconds += dt
-            if key not in prev and (latched is None or key not in latched):
-                v.count += 1
-                self._log("violation", team=key[0], robot=key[1],
-                          detail=f"{kind}{self._where(key)}")
-        if latched is not None:
-            latched |= offenders
-        self._active[kind] = offenders
-
-    def _judge(self, snap: Snapshot, dt: float) -> None:
-        g = self.grace
-        cmd = self.referee.command
-        since = self.now - self.command_since
-        robots = snap.robots
-        ball = snap.ball
-        found: dict[str, set[RobotKey]] = {k: set() for k in EPISODE_KINDS}
-        if cmd == "HALT" and since >= g.halt:
-            found["halt_moving"] = {r.key for r in robots if r.speed > HALT_SPEED_LIMIT_MMPS}
-        if cmd == "STOP" and since >= g.stop:
-            found["stop_speed"] = {r.key for r in robots if r.speed > STOP_SPEED_LIMIT_MMPS}
-            if ball is not None:
-                found["stop_distance"] = {r.key for r in robots
-                                          if dist(r.x, r.y, ball.x, ball.y) < TOO_CLOSE_MM}
-        if cmd.startswith("BALL_PLACEMENT_") and ball is not None \
-                and self.referee.designated_position is not None:
-            # the rules' interference: a robot of the other team inside the corridor for
-            # more than 2 s on end (a robot crossing it, or passed by the ball, is not)
-            placing = cmd[len("BALL_PLACEMENT_"):].lower()
-            px, py = self.referee.designated_position
-            inside = {r.key for r in robots if r.team != placing
-                      and dist_to_segment(r.x, r.y, ball.x, ball.y, px, py) < TOO_CLOSE_MM}
-            entered = self._in_corridor_since
-            for key in list(entered):
-                if key not in inside:
-                    del entered[key]
-            for key in inside:
-                entered.setdefault(key, self.now)
-            found["placement_distance"] = {k for k in inside
-                                           if self.now - entered[k] > g.placement_distance}
-        else:
-            self._in_corridor_since.clear()
-        sp = self.set_piece
-        if sp is not None and sp[1] in ("kickoff", "free") and ball is not None \
-                and self.now - sp[2] >= g.set_piece_distance:
-            found["set_piece_distance"] = {r.key for r in robots if r.team != sp[0]
-                                           and dist(r.x, r.y, ball.x, ball.y) < TOO_CLOSE_MM}
-        if self.running and self.now - self.running_since >= g.defense_area:
-            found["defense_area"] = self._defense_area_offenders(robots)
-        for kind in EPISODE_KINDS:
-            self._episodes(kind, found[kind], dt,
-                           self._halt_flagged if kind == "halt_moving" else None)
-        if self.running and ball is not None and robots:
-            d, r = min(((dist(r.x, r.y, ball.x, ball.y), r) for r in robots),
-                       key=lambda p: p[0])
-            if d <= POSSESSION_DISTANCE_MM:
-                self.stats[r.team].possession_s += dt
-            else:
-                self.loose_ball_s += dt
-
-    def _where(self, key: RobotKey) -> str:
-        """Where an episode starts: the robot (position, speed), the ball and, during a
-        placement, the designated position; mm and m/s on fieldsim's ground truth."""
-        snap = self.snap
-        if snap is None:
-            return ""
-        r = next((r for r in snap.robots if r.key == key), None)
-        if r is None:
-            return ""
-        out = f": robot at ({r.x:.0f}, {r.y:.0f}) {r.speed / 1000.0:.2f} m/s"
-        if snap.ball is not None:
-            b = snap.ball
-            out += f", ball at ({b.x:.0f}, {b.y:.0f}) {dist(r.x, r.y, b.x, b.y):.0f} mm away"
-        dp = self.referee.designated_position
-        if self.referee.command.startswith("BALL_PLACEMENT_") and dp is not None:
-            out += f", placing to ({dp[0]:.0f}, {dp[1]:.0f})"
-            if snap.ball is not None:
-                d = dist_to_segment(r.x, r.y, snap.ball.x, snap.ball.y, dp[0], dp[1])
-                out += f", {d:.0f} mm from the corridor's line"
-        return out
-
-    def _defense_area_offenders(self, robots: tuple[RobotView, ...]) -> set[RobotKey]:
-        out: set[RobotKey] = set()
-        for r in robots:
-            own = self.side_of(r.team)
-            keeper = self.cfg.goalkeepers.get(r.team, 0)
-            if r.id != keeper and self.field.dist_to_defense_area(r.x, r.y, own) < ROBOT_RADIUS_MM:
-                out.add(r.key)
-            if self.field.dist_to_defense_area(r.x, r.y, -own) < ROBOT_RADIUS_MM:
-                out.add(r.key)
-        return out
-
-    def _snapshot_violation(self, kind: str, r: RobotView, why: str) -> None:
-        self.stats[r.team].violations[kind].count += 1
-        self._log("violation", team=r.team, robot=r.id, detail=f"{kind}: {why}")
-
-    def _judge_kickoff(self, kicking: str) -> None:
-        s = self.snap
-        if s is None:
-            return
-        inside_ok = ROBOT_RADIUS_MM - DISTANCE_TOLERANCE_MM  # centre this far into own half
-        in_circle = sorted((r for r in s.robots if r.team == kicking
-                            and math.hypot(r.x, r.y) < TOO_CLOSE_MM),
-                           key=lambda r: math.hypot(r.x, r.y))
-        allowed = in_circle[0].key if in_circle else None
-        for r in s.robots:
-            at = f" at ({r.x:.0f}, {r.y:.0f})"
-            if self.side_of(r.team) * r.x < inside_ok:
-                self._snapshot_violation("kickoff_position", r, "not in its own half" + at)
-            elif math.hypot(r.x, r.y) < TOO_CLOSE_MM and r.key != allowed:
-                self._snapshot_violation("kickoff_position", r, "inside the centre circle" + at)
-
-    def _judge_penalty(self, kicking: str) -> None:
-        s = self.snap
-        if s is None:
-            return
-        defending = other(kicking)
-        side = self.side_of(defending)
-        keeper = self.cfg.goalkeepers.get(defending, 0)
-        bx, by = (s.ball.x, s.ball.y) if s.ball is not None \
-            else self.field.penalty_mark(side)
-        kickers = sorted((r for r in s.robots if r.team == kicking),
-                         key=lambda r: dist(r.x, r.y, bx, by))
-        kicker = kickers[0].key if kickers else None
-        goal_x = side * self.field.half_length
-        for r in s.robots:
-            if r.key == kicker:
-                continue
-            at = f" at ({r.x:.0f}, {r.y:.0f}), ball ({bx:.0f}, {by:.0f})"
-            if r.team == defending and r.id == keeper:
-                if abs(r.x - goal_x) > ROBOT_RADIUS_MM + DISTANCE_TOLERANCE_MM or \
-                        abs(r.y) > self.field.goal_width / 2.0:
-                    self._snapshot_violation("penalty_position", r,
-                                             "keeper not on its goal line" + at)
-                continue
-            if side * (r.x - bx) > -(PENALTY_BEHIND_BALL_MM - DISTANCE_TOLERANCE_MM):
-                self._snapshot_violation("penalty_position", r, "not 1 m behind the ball" + at)
 
     # -- result --------------------------------------------------------------------------------
 
@@ -959,8 +652,8 @@ class Director:
                              "seconds": round(self.command_seconds.get(c, 0.0), 2)}
                          for c in sorted(set(self.command_counts) | set(self.command_seconds))},
             "stages": {s: round(v, 2) for s, v in self.stage_seconds.items()},
-            "events": dict(self.event_counts),
-            "events_source": self.events_source,
+            "events": dict(self.events.counts),
+            "events_source": self.events.source,
             "interludes": {i.name: i.done for i in self.interludes},
             "stage": self.referee.stage,
             "command": self.referee.command,

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from match.director import EPISODE_KINDS, VIOLATION_KINDS
+from match.stats import EPISODE_KINDS, VIOLATION_KINDS
 
 VIOLATION_LABELS = {
     "halt_moving": "HALT: moving after the grace",

@@ -20,7 +20,7 @@ from typing import Any
 import httpx
 import pytest
 
-from match.director import VIOLATION_KINDS
+from match.stats import VIOLATION_KINDS
 from sslnet.multicast import loopback_multicast_ok
 
 ROOT = Path(__file__).resolve().parents[2]
