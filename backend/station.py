@@ -331,7 +331,7 @@ class Station:
         log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
                  sp.goalkeeper_function)
 
-    def engine_health(self) -> dict[str, Any] | None:
+    def engine_health(self) -> contract.EngineHealth | None:
         sp = self.strategy.params
         if sp.engine == "off":
             return None
@@ -346,7 +346,7 @@ class Station:
         out["running"] = eng is not None
         if not out.get("last_error") and self.strategy.engine_last_error:
             out["last_error"] = self.strategy.engine_last_error
-        return out
+        return cast(contract.EngineHealth, out)
 
     def strategy_state(self) -> contract.StrategyState:
         """What the strategy is doing now (sent with every world update: kept small)."""
@@ -645,7 +645,7 @@ class Station:
 
     def world_json(self) -> str:
         """The world message as JSON (what every websocket client gets)."""
-        return dumps({"type": "world", "world": _finite(self.world_dict())}, "world")
+        return dumps({"type": "world", "world": self.world_dict()}, "world")
 
     def publish_views(self, force: bool = False) -> None:
         """Builds what changed of the web side's views (on the station thread) and tells the
@@ -654,7 +654,7 @@ class Station:
         changes: dict[str, Any] = {}
         key = self.world_version()
         if force or key != v.world_key:
-            world = cast(contract.World, _finite(self.world_dict()))
+            world = self.world_dict()
             changes.update(world_key=key, world=world,
                            world_json=dumps({"type": "world", "world": world}, "world"))
         now = time.monotonic()
@@ -685,25 +685,28 @@ class Station:
         """The field as decoded (cleaned at decode time; non-finite numbers, should any get
         through, become null here rather than break the JSON)."""
         g = self.geometry_topic.latest_value()
-        return None if g is None else cast(contract.Geometry, _finite(g))
+        return None if g is None else cast(contract.Geometry, g)
 
     def health(self) -> contract.Health:
-        procs = []
+        procs: list[contract.ProcessorHealth] = []
         for p in self.runner.processors:
             trig = p.trigger
+            timing = p.stats.summary()
             procs.append({
                 "name": p.name,
                 "trigger": ("rate" if isinstance(trig, Every) else
                             f"topic:{trig.topic.name}" if isinstance(trig, OnTopic) else "source"),
                 "configured_hz": trig.hz if isinstance(trig, Every) else None,
-                **p.stats.summary(),
+                "measured_hz": timing["measured_hz"], "tick_mean_ms": timing["tick_mean_ms"],
+                "tick_p99_ms": timing["tick_p99_ms"],
                 "overruns": p.stats.overruns,
                 "runs": p.stats.rate.total,
                 "errors": p.stats.errors,
                 "last_error": p.stats.last_error,
             })
-        topics = [{"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
-                   "age_s": t.age_s()} for t in self.bus.topics()]
+        topics: list[contract.TopicHealth] = [
+            {"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
+             "age_s": t.age_s()} for t in self.bus.topics()]
         streams: dict[str, Any] = {}
         vis = self.vision.counter.to_dict()
         # what the world model dropped, by the same reasons ("time out of range", ...)
@@ -735,23 +738,23 @@ class Station:
         if referee is not None:
             referee["source"] = ("internal" if referee["source_identifier"]
                                  == self.referee_state.source_identifier else "game-controller")
-        out: contract.Health = _finite({
+        out: contract.Health = {
             "ok": ok,
             "warnings": [*self._estop_warnings(), *_warnings(vision, relay, referee, world),
                          *self.params.warnings],
             "estop": self.estop_view(),
             "world": world,
-            "referee": referee,
+            "referee": cast(contract.RefereeHealth | None, referee),
             "uptime_s": time.monotonic() - self.started_mono,
             "streams": streams,
             "processors": procs,
             "topics": topics,
-            "relay": relay,
-            "latency": self.publisher.latency_summary(),
+            "relay": cast(contract.RelayHealth | None, relay),
+            "latency": cast(contract.LatencyHealth, self.publisher.latency_summary()),
             "latency_stages": self._latency_stages(),
             "websocket_clients": self.ws_clients,
             "engine": self.engine_health(),
-        })
+        }
         return out
 
 
@@ -784,17 +787,6 @@ def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
     if line is not None:
         out.append(line)
     return out
-
-
-def _finite(obj: Any) -> Any:
-    """JSON cannot carry NaN/inf: replace them by None."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    return obj
 
 
 def _stop_all_bytes() -> bytes:
