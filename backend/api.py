@@ -130,17 +130,18 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.get("/world")
     async def world() -> JSONResponse:
-        return SafeJSONResponse(st.views.world, what="world")
+        # current, built on the station thread (the websocket gets the published one)
+        return SafeJSONResponse(await st.read(st.world_dict), what="world")
 
     @api.get("/geometry")
     async def geometry() -> JSONResponse:
-        geo = st.views.geometry
+        geo = await st.read(st.geometry)
         if geo is None:
             raise HTTPException(404, "no geometry packet received yet")
         return SafeJSONResponse(geo, what="geometry")
 
-    def _check_on_field(x: float, y: float, what: str = "point") -> None:
-        geo = st.views.geometry
+    async def _check_on_field(x: float, y: float, what: str = "point") -> None:
+        geo = await st.read(st.geometry)
         half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
         half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
         if abs(x) > half_l or abs(y) > half_w:
@@ -164,7 +165,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.post("/robots/{team}/{rid}/target")
     async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> contract.TargetAnswer:
         _check_team(team, rid)
-        _check_on_field(body.x, body.y, "target")
+        await _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
         return {"team": team, "id": rid,
                 "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
@@ -177,7 +178,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     @api.post("/sim/ball")
     async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
         _check_simulator()
-        _check_on_field(body.x, body.y)
+        await _check_on_field(body.x, body.y)
         await st.call(st.teleport_ball, body.x, body.y, body.vx, body.vy)
         return {"ball": body.model_dump()}
 
@@ -185,7 +186,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     async def teleport_robot(team: TeamParam, rid: IdParam,
                              body: TeleportRobotIn) -> dict[str, Any]:
         _check_simulator()
-        _check_on_field(body.x, body.y)
+        await _check_on_field(body.x, body.y)
         await st.call(st.teleport_robot, team, rid, body.x, body.y, body.orientation,
                       body.present)
         return {"team": team, "id": rid, **body.model_dump()}
@@ -198,9 +199,8 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     @api.get("/referee")
     async def referee_get() -> JSONResponse:
-        world = st.views.world
-        return SafeJSONResponse({**await st.call(st.referee_view),
-                                 "active": None if world is None else world["referee"]},
+        world = await st.read(st.world_dict)
+        return SafeJSONResponse({**await st.call(st.referee_view), "active": world["referee"]},
                                 what="referee")
 
     @api.post("/referee/internal/enabled", response_model=None)
@@ -215,7 +215,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     async def referee_command(body: RefereeCommandIn) -> contract.RefereeView | JSONResponse:
         dp = body.designated_position
         if dp is not None:
-            _check_on_field(dp.x, dp.y)
+            await _check_on_field(dp.x, dp.y)
         other = st.internal_referee.foreign_active()
         if other is not None:
             return JSONResponse(status_code=409, content={
@@ -384,6 +384,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
 
     rx = asyncio.create_task(receive())
     try:
+        await st.read(st.publish_views, True)  # fresh for this client (none may have been)
         v = st.views
         params_version = st.params.version
         await ws.send_text(dumps({

@@ -72,15 +72,19 @@ class Views:
 
 
 class ViewPublisher(Processor):
-    """Publishes the station's views for the web side on every world update (at least every
-    0.1 s, so a stopped world still shows why), health at most every 0.25 s."""
+    """Publishes the station's views for the websocket clients at ``stream.ws_max_hz`` (what
+    changed only, and nothing while no client listens), health at most every 0.25 s. Eight
+    cameras merge hundreds of frames a second; a page needs no more than it can show."""
 
     name = "views"
     health_period_s = 0.25
 
     def __init__(self, station: Station) -> None:
-        super().__init__(OnTopic(station.world_topic, max_wait_s=0.1))
+        super().__init__(Every(60.0))
         self.station = station
+
+    def configure(self, params: StationParams) -> None:
+        self.set_rate(params.stream.ws_max_hz)
 
     async def tick(self) -> None:
         self.station.publish_views()
@@ -236,7 +240,7 @@ class Station:
             try:
                 return fn(*args)
             finally:
-                if self._loop is not None:
+                if self._loop is not None and self._view_listeners:
                     self.publish_views(force=True)
         return self._schedule(command)
 
@@ -650,6 +654,8 @@ class Station:
     def publish_views(self, force: bool = False) -> None:
         """Builds what changed of the web side's views (on the station thread) and tells the
         websocket clients. The web side only ever reads ``self.views``."""
+        if not force and not self._view_listeners:
+            return  # no websocket client: HTTP answers are built when asked
         v = self.views
         changes: dict[str, Any] = {}
         key = self.world_version()
