@@ -55,8 +55,17 @@ class LogReader:
         with open_log(self.path) as f:
             yield from self._records(f)
 
+    def _read(self, f: BinaryIO, n: int) -> bytes:
+        """``f.read(n)``; a gzip stream cut short (the league's recorder killed before it closed
+        its file) ends the reading with a warning instead of an error."""
+        try:
+            return f.read(n)
+        except EOFError:
+            self.warning = "the compressed stream ends early (a recording that was killed?)"
+            return b""
+
     def _records(self, f: BinaryIO) -> Iterator[Record]:
-        head = f.read(HEADER_SIZE)
+        head = self._read(f, HEADER_SIZE)
         if len(head) < HEADER_SIZE:
             raise LogFormatError(0, "file shorter than the 16-byte header")
         magic, version = FILE_HEADER.unpack(head)
@@ -66,18 +75,18 @@ class LogReader:
             raise LogFormatError(12, f"unsupported version {version}")
         offset = HEADER_SIZE
         while True:
-            rh = f.read(RECORD_HEADER_SIZE)
+            rh = self._read(f, RECORD_HEADER_SIZE)
             if not rh:
                 return
             if len(rh) < RECORD_HEADER_SIZE:
-                self.warning = f"truncated record header at byte {offset}"
+                self.warning = self.warning or f"truncated record header at byte {offset}"
                 return
             time_ns, rtype, size = RECORD_HEADER.unpack(rh)
             if size < 0 or size > MAX_PAYLOAD:
                 raise LogFormatError(offset, f"payload size {size}")
-            payload = f.read(size)
+            payload = self._read(f, size)
             if len(payload) < size:
-                self.warning = (
+                self.warning = self.warning or (
                     f"truncated record at byte {offset}: {len(payload)} of {size} bytes"
                 )
                 return

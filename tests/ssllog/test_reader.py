@@ -36,3 +36,20 @@ def test_corrupt_size_names_offset(tmp_path: Path) -> None:
     with pytest.raises(LogFormatError) as e:
         list(LogReader(str(p)))
     assert e.value.offset == 35
+
+
+def test_a_gzip_stream_cut_short_is_a_warning(tmp_path: Path) -> None:
+    """The league's recorder killed with SIGTERM leaves a .log.gz without its end (seen with
+    ssl-log-recorder: ssl-log-stats then fails with "unexpected EOF"): the records before the
+    cut are read, the rest is a warning, not an error."""
+    import gzip
+    import os
+
+    records = [rec(i, 4, os.urandom(200)) for i in range(50)]  # random: gzip cannot shrink it
+    whole = gzip.compress(HEAD + b"".join(records))
+    p = tmp_path / "killed.log.gz"
+    p.write_bytes(whole[: len(whole) * 3 // 4])
+    r = LogReader(str(p))
+    got = [x.time_ns for x in r]
+    assert 0 < len(got) < 50 and got == list(range(len(got)))
+    assert r.warning is not None and "compressed stream ends early" in r.warning
