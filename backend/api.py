@@ -16,11 +16,19 @@ from fastapi import Path as PathParam
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, ConfigDict, Field
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from . import contract
 from .config import Settings
+from .contract import (
+    CardIn,
+    EnableIn,
+    EstopIn,
+    RefereeCommandIn,
+    TargetIn,
+    TeleportBallIn,
+    TeleportRobotIn,
+)
 from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
@@ -32,59 +40,6 @@ log = logging.getLogger("touchline.api")
 
 TeamParam = Annotated[Literal["blue", "yellow"], PathParam(description="robot team")]
 IdParam = Annotated[int, PathParam(ge=0, le=15, description="robot id, 0..15")]
-
-
-class TargetIn(BaseModel):
-    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    x: float = Field(description="target x in mm (vision frame)")
-    y: float = Field(description="target y in mm")
-    orientation: float | None = Field(default=None, description="target heading in rad")
-
-
-class Point(BaseModel):
-    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    x: float = Field(description="mm")
-    y: float = Field(description="mm")
-
-
-class RefereeCommandIn(BaseModel):
-    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
-    designated_position: Point | None = Field(default=None, description="for ball placement")
-
-
-class CardIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    team: Literal["blue", "yellow"]
-    card: Literal["yellow", "red", "clear"]
-
-
-class EnableIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    enabled: bool
-
-
-class TeleportBallIn(BaseModel):
-    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    x: float = Field(description="mm")
-    y: float = Field(description="mm")
-    vx: float = Field(default=0.0, ge=-10, le=10, description="m/s")
-    vy: float = Field(default=0.0, ge=-10, le=10, description="m/s")
-
-
-class TeleportRobotIn(BaseModel):
-    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    x: float = Field(description="mm")
-    y: float = Field(description="mm")
-    orientation: float | None = Field(default=None, description="rad")
-    present: bool = True
-
-
-class EstopIn(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    active: bool
-    confirm: bool = Field(default=False, description="required (true) to release the stop")
-    reason: str = Field(default="", max_length=200, description="why it is released (logged)")
 
 
 def create_app(settings: Settings, station: Station | None = None) -> FastAPI:

@@ -6,15 +6,15 @@ cost at run time); the tests validate real payloads against them with pydantic, 
 not declared here; ``scripts/gen_contract.py`` generates the TypeScript types
 (``frontend/src/api/contract.gen.ts``) and the message reference of ``docs/api.md`` from them,
 and a test fails when either is out of date. Units: lengths mm, angles rad, speeds m/s where the
-name says ``_mps`` (else mm/s), times s. HTTP request bodies are the pydantic models of
-``backend/api.py`` (their schema is in ``/openapi.json``).
+name says ``_mps`` (else mm/s), times s. The HTTP request bodies are pydantic models here too
+(FastAPI validates every request against them; their TypeScript types are generated as well).
 """
 
 from __future__ import annotations
 
 from typing import Annotated, Literal, NotRequired
 
-from pydantic import ConfigDict, Field, with_config
+from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
 Team = Literal["blue", "yellow"]
@@ -547,6 +547,63 @@ class EstopAnswer(EstopInfo):
     estop: bool
 
 
+# ------------------------------------------------------------------------------ request bodies
+# (pydantic models: FastAPI validates each request against them; NaN and unknown keys refused)
+
+
+class TargetIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="target x in mm (vision frame)")
+    y: float = Field(description="target y in mm")
+    orientation: float | None = Field(default=None, description="target heading in rad")
+
+
+class Point(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+
+
+class RefereeCommandIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
+    designated_position: Point | None = Field(default=None, description="for ball placement")
+
+
+class CardIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    team: Literal["blue", "yellow"]
+    card: Literal["yellow", "red", "clear"]
+
+
+class EnableIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    enabled: bool
+
+
+class TeleportBallIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+    vx: float = Field(default=0.0, ge=-10, le=10, description="m/s")
+    vy: float = Field(default=0.0, ge=-10, le=10, description="m/s")
+
+
+class TeleportRobotIn(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
+    x: float = Field(description="mm")
+    y: float = Field(description="mm")
+    orientation: float | None = Field(default=None, description="rad")
+    present: bool = True
+
+
+class EstopIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    active: bool
+    confirm: bool = Field(default=False, description="required (true) to release the stop")
+    reason: str = Field(default="", max_length=200, description="why it is released (logged)")
+
+
 # ------------------------------------------------------------------------------ websocket
 
 
@@ -606,4 +663,8 @@ EXPORTS: dict[str, object] = {
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
     "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff, "PresetList": PresetList,
     "PresetDetail": PresetDetail,
+    # request bodies (their optional fields are optional in TypeScript too)
+    "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
+    "EnableIn": EnableIn, "TeleportBallIn": TeleportBallIn, "TeleportRobotIn": TeleportRobotIn,
+    "EstopIn": EstopIn,
 }

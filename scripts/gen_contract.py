@@ -34,7 +34,10 @@ def _schemas() -> tuple[dict[str, Schema], dict[str, Schema]]:
     exported: dict[str, Schema] = {}
     defs: dict[str, Schema] = {}
     for name, obj in contract.EXPORTS.items():
-        s = TypeAdapter(obj).json_schema(mode="serialization", ref_template="#/$defs/{model}")
+        # what the station sends is always complete (serialization); what it takes may leave
+        # out what has a default (validation)
+        mode = "validation" if name.endswith("In") else "serialization"
+        s = TypeAdapter(obj).json_schema(mode=mode, ref_template="#/$defs/{model}")
         defs.update(s.pop("$defs", {}))
         if s.get("title") == name and s.get("type") == "object":
             defs[name] = s

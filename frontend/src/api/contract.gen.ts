@@ -32,6 +32,15 @@ export interface Ball {
   filter: string;
 }
 
+export interface CardIn {
+  team: Team;
+  card: "yellow" | "red" | "clear";
+}
+
+export interface EnableIn {
+  enabled: boolean;
+}
+
 /** The compute engine the strategy calls (null when off). */
 export interface EngineHealth {
   kind: string;
@@ -65,6 +74,14 @@ export interface EstopAnswer {
   /** the relay's latch from its statistics; null before any arrived */
   relay_latched: boolean | null;
   estop: boolean;
+}
+
+export interface EstopIn {
+  active: boolean;
+  /** required (true) to release the stop */
+  confirm?: boolean;
+  /** why it is released (logged) */
+  reason?: string;
 }
 
 /** The latched emergency stop. */
@@ -203,6 +220,13 @@ export interface PlayInfo {
   description: string;
 }
 
+export interface Point {
+  /** mm */
+  x: number;
+  /** mm */
+  y: number;
+}
+
 /**
  * GET /api/presets/{name}: its values and how they differ from the defaults and from
  * the parameters in force.
@@ -270,6 +294,13 @@ export interface Referee {
   current_action_time_remaining_s: number | null;
   game_events: RefereeGameEvent[];
   age_s: number;
+}
+
+export interface RefereeCommandIn {
+  /** HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ... */
+  command: string;
+  /** for ball placement */
+  designated_position?: Point | null;
 }
 
 /** A game event as the game controller reports it (newest first). */
@@ -466,10 +497,40 @@ export interface TargetAnswer {
   target: TargetPoint | null;
 }
 
+export interface TargetIn {
+  /** target x in mm (vision frame) */
+  x: number;
+  /** target y in mm */
+  y: number;
+  /** target heading in rad */
+  orientation?: number | null;
+}
+
 export interface TargetPoint {
   x: number;
   y: number;
   orientation: number | null;
+}
+
+export interface TeleportBallIn {
+  /** mm */
+  x: number;
+  /** mm */
+  y: number;
+  /** m/s */
+  vx?: number;
+  /** m/s */
+  vy?: number;
+}
+
+export interface TeleportRobotIn {
+  /** mm */
+  x: number;
+  /** mm */
+  y: number;
+  /** rad */
+  orientation?: number | null;
+  present?: boolean;
 }
 
 export interface TopicHealth {

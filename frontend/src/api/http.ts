@@ -1,7 +1,14 @@
 // HTTP calls to the backend (docs/api.md, "HTTP"). Errors carry the server's message.
 
 import type {
+  CardIn,
+  EnableIn,
   EstopAnswer,
+  EstopIn,
+  RefereeCommandIn,
+  TargetIn,
+  TeleportBallIn,
+  TeleportRobotIn,
   ParamChange,
   ParamsState,
   PresetDetail,
@@ -90,7 +97,7 @@ export function postTarget(
   id: number,
   target: { x: number; y: number; orientation?: number },
 ): Promise<TargetReply> {
-  const body: { x: number; y: number; orientation?: number } = {
+  const body: TargetIn = {
     x: Math.round(target.x),
     y: Math.round(target.y),
   };
@@ -105,7 +112,8 @@ export function deleteTarget(team: Team, id: number): Promise<unknown> {
 /** Press (one request) or release the emergency stop; the station refuses a release that is
  * not confirmed (409), so the page asks the operator first (`confirm`). */
 export function postEstop(active: boolean, confirm = false): Promise<EstopAnswer> {
-  return request<EstopAnswer>("POST", "/api/estop", active ? { active } : { active, confirm });
+  const body: EstopIn = active ? { active } : { active, confirm };
+  return request<EstopAnswer>("POST", "/api/estop", body);
 }
 
 // ---- parameters and presets ----
@@ -135,22 +143,29 @@ export const getStrategy = () => request<StrategyInfo>("GET", "/api/strategy");
 
 /** A card from the internal referee: yellow (one robot fewer for 120 s), red (for the rest of
  * the game), or clear (withdraw the team's cards). */
-export type Card = "yellow" | "red" | "clear";
+export type Card = CardIn["card"];
 
-export const postRefereeCommand = (command: string, designated_position?: { x: number; y: number }) =>
-  request<RefereeView>(
-    "POST",
-    "/api/referee/internal/command",
-    designated_position ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } } : { command },
-  );
-export const postRefereeCard = (team: Team, card: Card) =>
-  request<RefereeView>("POST", "/api/referee/internal/card", { team, card });
-export const postRefereeEnabled = (enabled: boolean) => request<RefereeView>("POST", "/api/referee/internal/enabled", { enabled });
+export function postRefereeCommand(command: string, designated_position?: { x: number; y: number }): Promise<RefereeView> {
+  const body: RefereeCommandIn = designated_position
+    ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } }
+    : { command };
+  return request<RefereeView>("POST", "/api/referee/internal/command", body);
+}
+export function postRefereeCard(team: Team, card: Card): Promise<RefereeView> {
+  const body: CardIn = { team, card };
+  return request<RefereeView>("POST", "/api/referee/internal/card", body);
+}
+export function postRefereeEnabled(enabled: boolean): Promise<RefereeView> {
+  const body: EnableIn = { enabled };
+  return request<RefereeView>("POST", "/api/referee/internal/enabled", body);
+}
 
-export const teleportBall = (x: number, y: number) => request<unknown>("POST", "/api/sim/ball", { x: Math.round(x), y: Math.round(y) });
-export const teleportRobot = (team: Team, id: number, x: number, y: number, orientation?: number) =>
-  request<unknown>(
-    "POST",
-    `/api/sim/robots/${team}/${id}`,
-    orientation === undefined ? { x: Math.round(x), y: Math.round(y) } : { x: Math.round(x), y: Math.round(y), orientation },
-  );
+export function teleportBall(x: number, y: number): Promise<unknown> {
+  const body: TeleportBallIn = { x: Math.round(x), y: Math.round(y) };
+  return request<unknown>("POST", "/api/sim/ball", body);
+}
+export function teleportRobot(team: Team, id: number, x: number, y: number, orientation?: number): Promise<unknown> {
+  const body: TeleportRobotIn = { x: Math.round(x), y: Math.round(y) };
+  if (orientation !== undefined) body.orientation = orientation;
+  return request<unknown>("POST", `/api/sim/robots/${team}/${id}`, body);
+}

@@ -3,6 +3,14 @@
 
 export type {
   Ball,
+  CardIn,
+  EnableIn,
+  EstopIn,
+  Point,
+  RefereeCommandIn,
+  TargetIn,
+  TeleportBallIn,
+  TeleportRobotIn,
   ControlAlgorithm,
   EngineHealth,
   EstopAnswer,
