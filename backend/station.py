@@ -8,7 +8,6 @@ import asyncio
 import concurrent.futures
 import contextlib
 import logging
-import math
 import sys
 import threading
 import time
@@ -23,17 +22,17 @@ import zmq.asyncio
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics
+from . import contract, topics, views
 from .bus import DataBus
 from .config import ROOT, Settings
 from .control.goto import Target
 from .engine import NumpyEngine, OctaveEngine, PoolEngine
 from .estop import EstopLatch
 from .jsonsafe import dumps
-from .messages import OperatorTarget, TargetEntry
-from .params.model import PLAYS, StationParams, StrategyParams
+from .messages import OperatorTarget
+from .params.model import StationParams, StrategyParams
 from .params.store import ParamStore, deep_merge, parse_setting
-from .processor import Every, OnTopic, Processor, Runner
+from .processor import Every, Processor, Runner
 from .processors import (
     CommandPublisher,
     ControlProcessor,
@@ -44,9 +43,8 @@ from .processors import (
     VisionIngest,
     WorldProcessor,
 )
-from .referee.internal import OPERATOR_COMMANDS, InternalReferee
+from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
-from .strategy.plays import PLAY_INFO
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
@@ -335,49 +333,6 @@ class Station:
         log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
                  sp.goalkeeper_function)
 
-    def engine_health(self) -> contract.EngineHealth | None:
-        sp = self.strategy.params
-        if sp.engine == "off":
-            return None
-        eng = self.strategy.engine
-        out: dict[str, Any] = dict(eng.health()) if eng is not None else {
-            "kind": sp.engine, "workers": 0, "busy": 0, "idle": 0, "calls": 0,
-            "calls_per_s": 0.0, "latency_mean_ms": 0.0, "latency_p99_ms": 0.0, "ok": 0,
-            "errors": 0, "timeouts": 0, "crashes": 0, "restarts": 0, "start_failures": 0,
-            "last_error": self.engine_error or "starting"}
-        out["function"] = sp.goalkeeper_function
-        out["fallbacks"] = self.strategy.engine_fallbacks
-        out["running"] = eng is not None
-        if not out.get("last_error") and self.strategy.engine_last_error:
-            out["last_error"] = self.strategy.engine_last_error
-        return cast(contract.EngineHealth, out)
-
-    def strategy_state(self) -> contract.StrategyState:
-        """What the strategy is doing now (sent with every world update: kept small)."""
-        core = self.strategy.core
-        sit = core.situation if core is not None else None
-        return {
-            "play": self.params.current.strategy.play,
-            "situation": sit.key if sit is not None else "running",
-            "situation_text": sit.text() if sit is not None else "",
-            "our_team": self.params.current.team.our_team,
-            "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
-            "side_from_referee": bool(core and core.side_from_referee),
-            "tick_ms": core.last_tick_ms if core is not None else 0.0,
-        }
-
-    def strategy_view(self) -> contract.StrategyView:
-        """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
-        core = self.strategy.core
-        team = self.params.current.team.our_team
-        return {
-            **self.strategy_state(),
-            "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
-                      for n in PLAYS],
-            "roles": {f"{team}/{rid}": role
-                      for rid, role in (core.strategy.roles.items() if core else [])},
-        }
-
     async def stop(self) -> None:
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
@@ -454,30 +409,6 @@ class Station:
             log.warning("the relay's emergency stop is latched (by %s): active here too", by)
             self.set_estop(True, f"relay latch ({by or '?'})")
 
-    def estop_view(self) -> contract.EstopInfo:
-        s = self.estop_latch.state
-        rs = self.relay_stats.latest_value()
-        return {"active": self.estop, "since": s.since, "by": s.by,
-                "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
-
-    def _estop_warnings(self) -> list[str]:
-        """Health lines: an active stop (every page says so), a relay that has not latched it
-        a few seconds after the press, and a latch file that could not be read or written."""
-        out: list[str] = []
-        s = self.estop_latch.state
-        if self.estop:
-            when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
-            out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
-                       f"held at zero until an operator releases it")
-            rs = self.relay_stats.latest_value()
-            if rs is not None and time.monotonic() - rs["received_mono"] < 3.0 \
-                    and not rs.get("estop_latched") and time.monotonic() - self._estop_mono > 3.0:
-                out.append("the relay has not latched the emergency stop (the backend holds "
-                           "every robot at zero; a backend restart would rely on estop.json)")
-        if self.estop_latch.warning:
-            out.append(self.estop_latch.warning)
-        return out
-
     def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
                       vy_mps: float = 0.0) -> None:
         """Through the simulator (SSL simulation protocol, metres)."""
@@ -500,26 +431,6 @@ class Station:
         t.present = present
         self.sim_commands.write(cmd.SerializeToString())
 
-    def referee_view(self) -> contract.RefereeView:
-        ir = self.internal_referee
-        st = self.referee_state
-        return {
-            "internal": {
-                "enabled": ir.enabled,
-                "disabled_reason": ir.disabled_reason,
-                "foreign_source": ir.foreign_active(),
-                "command": st.command,
-                "stage": st.stage,
-                "command_counter": st.command_counter,
-                "designated_position": None if st.designated_position is None else {
-                    "x": st.designated_position[0], "y": st.designated_position[1]},
-                "score": {"blue": st.blue.score, "yellow": st.yellow.score},
-                "max_allowed_bots": {"blue": st.max_allowed_bots("blue"),
-                                     "yellow": st.max_allowed_bots("yellow")},
-                "commands": list(OPERATOR_COMMANDS),
-            },
-        }
-
     def give_card(self, team: Team, card: str) -> None:
         """A card from the internal referee; the division's robots per team come from the
         field size (A: 12 m x 9 m, 11 robots)."""
@@ -534,108 +445,25 @@ class Station:
 
     # ---- views ----
 
+    # ---- the browser's data: built by backend/views.py (on the station thread) ----
+
     def world_dict(self) -> contract.World:
-        world = self.world_topic.latest_value()
-        targets: dict[tuple[Team, int], TargetEntry] = self.targets_topic.latest_value() or {}
-        ref = self.referee_topic.latest()
-        if ref is not None and self.control.active_referee() is None:
-            ref = None  # the internal referee's own state after it was switched off
-        commands = self.control.last_commands
-        telemetry = self.control.telemetry
-        now_unix = time.time()
-        out: contract.World = {
-            "seq": self.world_topic.seq,
-            "t_capture": world.t_capture if world else 0.0,
-            "ball": None,
-            "robots": [],
-            "cameras": [],
-            "referee": None,
-            "estop": self.estop,
-            "estop_info": self.estop_view(),
-            "halt_reason": self.control.halt_reason,
-            "strategy": None,
-            "internal_referee": self.referee_view()["internal"],
-        }
-        out["strategy"] = self.strategy_state()
-        if ref is not None:
-            internal = ref.value.source_identifier == self.referee_state.source_identifier
-            out["referee"] = ref.value.to_dict(time.monotonic() - ref.time_mono,
-                                               "internal" if internal else None)
-        if world is None:
-            return out
-        t_ref = world.t_capture
-        if world.ball is not None:
-            b = world.ball
-            ball: contract.Ball = {
-                "x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
-                "age_s": t_ref - b.t_seen, "cameras": list(b.cameras), "raw_x": b.raw_x,
-                "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter}
-            out["ball"] = ball
-        robots: list[contract.Robot] = []
-        for r in world.robots:
-            entry = targets.get((r.team, r.id))
-            cmd = commands.get((r.team, r.id))
-            robots.append({
-                "team": r.team, "id": r.id, "x": r.x, "y": r.y, "orientation": r.orientation,
-                "vx": r.vx, "vy": r.vy, "omega": r.omega, "visible": r.visible,
-                "age_s": t_ref - r.t_seen, "cameras": list(r.cameras),
-                "target": None if entry is None else {
-                    "x": entry.target.x, "y": entry.target.y,
-                    "orientation": entry.target.orientation, "source": entry.source,
-                },
-                "role": entry.role if entry is not None and entry.role else None,
-                "path": None if entry is None or not entry.path else [
-                    {"x": px, "y": py} for px, py in entry.path],
-                "kick": None if entry is None or entry.kick_speed_mps <= 0 else {
-                    "speed_mps": entry.kick_speed_mps, "chip": entry.chip},
-                "dribbler": bool(entry is not None and entry.dribbler_rpm > 0),
-                "controlled": entry is not None,
-                "raw_x": r.raw_x, "raw_y": r.raw_y, "raw_orientation": r.raw_orientation,
-                "predicted": r.predicted, "lost": r.lost, "filter": r.filter,
-                "control": (cast(contract.RobotControl, telemetry.get(f"{r.team}/{r.id}"))
-                            if entry is not None else None),
-                "command": None if cmd is None else {
-                    "forward_mps": cmd.velocity.forward_mps,
-                    "left_mps": cmd.velocity.left_mps,
-                    "angular_radps": cmd.velocity.angular_radps,
-                },
-            })
-        out["robots"] = robots
-        out["cameras"] = [{
-            "camera_id": c.camera_id, "frame_number": c.frame_number, "t_capture": c.t_capture,
-            "age_s": now_unix - c.t_capture,
-            "balls": [{"x": b.x, "y": b.y} for b in c.balls],
-            "robots": [{"team": rr.team, "id": rr.id, "x": rr.x, "y": rr.y,
-                        "orientation": rr.orientation} for rr in c.robots],
-        } for c in world.cameras]
-        return out
+        return views.world(self)
 
-    def _world_health(self) -> contract.WorldHealth | None:
-        """The world model's view: its age by the receive clock, what it dropped and why,
-        each camera's clock offset."""
-        model = self.world.model
-        age = self.control.vision_age_s(time.monotonic())
-        return {
-            "age_s": age if math.isfinite(age) else None,
-            "stale": age > self.control.vision_stale_s,
-            "rejected": dict(model.rejected),
-            "recent_rejections": self.world.recent_rejections(),
-            "last_rejection": model.last_rejection,
-            "clock_resyncs": model.clocks.resyncs,
-            "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
-        }
+    def health(self) -> contract.Health:
+        return views.health(self)
 
-    def _latency_stages(self) -> list[contract.LatencyStage]:
-        """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
-        stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
-                  for name, stage in (("decoded (vision ingest)", self.vision.latency),
-                                      ("world model written", self.world.latency),
-                                      ("commands sent to relay", self.publisher.latency))]
-        rs = self.relay_stats.latest_value()
-        if rs is not None and rs.get("command_latency_ms", -1) >= 0:
-            stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
-                           "p50_ms": None, "p99_ms": None, "n": None})
-        return stages
+    def referee_view(self) -> contract.RefereeView:
+        return views.referee_view(self)
+
+    def strategy_state(self) -> contract.StrategyState:
+        return views.strategy_state(self)
+
+    def strategy_view(self) -> contract.StrategyView:
+        return views.strategy_view(self)
+
+    def estop_view(self) -> contract.EstopInfo:
+        return views.estop_view(self)
 
     def world_version(self) -> tuple[object, ...]:
         """Changes whenever the world message would: a new world, a referee message, the
@@ -693,106 +521,6 @@ class Station:
         g = self.geometry_topic.latest_value()
         return None if g is None else cast(contract.Geometry, g)
 
-    def health(self) -> contract.Health:
-        procs: list[contract.ProcessorHealth] = []
-        for p in self.runner.processors:
-            trig = p.trigger
-            timing = p.stats.summary()
-            procs.append({
-                "name": p.name,
-                "trigger": ("rate" if isinstance(trig, Every) else
-                            f"topic:{trig.topic.name}" if isinstance(trig, OnTopic) else "source"),
-                "configured_hz": trig.hz if isinstance(trig, Every) else None,
-                "measured_hz": timing["measured_hz"], "tick_mean_ms": timing["tick_mean_ms"],
-                "tick_p99_ms": timing["tick_p99_ms"],
-                "overruns": p.stats.overruns,
-                "runs": p.stats.rate.total,
-                "errors": p.stats.errors,
-                "last_error": p.stats.last_error,
-            })
-        topics: list[contract.TopicHealth] = [
-            {"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
-             "age_s": t.age_s()} for t in self.bus.topics()]
-        streams: dict[str, Any] = {}
-        vis = self.vision.counter.to_dict()
-        # what the world model dropped, by the same reasons ("time out of range", ...)
-        for reason, n in self.world.model.rejected.items():
-            vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
-            vis["errors"] += n
-        streams["vision"] = vis
-        streams["referee"] = self.referee.counter.to_dict()
-        streams["zmq"] = self.ingest.counters["zmq"].to_dict()
-        relay = None
-        rs = self.relay_stats.latest_value()
-        if rs is not None:
-            age = time.monotonic() - rs["received_mono"]
-            relay = {k: v for k, v in rs.items() if k not in ("streams", "received_mono")}
-            relay["alive"] = age < 3.0
-            relay["age_s"] = age
-            for name, st in rs["streams"].items():
-                streams[f"relay.{name}"] = st
-        vision = streams.get("vision", {})
-        # ok: the loop works (fresh vision, relay alive). A silent referee leaves it true: the
-        # station then does what the rules expect of a team (it keeps obeying the last
-        # command); it is a warning about a system outside the station, in `warnings`.
-        ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
-            relay is not None and relay["alive"]
-        world = self._world_health()
-        if world is not None and world["stale"]:
-            ok = False
-        referee = self.referee_watch.status()
-        if referee is not None:
-            referee["source"] = ("internal" if referee["source_identifier"]
-                                 == self.referee_state.source_identifier else "game-controller")
-        out: contract.Health = {
-            "ok": ok,
-            "warnings": [*self._estop_warnings(), *_warnings(vision, relay, referee, world),
-                         *self.params.warnings],
-            "estop": self.estop_view(),
-            "world": world,
-            "referee": cast(contract.RefereeHealth | None, referee),
-            "uptime_s": time.monotonic() - self.started_mono,
-            "streams": streams,
-            "processors": procs,
-            "topics": topics,
-            "relay": cast(contract.RelayHealth | None, relay),
-            "latency": cast(contract.LatencyHealth, self.publisher.latency_summary()),
-            "latency_stages": self._latency_stages(),
-            "websocket_clients": self.ws_clients,
-            "engine": self.engine_health(),
-        }
-        return out
-
-
-def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
-              referee: dict[str, Any] | None,
-              world: contract.WorldHealth | None = None) -> list[str]:
-    """One line per problem: why ``ok`` is false, and a silent referee."""
-    out: list[str] = []
-    if world is not None:
-        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
-                and vision.get("last_age_s", -1) < 1.0:
-            # vision arrives but nothing of it reaches the world: say why
-            since = ("no frame merged yet" if world["age_s"] is None
-                     else f"world not updated for {world['age_s']:.1f} s")
-            out.append(f"{since} although vision arrives: robots stopped "
-                       f"({world['last_rejection'] or 'no detection frame merged'})")
-        if world["recent_rejections"]:
-            out.append("vision dropped by the world model in the last 10 s: "
-                       + ", ".join(f"{k} {v}" for k, v in world["recent_rejections"].items()))
-    age = vision.get("last_age_s", -1)
-    if not vision or age < 0:
-        out.append("no vision received")
-    elif age >= 1.0:
-        out.append(f"no vision for {age:.1f} s")
-    if relay is None:
-        out.append("no relay statistics received")
-    elif not relay["alive"]:
-        out.append(f"relay silent for {relay['age_s']:.1f} s")
-    line = RefereeWatch.warning(referee)
-    if line is not None:
-        out.append(line)
-    return out
 
 
 def _stop_all_bytes() -> bytes:

@@ -1,0 +1,322 @@
+"""The browser's data, built from the station's state on the station thread: the world message,
+health, and the referee, strategy and e-stop views (their shapes are in ``contract.py``). The
+station publishes them (``Station.views``) or answers with them when asked."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import TYPE_CHECKING, Any, cast
+
+from . import contract
+from .messages import TargetEntry
+from .params.model import PLAYS
+from .processor import Every, OnTopic
+from .referee.internal import OPERATOR_COMMANDS
+from .referee.watch import RefereeWatch
+from .strategy.plays import PLAY_INFO
+from .world.state import Team
+
+if TYPE_CHECKING:
+    from .station import Station
+
+
+def engine_health(st: Station) -> contract.EngineHealth | None:
+    sp = st.strategy.params
+    if sp.engine == "off":
+        return None
+    eng = st.strategy.engine
+    out: dict[str, Any] = dict(eng.health()) if eng is not None else {
+        "kind": sp.engine, "workers": 0, "busy": 0, "idle": 0, "calls": 0,
+        "calls_per_s": 0.0, "latency_mean_ms": 0.0, "latency_p99_ms": 0.0, "ok": 0,
+        "errors": 0, "timeouts": 0, "crashes": 0, "restarts": 0, "start_failures": 0,
+        "last_error": st.engine_error or "starting"}
+    out["function"] = sp.goalkeeper_function
+    out["fallbacks"] = st.strategy.engine_fallbacks
+    out["running"] = eng is not None
+    if not out.get("last_error") and st.strategy.engine_last_error:
+        out["last_error"] = st.strategy.engine_last_error
+    return cast(contract.EngineHealth, out)
+
+
+def strategy_state(st: Station) -> contract.StrategyState:
+    """What the strategy is doing now (sent with every world update: kept small)."""
+    core = st.strategy.core
+    sit = core.situation if core is not None else None
+    return {
+        "play": st.params.current.strategy.play,
+        "situation": sit.key if sit is not None else "running",
+        "situation_text": sit.text() if sit is not None else "",
+        "our_team": st.params.current.team.our_team,
+        "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
+        "side_from_referee": bool(core and core.side_from_referee),
+        "tick_ms": core.last_tick_ms if core is not None else 0.0,
+    }
+
+
+def strategy_view(st: Station) -> contract.StrategyView:
+    """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
+    core = st.strategy.core
+    team = st.params.current.team.our_team
+    return {
+        **strategy_state(st),
+        "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
+                  for n in PLAYS],
+        "roles": {f"{team}/{rid}": role
+                  for rid, role in (core.strategy.roles.items() if core else [])},
+    }
+
+
+def estop_view(st: Station) -> contract.EstopInfo:
+    s = st.estop_latch.state
+    rs = st.relay_stats.latest_value()
+    return {"active": st.estop, "since": s.since, "by": s.by,
+            "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
+
+
+def estop_warnings(st: Station) -> list[str]:
+    """Health lines: an active stop (every page says so), a relay that has not latched it
+    a few seconds after the press, and a latch file that could not be read or written."""
+    out: list[str] = []
+    s = st.estop_latch.state
+    if st.estop:
+        when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
+        out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
+                   f"held at zero until an operator releases it")
+        rs = st.relay_stats.latest_value()
+        if rs is not None and time.monotonic() - rs["received_mono"] < 3.0 \
+                and not rs.get("estop_latched") and time.monotonic() - st._estop_mono > 3.0:
+            out.append("the relay has not latched the emergency stop (the backend holds "
+                       "every robot at zero; a backend restart would rely on estop.json)")
+    if st.estop_latch.warning:
+        out.append(st.estop_latch.warning)
+    return out
+
+
+def referee_view(st: Station) -> contract.RefereeView:
+    ir = st.internal_referee
+    state = st.referee_state
+    return {
+        "internal": {
+            "enabled": ir.enabled,
+            "disabled_reason": ir.disabled_reason,
+            "foreign_source": ir.foreign_active(),
+            "command": state.command,
+            "stage": state.stage,
+            "command_counter": state.command_counter,
+            "designated_position": None if state.designated_position is None else {
+                "x": state.designated_position[0], "y": state.designated_position[1]},
+            "score": {"blue": state.blue.score, "yellow": state.yellow.score},
+            "max_allowed_bots": {"blue": state.max_allowed_bots("blue"),
+                                 "yellow": state.max_allowed_bots("yellow")},
+            "commands": list(OPERATOR_COMMANDS),
+        },
+    }
+
+
+def world(st: Station) -> contract.World:
+    world = st.world_topic.latest_value()
+    targets: dict[tuple[Team, int], TargetEntry] = st.targets_topic.latest_value() or {}
+    ref = st.referee_topic.latest()
+    if ref is not None and st.control.active_referee() is None:
+        ref = None  # the internal referee's own state after it was switched off
+    commands = st.control.last_commands
+    telemetry = st.control.telemetry
+    now_unix = time.time()
+    out: contract.World = {
+        "seq": st.world_topic.seq,
+        "t_capture": world.t_capture if world else 0.0,
+        "ball": None,
+        "robots": [],
+        "cameras": [],
+        "referee": None,
+        "estop": st.estop,
+        "estop_info": estop_view(st),
+        "halt_reason": st.control.halt_reason,
+        "strategy": None,
+        "internal_referee": referee_view(st)["internal"],
+    }
+    out["strategy"] = strategy_state(st)
+    if ref is not None:
+        internal = ref.value.source_identifier == st.referee_state.source_identifier
+        out["referee"] = ref.value.to_dict(time.monotonic() - ref.time_mono,
+                                           "internal" if internal else None)
+    if world is None:
+        return out
+    t_ref = world.t_capture
+    if world.ball is not None:
+        b = world.ball
+        ball: contract.Ball = {
+            "x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
+            "age_s": t_ref - b.t_seen, "cameras": list(b.cameras), "raw_x": b.raw_x,
+            "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter}
+        out["ball"] = ball
+    robots: list[contract.Robot] = []
+    for r in world.robots:
+        entry = targets.get((r.team, r.id))
+        cmd = commands.get((r.team, r.id))
+        robots.append({
+            "team": r.team, "id": r.id, "x": r.x, "y": r.y, "orientation": r.orientation,
+            "vx": r.vx, "vy": r.vy, "omega": r.omega, "visible": r.visible,
+            "age_s": t_ref - r.t_seen, "cameras": list(r.cameras),
+            "target": None if entry is None else {
+                "x": entry.target.x, "y": entry.target.y,
+                "orientation": entry.target.orientation, "source": entry.source,
+            },
+            "role": entry.role if entry is not None and entry.role else None,
+            "path": None if entry is None or not entry.path else [
+                {"x": px, "y": py} for px, py in entry.path],
+            "kick": None if entry is None or entry.kick_speed_mps <= 0 else {
+                "speed_mps": entry.kick_speed_mps, "chip": entry.chip},
+            "dribbler": bool(entry is not None and entry.dribbler_rpm > 0),
+            "controlled": entry is not None,
+            "raw_x": r.raw_x, "raw_y": r.raw_y, "raw_orientation": r.raw_orientation,
+            "predicted": r.predicted, "lost": r.lost, "filter": r.filter,
+            "control": (cast(contract.RobotControl, telemetry.get(f"{r.team}/{r.id}"))
+                        if entry is not None else None),
+            "command": None if cmd is None else {
+                "forward_mps": cmd.velocity.forward_mps,
+                "left_mps": cmd.velocity.left_mps,
+                "angular_radps": cmd.velocity.angular_radps,
+            },
+        })
+    out["robots"] = robots
+    out["cameras"] = [{
+        "camera_id": c.camera_id, "frame_number": c.frame_number, "t_capture": c.t_capture,
+        "age_s": now_unix - c.t_capture,
+        "balls": [{"x": b.x, "y": b.y} for b in c.balls],
+        "robots": [{"team": rr.team, "id": rr.id, "x": rr.x, "y": rr.y,
+                    "orientation": rr.orientation} for rr in c.robots],
+    } for c in world.cameras]
+    return out
+
+
+def world_health(st: Station) -> contract.WorldHealth | None:
+    """The world model's view: its age by the receive clock, what it dropped and why,
+    each camera's clock offset."""
+    model = st.world.model
+    age = st.control.vision_age_s(time.monotonic())
+    return {
+        "age_s": age if math.isfinite(age) else None,
+        "stale": age > st.control.vision_stale_s,
+        "rejected": dict(model.rejected),
+        "recent_rejections": st.world.recent_rejections(),
+        "last_rejection": model.last_rejection,
+        "clock_resyncs": model.clocks.resyncs,
+        "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
+    }
+
+
+def latency_stages(st: Station) -> list[contract.LatencyStage]:
+    """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
+    stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
+              for name, stage in (("decoded (vision ingest)", st.vision.latency),
+                                  ("world model written", st.world.latency),
+                                  ("commands sent to relay", st.publisher.latency))]
+    rs = st.relay_stats.latest_value()
+    if rs is not None and rs.get("command_latency_ms", -1) >= 0:
+        stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
+                       "p50_ms": None, "p99_ms": None, "n": None})
+    return stages
+
+
+def health(st: Station) -> contract.Health:
+    procs: list[contract.ProcessorHealth] = []
+    for p in st.runner.processors:
+        trig = p.trigger
+        timing = p.stats.summary()
+        procs.append({
+            "name": p.name,
+            "trigger": ("rate" if isinstance(trig, Every) else
+                        f"topic:{trig.topic.name}" if isinstance(trig, OnTopic) else "source"),
+            "configured_hz": trig.hz if isinstance(trig, Every) else None,
+            "measured_hz": timing["measured_hz"], "tick_mean_ms": timing["tick_mean_ms"],
+            "tick_p99_ms": timing["tick_p99_ms"],
+            "overruns": p.stats.overruns,
+            "runs": p.stats.rate.total,
+            "errors": p.stats.errors,
+            "last_error": p.stats.last_error,
+        })
+    topics: list[contract.TopicHealth] = [
+        {"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
+         "age_s": t.age_s()} for t in st.bus.topics()]
+    streams: dict[str, Any] = {}
+    vis = st.vision.counter.to_dict()
+    # what the world model dropped, by the same reasons ("time out of range", ...)
+    for reason, n in st.world.model.rejected.items():
+        vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
+        vis["errors"] += n
+    streams["vision"] = vis
+    streams["referee"] = st.referee.counter.to_dict()
+    streams["zmq"] = st.ingest.counters["zmq"].to_dict()
+    relay = None
+    rs = st.relay_stats.latest_value()
+    if rs is not None:
+        age = time.monotonic() - rs["received_mono"]
+        relay = {k: v for k, v in rs.items() if k not in ("streams", "received_mono")}
+        relay["alive"] = age < 3.0
+        relay["age_s"] = age
+        for name, stream in rs["streams"].items():
+            streams[f"relay.{name}"] = stream
+    vision = streams.get("vision", {})
+    # ok: the loop works (fresh vision, relay alive). A silent referee leaves it true: the
+    # station then does what the rules expect of a team (it keeps obeying the last
+    # command); it is a warning about a system outside the station, in `warnings`.
+    ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
+        relay is not None and relay["alive"]
+    world = world_health(st)
+    if world is not None and world["stale"]:
+        ok = False
+    referee = st.referee_watch.status()
+    if referee is not None:
+        referee["source"] = ("internal" if referee["source_identifier"]
+                             == st.referee_state.source_identifier else "game-controller")
+    out: contract.Health = {
+        "ok": ok,
+        "warnings": [*estop_warnings(st), *_warnings(vision, relay, referee, world),
+                     *st.params.warnings],
+        "estop": estop_view(st),
+        "world": world,
+        "referee": cast(contract.RefereeHealth | None, referee),
+        "uptime_s": time.monotonic() - st.started_mono,
+        "streams": streams,
+        "processors": procs,
+        "topics": topics,
+        "relay": cast(contract.RelayHealth | None, relay),
+        "latency": cast(contract.LatencyHealth, st.publisher.latency_summary()),
+        "latency_stages": latency_stages(st),
+        "websocket_clients": st.ws_clients,
+        "engine": engine_health(st),
+    }
+    return out
+
+
+def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
+              referee: dict[str, Any] | None,
+              world: contract.WorldHealth | None = None) -> list[str]:
+    """One line per problem: why ``ok`` is false, and a silent referee."""
+    out: list[str] = []
+    if world is not None:
+        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
+                and vision.get("last_age_s", -1) < 1.0:
+            # vision arrives but nothing of it reaches the world: say why
+            since = ("no frame merged yet" if world["age_s"] is None
+                     else f"world not updated for {world['age_s']:.1f} s")
+            out.append(f"{since} although vision arrives: robots stopped "
+                       f"({world['last_rejection'] or 'no detection frame merged'})")
+        if world["recent_rejections"]:
+            out.append("vision dropped by the world model in the last 10 s: "
+                       + ", ".join(f"{k} {v}" for k, v in world["recent_rejections"].items()))
+    age = vision.get("last_age_s", -1)
+    if not vision or age < 0:
+        out.append("no vision received")
+    elif age >= 1.0:
+        out.append(f"no vision for {age:.1f} s")
+    if relay is None:
+        out.append("no relay statistics received")
+    elif not relay["alive"]:
+        out.append(f"relay silent for {relay['age_s']:.1f} s")
+    line = RefereeWatch.warning(referee)
+    if line is not None:
+        out.append(line)
+    return out
