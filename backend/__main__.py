@@ -48,6 +48,15 @@ def main() -> None:
     p.add_argument("--relay-output", choices=["sim", "grsim", "robot-box"], default=None,
                    help="the relay's output (the launcher passes it): on robot-box, whose "
                         "datagrams have no team field, only our team is ever commanded")
+    p.add_argument("--log", type=Path, default=None, metavar="FILE",
+                   help="replay this SSL log file (.log or .log.gz) instead of live input: "
+                        "nothing is sent to robots or a simulator")
+    p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=[],
+                   metavar="DIR", help="a folder whose logs the page may open (repeatable; the "
+                   "recording folder always is)")
+    p.add_argument("--no-record", action="store_true",
+                   help="do not record this session (the recording.enabled parameter stays as "
+                        "it is, for the next start)")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
@@ -55,8 +64,9 @@ def main() -> None:
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
                         our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
                         relay_output=a.relay_output,
-                        play="idle" if a.no_demo else a.play, set_params=a.set_params,
-                        state_dir=a.state_dir)
+                        play="idle" if a.no_demo else a.play,
+                        set_params=a.set_params, state_dir=a.state_dir, log=a.log,
+                        log_dirs=a.log_dirs, record=not a.no_record)
     app = create_app(settings)
     # the page sends nothing on the websocket: a client's message is capped like a body
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,

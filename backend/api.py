@@ -32,6 +32,7 @@ from .contract import (
 from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
+from .replay.routes import player_routes
 from .security import EdgeGuard
 from .station import Station
 from .world.state import Team
@@ -107,6 +108,9 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                 "type": "outside_field"}])
 
     def _check_simulator() -> None:
+        if st.player.log is not None:
+            raise HTTPException(409, "replaying a log: nothing is sent to a simulator (go back "
+                                     "to live first)")
         if st.relay_output() == "robot-box":
             raise HTTPException(409, "no simulator: the relay drives real robots (robot-box), "
                                      "teleports need a simulator output")
@@ -234,6 +238,7 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             st.ws_clients -= 1
 
     _params_routes(api, st)
+    player_routes(api, st)
     app.include_router(api)
     _mount_frontend(app, settings.static_dir)
     return app
@@ -345,6 +350,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
         await ws.send_text(dumps({
             "type": "snapshot", "world": v.world, "geometry": v.geometry, "health": v.health,
             "params": {"version": params_version, "values": st.params.values()},
+            "player": v.player,
         }, "snapshot"))
         sent = v
         next_world = time.monotonic()
@@ -361,6 +367,8 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
             if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
                 await ws.send_text(dumps({"type": "geometry", "geometry": v.geometry},
                                          "geometry"))
+            if v.player_serial != sent.player_serial:
+                await ws.send_text(v.player_json)
             if v.world_key != sent.world_key:
                 now = time.monotonic()
                 if now < next_world:  # at most ws_max_hz: wait, then send the newest

@@ -28,6 +28,12 @@ class Settings(BaseModel):
     relay_output: str | None = None
     #: names the Host header may carry besides the bound address and loopback ("*": any)
     allowed_hosts: list[str] = Field(default_factory=list)
+    #: a log file to replay from the start instead of live input (``make run LOG=...``)
+    log: Path | None = None
+    #: folders whose logs the page may open (besides the recording folder)
+    log_dirs: list[Path] = Field(default_factory=list)
+    #: False: this run records nothing, whatever the recording.enabled parameter says
+    record: bool = True
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

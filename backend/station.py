@@ -37,6 +37,7 @@ from .processors import (
     CommandPublisher,
     ControlProcessor,
     InternalRefereeProcessor,
+    PlayerFeed,
     RefereeIngest,
     RelayIngest,
     StrategyProcessor,
@@ -45,6 +46,8 @@ from .processors import (
 )
 from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
+from .replay.logs import LogFolders, open_log_file
+from .replay.player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
@@ -65,6 +68,9 @@ class Views:
     health_mono: float = -1e9
     geometry: contract.Geometry | None = None
     geometry_seq: int = -1
+    player: contract.Player | None = None
+    player_json: str = ""
+    player_serial: int = -1
     #: counts every publication that changed something (websocket clients wait on it)
     serial: int = 0
 
@@ -155,11 +161,19 @@ class Station:
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        # the log player: in replay the pipeline runs on the log's time and nothing is sent
+        self.player = LogPlayer(emit=self._emit_replayed, reset=self._reset_pipeline)
+        self.player_feed = PlayerFeed(self.player)
+        self.log_folders = LogFolders(self._recording_folder, settings.log_dirs)
+        self._opening: asyncio.Task[None] | None = None
+        self._replay_seq = 0
+        self.ingest.live = lambda: self.player.log is None
+        self.publisher.muted = lambda: self.player.log is not None
         self.views = Views()
         self._view_listeners: set[Callable[[], None]] = set()
         self.processors: tuple[Processor, ...] = (
-            self.ingest, self.vision, self.referee, self.world, self.strategy, self.control,
-            self.internal_referee, self.publisher, ViewPublisher(self))
+            self.player_feed, self.ingest, self.vision, self.referee, self.world, self.strategy,
+            self.control, self.internal_referee, self.publisher, ViewPublisher(self))
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
     # web traffic (JSON encoding, websocket sends) never delays control ----
@@ -268,6 +282,9 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        if s.log is not None:  # make run LOG=...: the log instead of live input
+            self._opening = asyncio.get_running_loop().create_task(
+                self._open_log(str(s.log), checked=True))
         self.publish_views(force=True)
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
@@ -333,7 +350,99 @@ class Station:
         log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
                  sp.goalkeeper_function)
 
+    # ---- the log player (commands run on the station thread; opening indexes in a worker
+    # thread, the loop goes on meanwhile) ----
+
+    def _recording_folder(self) -> Path:
+        folder = self.params.current.recording.folder
+        if folder:
+            return Path(folder).expanduser()
+        return (self.settings.state_dir or ROOT / "var") / "logs"
+
+    def _emit_replayed(self, rec: Any) -> None:
+        """One record of the log onto the topics the relay ingest writes, as an envelope like
+        the relay's (bytes unchanged, the recorded receive time)."""
+        if rec.type not in PLAYED_TYPES:
+            return
+        from sslpb import touchline_pb2 as tl
+        self._replay_seq += 1
+        vision = rec.type == 4
+        env = tl.Envelope(stream=tl.STREAM_VISION if vision else tl.STREAM_REFEREE,
+                          receive_time_ns=rec.time_ns, sequence=self._replay_seq,
+                          source="log", payload=rec.payload)
+        (self.ingest.vision_packets if vision else self.ingest.referee_packets).write(env)
+
+    def _reset_pipeline(self) -> None:
+        """Time jumped (a log opened or seeked, or back to live): the world model and the
+        controllers start again."""
+        self.world.reset()
+        self.control.motion.reset_all()
+        self.control.replay_clock = self.player.now_ns if self.player.log is not None else None
+
+    def player_command(self, fn: Callable[..., T], *args: Any) -> T:
+        """A player command on the station thread; the feed is woken to act on it."""
+        out = fn(*args)
+        self.player_feed.wake.set()
+        return out
+
+    def player_view(self) -> contract.Player:
+        return self.player.view()
+
+    async def open_log(self, path: str) -> contract.Player:
+        """Opens a log from the page: only files of the recording folder and of the folders
+        given with --log-dir (PlayerError otherwise). Returns at once; the player's loading
+        progress and then the log come in the "player" messages."""
+        return await self.read(self._start_open, path, False)
+
+    def _start_open(self, path: str, checked: bool) -> contract.Player:
+        if self._opening is not None and not self._opening.done():
+            raise PlayerError(f"already opening {self.player.loading_path}: wait for it")
+        real = path if checked else self.log_folders.check(path)
+        self.player.error = ""
+        self._opening = asyncio.get_running_loop().create_task(self._open_log(real, True))
+        self.player.loading, self.player.loading_path = 0.0, real
+        self.player.serial += 1
+        self.publish_views(force=True)
+        return self.player.view()
+
+    async def _open_log(self, path: str, checked: bool) -> None:
+        loop = asyncio.get_running_loop()
+        self.player.loading, self.player.loading_path = 0.0, path
+        self.player.serial += 1
+        last = [0.0]
+
+        def progress(frac: float) -> None:  # in the worker thread: hand over, a step a time
+            if frac - last[0] >= 0.02 or frac >= 1.0:
+                last[0] = frac
+                loop.call_soon_threadsafe(self._loading, frac)
+
+        try:
+            log_ = await asyncio.to_thread(open_log_file, path, self.log_folders.cache_dir(),
+                                           progress)
+        except Exception as exc:  # a bad file: said in the player, the station goes on
+            self.player.loading = None
+            self.player.error = f"cannot open {path}: {exc}"
+            self.player.serial += 1
+            log.warning("%s", self.player.error)
+            self.publish_views(force=True)
+            return
+        self._attach(log_)
+
+    def _loading(self, frac: float) -> None:
+        if self.player.loading is not None:
+            self.player.loading = frac
+            self.player.serial += 1
+
+    def _attach(self, log_: LogSource) -> None:
+        self.player_command(self.player.attach, log_)
+        log.info("replaying %s (%.1f s): nothing is sent to robots or a simulator",
+                 log_.path, self.player.duration_s())
+        self.publish_views(force=True)
+
     async def stop(self) -> None:
+        if self._opening is not None:
+            self._opening.cancel()
+        self.player.close()
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):
@@ -465,12 +574,17 @@ class Station:
     def estop_view(self) -> contract.EstopInfo:
         return views.estop_view(self)
 
+    def recording_status(self) -> contract.Recording:
+        return {"enabled": False, "recording": False, "file": "",
+                "folder": str(self._recording_folder()), "size_bytes": 0, "duration_s": 0.0,
+                "records": 0, "dropped": 0, "error": ""}
+
     def world_version(self) -> tuple[object, ...]:
         """Changes whenever the world message would: a new world, a referee message, the
         e-stop, why the robots are stopped (that changes while no world is written: vision
         lost), or the internal referee (its panel follows the world message)."""
         ir, rs = self.internal_referee, self.referee_state
-        return (self.world_topic.seq, self.referee_topic.seq, self.estop,
+        return (self.world_topic.seq, self.referee_topic.seq, self.estop, self.player.serial,
                 self.control.halt_reason, rs.command_counter,
                 ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
                 rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
@@ -498,6 +612,10 @@ class Station:
                            health_json=dumps({"type": "health", "health": health}, "health"))
         if force or self.geometry_topic.seq != v.geometry_seq:
             changes.update(geometry=self.geometry(), geometry_seq=self.geometry_topic.seq)
+        if force or self.player.serial != v.player_serial:
+            player = self.player.view()
+            changes.update(player=player, player_serial=self.player.serial,
+                           player_json=dumps({"type": "player", "player": player}, "player"))
         if changes:
             self.views = replace(v, serial=v.serial + 1, **changes)
             self._notify_views()

@@ -122,7 +122,7 @@ def world(st: Station) -> contract.World:
         ref = None  # the internal referee's own state after it was switched off
     commands = st.control.last_commands
     telemetry = st.control.telemetry
-    now_unix = time.time()
+    now_unix = st.player.now_ns() / 1e9  # the log's time in replay
     out: contract.World = {
         "seq": st.world_topic.seq,
         "t_capture": world.t_capture if world else 0.0,
@@ -135,6 +135,7 @@ def world(st: Station) -> contract.World:
         "halt_reason": st.control.halt_reason,
         "strategy": None,
         "internal_referee": referee_view(st)["internal"],
+        "replay": st.player.clock(),
     }
     out["strategy"] = strategy_state(st)
     if ref is not None:
@@ -287,6 +288,7 @@ def health(st: Station) -> contract.Health:
         "latency_stages": latency_stages(st),
         "websocket_clients": st.ws_clients,
         "engine": engine_health(st),
+        "recording": st.recording_status(),
     }
     return out
 

@@ -134,6 +134,19 @@ class StreamParams(Group):
     ws_max_hz: float = num(60.0, 1.0, 120.0, "Hz", 1.0, "world updates per second per client")
 
 
+class RecordingParams(Group):
+    """The session recorder: every live session as an SSL log file (docs/logformat.md)."""
+
+    enabled: bool = Field(default=True, description="record every live session (vision, "
+                          "referee, world, commands, operator actions, health)")
+    folder: str = Field(default="", max_length=1024, description="where the logs go; empty: "
+                        "logs/ in the state folder (var/logs)")
+    max_mb: int = num(1024, 1, 65536, "MB", 64, "a file larger than this is closed and the "
+                      "next one started")
+    rotate_on_stage: bool = Field(default=True, description="start a new file when the game "
+                                  "stage changes (first half, half time, ...)")
+
+
 class StationParams(Group):
     """All parameters, grouped by the part of the station that uses them."""
 
@@ -150,3 +163,5 @@ class StationParams(Group):
                                         description="Processors")
     bus: BusParams = Field(default_factory=BusParams, description="Data Bus topic sizes")
     stream: StreamParams = Field(default_factory=StreamParams, description="Browser stream")
+    recording: RecordingParams = Field(default_factory=RecordingParams,
+                                       description="Recording (SSL log files)")

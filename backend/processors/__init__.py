@@ -1,10 +1,11 @@
 """The station's processors, one per file: relay ingest, vision ingest, referee ingest, world
-model, strategy, control, the internal referee and command publishing. Each is a
-``backend.processor.Processor``; path following is in ``backend/control/follow.py``."""
+model, strategy, control, the internal referee, command publishing and the log player's feed.
+Each is a ``backend.processor.Processor``; path following is in ``backend/control/follow.py``."""
 
 from .common import LatencyStage
 from .control import ControlProcessor
 from .internal_referee import InternalRefereeProcessor
+from .player import PlayerFeed
 from .publisher import CommandPublisher
 from .referee import RefereeIngest
 from .relay_ingest import RelayIngest
@@ -13,4 +14,5 @@ from .vision import VisionIngest
 from .world import WorldProcessor
 
 __all__ = ["CommandPublisher", "ControlProcessor", "InternalRefereeProcessor", "LatencyStage",
-           "RefereeIngest", "RelayIngest", "StrategyProcessor", "VisionIngest", "WorldProcessor"]
+           "PlayerFeed", "RefereeIngest", "RelayIngest", "StrategyProcessor", "VisionIngest",
+           "WorldProcessor"]

@@ -54,6 +54,9 @@ class ControlProcessor(Processor):
         self.may_drive_other_team: Callable[[], bool] = lambda: False
         self._last_tick = time.monotonic()
         self.halt_reason = ""
+        #: in replay, the log's time at the playhead (Unix ns): vision is as old as the log
+        #: says, whatever the speed and also while paused
+        self.replay_clock: Callable[[], int] | None = None
 
     def active_referee(self) -> RefereeState | None:
         """The referee the robots obey: the newest state, except the internal referee's own
@@ -72,8 +75,10 @@ class ControlProcessor(Processor):
         rec = self.world.latest()
         if rec is None:
             return math.inf
-        age = now_mono - rec.time_mono
         recv_ns = rec.value.receive_time_ns
+        if self.replay_clock is not None:
+            return (self.replay_clock() - recv_ns) / 1e9 if recv_ns > 0 else math.inf
+        age = now_mono - rec.time_mono
         if recv_ns > 0:
             age = max(age, (time.time_ns() - recv_ns) / 1e9)
         return age

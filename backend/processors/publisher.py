@@ -39,8 +39,23 @@ class CommandPublisher(SocketProcessor):
         self.estop_by: Callable[[], str] = lambda: ""
         self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
         self._release_until = -1e9  # a release is being repeated until the relay confirms
+        #: True while a log is replayed: nothing goes to robots or a simulator (the strategy
+        #: and controllers may run on the replay; their commands are shown, never sent)
+        self.muted: Callable[[], bool] = lambda: False
+        self._was_muted = False
 
     async def tick(self) -> None:
+        if self.muted():
+            self.reader.read_new()
+            self.sim_reader.read_new()
+            self.referee_out_reader.read_new()
+            if not self._was_muted:  # into replay: every live robot stops now, not 0.1 s later
+                self._was_muted = True
+                stop = tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True)
+                await self.sock.send_multipart([b"commands", stop.SerializeToString()])
+            await self._estop_latch()
+            return
+        self._was_muted = False
         for cs in self.reader.read_new():
             self.seq += 1
             msg = tl.RobotCommandSet(

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import zmq
 import zmq.asyncio
 from google.protobuf.message import DecodeError
 
+from ssllog.format import TYPE_REFEREE_2013, TYPE_VISION_2014
 from sslnet import streams
 from sslnet.streams import StreamCounter
 from sslpb import touchline_pb2 as tl
@@ -30,6 +32,11 @@ class RelayIngest(SocketProcessor):
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
         self.counters = {"zmq": StreamCounter("zmq")}
+        #: False while a log is replayed: live datagrams are then not fed to the pipeline
+        #: (they are still recorded)
+        self.live: Callable[[], bool] = lambda: True
+        #: every live vision (type 4) and referee (type 3) datagram with its receive time
+        self.record: Callable[[int, int, bytes], None] = lambda t, k, b: None
 
     async def wait_input(self) -> None:
         await self.sock.poll()
@@ -67,9 +74,13 @@ class RelayIngest(SocketProcessor):
             badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, exc)
             return
         if topic == b"vision":
-            self.vision_packets.write(env)
+            self.record(env.receive_time_ns, TYPE_VISION_2014, env.payload)
+            if self.live():
+                self.vision_packets.write(env)
         elif topic == b"referee":
-            self.referee_packets.write(env)
+            self.record(env.receive_time_ns, TYPE_REFEREE_2013, env.payload)
+            if self.live():
+                self.referee_packets.write(env)
 
 
 def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:

@@ -28,6 +28,7 @@ class WorldProcessor(Processor):
         self.geometry = bus.of(topics.GEOMETRY)
         self._geometry_seq = -1
         self.model = model or WorldModel()
+        self._params: StationParams | None = None
         self.latency = LatencyStage()  # relay arrival -> world written
         self._rejected_total = 0
         # (monotonic time, counts by reason) when the counts changed, the last 10 s
@@ -55,7 +56,17 @@ class WorldProcessor(Processor):
             self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
                                  g["boundary_width"])
 
+    def reset(self) -> None:
+        """A fresh world model (time jumped: a replay was opened or seeked, or went live),
+        configured as the old one and told the field again."""
+        self.reader.read_new()  # frames of before the jump are not merged
+        self.model = WorldModel()
+        if self._params is not None:
+            self.configure(self._params)
+        self._geometry_seq = -1
+
     def configure(self, params: StationParams) -> None:
+        self._params = params
         w, wc = params.world, self.model.config
         wc.merge_window_s = w.merge_window_s
         wc.predict_after_s = w.predict_after_s

@@ -1,0 +1,1 @@
+"""Replay: recorded sessions (SSL log files) fed through the station's pipeline."""

@@ -1,0 +1,54 @@
+"""HTTP routes of the log player (docs/api.md, "Replay"): GET/POST /api/player, GET /api/logs."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fastapi import APIRouter
+from fastapi.responses import JSONResponse
+
+from .. import contract
+from ..contract import PlayerIn
+from .player import PlayerError
+
+if TYPE_CHECKING:
+    from ..station import Station
+
+
+def player_routes(api: APIRouter, st: Station) -> None:
+    @api.get("/player")
+    async def player_get() -> contract.Player:
+        return await st.read(st.player_view)
+
+    @api.post("/player", response_model=None)
+    async def player_post(body: PlayerIn) -> contract.Player | JSONResponse:
+        """One action on the player; a refused one is answered with the reason: 422 for a
+        value that can never work (a path outside the log folders, a speed out of range),
+        409 for one that cannot now (no log open, nothing to jump to)."""
+        p = st.player
+        try:
+            if body.action == "open":
+                return await st.open_log(body.path)
+            if body.action == "live":
+                await st.call(st.player_command, p.live)
+            elif body.action == "play":
+                await st.call(st.player_command, p.play, body.speed)
+            elif body.action == "pause":
+                await st.call(st.player_command, p.pause)
+            elif body.action == "seek":
+                await st.call(st.player_command, p.seek, body.position_s)
+            elif body.action == "step":
+                await st.call(st.player_command, p.step, body.frames)
+            elif body.action == "jump":
+                await st.call(st.player_command, p.jump, body.kind, body.direction)
+        except PlayerError as exc:
+            status = 409 if st.player.log is None or body.action == "jump" else 422
+            if body.action == "open":
+                status = 422
+            return JSONResponse(status_code=status, content={"detail": [
+                {"loc": ["body", body.action], "msg": str(exc), "type": "player"}]})
+        return await st.read(st.player_view)
+
+    @api.get("/logs")
+    async def logs() -> contract.LogList:
+        return await st.read(st.log_folders.listing)

@@ -1,0 +1,189 @@
+"""The log player on a real log file (written with LogWriter, opened with LogFile), its clock
+driven by hand: what is emitted when, seek with pre-roll, frame steps, jumps, the end."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from backend.replay.player import PREROLL_S, LogPlayer, PlayerError
+from ssllog.format import TYPE_REFEREE_2013, TYPE_VISION_2014
+from ssllog.logfile import LogFile
+from ssllog.reader import Record
+from ssllog.writer import LogWriter
+from sslpb import ssl_gc_referee_message_pb2, ssl_vision_wrapper_pb2
+
+S = 1_000_000_000
+T0 = 1_700_000_000 * S
+FRAME = S // 60
+Referee = ssl_gc_referee_message_pb2.Referee
+
+
+def _wrapper(frame: int) -> bytes:
+    w = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
+    d = w.detection
+    d.frame_number, d.camera_id = frame, 0
+    d.t_capture = d.t_sent = (T0 + frame * FRAME) / S
+    return w.SerializeToString()
+
+
+def _referee(counter: int, command: int) -> bytes:
+    r = Referee(packet_timestamp=1, stage=Referee.NORMAL_FIRST_HALF, command=command,
+                command_counter=counter, command_timestamp=1)
+    for info in (r.yellow, r.blue):
+        info.name, info.score, info.red_cards, info.yellow_cards = "x", 0, 0, 0
+        info.timeouts, info.timeout_time, info.goalkeeper = 0, 0, 0
+    return r.SerializeToString()
+
+
+@pytest.fixture
+def log(tmp_path: Path) -> LogFile:
+    """3 s: one camera at 60 Hz, the referee at 10 Hz: HALT, STOP at 1 s, FORCE_START at 2 s."""
+    path = tmp_path / "t.log"
+    w = LogWriter(str(path))
+    for i in range(181):
+        t = T0 + i * FRAME
+        w.write(t, TYPE_VISION_2014, _wrapper(i))
+        if i % 6 == 0:
+            cmd, counter = ((Referee.HALT, 1) if i < 60 else
+                            (Referee.STOP, 2) if i < 120 else (Referee.FORCE_START, 3))
+            w.write(t + 1000, TYPE_REFEREE_2013, _referee(counter, cmd))
+    w.finish()
+    return LogFile.open(str(path), tmp_path / "cache")
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+class Harness:
+    def __init__(self, log: LogFile) -> None:
+        self.clock = Clock()
+        self.out: list[Record] = []
+        self.resets = 0
+        self.player = LogPlayer(self.out.append, self._reset, self.clock)
+        self.player.attach(log)
+
+    def _reset(self) -> None:
+        self.resets += 1
+
+    def drain(self) -> None:
+        """Emits what is due until nothing is (as the feed does, a batch a wake-up)."""
+        for _ in range(10_000):
+            batch = self.player.due()
+            if not batch:
+                return
+            self.player.emit(batch)
+        raise AssertionError("the player never ran dry")
+
+    def vision_times(self) -> list[int]:
+        return [r.time_ns for r in self.out if r.type == TYPE_VISION_2014]
+
+
+def test_open_shows_the_first_frame_paused(log: LogFile) -> None:
+    h = Harness(log)
+    h.drain()
+    assert h.vision_times() == [T0]
+    assert not h.player.playing and h.player.position_s() == 0.0
+    assert h.player.wait_s() is None  # paused: the feed sleeps until woken
+    v = h.player.view()
+    assert v["source"] == "log" and v["duration_s"] == pytest.approx(3.0, abs=0.01)
+    assert [e["label"] for e in v["events"] if e["kind"] == "command"][:3] == [
+        "HALT", "STOP", "FORCE_START"]
+
+
+def test_play_emits_on_the_log_clock_at_any_speed(log: LogFile) -> None:
+    h = Harness(log)
+    h.drain()
+    h.player.play(2.0)
+    h.clock.t += 0.25  # 0.5 s of log at 2x
+    h.drain()
+    assert h.vision_times()[-1] == T0 + 30 * FRAME
+    assert h.player.now_ns() == T0 + S // 2
+    wait = h.player.wait_s()
+    assert wait is not None and 0 < wait <= FRAME / S / 2 + 1e-9
+
+
+def test_as_fast_as_possible_plays_to_the_end_and_stops(log: LogFile) -> None:
+    h = Harness(log)
+    h.player.play(0)
+    h.drain()
+    assert len(h.vision_times()) == 181
+    assert not h.player.playing
+    assert h.player.position_s() == pytest.approx(h.player.duration_s())
+    h.player.play(1.0)  # at the end: plays again from the start
+    assert h.player.position_s() == 0.0
+
+
+def test_seek_resets_and_prerolls_to_the_position(log: LogFile) -> None:
+    h = Harness(log)
+    h.drain()
+    epoch, resets = h.player.epoch, h.resets
+    h.out.clear()
+    h.player.seek(1.5)
+    h.drain()
+    times = h.vision_times()
+    assert h.player.epoch == epoch + 1 and h.resets == resets + 1
+    assert times[0] >= T0 + int((1.5 - PREROLL_S) * S) - FRAME
+    assert times[-1] <= T0 + int(1.5 * S) and T0 + int(1.5 * S) - times[-1] < FRAME
+    assert h.player.position_s() == pytest.approx(1.5)
+    assert not h.player.playing
+
+
+def test_steps_one_camera_frame_forward_and_back(log: LogFile) -> None:
+    h = Harness(log)
+    h.player.seek(1.0)
+    h.drain()
+    here = h.vision_times()[-1]
+    h.player.step(1)
+    h.drain()
+    assert h.vision_times()[-1] == here + FRAME
+    assert h.player.now_ns() == here + FRAME
+    h.player.step(3)
+    h.drain()
+    assert h.player.now_ns() == here + 4 * FRAME
+    h.player.step(-2)
+    h.drain()
+    assert h.player.now_ns() == here + 2 * FRAME
+    assert h.vision_times()[-1] == here + 2 * FRAME
+
+
+def test_jumps_to_referee_commands(log: LogFile) -> None:
+    h = Harness(log)
+    h.drain()
+    assert h.player.jump("command", "next") == pytest.approx(1.0, abs=0.02)
+    assert h.player.jump("command", "next") == pytest.approx(2.0, abs=0.02)
+    with pytest.raises(PlayerError, match="no next command"):
+        h.player.jump("command", "next")
+    assert h.player.jump("command", "prev") == pytest.approx(1.0, abs=0.02)
+    with pytest.raises(PlayerError, match="no next goal"):
+        h.player.jump("goal", "next")
+
+
+@pytest.mark.parametrize("speed", [-1.0, 0.05, 11.0, float("nan"), float("inf")])
+def test_bad_speed_refused_with_reason(log: LogFile, speed: float) -> None:
+    h = Harness(log)
+    with pytest.raises(PlayerError, match="speed must be"):
+        h.player.play(speed)
+    assert not h.player.playing
+
+
+def test_seek_outside_the_log_refused(log: LogFile) -> None:
+    h = Harness(log)
+    with pytest.raises(PlayerError, match="past the end"):
+        h.player.seek(10.0)
+    with pytest.raises(PlayerError):
+        h.player.seek(-1.0)
+
+
+def test_live_detaches(log: LogFile) -> None:
+    h = Harness(log)
+    h.player.live()
+    assert h.player.source == "live" and h.player.clock() is None
+    with pytest.raises(PlayerError, match="no log is open"):
+        h.player.play(1.0)
