@@ -52,3 +52,8 @@ class LogWriter:
         self._f.write(RECORD_HEADER.pack(0, TYPE_INDEX_2021, size))
         self._f.write(body + struct.pack(">q", back) + INDEX_TRAILER)
         self._f.close()
+
+    def close_unfinished(self) -> None:
+        """Closes the file without an index (after a write error: the file is read up to its
+        last complete record)."""
+        self._f.close()
