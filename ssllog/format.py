@@ -20,6 +20,15 @@ TYPE_VISION_2014: Final = 4
 TYPE_TRACKER_2020: Final = 5
 TYPE_INDEX_2021: Final = 6
 KNOWN_TYPES: Final = frozenset(range(7))
+
+# Touchline's own record types (docs/logformat.md). The league's tools (ssl-go-tools) skip
+# types they do not know, so a Touchline log still plays in the league's log player.
+TYPE_TL_COMMANDS: Final = 1001  # touchline.RobotCommandSet protobuf: the commands sent
+TYPE_TL_PARAMS: Final = 1002  # UTF-8 JSON {"version", "changes", "by"}
+TYPE_TL_ACTION: Final = 1003  # UTF-8 JSON {"action", "by", ...details}: an operator action
+TYPE_TL_HEALTH: Final = 1004  # UTF-8 JSON: the station's health, once a second
+TYPE_TL_SESSION: Final = 1005  # UTF-8 JSON, first in each file: {"touchline": 1, ...}
+TOUCHLINE_TYPES: Final = frozenset(range(1001, 1006))
 INDEX_TRAILER: Final = b"INDEXED"
 # a payload larger than this is taken as corruption, not data
 MAX_PAYLOAD: Final = 64 * 1024 * 1024

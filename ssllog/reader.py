@@ -16,6 +16,7 @@ from ssllog.format import (
     MAX_PAYLOAD,
     RECORD_HEADER,
     RECORD_HEADER_SIZE,
+    TOUCHLINE_TYPES,
     TYPE_INDEX_2021,
 )
 
@@ -92,7 +93,7 @@ class LogReader:
                 return
             if rtype == TYPE_INDEX_2021:
                 self.index_offsets = _parse_index(payload, offset)
-            elif rtype not in KNOWN_TYPES:
+            elif rtype not in KNOWN_TYPES and rtype not in TOUCHLINE_TYPES:
                 self.unknown_types[rtype] += 1
             else:
                 yield Record(offset, time_ns, rtype, payload)

@@ -18,8 +18,12 @@ from ssllog.format import (
 class LogWriter:
     """Appends records; flushes at least once per second of data (crash safety)."""
 
-    def __init__(self, path: str, flush_interval_ns: int = 1_000_000_000) -> None:
-        self._f: BinaryIO = open(path, "xb")  # noqa: SIM115 - kept open until finish(); never overwrites
+    def __init__(self, path: str, flush_interval_ns: int = 1_000_000_000,
+                 *, file: BinaryIO | None = None) -> None:
+        """``file``: an already open binary file to write into (tests use one that fails or
+        blocks); without it ``path`` is created, never overwritten."""
+        # kept open until finish(); "x" never overwrites
+        self._f: BinaryIO = file if file is not None else open(path, "xb")  # noqa: SIM115
         self._f.write(file_header())
         self._offset = len(file_header())
         self._offsets: list[int] = []
@@ -47,4 +51,9 @@ class LogWriter:
         back = RECORD_HEADER_SIZE + size
         self._f.write(RECORD_HEADER.pack(0, TYPE_INDEX_2021, size))
         self._f.write(body + struct.pack(">q", back) + INDEX_TRAILER)
+        self._f.close()
+
+    def close_unfinished(self) -> None:
+        """Closes the file without an index (after a write error: the file is read up to its
+        last complete record)."""
         self._f.close()

@@ -1,0 +1,81 @@
+"""The world estimate as tracked vision: units, team numbers, visibility, round trip."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from backend.world.state import BallState, RobotState, WorldState
+from backend.world.tracked import tracked_packet
+from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
+from tests.wire import read_fields
+
+
+def world() -> WorldState:
+    return WorldState(
+        t_capture=1700000000.25,
+        receive_time_ns=1700000000_300_000_000,
+        ball=BallState(x=1500.0, y=-250.0, vx=2000.0, vy=-500.0),
+        robots=(
+            RobotState("yellow", 3, x=-1000.0, y=2000.0, orientation=1.5, vx=100.0, vy=-300.0,
+                       omega=-2.0),
+            RobotState("blue", 7, x=500.0, y=0.0, orientation=-math.pi / 2, predicted=True),
+            RobotState("blue", 0, x=0.0, y=0.0, orientation=0.0, visible=False, lost=True),
+        ),
+    )
+
+
+def decode(data: bytes) -> TrackerWrapperPacket:
+    p = TrackerWrapperPacket()
+    p.ParseFromString(data)
+    assert p.IsInitialized()
+    return p
+
+
+def test_values_are_converted_to_metres() -> None:
+    p = decode(tracked_packet(world(), "station-1", 42))
+    assert (p.uuid, p.source_name) == ("station-1", "Touchline")
+    f = p.tracked_frame
+    assert f.frame_number == 42 and f.timestamp == 1700000000.25
+    [b] = f.balls
+    assert (b.pos.x, b.pos.y, b.pos.z) == pytest.approx((1.5, -0.25, 0.0))
+    assert (b.vel.x, b.vel.y, b.vel.z) == pytest.approx((2.0, -0.5, 0.0))
+    assert b.visibility == 1.0
+    y3 = f.robots[0]
+    assert (y3.robot_id.id, y3.robot_id.team) == (3, 1)  # YELLOW = 1
+    assert (y3.pos.x, y3.pos.y) == pytest.approx((-1.0, 2.0))
+    assert (y3.vel.x, y3.vel.y) == pytest.approx((0.1, -0.3))
+    assert y3.orientation == pytest.approx(1.5) and y3.vel_angular == pytest.approx(-2.0)
+    assert y3.visibility == 1.0
+    b7 = f.robots[1]
+    assert (b7.robot_id.id, b7.robot_id.team) == (7, 2)  # BLUE = 2
+    assert b7.orientation == pytest.approx(-math.pi / 2)
+    assert b7.visibility == 0.5  # extrapolated
+    assert f.robots[2].visibility == 0.0  # lost
+    assert list(f.capabilities) == [] and not f.HasField("kicked_ball")
+
+
+def test_team_numbers_on_the_wire() -> None:
+    """RobotId.team is field 2 of RobotId (field 1 of TrackedRobot, field 4 of the frame)."""
+    data = tracked_packet(world(), "u", 1, source_name="x")
+    frame = next(v for n, _, v in read_fields(data) if n == 3)
+    assert isinstance(frame, bytes)
+    robots = [v for n, _, v in read_fields(frame) if n == 4]
+    teams = []
+    for r in robots:
+        assert isinstance(r, bytes)
+        rid = next(v for n, _, v in read_fields(r) if n == 1)
+        assert isinstance(rid, bytes)
+        teams.append(dict((n, v) for n, _, v in read_fields(rid)))
+    assert teams == [{1: 3, 2: 1}, {1: 7, 2: 2}, {1: 0, 2: 2}]
+
+
+def test_round_trip_and_no_ball() -> None:
+    w = WorldState(t_capture=5.0, receive_time_ns=0, ball=None, robots=())
+    data = tracked_packet(w, "u", 0, source_name="Touchline test")
+    p = decode(data)
+    assert len(p.tracked_frame.balls) == 0 and p.source_name == "Touchline test"
+    assert p.SerializeToString() == data
+    full = tracked_packet(world(), "u", 9)
+    assert decode(full).SerializeToString() == full
