@@ -32,7 +32,7 @@ from .contract import (
 from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
-from .replay.routes import player_routes
+from .replay.routes import player_routes, recording_routes
 from .security import EdgeGuard
 from .station import Station
 from .world.state import Team
@@ -122,32 +122,43 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                                        "type": "other_team"}])
 
     @api.post("/robots/{team}/{rid}/target")
-    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn) -> contract.TargetAnswer:
+    async def set_target(team: TeamParam, rid: IdParam, body: TargetIn,
+                         request: Request) -> contract.TargetAnswer:
         _check_team(team, rid)
         await _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
+        await st.call(st.operator_action, "target", _who(request),
+                      {"team": team, "id": rid, "x": body.x, "y": body.y,
+                       "orientation": body.orientation})
         return {"team": team, "id": rid,
                 "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
 
     @api.delete("/robots/{team}/{rid}/target")
-    async def clear_target(team: TeamParam, rid: IdParam) -> contract.TargetAnswer:
+    async def clear_target(team: TeamParam, rid: IdParam,
+                           request: Request) -> contract.TargetAnswer:
         await st.call(st.clear_target, team, rid)
+        await st.call(st.operator_action, "clear-target", _who(request),
+                      {"team": team, "id": rid})
         return {"team": team, "id": rid, "target": None}
 
     @api.post("/sim/ball")
-    async def teleport_ball(body: TeleportBallIn) -> dict[str, Any]:
+    async def teleport_ball(body: TeleportBallIn, request: Request) -> dict[str, Any]:
         _check_simulator()
         await _check_on_field(body.x, body.y)
         await st.call(st.teleport_ball, body.x, body.y, body.vx, body.vy)
+        await st.call(st.operator_action, "teleport-ball", _who(request),
+                      body.model_dump())
         return {"ball": body.model_dump()}
 
     @api.post("/sim/robots/{team}/{rid}")
     async def teleport_robot(team: TeamParam, rid: IdParam,
-                             body: TeleportRobotIn) -> dict[str, Any]:
+                             body: TeleportRobotIn, request: Request) -> dict[str, Any]:
         _check_simulator()
         await _check_on_field(body.x, body.y)
         await st.call(st.teleport_robot, team, rid, body.x, body.y, body.orientation,
                       body.present)
+        await st.call(st.operator_action, "teleport-robot", _who(request),
+                      {"team": team, "id": rid, **body.model_dump()})
         return {"team": team, "id": rid, **body.model_dump()}
 
     @api.get("/strategy")
@@ -163,15 +174,19 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                                 what="referee")
 
     @api.post("/referee/internal/enabled", response_model=None)
-    async def referee_enable(body: EnableIn) -> contract.RefereeView | JSONResponse:
+    async def referee_enable(body: EnableIn,
+                             request: Request) -> contract.RefereeView | JSONResponse:
         try:
             await st.call(st.internal_referee.enable, body.enabled)
         except RefereeCommandError as exc:
             return JSONResponse(status_code=409, content={"detail": str(exc)})
+        await st.call(st.operator_action, "internal-referee", _who(request),
+                      {"enabled": body.enabled})
         return await st.call(st.referee_view)
 
     @api.post("/referee/internal/command", response_model=None)
-    async def referee_command(body: RefereeCommandIn) -> contract.RefereeView | JSONResponse:
+    async def referee_command(body: RefereeCommandIn,
+                              request: Request) -> contract.RefereeView | JSONResponse:
         dp = body.designated_position
         if dp is not None:
             await _check_on_field(dp.x, dp.y)
@@ -187,11 +202,15 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             return JSONResponse(status_code=422, content={"detail": [
                 {"loc": ["body", "command"], "msg": str(exc), "type": "value_error"}]})
         await st.call(st.internal_referee.enable, True)
+        await st.call(st.operator_action, "referee", _who(request),
+                      {"command": body.command,
+                       "designated_position": None if dp is None else {"x": dp.x, "y": dp.y}})
         log.info("internal referee: %s", body.command)
         return await st.call(st.referee_view)
 
     @api.post("/referee/internal/card", response_model=None)
-    async def referee_card(body: CardIn) -> contract.RefereeView | JSONResponse:
+    async def referee_card(body: CardIn,
+                           request: Request) -> contract.RefereeView | JSONResponse:
         other = st.internal_referee.foreign_active()
         if other is not None:
             return JSONResponse(status_code=409, content={
@@ -199,6 +218,8 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
                           "stays off"})
         await st.call(st.give_card, body.team, body.card)
         await st.call(st.internal_referee.enable, True)
+        await st.call(st.operator_action, "card", _who(request),
+                      {"team": body.team, "card": body.card})
         log.info("internal referee: %s card for %s", body.card, body.team)
         return await st.call(st.referee_view)
 
@@ -223,6 +244,8 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
             await st.call(st.set_estop, False, f"operator at {client}")
             log.warning("emergency stop RELEASED by %s (pressed by %s)%s", client, was.by,
                         f": {body.reason}" if body.reason else "")
+        await st.call(st.operator_action, "estop" if body.active else "estop-release",
+                      f"operator at {client}", {"reason": body.reason})
         return {"estop": body.active, **await st.call(st.estop_view)}
 
     @api.websocket("/ws")
@@ -239,9 +262,15 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
 
     _params_routes(api, st)
     player_routes(api, st)
+    recording_routes(api, st)
     app.include_router(api)
     _mount_frontend(app, settings.static_dir)
     return app
+
+
+def _who(request: Request) -> str:
+    """Who did it, for the session log: the client's address (issue 12 adds names)."""
+    return f"operator at {request.client.host}" if request.client else "operator"
 
 
 async def _json_body(request: Request) -> Any:
@@ -274,7 +303,10 @@ def _params_routes(api: APIRouter, st: Station) -> None:
 
     @api.patch("/params")
     async def params_patch(request: Request) -> contract.ParamsState:
-        store.patch(await _json_body(request))
+        body = await _json_body(request)
+        store.patch(body)
+        await st.call(st.operator_action, "params", _who(request),
+                      {"changes": body})
         log.info("parameters changed to version %d", store.version)
         return await _applied()
 

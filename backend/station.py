@@ -11,6 +11,7 @@ import logging
 import sys
 import threading
 import time
+import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -19,6 +20,7 @@ from typing import Any, TypeVar, cast
 import zmq
 import zmq.asyncio
 
+from ssllog.format import TYPE_TL_ACTION, TYPE_TL_HEALTH, TYPE_TL_PARAMS, TYPE_TRACKER_2020
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
@@ -31,7 +33,7 @@ from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .params.model import StationParams, StrategyParams
-from .params.store import ParamStore, deep_merge, parse_setting
+from .params.store import ParamStore, deep_merge, diff, parse_setting
 from .processor import Every, Processor, Runner
 from .processors import (
     CommandPublisher,
@@ -44,11 +46,13 @@ from .processors import (
     VisionIngest,
     WorldProcessor,
 )
+from .recorder import SessionRecorder
 from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
 from .replay.logs import LogFolders, open_log_file
 from .replay.player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
-from .world.state import Team
+from .world.state import Team, WorldState
+from .world.tracked import tracked_packet
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
@@ -92,6 +96,32 @@ class ViewPublisher(Processor):
 
     async def tick(self) -> None:
         self.station.publish_views()
+
+
+class RecordingProcessor(Processor):
+    """What the recorder takes besides datagrams and commands: the station's health once a
+    second, and the game stage (a new file per stage)."""
+
+    name = "recording"
+
+    def __init__(self, station: Station) -> None:
+        super().__init__(Every(10.0))
+        self.station = station
+        self._next_health = 0.0
+
+    async def tick(self) -> None:
+        st = self.station
+        rec = st.recorder
+        if rec is None or st.player.log is not None:
+            return
+        ref = st.referee_topic.latest_value()
+        if ref is not None and ref.stage:
+            rec.stage(ref.stage)
+        now = time.monotonic()
+        if now >= self._next_health:
+            self._next_health = now + 1.0
+            rec.record(time.time_ns(), TYPE_TL_HEALTH,
+                       dumps(st.health(), "health").encode())
 
 
 class Station:
@@ -169,11 +199,17 @@ class Station:
         self._replay_seq = 0
         self.ingest.live = lambda: self.player.log is None
         self.publisher.muted = lambda: self.player.log is not None
+        # the session recorder: made in start() (it opens a file), closed in stop()
+        self.recorder: SessionRecorder | None = None
+        self._tracker_uuid = uuid.uuid4().hex
+        self._tracked_frames = 0
+        self._params_recorded: dict[str, Any] | None = None
         self.views = Views()
         self._view_listeners: set[Callable[[], None]] = set()
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.strategy,
-            self.control, self.internal_referee, self.publisher, ViewPublisher(self))
+            self.control, self.internal_referee, self.publisher, ViewPublisher(self),
+            RecordingProcessor(self))
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
     # web traffic (JSON encoding, websocket sends) never delays control ----
@@ -276,6 +312,14 @@ class Station:
         self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"]))
         self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
+        rp = prm.recording
+        self.recorder = SessionRecorder(
+            self._recording_folder(), enabled=self._record_wanted(prm),
+            max_bytes=rp.max_mb << 20, rotate_on_stage=rp.rotate_on_stage,
+            our_team=prm.team.our_team)
+        self.ingest.record = self.recorder.record
+        self.publisher.record = self.recorder.record
+        self.world.on_world = self._record_world
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
@@ -295,6 +339,7 @@ class Station:
         for proc in self.processors:
             proc.configure(p)
         self._configure_engine(p.strategy)
+        self._configure_recorder(p, version)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         sized = {s.name: s for s in topics.ALL}
@@ -439,6 +484,62 @@ class Station:
                  log_.path, self.player.duration_s())
         self.publish_views(force=True)
 
+    # ---- the session recorder ----
+
+    def _record_wanted(self, p: StationParams) -> bool:
+        """Records live sessions unless told not to (the parameter, --no-record), when
+        replaying from the command line, or for a station that keeps no state (tests)."""
+        return (p.recording.enabled and self.settings.record and self.settings.log is None
+                and (self.settings.state_dir is not None or bool(p.recording.folder)))
+
+    def _configure_recorder(self, p: StationParams, version: int) -> None:
+        rec = self.recorder
+        if rec is None:
+            return
+        rec.max_bytes = p.recording.max_mb << 20
+        rec.rotate_on_stage = p.recording.rotate_on_stage
+        rec.our_team = p.team.our_team
+        folder = self._recording_folder()
+        if folder != Path(rec.status()["folder"]):
+            rec.set_folder(folder)
+        rec.set_enabled(self._record_wanted(p))
+        values = p.model_dump(mode="json")
+        changes = values if self._params_recorded is None else \
+            diff(self._params_recorded, values)
+        self._params_recorded = values
+        if changes:
+            rec.record(time.time_ns(), TYPE_TL_PARAMS, dumps(
+                {"version": version, "changes": changes, "by": ""}, "params").encode())
+
+    def _record_world(self, world: WorldState) -> None:
+        """The world estimate of every tick, as the league's tracked vision (type 5)."""
+        rec = self.recorder
+        if rec is None or self.player.log is not None:
+            return
+        self._tracked_frames += 1
+        rec.record(world.receive_time_ns or time.time_ns(), TYPE_TRACKER_2020,
+                   tracked_packet(world, self._tracker_uuid, self._tracked_frames))
+
+    def operator_action(self, action: str, by: str = "",
+                        details: dict[str, Any] | None = None) -> None:
+        """Records an operator's action (target, e-stop, play, referee, teleport) in the
+        session log, with who and when."""
+        if self.recorder is not None:
+            body = {"action": action, "by": by, "time_unix": time.time(), **(details or {})}
+            self.recorder.record(time.time_ns(), TYPE_TL_ACTION,
+                                 dumps(body, "action").encode())
+
+    def recorder_command(self, action: str) -> contract.Recording:
+        """The page's recording buttons: a new file now, or recording on/off (the parameter,
+        persisted, so the next start does the same)."""
+        if action == "new-file":
+            if self.recorder is None or not self.recorder.status()["recording"]:
+                raise ValueError("not recording: start recording first")
+            self.recorder.new_file("operator")
+        else:
+            self.params.patch({"recording": {"enabled": action == "start"}})
+        return self.recording_status()
+
     async def stop(self) -> None:
         if self._opening is not None:
             self._opening.cancel()
@@ -459,6 +560,8 @@ class Station:
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None
+        if self.recorder is not None:  # what is queued is written, the file gets its index
+            await asyncio.to_thread(self.recorder.close)
 
     # ---- commands from the API (written onto the bus; processors apply them) ----
 
@@ -575,9 +678,16 @@ class Station:
         return views.estop_view(self)
 
     def recording_status(self) -> contract.Recording:
-        return {"enabled": False, "recording": False, "file": "",
-                "folder": str(self._recording_folder()), "size_bytes": 0, "duration_s": 0.0,
-                "records": 0, "dropped": 0, "error": ""}
+        if self.recorder is None:
+            return {"enabled": False, "recording": False, "file": "",
+                    "folder": str(self._recording_folder()), "size_bytes": 0,
+                    "duration_s": 0.0, "records": 0, "dropped": 0, "error": ""}
+        s = self.recorder.status()
+        return {"enabled": bool(s["enabled"]), "recording": bool(s["recording"]),
+                "file": str(s["file"]), "folder": str(s["folder"]),
+                "size_bytes": int(s["size_bytes"]), "duration_s": float(s["duration_s"]),
+                "records": int(s["records"]), "dropped": int(s["dropped"]),
+                "error": str(s["error"] or "")}
 
     def world_version(self) -> tuple[object, ...]:
         """Changes whenever the world message would: a new world, a referee message, the

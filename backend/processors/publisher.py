@@ -8,6 +8,7 @@ from collections.abc import Callable
 import zmq
 import zmq.asyncio
 
+from ssllog.format import TYPE_TL_COMMANDS
 from sslnet.rate import RateCounter
 from sslpb import touchline_pb2 as tl
 
@@ -42,6 +43,8 @@ class CommandPublisher(SocketProcessor):
         #: True while a log is replayed: nothing goes to robots or a simulator (the strategy
         #: and controllers may run on the replay; their commands are shown, never sent)
         self.muted: Callable[[], bool] = lambda: False
+        #: every command set sent (the session recorder)
+        self.record: Callable[[int, int, bytes], None] = lambda t, k, b: None
         self._was_muted = False
 
     async def tick(self) -> None:
@@ -75,7 +78,9 @@ class CommandPublisher(SocketProcessor):
                     chip=c.chip,
                     dribbler_rpm=c.dribbler_rpm,
                 )
-            await self.sock.send_multipart([b"commands", msg.SerializeToString()])
+            raw = msg.SerializeToString()
+            await self.sock.send_multipart([b"commands", raw])
+            self.record(time.time_ns(), TYPE_TL_COMMANDS, raw)
             self.sent.add()
             self.latency.add_since(cs.source_receive_time_ns)
         for raw in self.sim_reader.read_new():

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from collections.abc import Callable
 
 from .. import topics
 from ..bus import DataBus, Reader
 from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.model import WorldModel
+from ..world.state import WorldState
 from .common import LatencyStage, badlog
 
 
@@ -29,6 +31,8 @@ class WorldProcessor(Processor):
         self._geometry_seq = -1
         self.model = model or WorldModel()
         self._params: StationParams | None = None
+        #: every world written (the station records it)
+        self.on_world: Callable[[WorldState], None] = lambda w: None
         self.latency = LatencyStage()  # relay arrival -> world written
         self._rejected_total = 0
         # (monotonic time, counts by reason) when the counts changed, the last 10 s
@@ -92,7 +96,9 @@ class WorldProcessor(Processor):
                             "%s", _reasons(self.model.rejected), self.model.last_rejection)
         if not merged:
             return
-        self.world.write(self.model.snapshot())
+        world = self.model.snapshot()
+        self.world.write(world)
+        self.on_world(world)
         for f in merged:
             self.latency.add_since(f.receive_time_ns)
 

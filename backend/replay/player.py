@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
@@ -42,21 +42,27 @@ PREV_EVENT_SLACK_S = 0.5
 
 
 class LogEventLike(Protocol):
-    time_ns: int
-    kind: str
-    label: str
+    @property
+    def time_ns(self) -> int: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def label(self) -> str: ...
 
 
 class LogSource(Protocol):
     """A log opened for random access (``ssllog.logfile.LogFile``)."""
 
-    path: str
-    t_first_ns: int
-    t_last_ns: int
-    warning: str | None
-
     @property
-    def events(self) -> list[LogEventLike]: ...
+    def path(self) -> str: ...
+    @property
+    def t_first_ns(self) -> int: ...
+    @property
+    def t_last_ns(self) -> int: ...
+    @property
+    def warning(self) -> str | None: ...
+    @property
+    def events(self) -> Sequence[LogEventLike]: ...
 
     def offset_at(self, time_ns: int) -> int: ...
 

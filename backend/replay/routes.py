@@ -1,4 +1,5 @@
-"""HTTP routes of the log player (docs/api.md, "Replay"): GET/POST /api/player, GET /api/logs."""
+"""HTTP routes of the log player and the recorder (docs/api.md, "Replay and recording"):
+GET/POST /api/player, GET /api/logs, POST /api/recording."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
 from .. import contract
-from ..contract import PlayerIn
+from ..contract import PlayerIn, RecordingIn
 from .player import PlayerError
 
 if TYPE_CHECKING:
@@ -52,3 +53,13 @@ def player_routes(api: APIRouter, st: Station) -> None:
     @api.get("/logs")
     async def logs() -> contract.LogList:
         return await st.read(st.log_folders.listing)
+
+
+def recording_routes(api: APIRouter, st: Station) -> None:
+    @api.post("/recording", response_model=None)
+    async def recording_post(body: RecordingIn) -> contract.Recording | JSONResponse:
+        """A new file now, or recording on/off (the recording.enabled parameter)."""
+        try:
+            return await st.call(st.recorder_command, body.action)
+        except ValueError as exc:
+            return JSONResponse(status_code=409, content={"detail": str(exc)})
