@@ -37,6 +37,7 @@ INDEX_EVERY = 64  # records between two entries of the sparse index
 GAP_NS = 1_000_000_000  # no vision for longer than this is a gap
 BLOCK = 8 * 1024 * 1024  # bytes read at once by the index pass
 CACHE_VERSION = 1
+GUNZIP_SHARE = 0.7  # of the progress bar, when a gzip file is first copied then indexed
 VISION_TYPES = (TYPE_VISION_2010, TYPE_VISION_2014)
 TYPE_NAMES = {
     0: "blank",
@@ -102,6 +103,14 @@ class _Index:
             warning=d["warning"],
             has_index_record=bool(d["has_index_record"]),
         )
+
+
+def _scaled(progress: Progress | None, lo: float, hi: float) -> Progress | None:
+    """One bar for two passes (gunzip, then index): maps 0..1 onto lo..hi."""
+    if progress is None:
+        return None
+    cb = progress
+    return lambda f: cb(lo + (hi - lo) * f)
 
 
 def cache_key(path: str) -> str:
@@ -390,7 +399,7 @@ class LogFile:
             copy = cache / f"{key}.log"
             done = cache / f"{key}.gunzip.json"
             if not (copy.exists() and done.exists()):
-                gz_warning = _gunzip_copy(path, copy, progress)
+                gz_warning = _gunzip_copy(path, copy, _scaled(progress, 0.0, GUNZIP_SHARE))
                 done.write_text(json.dumps({"warning": gz_warning}))
             else:
                 gz_warning = json.loads(done.read_text())["warning"]
@@ -409,7 +418,8 @@ class LogFile:
             except (ValueError, KeyError, TypeError):
                 index = None
         if index is None:
-            index = build_index(data_path, progress)
+            share = GUNZIP_SHARE if data_path != path else 0.0
+            index = build_index(data_path, _scaled(progress, share, 1.0))
             if gz_warning and not index.warning:
                 index.warning = gz_warning
             tmp = index_file.with_name(index_file.name + f".tmp{os.getpid()}")
