@@ -57,6 +57,7 @@ def referee(t_ns: int, second: int) -> bytes:
     r = Referee()
     r.packet_timestamp = t_ns // 1000
     r.stage = Referee.NORMAL_FIRST_HALF if second < 2700 else Referee.NORMAL_SECOND_HALF
+    r.stage_time_left = (2700 - second % 2700) * 1_000_000
     counter = second // 20
     r.command = COMMANDS[counter % len(COMMANDS)]
     r.command_counter = counter

@@ -47,6 +47,7 @@ def referee(
 ) -> bytes:
     r = Referee()
     r.packet_timestamp = 1
+    r.stage_time_left = 300_000_000  # a real GC always sends it (ssl-log-stats needs it)
     r.stage = stage
     r.command = command
     r.command_counter = counter
