@@ -105,6 +105,22 @@ class _Index:
         )
 
 
+def _read_json(path: Path) -> dict[str, Any] | None:
+    """A cache file, or None if it is missing or unreadable (then the work is done again)."""
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return d if isinstance(d, dict) else None
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    """Temp name, then rename: a reader never sees half a cache file."""
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+    tmp.write_text(json.dumps(data))
+    os.replace(tmp, path)
+
+
 def _scaled(progress: Progress | None, lo: float, hi: float) -> Progress | None:
     """One bar for two passes (gunzip, then index): maps 0..1 onto lo..hi."""
     if progress is None:
@@ -398,33 +414,31 @@ class LogFile:
         if path.endswith("gz"):
             copy = cache / f"{key}.log"
             done = cache / f"{key}.gunzip.json"
-            if not (copy.exists() and done.exists()):
+            marker = _read_json(done) if copy.exists() else None
+            if marker is None or "warning" not in marker:
                 gz_warning = _gunzip_copy(path, copy, _scaled(progress, 0.0, GUNZIP_SHARE))
-                done.write_text(json.dumps({"warning": gz_warning}))
+                _write_json(done, {"warning": gz_warning})
             else:
-                gz_warning = json.loads(done.read_text())["warning"]
+                gz_warning = marker["warning"]
             data_path = str(copy)
         else:
             data_path = path
         index_file = cache / f"{key}.index.json"
         index: _Index | None = None
-        if index_file.exists():
+        d = _read_json(index_file)
+        if d is not None and d.get("version") == CACHE_VERSION:
             try:
-                d = json.loads(index_file.read_text())
-                if d.get("version") == CACHE_VERSION:
-                    index = _Index.from_json(d)
-                    if index.data_size != os.path.getsize(data_path):
-                        index = None
+                index = _Index.from_json(d)
             except (ValueError, KeyError, TypeError):
+                index = None
+            if index is not None and index.data_size != os.path.getsize(data_path):
                 index = None
         if index is None:
             share = GUNZIP_SHARE if data_path != path else 0.0
             index = build_index(data_path, _scaled(progress, share, 1.0))
             if gz_warning and not index.warning:
                 index.warning = gz_warning
-            tmp = index_file.with_name(index_file.name + f".tmp{os.getpid()}")
-            tmp.write_text(json.dumps(index.to_json()))
-            os.replace(tmp, index_file)
+            _write_json(index_file, index.to_json())
         return cls(path, data_path, index)
 
     # --- summary -------------------------------------------------------------------------

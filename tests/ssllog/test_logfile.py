@@ -287,3 +287,35 @@ def test_gzip_of_several_members(tmp_path: Path) -> None:
     gz.write_bytes(gzip.compress(data[:500]) + gzip.compress(data[500:]))
     with LogFile.open(str(gz), tmp_path / "c") as lf:
         assert lf.counts == {4: 50} and lf.warning is None
+
+
+def test_broken_cache_files_are_redone(tmp_path: Path) -> None:
+    gz = tmp_path / "m.log.gz"
+    gz.write_bytes(gzip.compress(vision_log(30)))
+    cache = tmp_path / "c"
+    LogFile.open(str(gz), cache).close()
+    for f in cache.iterdir():
+        if f.suffix == ".json":
+            f.write_text('{"half')
+    calls: list[float] = []
+    with LogFile.open(str(gz), cache, calls.append) as lf:
+        assert lf.counts == {4: 30}
+    assert calls  # done again rather than crashing
+
+
+def test_a_file_written_by_ssl_log_recorder() -> None:
+    """Recorded by ssl-go-tools' ssl-log-recorder (stopped with SIGINT) from multicast
+    packets: 2 cameras at 60 Hz, referee at 10 Hz: HALT, STOP, FORCE_START, a blue goal,
+    DIRECT_FREE_BLUE."""
+    import tempfile
+
+    src = Path(__file__).parent / "data" / "ssl-log-recorder.log.gz"
+    with tempfile.TemporaryDirectory() as cache, LogFile.open(str(src), cache) as lf:
+        assert lf.counts == {3: 35, 4: 422} and lf.warning is None
+        assert lf.cameras == {0: 211, 1: 211}
+        assert [e.label for e in lf.events if e.kind == "command"] == [
+            "HALT", "STOP", "FORCE_START", "DIRECT_FREE_BLUE"]
+        assert [e.label for e in lf.events if e.kind == "goal"] == ["Blu (0:1)"]
+        assert 3.5 < lf.duration_s < 3.6
+        mid = lf.offset_at(lf.t_first_ns + 2 * S)
+        assert lf.read_at(mid).time_ns >= lf.t_first_ns + 2 * S
