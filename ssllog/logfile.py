@@ -36,7 +36,7 @@ Progress = Callable[[float], None]
 INDEX_EVERY = 64  # records between two entries of the sparse index
 GAP_NS = 1_000_000_000  # no vision for longer than this is a gap
 BLOCK = 8 * 1024 * 1024  # bytes read at once by the index pass
-CACHE_VERSION = 1
+CACHE_VERSION = 2  # bumped when the pass learns something new: older caches are redone
 GUNZIP_SHARE = 0.7  # of the progress bar, when a gzip file is first copied then indexed
 VISION_TYPES = (TYPE_VISION_2010, TYPE_VISION_2014)
 TYPE_NAMES = {
@@ -363,8 +363,10 @@ def build_index(data_path: str, progress: Progress | None = None) -> _Index:
                 cam = _camera_id(buf, start, pos)
                 if cam is not None:
                     cameras[cam] = cameras.get(cam, 0) + 1
-                if last_vision is not None and t - last_vision > GAP_NS:
-                    gaps.append((last_vision, t))
+                # a silence before the first frame counts too (from the log's first record)
+                prev = last_vision if last_vision is not None else first_t
+                if prev is not None and t - prev > GAP_NS:
+                    gaps.append((prev, t))
                 last_vision = t
             elif rtype == TYPE_REFEREE_2013:
                 referee.feed(t, buf[start:pos])
@@ -375,7 +377,7 @@ def build_index(data_path: str, progress: Progress | None = None) -> _Index:
     idx.offsets, idx.times = offsets, times
     idx.counts, idx.cameras = counts, cameras
     idx.t_first_ns = first_t if first_t is not None else 0
-    idx.t_last_ns = last_t if last_t >= 0 else idx.t_first_ns
+    idx.t_last_ns = last_t if last_off >= 0 else idx.t_first_ns
     if last_vision is None and first_t is not None and idx.t_last_ns - first_t > GAP_NS:
         gaps.append((first_t, idx.t_last_ns))
     elif last_vision is not None and idx.t_last_ns - last_vision > GAP_NS:

@@ -319,3 +319,15 @@ def test_a_file_written_by_ssl_log_recorder() -> None:
         assert 3.5 < lf.duration_s < 3.6
         mid = lf.offset_at(lf.t_first_ns + 2 * S)
         assert lf.read_at(mid).time_ns >= lf.t_first_ns + 2 * S
+
+
+def test_gaps_at_the_start_and_end_and_without_vision(tmp_path: Path) -> None:
+    ref = referee(1, Referee.HALT)
+    p = tmp_path / "v.log"
+    p.write_bytes(HEAD + rec(T0, 3, ref) + rec(T0 + 2 * S, 4, wrapper(0, 0))
+                  + rec(T0 + 2 * S + 1, 4, wrapper(0, 1)) + rec(T0 + 4 * S, 3, ref))
+    with LogFile.open(str(p), tmp_path / "c") as lf:
+        assert lf.gaps == [(T0, T0 + 2 * S), (T0 + 2 * S + 1, T0 + 4 * S)]
+    p.write_bytes(HEAD + rec(T0, 3, ref) + rec(T0 + 3 * S, 3, ref))
+    with LogFile.open(str(p), tmp_path / "c") as lf:
+        assert lf.gaps == [(T0, T0 + 3 * S)] and lf.cameras == {}
