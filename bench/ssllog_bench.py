@@ -17,6 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from ssllog.__main__ import export_csv
 from ssllog.format import RECORD_HEADER, file_header
 from ssllog.logfile import LogFile, _gunzip_copy
 from sslpb import ssl_gc_referee_message_pb2, ssl_vision_wrapper_pb2
@@ -170,6 +171,11 @@ def main() -> None:
         k = sum(1 for _ in zip(range(100_000), lf.records(lf.offset_at(lf.t_first_ns)),
                                strict=False))
         print(f"records(): {k} records streamed in {(time.perf_counter() - t):.2f} s")
+        t = time.perf_counter()
+        with open(tmp / "x.csv", "w", newline="") as out:
+            rows = export_csv(lf, out, 600.0, 660.0)
+        print(f"export --from 600 --to 660 (60 s of log): {rows} CSV rows in "
+              f"{time.perf_counter() - t:.2f} s")
         lf.close()
         log.unlink()
         print(f"peak RSS: {rss_mb():.0f} MB")
