@@ -36,7 +36,8 @@ Progress = Callable[[float], None]
 INDEX_EVERY = 64  # records between two entries of the sparse index
 GAP_NS = 1_000_000_000  # no vision for longer than this is a gap
 BLOCK = 8 * 1024 * 1024  # bytes read at once by the index pass
-CACHE_VERSION = 1
+CACHE_VERSION = 2  # bumped when the pass learns something new: older caches are redone
+GUNZIP_SHARE = 0.7  # of the progress bar, when a gzip file is first copied then indexed
 VISION_TYPES = (TYPE_VISION_2010, TYPE_VISION_2014)
 TYPE_NAMES = {
     0: "blank",
@@ -102,6 +103,30 @@ class _Index:
             warning=d["warning"],
             has_index_record=bool(d["has_index_record"]),
         )
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    """A cache file, or None if it is missing or unreadable (then the work is done again)."""
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return d if isinstance(d, dict) else None
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    """Temp name, then rename: a reader never sees half a cache file."""
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+    tmp.write_text(json.dumps(data))
+    os.replace(tmp, path)
+
+
+def _scaled(progress: Progress | None, lo: float, hi: float) -> Progress | None:
+    """One bar for two passes (gunzip, then index): maps 0..1 onto lo..hi."""
+    if progress is None:
+        return None
+    cb = progress
+    return lambda f: cb(lo + (hi - lo) * f)
 
 
 def cache_key(path: str) -> str:
@@ -338,8 +363,10 @@ def build_index(data_path: str, progress: Progress | None = None) -> _Index:
                 cam = _camera_id(buf, start, pos)
                 if cam is not None:
                     cameras[cam] = cameras.get(cam, 0) + 1
-                if last_vision is not None and t - last_vision > GAP_NS:
-                    gaps.append((last_vision, t))
+                # a silence before the first frame counts too (from the log's first record)
+                prev = last_vision if last_vision is not None else first_t
+                if prev is not None and t - prev > GAP_NS:
+                    gaps.append((prev, t))
                 last_vision = t
             elif rtype == TYPE_REFEREE_2013:
                 referee.feed(t, buf[start:pos])
@@ -350,7 +377,7 @@ def build_index(data_path: str, progress: Progress | None = None) -> _Index:
     idx.offsets, idx.times = offsets, times
     idx.counts, idx.cameras = counts, cameras
     idx.t_first_ns = first_t if first_t is not None else 0
-    idx.t_last_ns = last_t if last_t >= 0 else idx.t_first_ns
+    idx.t_last_ns = last_t if last_off >= 0 else idx.t_first_ns
     if last_vision is None and first_t is not None and idx.t_last_ns - first_t > GAP_NS:
         gaps.append((first_t, idx.t_last_ns))
     elif last_vision is not None and idx.t_last_ns - last_vision > GAP_NS:
@@ -389,32 +416,31 @@ class LogFile:
         if path.endswith("gz"):
             copy = cache / f"{key}.log"
             done = cache / f"{key}.gunzip.json"
-            if not (copy.exists() and done.exists()):
-                gz_warning = _gunzip_copy(path, copy, progress)
-                done.write_text(json.dumps({"warning": gz_warning}))
+            marker = _read_json(done) if copy.exists() else None
+            if marker is None or "warning" not in marker:
+                gz_warning = _gunzip_copy(path, copy, _scaled(progress, 0.0, GUNZIP_SHARE))
+                _write_json(done, {"warning": gz_warning})
             else:
-                gz_warning = json.loads(done.read_text())["warning"]
+                gz_warning = marker["warning"]
             data_path = str(copy)
         else:
             data_path = path
         index_file = cache / f"{key}.index.json"
         index: _Index | None = None
-        if index_file.exists():
+        d = _read_json(index_file)
+        if d is not None and d.get("version") == CACHE_VERSION:
             try:
-                d = json.loads(index_file.read_text())
-                if d.get("version") == CACHE_VERSION:
-                    index = _Index.from_json(d)
-                    if index.data_size != os.path.getsize(data_path):
-                        index = None
+                index = _Index.from_json(d)
             except (ValueError, KeyError, TypeError):
                 index = None
+            if index is not None and index.data_size != os.path.getsize(data_path):
+                index = None
         if index is None:
-            index = build_index(data_path, progress)
+            share = GUNZIP_SHARE if data_path != path else 0.0
+            index = build_index(data_path, _scaled(progress, share, 1.0))
             if gz_warning and not index.warning:
                 index.warning = gz_warning
-            tmp = index_file.with_name(index_file.name + f".tmp{os.getpid()}")
-            tmp.write_text(json.dumps(index.to_json()))
-            os.replace(tmp, index_file)
+            _write_json(index_file, index.to_json())
         return cls(path, data_path, index)
 
     # --- summary -------------------------------------------------------------------------

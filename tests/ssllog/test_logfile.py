@@ -47,6 +47,7 @@ def referee(
 ) -> bytes:
     r = Referee()
     r.packet_timestamp = 1
+    r.stage_time_left = 300_000_000  # a real GC always sends it (ssl-log-stats needs it)
     r.stage = stage
     r.command = command
     r.command_counter = counter
@@ -139,7 +140,8 @@ def test_gzip_copy_made_once_in_cache_dir(tmp_path: Path) -> None:
         assert Path(lf.data_path).read_bytes() == vision_log(300)
         assert lf.counts == {4: 300}
         first_copy = Path(lf.data_path).stat().st_mtime_ns
-    assert calls and calls[-1] == 1.0
+    assert calls and calls[-1] == 1.0 and calls == sorted(calls)  # one bar, never backwards
+    assert any(0 < c <= 0.7 for c in calls)  # the copy reports too
     assert sorted(x.name for x in src.iterdir()) == ["m.log.gz"]  # nothing beside the user's file
     calls.clear()
     with LogFile.open(str(gz), cache, calls.append) as lf:
@@ -285,3 +287,47 @@ def test_gzip_of_several_members(tmp_path: Path) -> None:
     gz.write_bytes(gzip.compress(data[:500]) + gzip.compress(data[500:]))
     with LogFile.open(str(gz), tmp_path / "c") as lf:
         assert lf.counts == {4: 50} and lf.warning is None
+
+
+def test_broken_cache_files_are_redone(tmp_path: Path) -> None:
+    gz = tmp_path / "m.log.gz"
+    gz.write_bytes(gzip.compress(vision_log(30)))
+    cache = tmp_path / "c"
+    LogFile.open(str(gz), cache).close()
+    for f in cache.iterdir():
+        if f.suffix == ".json":
+            f.write_text('{"half')
+    calls: list[float] = []
+    with LogFile.open(str(gz), cache, calls.append) as lf:
+        assert lf.counts == {4: 30}
+    assert calls  # done again rather than crashing
+
+
+def test_a_file_written_by_ssl_log_recorder() -> None:
+    """Recorded by ssl-go-tools' ssl-log-recorder (stopped with SIGINT) from multicast
+    packets: 2 cameras at 60 Hz, referee at 10 Hz: HALT, STOP, FORCE_START, a blue goal,
+    DIRECT_FREE_BLUE."""
+    import tempfile
+
+    src = Path(__file__).parent / "data" / "ssl-log-recorder.log.gz"
+    with tempfile.TemporaryDirectory() as cache, LogFile.open(str(src), cache) as lf:
+        assert lf.counts == {3: 35, 4: 422} and lf.warning is None
+        assert lf.cameras == {0: 211, 1: 211}
+        assert [e.label for e in lf.events if e.kind == "command"] == [
+            "HALT", "STOP", "FORCE_START", "DIRECT_FREE_BLUE"]
+        assert [e.label for e in lf.events if e.kind == "goal"] == ["Blu (0:1)"]
+        assert 3.5 < lf.duration_s < 3.6
+        mid = lf.offset_at(lf.t_first_ns + 2 * S)
+        assert lf.read_at(mid).time_ns >= lf.t_first_ns + 2 * S
+
+
+def test_gaps_at_the_start_and_end_and_without_vision(tmp_path: Path) -> None:
+    ref = referee(1, Referee.HALT)
+    p = tmp_path / "v.log"
+    p.write_bytes(HEAD + rec(T0, 3, ref) + rec(T0 + 2 * S, 4, wrapper(0, 0))
+                  + rec(T0 + 2 * S + 1, 4, wrapper(0, 1)) + rec(T0 + 4 * S, 3, ref))
+    with LogFile.open(str(p), tmp_path / "c") as lf:
+        assert lf.gaps == [(T0, T0 + 2 * S), (T0 + 2 * S + 1, T0 + 4 * S)]
+    p.write_bytes(HEAD + rec(T0, 3, ref) + rec(T0 + 3 * S, 3, ref))
+    with LogFile.open(str(p), tmp_path / "c") as lf:
+        assert lf.gaps == [(T0, T0 + 3 * S)] and lf.cameras == {}
