@@ -25,6 +25,7 @@ from ssllog.format import (
     RECORD_HEADER_SIZE,
     TYPE_INDEX_2021,
     TYPE_REFEREE_2013,
+    TYPE_TL_ACTION,
     TYPE_VISION_2010,
     TYPE_VISION_2014,
 )
@@ -36,7 +37,7 @@ Progress = Callable[[float], None]
 INDEX_EVERY = 64  # records between two entries of the sparse index
 GAP_NS = 1_000_000_000  # no vision for longer than this is a gap
 BLOCK = 8 * 1024 * 1024  # bytes read at once by the index pass
-CACHE_VERSION = 2  # bumped when the pass learns something new: older caches are redone
+CACHE_VERSION = 3  # bumped when the pass learns something new: older caches are redone
 GUNZIP_SHARE = 0.7  # of the progress bar, when a gzip file is first copied then indexed
 VISION_TYPES = (TYPE_VISION_2010, TYPE_VISION_2014)
 TYPE_NAMES = {
@@ -224,6 +225,22 @@ def _camera_id(buf: bytes | memoryview, pos: int, end: int) -> int | None:
     return None
 
 
+def _action_label(payload: bytes) -> str:
+    """A Touchline operator action (type 1003, JSON) as a timeline label; "" if unreadable."""
+    try:
+        a = json.loads(payload)
+    except ValueError:
+        return ""
+    if not isinstance(a, dict) or not isinstance(a.get("action"), str):
+        return ""
+    what = [str(a["action"])]
+    for key in ("command", "card", "team", "id"):
+        if key in a and a[key] is not None:
+            what.append(str(a[key]))
+    by = a.get("by")
+    return " ".join(what) + (f" ({by})" if isinstance(by, str) and by else "")
+
+
 class _RefereeTracker:
     """Turns the referee stream into timeline events by comparing with the previous message."""
 
@@ -370,6 +387,10 @@ def build_index(data_path: str, progress: Progress | None = None) -> _Index:
                 last_vision = t
             elif rtype == TYPE_REFEREE_2013:
                 referee.feed(t, buf[start:pos])
+            elif rtype == TYPE_TL_ACTION:
+                label = _action_label(bytes(buf[start:pos]))
+                if label:
+                    referee.events.append(LogEvent(t, "operator", label))
     if last_off >= 0 and (not offsets or offsets[-1] != last_off):
         offsets.append(last_off)
         times.append(last_t)

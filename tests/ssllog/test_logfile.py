@@ -331,3 +331,20 @@ def test_gaps_at_the_start_and_end_and_without_vision(tmp_path: Path) -> None:
     p.write_bytes(HEAD + rec(T0, 3, ref) + rec(T0 + 3 * S, 3, ref))
     with LogFile.open(str(p), tmp_path / "c") as lf:
         assert lf.gaps == [(T0, T0 + 3 * S)] and lf.cameras == {}
+
+
+def test_operator_actions_are_timeline_events(tmp_path: Path) -> None:
+    """Touchline's own type-1003 records (JSON) become "operator" events; a record that is
+    not JSON is skipped, not fatal."""
+    from ssllog.format import TYPE_TL_ACTION
+
+    action = b'{"action": "referee", "by": "operator at 127.0.0.1", "command": "STOP"}'
+    data = (HEAD + rec(T0, 4, wrapper(0, 1)) + rec(T0 + S, TYPE_TL_ACTION, action)
+            + rec(T0 + S + 1, TYPE_TL_ACTION, b"\xff not json")
+            + rec(T0 + 2 * S, 4, wrapper(0, 2)))
+    path = tmp_path / "a.log"
+    path.write_bytes(data)
+    lf = LogFile.open(str(path), tmp_path / "cache")
+    ops = [e for e in lf.events if e.kind == "operator"]
+    assert [(e.time_ns, e.label) for e in ops] == [
+        (T0 + S, "referee STOP (operator at 127.0.0.1)")]
