@@ -186,13 +186,17 @@ class SessionRecorder:
             self._wake.clear()
             while q:
                 item = q.popleft()
-                if isinstance(item, _Control):
-                    if item.op == "stop":
-                        self._finish()
-                        return
-                    self._control(item)
-                else:
-                    self._write(*item)
+                try:
+                    if isinstance(item, _Control):
+                        if item.op == "stop":
+                            self._finish()
+                            return
+                        self._control(item)
+                    else:
+                        self._write(*item)
+                except Exception as e:  # a bug must not end the thread (close() would hang)
+                    log.exception("recorder: unexpected error")
+                    self._stop_on_error(OSError(0, f"unexpected {type(e).__name__}: {e}"))
             if self._dirty and time.monotonic() - self._last_flush >= self._flush_interval_s:
                 self._guard(self._flush)
 
@@ -310,5 +314,5 @@ class SessionRecorder:
         self.error = reason
         w, self._writer = self._writer, None
         if w is not None:
-            with contextlib.suppress(OSError):  # the buffered bytes cannot be written either
+            with contextlib.suppress(Exception):  # the buffered bytes cannot be written either
                 w.close_unfinished()

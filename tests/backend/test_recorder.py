@@ -259,3 +259,15 @@ def test_new_folder_while_disabled_opens_nothing(tmp_path: Path) -> None:
     rec.close()
     assert not (tmp_path / "a").exists()
     assert [payloads(read(f)[0]) for f in logs(tmp_path / "b")] == [[(1, 4, b"a")]]
+
+
+def test_an_unexpected_error_stops_recording_not_the_thread(tmp_path: Path) -> None:
+    def broken(_path: str) -> BinaryIO:
+        raise RuntimeError("a bug")
+
+    rec = SessionRecorder(tmp_path, opener=broken)
+    wait_for(lambda: rec.status()["error"] is not None, "the error")
+    assert "RuntimeError: a bug" in rec.status()["error"]
+    rec.new_file("again")  # tries again, fails again, still answers
+    rec.close()
+    assert not rec._thread.is_alive()
