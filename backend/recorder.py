@@ -93,6 +93,12 @@ class SessionRecorder:
         self._started = 0.0  # monotonic time the current file began
         self._last_flush = 0.0
         self._dirty = False
+        self._w_enabled = enabled  # the writer's view, in line with the queued records
+        # the session record, written just before the file's first record (with its time, so
+        # that times never go back in the file) or when the file is finished
+        self._session: bytes | None = None
+        self._next_reason: str | None = None  # a file to open at the next record (size)
+        self.bad = 0  # records that could not be encoded (not bytes, time out of int64)
         self.error: str | None = None
         self._thread = threading.Thread(target=self._run, name="session-recorder", daemon=True)
         if enabled:
@@ -143,20 +149,21 @@ class SessionRecorder:
 
     def status(self) -> dict[str, Any]:
         """What the page shows; reads plain attributes, holds no lock."""
-        recording = self._writer is not None
+        writing = self._writer is not None  # a file is open (not between two files)
         return {
             "enabled": self._enabled,
-            "recording": recording,
-            "file": self._file if recording else "",
+            "recording": writing or self._next_reason is not None,
+            "file": self._file if writing else "",
             "folder": str(self._folder),
-            "size_bytes": self._size if recording else 0,
-            "duration_s": round(time.monotonic() - self._started, 3) if recording else 0.0,
-            "records": self._records if recording else 0,
+            "size_bytes": self._size if writing else 0,
+            "duration_s": round(time.monotonic() - self._started, 3) if writing else 0.0,
+            "records": self._records if writing else 0,
             "records_total": self._records_total,
             "files": self._files,
             "queued": len(self._q),
             "dropped": self.dropped,
             "not_recorded": self.not_recorded,
+            "bad": self.bad,
             "error": self.error,
         }
 
@@ -179,42 +186,60 @@ class SessionRecorder:
             self._wake.clear()
             while q:
                 item = q.popleft()
-                if isinstance(item, _Control):
-                    if item.op == "stop":
-                        self._finish()
-                        return
-                    self._control(item)
-                else:
-                    self._write(*item)
+                try:
+                    if isinstance(item, _Control):
+                        if item.op == "stop":
+                            self._finish()
+                            return
+                        self._control(item)
+                    else:
+                        self._write(*item)
+                except Exception as e:  # a bug must not end the thread (close() would hang)
+                    log.exception("recorder: unexpected error")
+                    self._stop_on_error(OSError(0, f"unexpected {type(e).__name__}: {e}"))
             if self._dirty and time.monotonic() - self._last_flush >= self._flush_interval_s:
                 self._guard(self._flush)
 
     def _control(self, c: _Control) -> None:
-        if c.op == "disable":
-            self._finish()
-            return
         if c.folder is not None:
             self._file_folder = c.folder
-        if c.op == "folder" and self._writer is None and self.error is None:
-            return  # not recording: the folder is used when recording starts
+        self._next_reason = None
+        if c.op == "disable":
+            self._w_enabled = False
+            self._finish()
+            return
+        if c.op == "enable":
+            self._w_enabled = True
+        if not self._w_enabled:
+            return  # a new folder is used when recording starts again
         # rotate, enable, folder: a new file; a request after an error tries again
         self._finish()
         self.error = None
         self._guard(lambda: self._open(c.reason))
 
     def _write(self, time_ns: int, rtype: int, payload: bytes) -> None:
+        if (not isinstance(payload, bytes | bytearray) or not -(1 << 63) <= time_ns < 1 << 63
+                or not -(1 << 31) <= rtype < 1 << 31):
+            self._bad(f"record type {rtype}: payload {type(payload).__name__}, time {time_ns}")
+            return
+        if self._writer is None and self._next_reason is not None:
+            reason, self._next_reason = self._next_reason, None
+            self._guard(lambda: self._open(reason))
         w = self._writer
         if w is None:
             return  # disabled or stopped by an error; the records still queued are lost
+        if self._session is not None:
+            session, self._session = self._session, None
+            self._write(time_ns, TYPE_TL_SESSION, session)
         if not self._guard(lambda: w.write(time_ns, rtype, payload)):
             return
         self._size += 16 + len(payload)
         self._records += 1
         self._records_total += 1
         self._dirty = True
-        if self._size >= self.max_bytes:
+        if self._size >= self.max_bytes and self._records > 1:  # never a file of a session only
             self._finish()
-            self._guard(lambda: self._open("size"))
+            self._next_reason = "size"  # the next file begins with the next record
 
     def _open(self, reason: str) -> None:
         folder = self._file_folder
@@ -246,8 +271,13 @@ class SessionRecorder:
         log.info("recorder: writing %s (%s)", path, reason)
         session = {"touchline": 1, "started_unix": time.time(), "our_team": self.our_team,
                    "reason": reason}
-        self._write(time.time_ns(), TYPE_TL_SESSION, json.dumps(session).encode())
+        self._session = json.dumps(session).encode()
         self._flush()
+
+    def _bad(self, what: str) -> None:
+        if not self.bad:
+            log.error("recorder: a record that cannot be written, skipped (%s)", what)
+        self.bad += 1
 
     def _flush(self) -> None:
         if self._writer is not None:
@@ -257,6 +287,9 @@ class SessionRecorder:
 
     def _finish(self) -> None:
         """Ends the current file with its index (if any)."""
+        if self._writer is not None and self._session is not None:
+            session, self._session = self._session, None
+            self._write(time.time_ns(), TYPE_TL_SESSION, session)  # a file without records
         w = self._writer
         if w is not None and self._guard(w.finish):
             self._writer = None
@@ -281,5 +314,5 @@ class SessionRecorder:
         self.error = reason
         w, self._writer = self._writer, None
         if w is not None:
-            with contextlib.suppress(OSError):  # the buffered bytes cannot be written either
+            with contextlib.suppress(Exception):  # the buffered bytes cannot be written either
                 w.close_unfinished()

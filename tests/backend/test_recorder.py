@@ -226,3 +226,48 @@ def test_queue_full_drops_and_counts(tmp_path: Path) -> None:
     [path] = logs(tmp_path)
     kept = [x.time_ns for x in read(path)[0] if x.type == 4]
     assert kept == list(range(len(kept))) and len(kept) + rec.dropped == 300
+
+
+def test_times_never_go_back_and_bad_records_are_skipped(tmp_path: Path) -> None:
+    rec = SessionRecorder(tmp_path, max_bytes=1)  # every record in its own file
+    rec.record(10, 4, b"a")
+    rec.record(11, 4, "not bytes")  # type: ignore[arg-type]
+    rec.record(1 << 70, 4, b"x")
+    rec.record(12, 1 << 40, b"x")
+    rec.record(13, 3, b"b")
+    rec.close()
+    contents = [read(f)[0] for f in logs(tmp_path)]
+    assert [[(x.time_ns, x.type) for x in c] for c in contents] == [
+        [(10, TYPE_TL_SESSION), (10, 4)], [(13, TYPE_TL_SESSION), (13, 3)]]
+    assert rec.status()["bad"] == 3
+
+
+def test_an_empty_file_still_has_its_session_record(tmp_path: Path) -> None:
+    rec = SessionRecorder(tmp_path)
+    rec.close()
+    [path] = logs(tmp_path)
+    records, r = read(path)
+    assert [x.type for x in records] == [TYPE_TL_SESSION] and r.index_offsets == [16]
+
+
+def test_new_folder_while_disabled_opens_nothing(tmp_path: Path) -> None:
+    rec = SessionRecorder(tmp_path / "a", enabled=False)
+    rec.set_folder(tmp_path / "b")
+    rec.new_file("operator")
+    rec.set_enabled(True)
+    rec.record(1, 4, b"a")
+    rec.close()
+    assert not (tmp_path / "a").exists()
+    assert [payloads(read(f)[0]) for f in logs(tmp_path / "b")] == [[(1, 4, b"a")]]
+
+
+def test_an_unexpected_error_stops_recording_not_the_thread(tmp_path: Path) -> None:
+    def broken(_path: str) -> BinaryIO:
+        raise RuntimeError("a bug")
+
+    rec = SessionRecorder(tmp_path, opener=broken)
+    wait_for(lambda: rec.status()["error"] is not None, "the error")
+    assert "RuntimeError: a bug" in rec.status()["error"]
+    rec.new_file("again")  # tries again, fails again, still answers
+    rec.close()
+    assert not rec._thread.is_alive()
