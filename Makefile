@@ -6,13 +6,15 @@ UV := python3 -m uv
 SIM ?= builtin
 PORT ?= 8000
 RUN_ARGS ?=
+# make run LOG=path/to/file.log[.gz]: replay a log instead of live input
+LOG ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
         test-e2e bench experiments clean match fuzz
 
 run: build multicast
-	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(RUN_ARGS)
+	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") $(RUN_ARGS)
 
 test: build multicast chromium octave lint typecheck test-py test-ts test-e2e
 	@scripts/test-summary.sh

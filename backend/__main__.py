@@ -54,6 +54,8 @@ def main() -> None:
     p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=[],
                    metavar="DIR", help="a folder whose logs the page may open (repeatable; the "
                    "recording folder always is)")
+    p.add_argument("--record-dir", type=Path, default=None, metavar="DIR",
+                   help="record into DIR for this run (the recording.folder parameter stays)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
@@ -66,7 +68,8 @@ def main() -> None:
                         relay_output=a.relay_output,
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
-                        log_dirs=a.log_dirs, record=not a.no_record)
+                        log_dirs=a.log_dirs, record=not a.no_record,
+                        record_dir=a.record_dir)
     app = create_app(settings)
     # the page sends nothing on the websocket: a client's message is capped like a body
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,

@@ -72,6 +72,11 @@ class Topic(Generic[T]):
     def latest(self) -> Record[T] | None:
         return self._ring[-1] if self._ring else None
 
+    def clear(self) -> None:
+        """Forgets every record (time jumped: a replay was seeked); sequence numbers go on, so
+        readers' cursors stay valid."""
+        self._ring.clear()
+
     def latest_value(self) -> T | None:
         return self._ring[-1].value if self._ring else None
 

@@ -34,6 +34,8 @@ class Settings(BaseModel):
     log_dirs: list[Path] = Field(default_factory=list)
     #: False: this run records nothing, whatever the recording.enabled parameter says
     record: bool = True
+    #: records into this folder for this run, whatever the recording.folder parameter says
+    record_dir: Path | None = None
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

@@ -399,6 +399,8 @@ class Station:
     # thread, the loop goes on meanwhile) ----
 
     def _recording_folder(self) -> Path:
+        if self.settings.record_dir is not None:
+            return self.settings.record_dir
         folder = self.params.current.recording.folder
         if folder:
             return Path(folder).expanduser()
@@ -420,9 +422,16 @@ class Station:
     def _reset_pipeline(self) -> None:
         """Time jumped (a log opened or seeked, or back to live): the world model and the
         controllers start again."""
+        replay = self.player.log is not None
         self.world.reset()
+        self.world_topic.clear()  # no world of before the jump is shown or obeyed
+        self.referee_topic.clear()  # the log's own referee is heard within 0.1 s
         self.control.motion.reset_all()
-        self.control.replay_clock = self.player.now_ns if self.player.log is not None else None
+        self.control.replay_clock = self.player.now_ns if replay else None
+        # a referee is silent by the log's clock in replay (a paused replay is not silence)
+        self.referee_watch.clock = (lambda: self.player.now_ns() / 1e9) if replay \
+            else time.monotonic
+        self.referee_watch.last_heard = None
 
     def player_command(self, fn: Callable[..., T], *args: Any) -> T:
         """A player command on the station thread; the feed is woken to act on it."""
@@ -490,7 +499,8 @@ class Station:
         """Records live sessions unless told not to (the parameter, --no-record), when
         replaying from the command line, or for a station that keeps no state (tests)."""
         return (p.recording.enabled and self.settings.record and self.settings.log is None
-                and (self.settings.state_dir is not None or bool(p.recording.folder)))
+                and (self.settings.state_dir is not None or bool(p.recording.folder)
+                     or self.settings.record_dir is not None))
 
     def _configure_recorder(self, p: StationParams, version: int) -> None:
         rec = self.recorder

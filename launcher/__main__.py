@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import shutil
 import signal
 import tempfile
@@ -60,6 +61,16 @@ def main() -> int:
                    help="extra flag for fieldsim (repeatable), e.g. --sim-arg=--false-prob=0.2")
     p.add_argument("--relay-arg", dest="relay_args", action="append", default=[])
     p.add_argument("--backend-arg", dest="backend_args", action="append", default=[])
+    p.add_argument("--log", default=None, metavar="FILE",
+                   help="replay this SSL log (.log or .log.gz) instead of live input: no "
+                        "simulator, nothing sent to robots (make run LOG=FILE)")
+    p.add_argument("--log-dir", dest="log_dirs", action="append", default=[], metavar="DIR",
+                   help="a folder whose logs the page may open (repeatable)")
+    p.add_argument("--no-record", action="store_true",
+                   help="do not record this session into the recording folder (var/logs)")
+    p.add_argument("--record-dir", default=None, metavar="DIR",
+                   help="record into DIR for this run (default: the recording.folder "
+                        "parameter, else var/logs)")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
@@ -74,6 +85,18 @@ def main() -> int:
                   "(make run does this for you when run as root)")
         return 2
 
+    replay_args: list[str] = []
+    if a.log is not None:
+        if not os.path.isfile(a.log):
+            log.error("no such log file: %s", a.log)
+            return 2
+        a.sim = "none"  # a replay has no simulator, and nothing is sent to robots
+        replay_args.append(f"--log={os.path.abspath(a.log)}")
+    replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
+    if a.no_record:
+        replay_args.append("--no-record")
+    if a.record_dir:
+        replay_args.append(f"--record-dir={os.path.abspath(a.record_dir)}")
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
     own_state_dir: str | None = None  # a temporary state folder of ours: removed at exit
     if a.isolated and a.state_dir is None:
@@ -84,7 +107,8 @@ def main() -> int:
         sim=a.sim, seed=a.seed, interface=a.interface, output=a.output, sim_host=a.sim_host,
         host=a.host, our_team=a.our_team, state_dir=a.state_dir, sim_args=a.sim_args,
         relay_args=a.relay_args,
-        backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *a.backend_args]), ports),
+        backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *replay_args,
+                      *a.backend_args]), ports),
         restart=True)
     stopping = False
 

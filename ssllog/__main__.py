@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from typing import TextIO
 
-from ssllog.format import KNOWN_TYPES, TYPE_VISION_2010, TYPE_VISION_2014
+from ssllog.format import TYPE_VISION_2010, TYPE_VISION_2014
 from ssllog.logfile import TYPE_NAMES, LogFile
 from ssllog.reader import LogFormatError
 from sslpb import ssl_vision_wrapper_pb2
@@ -54,7 +54,7 @@ def info(lf: LogFile, out: TextIO) -> None:
     w(f"duration: {lf.duration_s:.3f} s ({_utc(lf.t_first_ns)} .. {_utc(lf.t_last_ns)})\n")
     w("messages:\n")
     for t, n in sorted(lf.counts.items()):
-        name = TYPE_NAMES.get(t, "unknown type") if t in KNOWN_TYPES else "unknown type"
+        name = TYPE_NAMES.get(t, "unknown type")
         w(f"  {t:5d} {name:14s} {n}\n")
     w("cameras:\n")
     for cam, n in sorted(lf.cameras.items()):

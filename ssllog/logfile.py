@@ -48,6 +48,11 @@ TYPE_NAMES = {
     4: "vision 2014",
     5: "tracker 2020",
     6: "index 2021",
+    1001: "touchline commands",
+    1002: "touchline params",
+    1003: "touchline action",
+    1004: "touchline health",
+    1005: "touchline session",
 }
 
 _Referee = ssl_gc_referee_message_pb2.Referee

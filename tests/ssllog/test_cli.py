@@ -49,7 +49,7 @@ def test_info(tmp_path: Path) -> None:
     lines = [" ".join(line.split()) for line in out.splitlines()]
     assert "4 vision 2014 156" in lines
     assert "3 referee 2013 10" in lines
-    assert "1001 unknown type 1" in lines
+    assert "1001 touchline commands 1" in lines
     assert "camera 0: 78 frames, 7.9 Hz" in out and "camera 1: 78 frames" in out
     assert "teams: yellow Yel, blue Blu" in out
     assert "commands: FORCE_START x1, STOP x1" in out
