@@ -254,6 +254,20 @@ class InternalReferee(TypedDict):
 
 
 @with_config(_STRICT)
+class ReplayClock(TypedDict):
+    """Where a replay is (in every world message while a log plays; null when live)."""
+
+    file: str
+    position_s: Annotated[float, Field(description="playhead, s from the log's first record")]
+    t_unix: Annotated[float, Field(description="the log's wall time at the playhead, Unix s")]
+    duration_s: float
+    playing: bool
+    speed: Annotated[float, Field(description="1 = real time; 0 = as fast as possible")]
+    epoch: Annotated[int, Field(
+        description="changes on every open and seek (time jumps: plots start again)")]
+
+
+@with_config(_STRICT)
 class World(TypedDict):
     """The world as the station sees it, with what it commands."""
 
@@ -270,6 +284,8 @@ class World(TypedDict):
     strategy: StrategyState | None
     internal_referee: Annotated[InternalReferee, Field(
         description="the station's own referee (the referee panel shows it)")]
+    replay: Annotated[ReplayClock | None, Field(
+        description="set while the station replays a log (nothing is sent to robots then)")]
 
 
 # ------------------------------------------------------------------------------ geometry
@@ -438,6 +454,21 @@ class WorldHealth(TypedDict):
 
 
 @with_config(_STRICT)
+class Recording(TypedDict):
+    """The session recorder (SSL log files in var/logs/, docs/logformat.md)."""
+
+    enabled: bool
+    recording: Annotated[bool, Field(description="a file is open and being written")]
+    file: Annotated[str, Field(description="name of the file being written, or the last one")]
+    folder: str
+    size_bytes: int
+    duration_s: float
+    records: int
+    dropped: Annotated[int, Field(description="records lost because the writer fell behind")]
+    error: Annotated[str, Field(description='why recording stopped (e.g. disk full), or ""')]
+
+
+@with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
 
@@ -456,6 +487,7 @@ class Health(TypedDict):
     latency_stages: list[LatencyStage]
     websocket_clients: int
     engine: EngineHealth | None
+    recording: Recording
 
 
 # ------------------------------------------------------------------------------ parameters
@@ -604,6 +636,109 @@ class EstopIn(BaseModel):
     reason: str = Field(default="", max_length=200, description="why it is released (logged)")
 
 
+# ------------------------------------------------------------------------------ log player
+
+
+PlayerEventKind = Literal["command", "stage", "goal", "card", "operator"]
+
+
+@with_config(_STRICT)
+class PlayerEvent(TypedDict):
+    """A marker on the timeline."""
+
+    t_s: Annotated[float, Field(description="s from the log's first record")]
+    kind: PlayerEventKind
+    label: str
+
+
+@with_config(_STRICT)
+class Player(TypedDict):
+    """The log player (GET/POST /api/player; the websocket's "player" message)."""
+
+    source: Literal["live", "log"]
+    file: Annotated[str | None, Field(description="the open log's path")]
+    duration_s: float
+    position_s: float
+    playing: bool
+    speed: Annotated[float, Field(description="1 = real time; 0 = as fast as possible")]
+    start_unix: Annotated[float, Field(description="wall time of the log's first record")]
+    loading: Annotated[float | None, Field(
+        description="0..1 while the log is being indexed, else null")]
+    error: Annotated[str, Field(description='why the last action failed, or ""')]
+    warning: Annotated[str | None, Field(description="e.g. a truncated tail")]
+    events: list[PlayerEvent]
+    epoch: int
+
+
+@with_config(_STRICT)
+class LogFileInfo(TypedDict):
+    name: str
+    path: str
+    size_bytes: int
+    modified_unix: float
+
+
+@with_config(_STRICT)
+class LogList(TypedDict):
+    """GET /api/logs: the logs a player can open."""
+
+    folders: list[str]
+    files: list[LogFileInfo]
+
+
+class PlayerOpenIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["open"]
+    path: str = Field(min_length=1, max_length=4096,
+                      description="a .log or .log.gz file in var/logs/ or a configured folder")
+
+
+class PlayerPlayIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["play"]
+    speed: float = Field(default=1.0, allow_inf_nan=False,
+                         description="0.1 .. 10, or 0 for as fast as possible")
+
+
+class PlayerPauseIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["pause"]
+
+
+class PlayerSeekIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["seek"]
+    position_s: float = Field(ge=0, allow_inf_nan=False, description="s from the log's start")
+
+
+class PlayerStepIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["step"]
+    frames: int = Field(ge=-100, le=100, description="camera frames forward (+) or back (-)")
+
+
+class PlayerJumpIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["jump"]
+    kind: Literal["command", "stage", "goal", "card", "operator", "any"] = "command"
+    direction: Literal["next", "prev"] = "next"
+
+
+class PlayerLiveIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["live"]
+
+
+PlayerIn = Annotated[
+    PlayerOpenIn | PlayerPlayIn | PlayerPauseIn | PlayerSeekIn | PlayerStepIn | PlayerJumpIn
+    | PlayerLiveIn, Field(discriminator="action")]
+
+
+class RecordingIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["new-file", "start", "stop"]
+
+
 # ------------------------------------------------------------------------------ websocket
 
 
@@ -624,6 +759,15 @@ class SnapshotMessage(TypedDict):
     geometry: Geometry | None
     health: Health
     params: ParamsState
+    player: Player
+
+
+@with_config(_STRICT)
+class PlayerMessage(TypedDict):
+    """The player's state: on open, play, pause, speed, seek and the end of a log."""
+
+    type: Literal["player"]
+    player: Player
 
 
 @with_config(_STRICT)
@@ -653,7 +797,8 @@ class ParamsMessage(TypedDict):
     values: ParamValues
 
 
-ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
+ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
+                 | PlayerMessage)
 
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {
@@ -662,9 +807,12 @@ EXPORTS: dict[str, object] = {
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
     "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff, "PresetList": PresetList,
-    "PresetDetail": PresetDetail,
+    "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
+    "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
     # request bodies (their optional fields are optional in TypeScript too)
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
     "EnableIn": EnableIn, "TeleportBallIn": TeleportBallIn, "TeleportRobotIn": TeleportRobotIn,
-    "EstopIn": EstopIn,
+    "EstopIn": EstopIn, "PlayerOpenIn": PlayerOpenIn, "PlayerPlayIn": PlayerPlayIn,
+    "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
+    "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,
 }

@@ -9,7 +9,7 @@ export type ControlAlgorithm = "algorithm1" | "algorithm2" | "proportional";
 
 export type TargetSource = "operator" | "strategy";
 
-export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage;
+export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage | PlayerMessage;
 
 /** The filtered ball. */
 export interface Ball {
@@ -150,6 +150,7 @@ export interface Health {
   latency_stages: LatencyStage[];
   websocket_clients: number;
   engine: EngineHealth | null;
+  recording: Recording;
 }
 
 export interface HealthMessage {
@@ -189,6 +190,19 @@ export interface LatencyStage {
   n: number | null;
 }
 
+export interface LogFileInfo {
+  name: string;
+  path: string;
+  size_bytes: number;
+  modified_unix: number;
+}
+
+/** GET /api/logs: the logs a player can open. */
+export interface LogList {
+  folders: string[];
+  files: LogFileInfo[];
+}
+
 export interface ParamChange {
   path: string;
   from: unknown;
@@ -218,6 +232,80 @@ export interface PlayInfo {
   name: string;
   title: string;
   description: string;
+}
+
+/** The log player (GET/POST /api/player; the websocket's "player" message). */
+export interface Player {
+  source: "live" | "log";
+  /** the open log's path */
+  file: string | null;
+  duration_s: number;
+  position_s: number;
+  playing: boolean;
+  /** 1 = real time; 0 = as fast as possible */
+  speed: number;
+  /** wall time of the log's first record */
+  start_unix: number;
+  /** 0..1 while the log is being indexed, else null */
+  loading: number | null;
+  /** why the last action failed, or "" */
+  error: string;
+  /** e.g. a truncated tail */
+  warning: string | null;
+  events: PlayerEvent[];
+  epoch: number;
+}
+
+/** A marker on the timeline. */
+export interface PlayerEvent {
+  /** s from the log's first record */
+  t_s: number;
+  kind: "command" | "stage" | "goal" | "card" | "operator";
+  label: string;
+}
+
+export interface PlayerJumpIn {
+  action: "jump";
+  kind?: "command" | "stage" | "goal" | "card" | "operator" | "any";
+  direction?: "next" | "prev";
+}
+
+export interface PlayerLiveIn {
+  action: "live";
+}
+
+/** The player's state: on open, play, pause, speed, seek and the end of a log. */
+export interface PlayerMessage {
+  type: "player";
+  player: Player;
+}
+
+export interface PlayerOpenIn {
+  action: "open";
+  /** a .log or .log.gz file in var/logs/ or a configured folder */
+  path: string;
+}
+
+export interface PlayerPauseIn {
+  action: "pause";
+}
+
+export interface PlayerPlayIn {
+  action: "play";
+  /** 0.1 .. 10, or 0 for as fast as possible */
+  speed?: number;
+}
+
+export interface PlayerSeekIn {
+  action: "seek";
+  /** s from the log's start */
+  position_s: number;
+}
+
+export interface PlayerStepIn {
+  action: "step";
+  /** camera frames forward (+) or back (-) */
+  frames: number;
 }
 
 export interface Point {
@@ -272,6 +360,27 @@ export interface RawRobot {
   x: number;
   y: number;
   orientation: number;
+}
+
+/** The session recorder (SSL log files in var/logs/, docs/logformat.md). */
+export interface Recording {
+  enabled: boolean;
+  /** a file is open and being written */
+  recording: boolean;
+  /** name of the file being written, or the last one */
+  file: string;
+  folder: string;
+  size_bytes: number;
+  duration_s: number;
+  records: number;
+  /** records lost because the writer fell behind */
+  dropped: number;
+  /** why recording stopped (e.g. disk full), or "" */
+  error: string;
+}
+
+export interface RecordingIn {
+  action: "new-file" | "start" | "stop";
 }
 
 /** The referee the station obeys (the game controller's or the internal one). */
@@ -370,6 +479,21 @@ export interface RelayHealth {
   age_s: number;
 }
 
+/** Where a replay is (in every world message while a log plays; null when live). */
+export interface ReplayClock {
+  file: string;
+  /** playhead, s from the log's first record */
+  position_s: number;
+  /** the log's wall time at the playhead, Unix s */
+  t_unix: number;
+  duration_s: number;
+  playing: boolean;
+  /** 1 = real time; 0 = as fast as possible */
+  speed: number;
+  /** changes on every open and seek (time jumps: plots start again) */
+  epoch: number;
+}
+
 export interface Robot {
   team: Team;
   id: number;
@@ -451,6 +575,7 @@ export interface SnapshotMessage {
   geometry: Geometry | null;
   health: Health;
   params: ParamsState;
+  player: Player;
 }
 
 /** What the strategy is doing now (sent with every world update). */
@@ -562,6 +687,8 @@ export interface World {
   strategy: StrategyState | null;
   /** the station's own referee (the referee panel shows it) */
   internal_referee: InternalReferee;
+  /** set while the station replays a log (nothing is sent to robots then) */
+  replay: ReplayClock | null;
 }
 
 /** The world model: its age by the receive clock, what it dropped and why. */
