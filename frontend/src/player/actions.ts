@@ -2,8 +2,9 @@
 // "player" message confirms it); a refusal shows a toast with the server's reason.
 
 import { ApiError, getLogs, postPlayer, postRecording } from "../api/http";
-import type { LogList, PlayerIn, Recording, RecordingIn } from "../api/types";
+import type { LogList, Player, PlayerIn, Recording, RecordingIn } from "../api/types";
 import { appStore } from "../store/appStore";
+import { createStore } from "../store/createStore";
 import { pushToast } from "../store/toasts";
 
 function errorText(e: unknown): string {
@@ -76,4 +77,40 @@ export async function recordingAction(action: RecordingIn["action"]): Promise<Re
     pushToast("error", `Recorder ${action}: ${errorText(e)}`);
     return null;
   }
+}
+
+// ---- speed and play/pause (shared by the timeline and the keyboard) ----
+
+/** A speed chosen while paused: sent with the next play (the station has no separate speed action). */
+export const speedStore = createStore<{ pending: number | null }>({ pending: null });
+
+/** The speed the timeline shows: the pending one while paused, else the station's. */
+export function shownSpeed(player: Player | null, pending: number | null): number {
+  if (!player) return 1;
+  return !player.playing && pending !== null ? pending : player.speed;
+}
+
+/** Choose a speed: applied at once while playing, kept for the next play while paused. */
+export async function changeSpeed(speed: number): Promise<void> {
+  const player = appStore.getState().player;
+  if (player?.playing) {
+    if (await play(speed)) speedStore.setState({ pending: null });
+  } else speedStore.setState({ pending: speed });
+}
+
+export async function togglePlay(): Promise<void> {
+  const player = appStore.getState().player;
+  if (!player || player.source !== "log") return;
+  if (player.playing) {
+    await pause();
+    return;
+  }
+  const speed = shownSpeed(player, speedStore.getState().pending);
+  if (await play(speed)) speedStore.setState({ pending: null });
+}
+
+/** True while the station replays a log (commands are not sent then). */
+export function isReplaying(): boolean {
+  const s = appStore.getState();
+  return s.player?.source === "log" || (s.world?.replay ?? null) !== null;
 }
