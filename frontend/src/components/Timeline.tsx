@@ -64,7 +64,11 @@ function TimelineBody({ player }: { player: Player }) {
 
   const onDown = (ev: ReactPointerEvent<HTMLDivElement>) => {
     if (ev.button !== 0 || duration <= 0) return;
-    ev.currentTarget.setPointerCapture?.(ev.pointerId);
+    try {
+      ev.currentTarget.setPointerCapture?.(ev.pointerId);
+    } catch {
+      /* no capture (synthetic events): the drag still ends on pointerup over the bar */
+    }
     setDrag(posAt(ev.clientX));
     lastSeekAt.current = performance.now();
   };
