@@ -1,10 +1,11 @@
 // Top bar pieces of the log player and the recorder: the REPLAY badge, the "Logs" dialog and
 // the record indicator.
 
-import { useEffect, useState, type ReactNode } from "react";
+import { useCallback, useEffect, useRef, useState, type ReactNode } from "react";
 import type { LogList, Recording } from "../api/types";
 import { listLogs, openLog, recordingAction } from "../player/actions";
 import { baseName, fmtDuration, fmtMB } from "../player/timeline";
+import { appStore } from "../store/appStore";
 import { useAppState } from "../store/hooks";
 
 /** True while the station replays a log (from the player, or the world's replay clock). */
@@ -57,6 +58,17 @@ export function LogsDialog({ onClose }: { onClose: () => void }) {
     window.addEventListener("touchline:escape", onEsc);
     return () => window.removeEventListener("touchline:escape", onEsc);
   }, [onClose]);
+  // indexing finished with the log open: close
+  const loading = player?.loading ?? null;
+  const wasLoading = useRef(false);
+  useEffect(() => {
+    if (loading !== null) wasLoading.current = true;
+    else if (wasLoading.current) {
+      wasLoading.current = false;
+      const p = appStore.getState().player;
+      if (p?.source === "log" && !p.error) onClose();
+    }
+  }, [loading, onClose]);
   const files = logs ? [...logs.files].sort((a, b) => b.modified_unix - a.modified_unix) : [];
   return (
     <div className="overlay" role="dialog" aria-modal="true" aria-label="Open a log" data-testid="logs-dialog" onClick={onClose}>
@@ -112,7 +124,13 @@ export function LogsDialog({ onClose }: { onClose: () => void }) {
                       className="btn btn-small"
                       data-testid={`log-open-${f.name}`}
                       disabled={player?.loading !== null && player?.loading !== undefined}
-                      onClick={() => void openLog(f.path)}
+                      onClick={() =>
+                        void openLog(f.path).then((ok) => {
+                          // opened at once: the timeline takes over; while indexing, stay to show the progress
+                          const p = appStore.getState().player;
+                          if (ok && p?.source === "log" && p.loading === null && !p.error) onClose();
+                        })
+                      }
                     >
                       Open
                     </button>
@@ -129,6 +147,7 @@ export function LogsDialog({ onClose }: { onClose: () => void }) {
 
 export function LogsControl() {
   const [open, setOpen] = useState(false);
+  const close = useCallback(() => setOpen(false), []);
   const loading = useAppState((s) => s.player?.loading ?? null);
   return (
     <>
@@ -141,7 +160,7 @@ export function LogsControl() {
       >
         Logs{loading !== null ? ` ${Math.round(loading * 100)}%` : ""}
       </button>
-      {open && <LogsDialog onClose={() => setOpen(false)} />}
+      {open && <LogsDialog onClose={close} />}
     </>
   );
 }
@@ -190,6 +209,17 @@ export function RecordIndicator() {
         <span className="rec-dot" aria-hidden="true" />
         {body}
       </span>
+      {rec?.enabled && state !== "on" && (
+        <button
+          type="button"
+          className="btn btn-small"
+          data-testid="record-start"
+          title="Start recording the session"
+          onClick={() => void recordingAction("start")}
+        >
+          start
+        </button>
+      )}
       {rec?.enabled && (
         <button
           type="button"

@@ -45,7 +45,10 @@ function TimelineBody({ player }: { player: Player }) {
   const [hover, setHover] = useState<number | null>(null);
   const lastSeekAt = useRef(0);
 
-  const replay = world?.replay ?? null;
+  // The world's replay clock moves with every frame; after an open or a seek the player's
+  // answer (a new epoch) may come before the first world of that epoch: trust the newer one.
+  const clock = world?.replay ?? null;
+  const replay = clock && clock.epoch === player.epoch ? clock : null;
   const duration = replay?.duration_s ?? player.duration_s;
   const livePosition = replay ? replay.position_s : player.position_s;
   const position = drag ?? livePosition;
@@ -213,6 +216,16 @@ function TimelineBody({ player }: { player: Player }) {
           <span className="tl-stage" data-testid="timeline-stage" title="Stage and time left in it">
             {prettyStage(ref.stage)}
             {ref.stage_time_left_s !== null ? ` ${fmtClock(ref.stage_time_left_s)}` : ""}
+          </span>
+        )}
+        {player.error && (
+          <span className="tl-error" data-testid="timeline-error" title={player.error}>
+            {player.error}
+          </span>
+        )}
+        {player.warning && (
+          <span className="tl-warning" data-testid="timeline-warning" title={player.warning}>
+            ⚠ {player.warning}
           </span>
         )}
         {player.loading !== null && (

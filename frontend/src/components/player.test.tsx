@@ -77,6 +77,23 @@ describe("Timeline", () => {
     expect(q("timeline-stage")?.textContent).toBe("normal first half 2:05");
   });
 
+  it("trusts the player's position until the first world of a new epoch arrives", async () => {
+    act(() => t.root.render(<Timeline />));
+    showLog({ epoch: 5, position_s: 90 }, replayClock({ epoch: 4, position_s: 12 }));
+    expect(q("timeline-position")?.textContent).toBe("1:30.0 / 2:00");
+    act(() => appStore.setState({ world: world(2, { replay: replayClock({ epoch: 5, position_s: 90.5 }) }) }));
+    // the timeline samples the world at 10 Hz
+    await act(async () => new Promise((r) => setTimeout(r, 150)));
+    expect(q("timeline-position")?.textContent).toBe("1:30.5 / 2:00");
+  });
+
+  it("shows the player's error and warning", () => {
+    act(() => t.root.render(<Timeline />));
+    showLog({ error: "seek past the end", warning: "truncated tail" });
+    expect(q("timeline-error")?.textContent).toBe("seek past the end");
+    expect(q("timeline-warning")?.textContent).toContain("truncated tail");
+  });
+
   it("seeks to the clicked position on the bar", async () => {
     const fetchMock = stubFetch(() => logPlayer({ position_s: 30 }));
     act(() => t.root.render(<Timeline />));
@@ -198,6 +215,26 @@ describe("Replay badge and logs", () => {
     await act(async () => (q("log-open-a.log.gz") as HTMLButtonElement).click());
     expect(sent(fetchMock, 1).body).toEqual({ action: "open", path: "var/logs/a.log.gz" });
     expect(appStore.getState().player?.source).toBe("log");
+    // opened (no indexing left): the dialog gives way to the timeline
+    expect(q("logs-dialog")).toBeNull();
+  });
+
+  it("stays open while the log is indexed and closes when it is done", async () => {
+    stubFetch((url) =>
+      url === "/api/logs"
+        ? { folders: ["var/logs"], files: [{ name: "b.log", path: "var/logs/b.log", size_bytes: 1, modified_unix: 1 }] }
+        : logPlayer({ loading: 0 }),
+    );
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ player: player() }));
+    await act(async () => (q("open-log") as HTMLButtonElement).click());
+    await act(async () => (q("log-open-b.log") as HTMLButtonElement).click());
+    expect(q("logs-dialog")).not.toBeNull();
+    expect(q("logs-loading")?.textContent).toContain("0%");
+    act(() => appStore.setState({ player: logPlayer({ loading: 0.5 }) }));
+    expect(q("logs-loading")?.textContent).toContain("50%");
+    act(() => appStore.setState({ player: logPlayer({ loading: null }) }));
+    expect(q("logs-dialog")).toBeNull();
   });
 });
 
@@ -221,6 +258,9 @@ describe("RecordIndicator", () => {
     expect(q("record-indicator")?.getAttribute("data-state")).toBe("off");
     expect(q("record-indicator")?.textContent).toBe("rec off");
     expect(q("record-new-file")).toBeNull();
+    withRec({ recording: false });
+    expect(q("record-indicator")?.getAttribute("data-state")).toBe("idle");
+    expect(q("record-start")).not.toBeNull();
     withRec({ recording: false, error: "disk full" });
     expect(q("record-indicator")?.getAttribute("data-state")).toBe("error");
     expect(q("record-indicator")?.className).toContain("rec-error");
