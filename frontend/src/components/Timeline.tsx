@@ -171,6 +171,7 @@ function TimelineBody({ player }: { player: Player }) {
         className={`tl-bar ${drag !== null ? "is-dragging" : ""}`}
         data-testid="timeline-bar"
         role="slider"
+        tabIndex={0}
         aria-label="Replay position"
         aria-valuemin={0}
         aria-valuemax={Math.round(duration * 10) / 10}
