@@ -14,6 +14,7 @@ import {
   togglePlay,
 } from "../player/actions";
 import {
+  findEvent,
   fmtDuration,
   fmtPosition,
   fmtWallTime,
@@ -57,6 +58,10 @@ function TimelineBody({ player }: { player: Player }) {
   const speed = shownSpeed(player, pending);
   const markers = layoutMarkers(player.events, duration);
   const ref = world?.referee ?? null;
+  const prevEvent = findEvent(player.events, position, "prev");
+  const nextEvent = findEvent(player.events, position, "next");
+  const eventTitle = (what: string, e: typeof prevEvent) =>
+    e ? `${what}: ${e.label} (${e.kind}) at ${fmtPosition(e.t_s)}` : `${what}: none`;
 
   const posAt = (clientX: number): number => {
     const el = barRef.current;
@@ -103,7 +108,7 @@ function TimelineBody({ player }: { player: Player }) {
           type="button"
           className="btn btn-small btn-icon"
           aria-label="Previous event"
-          title="Previous event"
+          title={eventTitle("Previous event", prevEvent)}
           data-testid="timeline-prev-event"
           onClick={() => void jump("prev")}
         >
@@ -144,7 +149,7 @@ function TimelineBody({ player }: { player: Player }) {
           type="button"
           className="btn btn-small btn-icon"
           aria-label="Next event"
-          title="Next event"
+          title={eventTitle("Next event", nextEvent)}
           data-testid="timeline-next-event"
           onClick={() => void jump("next")}
         >

@@ -55,6 +55,9 @@ describe("Timeline", () => {
     expect(markers.map((m) => m.getAttribute("data-kind"))).toEqual(["command", "goal", "stage", "card"]);
     expect(markers[1]!.getAttribute("title")).toContain("goal blue");
     expect(markers[2]!.style.left).toBe("50%");
+    // the playhead is at 0:30: the jump buttons name their events
+    expect(q("timeline-prev-event")?.getAttribute("title")).toBe("Previous event: FORCE_START (command) at 0:10.0");
+    expect(q("timeline-next-event")?.getAttribute("title")).toBe("Next event: goal blue (goal) at 0:40.0");
   });
 
   it("shows the position, the log's wall time and the stage", () => {
