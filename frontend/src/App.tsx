@@ -10,7 +10,9 @@ import { RobotDetails } from "./components/RobotDetails";
 import { RobotTable } from "./components/RobotTable";
 import { StrategyCard } from "./components/StrategyCard";
 import { Toasts } from "./components/Toasts";
+import { Timeline } from "./components/Timeline";
 import { TopBar } from "./components/TopBar";
+import { useReplaying } from "./components/PlayerBar";
 import { installShortcuts } from "./shortcuts";
 import { useAppState, useThrottledWorld } from "./store/hooks";
 import { setTab, TABS, useUi } from "./store/uiStore";
@@ -31,8 +33,11 @@ function RobotsTab() {
 function Hint() {
   const selected = useAppState((s) => s.selected);
   const placing = useUi((s) => s.placing);
+  const replaying = useReplaying();
   let text: string;
-  if (placing) text = `Click the field where the ball should be placed (${placing.replace(/_/g, " ").toLowerCase()}) · Esc to cancel`;
+  if (replaying)
+    text = "REPLAY: nothing is sent to robots · Space play/pause · ←/→ one frame · Shift+←/→ 1 s · +/− speed · ? for keys";
+  else if (placing) text = `Click the field where the ball should be placed (${placing.replace(/_/g, " ").toLowerCase()}) · Esc to cancel`;
   else if (selected)
     text = `Click or drag (sets the heading) on the field to send ${selected.team} ${selected.id} · right-click: teleport · Esc deselects`;
   else text = "Click a robot, then a point to send it · wheel zoom, drag pans, F fits · right-click: teleport · ? for keys";
@@ -46,17 +51,19 @@ function Hint() {
 export function App({ onRetryNow }: { onRetryNow: () => void }) {
   const tab = useUi((s) => s.tab);
   const largeText = useUi((s) => s.largeText);
+  const replaying = useReplaying();
   useEffect(() => installShortcuts(), []);
   useEffect(() => {
     document.documentElement.classList.toggle("large-text", largeText);
   }, [largeText]);
 
   return (
-    <div className={`app tab-${tab}`}>
+    <div className={`app tab-${tab}${replaying ? " replaying" : ""}`} data-replaying={replaying ? "true" : "false"}>
       <TopBar onRetryNow={onRetryNow} />
       <main className="main">
         <div className="field-col">
           <FieldView />
+          <Timeline />
           <Hint />
         </div>
         <aside className="panel">

@@ -4,6 +4,8 @@ import { selectRobot, setEstop } from "./actions";
 import { giveRefereeCommand } from "./actions";
 import { fitView } from "./field/viewState";
 import { togglePaused } from "./plots/sampler";
+import { changeSpeed, isReplaying, seek, shownSpeed, speedStore, step, togglePlay } from "./player/actions";
+import { nextSpeed } from "./player/timeline";
 import { setTab, TABS, uiStore } from "./store/uiStore";
 import { appStore } from "./store/appStore";
 
@@ -13,7 +15,10 @@ export const SHORTCUTS: [string, string][] = [
   ["0 – 9", "select blue robot 0 – 9"],
   ["Shift + 0 – 9", "select yellow robot 0 – 9"],
   ["F", "fit the field into view"],
-  ["Space", "pause / resume plots"],
+  ["Space", "pause / resume plots (while replaying: play / pause the log)"],
+  ["← / →", "while replaying: one camera frame back / forward"],
+  ["Shift + ← / →", "while replaying: 1 s back / forward"],
+  ["+ / −", "while replaying: faster / slower (0.1× … 10×, max)"],
   ["H", "internal referee HALT"],
   ["S", "internal referee STOP"],
   ["G", "internal referee FORCE START"],
@@ -35,6 +40,35 @@ function typing(ev: KeyboardEvent): boolean {
 
 const DIGIT = /^Digit([0-9])$/;
 
+/** The replay's keys (only while a log plays): true when the key was one of them. */
+function handleReplayKey(ev: KeyboardEvent): boolean {
+  const s = appStore.getState();
+  switch (ev.key) {
+    case " ":
+      void togglePlay();
+      return true;
+    case "ArrowLeft":
+    case "ArrowRight": {
+      const dir = ev.key === "ArrowLeft" ? -1 : 1;
+      if (ev.shiftKey) {
+        const pos = s.world?.replay?.position_s ?? s.player?.position_s ?? 0;
+        void seek(pos + dir);
+      } else void step(dir);
+      return true;
+    }
+    case "+":
+    case "=":
+    case "-":
+    case "_": {
+      const dir = ev.key === "+" || ev.key === "=" ? 1 : -1;
+      void changeSpeed(nextSpeed(shownSpeed(s.player, speedStore.getState().pending), dir));
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
 export function handleKey(ev: KeyboardEvent): boolean {
   if (ev.ctrlKey || ev.metaKey) return false;
   // Outside text inputs only: "e" is a letter when typing (the E-stop button is always one click away).
@@ -54,6 +88,7 @@ export function handleKey(ev: KeyboardEvent): boolean {
     }
     return false;
   }
+  if (isReplaying() && handleReplayKey(ev)) return true;
   const m = DIGIT.exec(ev.code);
   if (m) {
     const id = Number(m[1]);
@@ -106,7 +141,9 @@ export function handleKey(ev: KeyboardEvent): boolean {
 
 export function installShortcuts(): () => void {
   const onKey = (ev: KeyboardEvent) => {
-    if (ev.repeat && ev.key !== "e" && ev.key !== "E") return;
+    // E repeats (a held key keeps stopping), and so do the replay's frame steps
+    const repeats = ev.key === "e" || ev.key === "E" || ev.key === "ArrowLeft" || ev.key === "ArrowRight";
+    if (ev.repeat && !repeats) return;
     if (handleKey(ev)) ev.preventDefault();
   };
   window.addEventListener("keydown", onKey);

@@ -1,12 +1,12 @@
 // Read-only hooks for end-to-end tests: window.__touchline.
 
-import type { StrategyState, Team, Vec, World } from "./api/types";
+import type { Player, ReplayClock, StrategyState, Team, Vec, World } from "./api/types";
 import { canvasToWorld, worldToCanvas, type Point } from "./field/transform";
 import { currentTransform } from "./field/viewState";
 import { appStore } from "./store/appStore";
 import { fieldStats } from "./components/FieldView";
 import { plotInfo, plotStats } from "./components/PlotsPanel";
-import { samples } from "./plots/sampler";
+import { plotNow, samples, visibleRange } from "./plots/sampler";
 
 export interface TouchlineTestApi {
   /** World mm -> CSS px relative to the field canvas's top-left corner. */
@@ -37,6 +37,12 @@ export interface TouchlineTestApi {
   plots(): { id: number; keys: string[]; lastX: number; points: number }[];
   /** Every signal name the plots can show. */
   signals(): string[];
+  /** The log player's state (null before the first snapshot). */
+  player(): Player | null;
+  /** The replay clock of the latest world (null when live). */
+  replay(): ReplayClock | null;
+  /** The plots' "now" (the playhead while replaying) and their visible range (Unix s). */
+  plotTime(): { now: number; range: [number, number] };
 }
 
 declare global {
@@ -85,6 +91,9 @@ export function installTestHooks(): void {
       (appStore.getState().world?.robots ?? []).map((r) => ({ team: r.team, id: r.id, kick: r.kick ?? null, dribbler: r.dribbler === true })),
     plots: () => plotInfo(),
     signals: () => samples.keys(),
+    player: () => appStore.getState().player,
+    replay: () => appStore.getState().world?.replay ?? null,
+    plotTime: () => ({ now: plotNow(), range: visibleRange() }),
   });
   Object.defineProperty(window, "__touchline", {
     value: api,

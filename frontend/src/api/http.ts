@@ -6,6 +6,11 @@ import type {
   EstopAnswer,
   EstopIn,
   RefereeCommandIn,
+  LogList,
+  Player,
+  PlayerIn,
+  Recording,
+  RecordingIn,
   TargetIn,
   TeleportBallIn,
   TeleportRobotIn,
@@ -168,4 +173,18 @@ export function teleportRobot(team: Team, id: number, x: number, y: number, orie
   const body: TeleportRobotIn = { x: Math.round(x), y: Math.round(y) };
   if (orientation !== undefined) body.orientation = orientation;
   return request<unknown>("POST", `/api/sim/robots/${team}/${id}`, body);
+}
+
+// ---- log player and recorder ----
+
+/** The player's state (live or a log). */
+export const getPlayer = () => request<Player>("GET", "/api/player");
+/** One player action (open, play, pause, seek, step, jump, live); answers the new state. */
+export const postPlayer = (body: PlayerIn) => request<Player>("POST", "/api/player", body);
+/** The logs the player may open. */
+export const getLogs = () => request<LogList>("GET", "/api/logs");
+/** Start a new recording file, start or stop recording. */
+export function postRecording(action: RecordingIn["action"]): Promise<Recording> {
+  const body: RecordingIn = { action };
+  return request<Recording>("POST", "/api/recording", body);
 }

@@ -22,20 +22,34 @@ export type {
   InternalReferee,
   LatencyHealth,
   LatencyStage,
+  LogFileInfo,
+  LogList,
   ParamChange,
   ParamsDiff,
   ParamsState,
   PlayInfo,
+  Player,
+  PlayerEvent,
+  PlayerJumpIn,
+  PlayerLiveIn,
+  PlayerOpenIn,
+  PlayerPauseIn,
+  PlayerPlayIn,
+  PlayerSeekIn,
+  PlayerStepIn,
   PresetDetail,
   PresetList,
   ProcessorHealth,
   RawCamera,
+  Recording,
+  RecordingIn,
   Referee,
   RefereeGameEvent,
   RefereeHealth,
   RefereeTeam,
   RefereeView,
   RelayHealth,
+  ReplayClock,
   Robot,
   RobotCommand,
   RobotControl,
@@ -55,7 +69,27 @@ export type {
   WorldHealth,
 } from "./contract.gen";
 
-import type { StrategyView, Team } from "./contract.gen";
+import type {
+  PlayerJumpIn,
+  PlayerLiveIn,
+  PlayerOpenIn,
+  PlayerPauseIn,
+  PlayerPlayIn,
+  PlayerSeekIn,
+  PlayerStepIn,
+  StrategyView,
+  Team,
+} from "./contract.gen";
+
+/** A body of POST /api/player (one per action). */
+export type PlayerIn =
+  | PlayerOpenIn
+  | PlayerPlayIn
+  | PlayerPauseIn
+  | PlayerSeekIn
+  | PlayerStepIn
+  | PlayerJumpIn
+  | PlayerLiveIn;
 
 export const TEAMS: readonly Team[] = ["blue", "yellow"];
 

@@ -62,7 +62,8 @@ function loop(): void {
   const paused = plotsStore.getState().paused;
   for (const p of live.values()) {
     if (paused && p.lastT1 === t1) continue;
-    if (!paused && p.lastRows === samples.rows && t1 - p.lastT1 < 0.1) continue;
+    // (abs: while replaying, the right edge jumps back on a seek)
+    if (!paused && p.lastRows === samples.rows && Math.abs(t1 - p.lastT1) < 0.1) continue;
     drawPlot(p, t0, t1);
   }
 }

@@ -5,6 +5,7 @@ import { fmtFixed } from "../format";
 import { refereeSilentFor } from "../referee";
 import { uiStore, useUi } from "../store/uiStore";
 import { PlaySelector } from "./PlaySelector";
+import { LogsControl, RecordIndicator, ReplayBadge } from "./PlayerBar";
 
 interface Props {
   onRetryNow: () => void;
@@ -171,11 +172,14 @@ export function TopBar({ onRetryNow }: Props) {
         <span className="brand-mark" aria-hidden="true" />
         Touchline
       </div>
+      <ReplayBadge />
       <ConnectionStatus onRetryNow={onRetryNow} />
       <VisionRate />
       <RefereeInfo />
       <PlaySelector variant="bar" />
       <div className="spacer" />
+      <RecordIndicator />
+      <LogsControl />
       <ViewOptions />
       <EstopButton />
     </header>

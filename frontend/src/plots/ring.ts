@@ -156,9 +156,9 @@ export class SampleTable {
     return { t, cols };
   }
 
+  /** Drop every row and column; `rows` keeps counting (plots compare it to see new data). */
   clear(): void {
     this.time.clear();
     this.cols.clear();
-    this.rows = 0;
   }
 }

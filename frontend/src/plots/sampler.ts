@@ -1,5 +1,10 @@
 // Feeds the live sample table from the app store (which the websocket client updates):
 // one row per world message and one per health message, stamped with the arrival time.
+// While a log replays, world rows are stamped with the log's wall time at the playhead
+// (world.replay.t_unix) and the plots' right edge is the playhead; the table starts again
+// when the replay jumps (a new epoch: open, seek) or the source switches live <-> log, so
+// time never goes backwards in a plot. Health rows (the live station's) are not sampled
+// during a replay: they belong to another time line.
 // Runs outside React; plots read the table on animation frames.
 
 import { useSyncExternalStore } from "react";
@@ -16,18 +21,49 @@ export function nowS(): number {
   return (performance.timeOrigin + performance.now()) / 1000;
 }
 
+/** The replay's playhead (log wall time, Unix s) while a log plays, else null. */
+let playhead: number | null = null;
+
+export function replayPlayhead(): number | null {
+  return playhead;
+}
+
+/** The plots' "now": the playhead while replaying, else the wall clock. */
+export function plotNow(): number {
+  return playhead ?? nowS();
+}
+
 export function startSampler(store: AppStore): () => void {
   let world = store.getState().world;
   let health = store.getState().health;
+  /** "live", or "log:<epoch>": a change starts the table again. */
+  let timeline: string | null = null;
+  let lastT = Number.NaN;
+  playhead = world?.replay?.t_unix ?? null;
   return store.subscribe(() => {
     const s = store.getState();
     if (s.world !== world) {
       world = s.world;
-      if (world) samples.append(nowS(), worldSignals(world));
+      if (world) {
+        const r = world.replay ?? null;
+        const key = r ? `log:${r.epoch}` : "live";
+        const t = r ? r.t_unix : nowS();
+        // A new time line, or a replay stepping back without a new epoch: start again.
+        const back = r !== null && Number.isFinite(lastT) && t < lastT - 1e-3;
+        if ((timeline !== null && key !== timeline) || back) {
+          samples.clear();
+          // a frozen window would show nothing of the new time line
+          if (plotsStore.getState().paused) plotsStore.setState({ pausedAt: t });
+        }
+        timeline = key;
+        lastT = t;
+        playhead = r ? t : null;
+        samples.append(t, worldSignals(world));
+      }
     }
     if (s.health !== health) {
       health = s.health;
-      if (health) samples.append(nowS(), healthSignals(health));
+      if (health && playhead === null) samples.append(nowS(), healthSignals(health));
     }
   });
 }
@@ -41,7 +77,7 @@ export interface PlotsState {
   plots: PlotDef[];
   windowS: number;
   paused: boolean;
-  /** Right edge of the window while paused (Unix s). */
+  /** Right edge of the window while paused (Unix s; the log's time while replaying). */
   pausedAt: number;
 }
 
@@ -100,7 +136,7 @@ export function removeSignal(id: number, key: string): void {
 }
 
 export function setPaused(paused: boolean): void {
-  plotsStore.setState({ paused, pausedAt: nowS() });
+  plotsStore.setState({ paused, pausedAt: plotNow() });
 }
 
 export function togglePaused(): void {
@@ -111,9 +147,9 @@ export function setWindow(windowS: number): void {
   plotsStore.setState({ windowS: Math.max(1, Math.min(60, windowS)) });
 }
 
-/** The visible time range [t0, t1] of every plot (shared). */
+/** The visible time range [t0, t1] of every plot (shared); t1 is the playhead while replaying. */
 export function visibleRange(): [number, number] {
   const s = plotsStore.getState();
-  const t1 = s.paused ? s.pausedAt : nowS();
+  const t1 = s.paused ? s.pausedAt : plotNow();
   return [t1 - s.windowS, t1];
 }

@@ -7,7 +7,7 @@
 const MAX_DEPTH = 5;
 
 /** Keys that are identities or clocks, not signals. */
-const SKIP_KEYS = new Set(["seq", "id", "team", "camera_id", "frame_number", "t_capture", "time_ns", "command_counter"]);
+const SKIP_KEYS = new Set(["seq", "id", "team", "camera_id", "frame_number", "t_capture", "time_ns", "command_counter", "t_unix", "epoch"]);
 
 function recordKey(item: Record<string, unknown>, index: number): string | null {
   if (typeof item.team === "string" && typeof item.id === "number") return `${item.team}.${item.id}`;

@@ -4,10 +4,13 @@ import type {
   Geometry,
   Health,
   InternalReferee,
+  Player,
+  Recording,
   Referee,
   RefereeTeam,
   StrategyView,
   StreamHealth,
+  ReplayClock,
   World,
 } from "../api/types";
 import { DEFAULT_GEOMETRY } from "../field/defaultGeometry";
@@ -29,6 +32,7 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     halt_reason: "",
     strategy: null,
     internal_referee: internalReferee(),
+    replay: null,
     ...extra,
   };
 }
@@ -64,6 +68,7 @@ export function health(rate = 60): Health {
     latency_stages: [],
     websocket_clients: 1,
     engine: null,
+    recording: recording(),
   };
 }
 
@@ -151,5 +156,66 @@ export const strategyView = (plays: StrategyView["plays"], extra: Partial<Strate
   side_from_referee: false,
   tick_ms: 0.5,
   roles: {},
+  ...extra,
+});
+
+/** The recorder, idle. */
+export const recording = (extra: Partial<Recording> = {}): Recording => ({
+  enabled: true,
+  recording: false,
+  file: "",
+  folder: "var/logs",
+  size_bytes: 0,
+  duration_s: 0,
+  records: 0,
+  dropped: 0,
+  error: "",
+  ...extra,
+});
+
+/** The player, live (as a station starts). */
+export const player = (extra: Partial<Player> = {}): Player => ({
+  source: "live",
+  file: null,
+  duration_s: 0,
+  position_s: 0,
+  playing: false,
+  speed: 1,
+  start_unix: 0,
+  loading: null,
+  error: "",
+  warning: null,
+  events: [],
+  epoch: 0,
+  ...extra,
+});
+
+/** A log open in the player: 120 s, a few events. */
+export const logPlayer = (extra: Partial<Player> = {}): Player =>
+  player({
+    source: "log",
+    file: "var/logs/match.log.gz",
+    duration_s: 120,
+    position_s: 30,
+    playing: false,
+    start_unix: 1_700_000_000,
+    events: [
+      { t_s: 10, kind: "command", label: "FORCE_START" },
+      { t_s: 40, kind: "goal", label: "goal blue" },
+      { t_s: 60, kind: "stage", label: "NORMAL_HALF_TIME" },
+      { t_s: 90, kind: "card", label: "yellow card yellow" },
+    ],
+    epoch: 1,
+    ...extra,
+  });
+
+export const replayClock = (extra: Partial<ReplayClock> = {}): ReplayClock => ({
+  file: "match.log.gz",
+  position_s: 30,
+  t_unix: 1_700_000_030,
+  duration_s: 120,
+  playing: false,
+  speed: 1,
+  epoch: 1,
   ...extra,
 });

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { geometry, health, world } from "./fixtures";
+import { geometry, health, logPlayer, player, replayClock, world } from "./fixtures";
 import { applyMessage, emptyLiveData, parseMessage, type LiveData } from "./reducer";
 
 function apply(state: LiveData, msg: unknown): LiveData {
@@ -80,5 +80,36 @@ describe("applyMessage", () => {
     expect(apply(s, { type: "geometry", geometry: { lines: [] } })).toBe(s);
     expect(apply(s, { type: "health", health: 3 })).toBe(s);
     expect(apply(s, { type: "snapshot", world: null, geometry: null, health: null })).toBe(s);
+  });
+
+  it("takes the player from a snapshot and keeps it when a snapshot has none", () => {
+    let s = apply(emptyLiveData, { type: "snapshot", world: world(1), geometry, health: health(), player: player() });
+    expect(s.player?.source).toBe("live");
+    s = apply(s, { type: "snapshot", world: world(2), geometry, health: health() });
+    expect(s.player?.source).toBe("live");
+  });
+
+  it("replaces the player on a player message and ignores malformed ones", () => {
+    let s = apply(emptyLiveData, { type: "snapshot", world: world(1), geometry, health: health(), player: player() });
+    s = apply(s, { type: "player", player: logPlayer({ playing: true }) });
+    expect(s.player?.source).toBe("log");
+    expect(s.player?.playing).toBe(true);
+    expect(s.player?.events).toHaveLength(4);
+    expect(s.messages).toBe(2);
+    expect(apply(s, { type: "player", player: { source: "tape" } })).toBe(s);
+    expect(apply(s, { type: "player" })).toBe(s);
+    const { events: _e, ...bare } = logPlayer();
+    expect(apply(s, { type: "player", player: bare }).player?.events).toEqual([]);
+  });
+
+  it("accepts a lower world seq when the replay jumped, not within one replay", () => {
+    let s = apply(emptyLiveData, { type: "world", world: world(100, { replay: replayClock({ epoch: 1 }) }) });
+    const before = s;
+    expect(apply(s, { type: "world", world: world(50, { replay: replayClock({ epoch: 1 }) }) })).toBe(before);
+    s = apply(s, { type: "world", world: world(50, { replay: replayClock({ epoch: 2 }) }) });
+    expect(s.world?.seq).toBe(50);
+    expect(s.world?.replay?.epoch).toBe(2);
+    s = apply(s, { type: "world", world: world(10) });
+    expect(s.world?.replay).toBeNull();
   });
 });

@@ -1,6 +1,6 @@
 // Pure handling of server -> client websocket messages (docs/api.md, "Websocket /api/ws").
 
-import type { Geometry, Health, ParamsState, World } from "../api/types";
+import type { Geometry, Health, ParamsState, Player, World } from "../api/types";
 
 export interface LiveData {
   world: World | null;
@@ -8,11 +8,13 @@ export interface LiveData {
   health: Health | null;
   /** Server-owned parameters: pushed on every change (null before the first snapshot). */
   params: ParamsState | null;
+  /** The log player (live or a log), from the snapshot and "player" messages. */
+  player: Player | null;
   /** Number of messages applied (useful to detect activity). */
   messages: number;
 }
 
-export const emptyLiveData: LiveData = { world: null, geometry: null, health: null, params: null, messages: 0 };
+export const emptyLiveData: LiveData = { world: null, geometry: null, health: null, params: null, player: null, messages: 0 };
 
 export type ParseResult =
   | { ok: true; msg: { type: string; [k: string]: unknown } }
@@ -63,6 +65,19 @@ function asParams(v: unknown): ParamsState | undefined {
   return { version: v.version, values: v.values as ParamsState["values"] };
 }
 
+function asPlayer(v: unknown): Player | undefined {
+  if (!isObject(v) || (v.source !== "live" && v.source !== "log") || typeof v.epoch !== "number") return undefined;
+  const p = v as unknown as Player;
+  // Tolerate a server that omits the event list.
+  return Array.isArray(p.events) ? p : { ...p, events: [] };
+}
+
+/** The replay's identity: a world from another replay epoch (or live <-> log) may restart its seq. */
+function replayKey(w: World): string {
+  const r = w.replay;
+  return r ? `log:${r.epoch}` : "live";
+}
+
 function asHealth(v: unknown): Health | undefined {
   if (!isObject(v) || !isObject(v.streams)) return undefined;
   return v as unknown as Health;
@@ -86,13 +101,17 @@ export function applyMessage(state: LiveData, msg: { type: string; [k: string]: 
         geometry: geometry === undefined ? state.geometry : geometry,
         health: health ?? state.health,
         params: asParams(msg.params) ?? state.params,
+        player: asPlayer(msg.player) ?? state.player,
         messages: state.messages + 1,
       };
     }
     case "world": {
       const world = asWorld(msg.world);
       if (world === undefined) return state;
-      if (state.world !== null && world.seq < state.world.seq) return state;
+      // Older worlds are dropped, unless the replay jumped (open, seek, back to live).
+      if (state.world !== null && world.seq < state.world.seq && replayKey(world) === replayKey(state.world)) {
+        return state;
+      }
       return { ...state, world, messages: state.messages + 1 };
     }
     case "geometry": {
@@ -111,6 +130,11 @@ export function applyMessage(state: LiveData, msg: { type: string; [k: string]: 
       // Versions only grow within a session; a restarted backend sends a snapshot first.
       if (state.params !== null && params.version < state.params.version) return state;
       return { ...state, params, messages: state.messages + 1 };
+    }
+    case "player": {
+      const player = asPlayer(msg.player);
+      if (player === undefined) return state;
+      return { ...state, player, messages: state.messages + 1 };
     }
     default:
       return state;
