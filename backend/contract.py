@@ -151,6 +151,16 @@ class RawCamera(TypedDict):
 
 
 @with_config(_STRICT)
+class RecordedWorld(TypedDict):
+    """In replay: the world the live station estimated at this time, as recorded (tracked
+    vision, type 5), drawn beside today's estimate of the same vision (what-if)."""
+
+    source: Annotated[str, Field(description="the tracker's source name, e.g. Touchline")]
+    ball: Vec | None
+    robots: list[RawRobot]
+
+
+@with_config(_STRICT)
 class RefereeTeam(TypedDict):
     name: str
     score: int
@@ -286,6 +296,8 @@ class World(TypedDict):
         description="the station's own referee (the referee panel shows it)")]
     replay: Annotated[ReplayClock | None, Field(
         description="set while the station replays a log (nothing is sent to robots then)")]
+    recorded: Annotated[RecordedWorld | None, Field(
+        description="in replay, the estimate recorded in the log (null live, or if none)")]
 
 
 # ------------------------------------------------------------------------------ geometry

@@ -196,6 +196,8 @@ class Station:
         self.player_feed = PlayerFeed(self.player)
         self.log_folders = LogFolders(self._recording_folder, settings.log_dirs)
         self._opening: asyncio.Task[None] | None = None
+        #: in replay, the newest tracked-vision record of the log (the live estimate)
+        self.recorded_tracked = b""
         self._replay_seq = 0
         self.ingest.live = lambda: self.player.log is None
         self.publisher.muted = lambda: self.player.log is not None
@@ -411,6 +413,9 @@ class Station:
         the relay's (bytes unchanged, the recorded receive time)."""
         if rec.type not in PLAYED_TYPES:
             return
+        if rec.type == TYPE_TRACKER_2020:  # the live estimate of the time: shown, not used
+            self.recorded_tracked = rec.payload
+            return
         from sslpb import touchline_pb2 as tl
         self._replay_seq += 1
         vision = rec.type == 4
@@ -432,6 +437,7 @@ class Station:
         self.referee_watch.clock = (lambda: self.player.now_ns() / 1e9) if replay \
             else time.monotonic
         self.referee_watch.last_heard = None
+        self.recorded_tracked = b""
 
     def player_command(self, fn: Callable[..., T], *args: Any) -> T:
         """A player command on the station thread; the feed is woken to act on it."""

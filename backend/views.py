@@ -8,6 +8,10 @@ import math
 import time
 from typing import TYPE_CHECKING, Any, cast
 
+from google.protobuf.message import DecodeError
+
+from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
+
 from . import contract
 from .messages import TargetEntry
 from .params.model import PLAYS
@@ -114,6 +118,26 @@ def referee_view(st: Station) -> contract.RefereeView:
     }
 
 
+def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
+    """A tracked-vision record of the log (m) as the page draws it (mm)."""
+    if not payload:
+        return None
+    p = TrackerWrapperPacket()
+    try:
+        p.ParseFromString(payload)
+    except DecodeError:
+        return None
+    f = p.tracked_frame
+    ball: contract.Vec | None = None
+    if f.balls:
+        ball = {"x": f.balls[0].pos.x * 1000.0, "y": f.balls[0].pos.y * 1000.0}
+    robots: list[contract.RawRobot] = [
+        {"team": "yellow" if r.robot_id.team == 1 else "blue", "id": r.robot_id.id,
+         "x": r.pos.x * 1000.0, "y": r.pos.y * 1000.0, "orientation": r.orientation}
+        for r in f.robots if r.visibility > 0]
+    return {"source": p.source_name, "ball": ball, "robots": robots}
+
+
 def world(st: Station) -> contract.World:
     world = st.world_topic.latest_value()
     targets: dict[tuple[Team, int], TargetEntry] = st.targets_topic.latest_value() or {}
@@ -136,6 +160,7 @@ def world(st: Station) -> contract.World:
         "strategy": None,
         "internal_referee": referee_view(st)["internal"],
         "replay": st.player.clock(),
+        "recorded": recorded_world(st.recorded_tracked) if st.player.log is not None else None,
     }
     out["strategy"] = strategy_state(st)
     if ref is not None:

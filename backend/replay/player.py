@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
-from ssllog.format import TYPE_REFEREE_2013, TYPE_VISION_2014
+from ssllog.format import TYPE_REFEREE_2013, TYPE_TRACKER_2020, TYPE_VISION_2014
 from ssllog.reader import Record
 
 from .. import contract
@@ -407,4 +407,4 @@ def _kind(kind: str) -> contract.PlayerEventKind:
 
 
 #: the record types that go onto the bus (the rest of a log is skipped by the feed)
-PLAYED_TYPES = frozenset({TYPE_VISION_2014, TYPE_REFEREE_2013})
+PLAYED_TYPES = frozenset({TYPE_VISION_2014, TYPE_REFEREE_2013, TYPE_TRACKER_2020})

@@ -362,6 +362,17 @@ export interface RawRobot {
   orientation: number;
 }
 
+/**
+ * In replay: the world the live station estimated at this time, as recorded (tracked
+ * vision, type 5), drawn beside today's estimate of the same vision (what-if).
+ */
+export interface RecordedWorld {
+  /** the tracker's source name, e.g. Touchline */
+  source: string;
+  ball: Vec | null;
+  robots: RawRobot[];
+}
+
 /** The session recorder (SSL log files in var/logs/, docs/logformat.md). */
 export interface Recording {
   enabled: boolean;
@@ -689,6 +700,8 @@ export interface World {
   internal_referee: InternalReferee;
   /** set while the station replays a log (nothing is sent to robots then) */
   replay: ReplayClock | null;
+  /** in replay, the estimate recorded in the log (null live, or if none) */
+  recorded: RecordedWorld | null;
 }
 
 /** The world model: its age by the receive clock, what it dropped and why. */

@@ -33,6 +33,7 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     strategy: null,
     internal_referee: internalReferee(),
     replay: null,
+    recorded: null,
     ...extra,
   };
 }
