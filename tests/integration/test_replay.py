@@ -1,0 +1,137 @@
+"""Record and replay through the real processes: a live session (fieldsim, relay, backend)
+records into its folder; the file is a real SSL log with the expected messages; the station
+replays it (nothing sent to robots meanwhile), seeks, steps, jumps, and goes back to live."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from ssllog.reader import LogReader
+from ssllog.seek import read_index
+
+from .conftest import StationHandle, launched, wait_until
+
+JSON = {"content-type": "application/json"}
+
+
+def post(st: StationHandle, path: str, body: dict[str, Any]) -> httpx.Response:
+    return httpx.post(st.url + path, json=body, headers=JSON, timeout=10.0)
+
+
+def player(st: StationHandle, body: dict[str, Any]) -> dict[str, Any]:
+    r = post(st, "/api/player", body)
+    assert r.status_code == 200, r.text
+    return r.json()  # type: ignore[no-any-return]
+
+
+def test_a_live_session_is_recorded_and_replays(tmp_path: Path) -> None:
+    logs = tmp_path / "logs"
+    with launched("--record-dir", str(logs),
+                  "--backend-arg=--set=recording.rotate_on_stage=false") as st:
+        wait_until(lambda: len(st.get("/api/world")["robots"]) >= 6, 20, what="robots")
+        rec = st.get("/api/health")["recording"]
+        assert rec["enabled"] and rec["recording"] and rec["folder"] == str(logs)
+        # a fresh file for this test, then operator actions in it
+        assert post(st, "/api/recording", {"action": "new-file"}).status_code == 200
+        wait_until(lambda: st.get("/api/health")["recording"]["file"] != rec["file"], 10,
+                   what="a new file")
+        for cmd in ("STOP", "FORCE_START"):
+            assert post(st, "/api/referee/internal/command", {"command": cmd}).status_code \
+                == 200
+            wait_until(lambda c=cmd: (st.get("/api/world")["referee"] or {}).get("command")
+                       == c, 10, what=cmd)
+        assert post(st, "/api/robots/blue/1/target", {"x": 500, "y": 500}).status_code == 200
+        wait_until(lambda: st.get("/api/health")["recording"]["duration_s"] > 2.5, 20,
+                   what="2.5 s recorded")
+        name = st.get("/api/health")["recording"]["file"]
+        assert post(st, "/api/recording", {"action": "new-file"}).status_code == 200
+        wait_until(lambda: st.get("/api/health")["recording"]["file"] != name, 10,
+                   what="the file finished")
+        path = logs / name
+
+        # a real SSL log: the league's types, bytes unchanged, and Touchline's own records
+        wait_until(lambda: read_index(str(path)) is not None, 10, what="the index record")
+        reader = LogReader(str(path))
+        counts = Counter(r.type for r in reader)
+        assert reader.warning is None and not reader.unknown_types
+        assert counts[4] > 100 and counts[3] > 20 and counts[5] > 100, counts
+        assert counts[1001] > 100 and counts[1003] == 3 and counts[1004] >= 2, counts
+        assert counts[1005] == 1, counts
+        listed = {f["name"] for f in st.get("/api/logs")["files"]}
+        assert name in listed
+
+        # replay it from the page's API
+        opened = player(st, {"action": "open", "path": str(path)})
+        assert opened["loading"] is not None or opened["source"] == "log"
+        p = wait_until(lambda: (lambda v: v if v["source"] == "log" else None)(
+            st.get("/api/player")), 20, what="the log open")
+        assert p["duration_s"] > 2.5 and not p["playing"]
+        assert {"STOP", "FORCE_START"} <= {e["label"] for e in p["events"]
+                                           if e["kind"] == "command"}
+        assert sum(e["kind"] == "operator" for e in p["events"]) == 3
+        # nothing goes to robots while replaying: the relay's table empties
+        wait_until(lambda: (st.get("/api/health")["relay"] or {}).get("active_robots") == 0,
+                   5, what="no robot commanded by the relay")
+        r = post(st, "/api/sim/ball", {"x": 0, "y": 0})
+        assert r.status_code == 409 and "replaying" in r.text
+
+        # seek: the robots are where the log has them (its own recorded estimate)
+        mid = round(p["duration_s"] * 0.6, 3)
+        player(st, {"action": "seek", "position_s": mid})
+        w = wait_until(lambda: (lambda w: w if w["replay"] and w["recorded"] and w["robots"]
+                                and abs(w["replay"]["position_s"] - mid) < 1e-3 else None)(
+            st.get("/api/world")), 10, what="the world at the seek")
+        rec_robots = {(r["team"], r["id"]): r for r in w["recorded"]["robots"]}
+        for rb in w["robots"]:
+            ref = rec_robots.get((rb["team"], rb["id"]))
+            if ref is not None and rb["visible"]:
+                assert math.hypot(rb["x"] - ref["x"], rb["y"] - ref["y"]) < 30, (rb, ref)
+        assert w["halt_reason"] in ("", "HALT") or "vision" not in w["halt_reason"], w[
+            "halt_reason"]
+
+        # step one camera frame forward and back
+        here = st.get("/api/player")["position_s"]
+        after = player(st, {"action": "step", "frames": 1})["position_s"]
+        after = wait_until(lambda: st.get("/api/player")["position_s"] > here, 5,
+                           what="a step forward") and st.get("/api/player")["position_s"]
+        assert 0 < after - here <= 0.02
+        player(st, {"action": "step", "frames": -1})
+        back = wait_until(lambda: (lambda v: v if v < after else None)(
+            st.get("/api/player")["position_s"]), 5, what="a step back")
+        assert 0 < after - back <= 0.02
+
+        # jump back to the previous command, then play fast to the end
+        t_cmd = player(st, {"action": "jump", "kind": "command", "direction": "prev"})
+        assert t_cmd["position_s"] < mid
+        r = post(st, "/api/player", {"action": "play", "speed": 50})
+        assert r.status_code == 422 and "speed" in r.text
+        player(st, {"action": "play", "speed": 0})
+        end = wait_until(lambda: (lambda v: v if not v["playing"] else None)(
+            st.get("/api/player")), 20, what="the end of the log")
+        assert end["position_s"] == end["duration_s"]
+
+        # back to live: the world follows the simulator again and commands flow
+        player(st, {"action": "live"})
+        wait_until(lambda: st.get("/api/world")["replay"] is None and len(
+            st.get("/api/world")["robots"]) >= 6, 10, what="live again")
+        wait_until(lambda: (st.get("/api/health")["relay"] or {}).get("active_robots", 0) > 0,
+                   10, what="commands to the robots again")
+
+
+def test_player_refuses_what_it_cannot_do(station: StationHandle) -> None:
+    """Live, with nothing open: a clear reason, never a 500."""
+    r = post(station, "/api/player", {"action": "play", "speed": 1})
+    assert r.status_code == 409 and "no log is open" in r.text
+    r = post(station, "/api/player", {"action": "open", "path": "/etc/passwd"})
+    assert r.status_code == 422 and "not in a log folder" in r.text
+    r = httpx.post(station.url + "/api/player", headers=JSON, timeout=10.0,
+                   content=b'{"action": "seek", "position_s": NaN}')
+    assert r.status_code == 422
+    r = post(station, "/api/player", {"action": "fly"})
+    assert r.status_code == 422
+    assert station.get("/api/player")["source"] == "live"
