@@ -473,6 +473,8 @@ class Station:
 
         def progress(frac: float) -> None:  # in the worker thread: hand over, a step a time
             if frac - last[0] >= 0.02 or frac >= 1.0:
+                if int(frac * 4) > int(last[0] * 4):  # the terminal too, every quarter
+                    log.info("indexing %s: %.0f %%", path, frac * 100)
                 last[0] = frac
                 loop.call_soon_threadsafe(self._loading, frac)
 

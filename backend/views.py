@@ -297,10 +297,17 @@ def health(st: Station) -> contract.Health:
     if referee is not None:
         referee["source"] = ("internal" if referee["source_identifier"]
                              == st.referee_state.source_identifier else "game-controller")
+    recording = st.recording_status()
+    station_lines: list[str] = []
+    if recording["error"]:
+        station_lines.append(f"recording stopped: {recording['error']}")
+    if st.player.log is not None:
+        station_lines.append(f"replaying {st.player.log.path}: nothing is sent to robots or "
+                             "a simulator")
     out: contract.Health = {
         "ok": ok,
-        "warnings": [*estop_warnings(st), *_warnings(vision, relay, referee, world),
-                     *st.params.warnings],
+        "warnings": [*estop_warnings(st), *station_lines,
+                     *_warnings(vision, relay, referee, world), *st.params.warnings],
         "estop": estop_view(st),
         "world": world,
         "referee": cast(contract.RefereeHealth | None, referee),
@@ -313,7 +320,7 @@ def health(st: Station) -> contract.Health:
         "latency_stages": latency_stages(st),
         "websocket_clients": st.ws_clients,
         "engine": engine_health(st),
-        "recording": st.recording_status(),
+        "recording": recording,
     }
     return out
 

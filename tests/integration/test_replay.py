@@ -135,3 +135,33 @@ def test_player_refuses_what_it_cannot_do(station: StationHandle) -> None:
     r = post(station, "/api/player", {"action": "fly"})
     assert r.status_code == 422
     assert station.get("/api/player")["source"] == "live"
+
+
+def test_a_full_disk_stops_recording_and_the_station_goes_on(tmp_path: Path) -> None:
+    """The recording folder on a 256 KiB file system (a real ENOSPC from the kernel): the
+    recorder stops with the reason in health (a warning line and Health.recording.error);
+    the loop keeps running and commanding robots."""
+    import os
+    import subprocess
+
+    if os.geteuid() != 0:
+        import pytest
+
+        pytest.skip("mounting a small tmpfs needs root (make test and CI run as root)")
+    disk = tmp_path / "small"
+    disk.mkdir()
+    subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(disk)], check=True)
+    try:
+        with launched("--record-dir", str(disk)) as st:
+            h = wait_until(lambda: (lambda h: h if h["recording"]["error"] else None)(
+                st.get("/api/health")), 30, what="the recorder's disk-full error")
+            assert "disk full" in h["recording"]["error"] and not h["recording"]["recording"]
+            assert any(w.startswith("recording stopped: disk full") for w in h["warnings"])
+            seq = st.get("/api/world")["seq"]
+            wait_until(lambda: st.get("/api/world")["seq"] > seq + 10, 10,
+                       what="the world going on")
+            wait_until(lambda: (st.get("/api/health")["relay"] or {}).get(
+                "active_robots", 0) > 0, 10, what="robots commanded")
+            assert st.get("/api/health")["ok"]
+    finally:
+        subprocess.run(["umount", "-l", str(disk)], check=False)
