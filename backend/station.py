@@ -741,9 +741,8 @@ class Station:
         if force or self.geometry_topic.seq != v.geometry_seq:
             changes.update(geometry=self.geometry(), geometry_seq=self.geometry_topic.seq)
         if force or self.player.serial != v.player_serial:
-            player = self.player.view()
-            changes.update(player=player, player_serial=self.player.serial,
-                           player_json=dumps({"type": "player", "player": player}, "player"))
+            changes.update(player=self.player.view(), player_serial=self.player.serial,
+                           player_json=self.player.json())
         if changes:
             self.views = replace(v, serial=v.serial + 1, **changes)
             self._notify_views()

@@ -36,10 +36,10 @@ class LogFolders:
         if "\0" in path:
             raise PlayerError("the path contains a NUL character")
         p = Path(path).expanduser()
-        if not p.is_absolute():
-            p = self.folders()[0] / p
-        real = p.resolve()
         allowed = self.folders()
+        if not p.is_absolute():  # a name in one of the folders (the first that has it)
+            p = next((f / p for f in allowed if (f / p).exists()), allowed[0] / p)
+        real = p.resolve()
         if not any(real.is_relative_to(f) for f in allowed):
             names = ", ".join(str(f) for f in allowed)
             raise PlayerError(f"{path} is not in a log folder ({names}); start the station with "

@@ -24,13 +24,14 @@ from ssllog.format import TYPE_REFEREE_2013, TYPE_TRACKER_2020, TYPE_VISION_2014
 from ssllog.reader import Record
 
 from .. import contract
+from ..jsonsafe import dumps
 
 #: after a seek the pipeline is re-run over this much of the log before the playhead, so the
 #: filters have settled and the field shows the robots where the log has them
-PREROLL_S = 0.5
+PREROLL_S = 0.3
 #: records emitted per feed tick while catching up (the topics hold 64 vision packets; each
 #: tick lets every processor that waits on them run before the next batch)
-BATCH = 16
+BATCH = 32
 #: the speeds a page may choose (0 = as fast as possible)
 MIN_SPEED, MAX_SPEED = 0.1, 10.0
 #: step back: how far back one camera frame may be looked for (a gap in the log is longer)
@@ -110,6 +111,10 @@ class LogPlayer:
         self._vision_times: deque[int] = deque(maxlen=HISTORY)
         #: bumped on every state change a page should hear of (not the playhead moving)
         self.serial = 0
+        #: the open log's events as the page gets them, and as JSON: made once per log (a
+        #: long session has thousands; the player's state changes on every seek)
+        self._events: list[contract.PlayerEvent] = []
+        self.events_json = "[]"
         self.emitted = 0
 
     # ---- state ----
@@ -154,11 +159,14 @@ class LogPlayer:
             "loading": self.loading,
             "error": self.error,
             "warning": lg.warning if lg is not None else None,
-            "events": [] if lg is None else [
-                {"t_s": (e.time_ns - lg.t_first_ns) / 1e9, "kind": _kind(e.kind),
-                 "label": e.label} for e in lg.events],
             "epoch": self.epoch,
+            "events": self._events,
         }
+
+    def json(self) -> str:
+        """``{"type": "player", "player": view()}`` as JSON, the events' JSON made once."""
+        head = dumps({"type": "player", "player": {**self.view(), "events": []}}, "player")
+        return head[:-len('[]}}')] + self.events_json + "}}"
 
     def clock(self) -> contract.ReplayClock | None:
         """What every world message carries while a log is open."""
@@ -179,6 +187,9 @@ class LogPlayer:
         """Opens ``log`` (already indexed): paused at its start, the first frames shown."""
         self.close()
         self.log = log
+        self._events = [{"t_s": (e.time_ns - log.t_first_ns) / 1e9, "kind": _kind(e.kind),
+                         "label": e.label} for e in log.events]
+        self.events_json = dumps(self._events, "events")
         self.loading = None
         self.loading_path = None
         self.error = ""
@@ -197,6 +208,8 @@ class LogPlayer:
         if self.log is not None:
             self.log.close()
         self.log = None
+        self._events = []
+        self.events_json = "[]"
         self._feed = None
         self._target_ns = None
         self.playing = False

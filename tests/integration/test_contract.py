@@ -22,7 +22,8 @@ from .conftest import StationHandle, launched, wait_until
 
 @pytest.fixture(scope="module")
 def busy() -> Iterator[StationHandle]:
-    with launched("--backend-arg=--set", "--backend-arg=strategy.engine=numpy") as st:
+    with launched("--backend-arg=--set", "--backend-arg=strategy.engine=numpy",
+                  "--log-dir", "tests/data") as st:
         yield st
 
 
@@ -81,6 +82,11 @@ def test_every_answer_and_message_matches_the_contract(busy: StationHandle) -> N
     _valid(contract.EstopAnswer, _post(st, "/api/estop", {"active": False, "confirm": True}),
            "POST /api/estop (release)")
 
+    _valid(contract.Recording, _post(st, "/api/recording", {"action": "new-file"}),
+           "POST /api/recording")
+    _valid(contract.LogList, st.get("/api/logs"), "GET /api/logs")
+    _valid(contract.Player, st.get("/api/player"), "GET /api/player (live)")
+
     seen: set[str] = set()
     ws_url = st.url.replace("http://", "ws://") + "/api/ws"
     with connect(ws_url, open_timeout=10) as ws:
@@ -94,6 +100,25 @@ def test_every_answer_and_message_matches_the_contract(busy: StationHandle) -> N
                 r = httpx.patch(st.url + "/api/params", json={"strategy": {"kick_speed_mps": 5.0}},
                                 timeout=5)
                 assert r.status_code == 200, r.text
+
+    # replaying: the player's answers and message, a world with its replay clock and the
+    # estimate recorded in the log
+    with connect(ws_url, open_timeout=10) as ws:
+        _valid(contract.Player, _post(st, "/api/player", {
+            "action": "open", "path": "fieldsim-2s.log.gz"}), "POST /api/player")
+        deadline = time.monotonic() + 20
+        replayed: dict[str, Any] = {}
+        while not ("player" in replayed and "world" in replayed):
+            assert time.monotonic() < deadline, f"only {sorted(replayed)} arrived in replay"
+            msg = json.loads(ws.recv(timeout=5))
+            _valid(contract.ServerMessage, msg, f"websocket {msg.get('type')!r} in replay")
+            if msg["type"] == "player" and msg["player"]["source"] == "log":
+                replayed["player"] = msg
+            if msg["type"] == "world" and msg["world"]["replay"] and msg["world"]["recorded"]:
+                replayed["world"] = msg
+    _valid(contract.Player, _post(st, "/api/player", {"action": "seek", "position_s": 1.0}),
+           "POST /api/player seek")
+    _valid(contract.Player, _post(st, "/api/player", {"action": "live"}), "POST player live")
 
 
 def test_the_contract_refuses_an_undeclared_key() -> None:
