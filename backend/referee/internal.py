@@ -49,6 +49,16 @@ class _Team:
         return sorted(t - now_us for t in self.yellow_card_ends_us if t > now_us)
 
 
+#: how long the timed stages last (the rules: 5 min halves and half time, 2.5 min extra
+#: halves); the others have no clock (0 is sent)
+STAGE_DURATION_US: dict[str, int] = {
+    "NORMAL_FIRST_HALF": 300_000_000, "NORMAL_HALF_TIME": 300_000_000,
+    "NORMAL_SECOND_HALF": 300_000_000, "EXTRA_TIME_BREAK": 300_000_000,
+    "EXTRA_FIRST_HALF": 150_000_000, "EXTRA_HALF_TIME": 120_000_000,
+    "EXTRA_SECOND_HALF": 150_000_000, "PENALTY_SHOOTOUT_BREAK": 120_000_000,
+}
+
+
 @dataclass
 class InternalReferee:
     source_identifier: str = field(default_factory=lambda: f"touchline-{uuid.uuid4()}")
@@ -61,6 +71,10 @@ class InternalReferee:
     blue: _Team = field(default_factory=lambda: _Team("Blue"))
     yellow: _Team = field(default_factory=lambda: _Team("Yellow"))
     robots_per_team: int = 6  # the division's number (B: 6, A: 11); cards lower it
+    #: the stage whose clock runs, and when it began (us): stage_time_left is sent like the
+    #: game controller sends it (the league's tools expect it: ssl-log-stats failed without)
+    _clock_stage: str = ""
+    _stage_start_us: int = 0
 
     def card(self, team: str, kind: str, now_us: int | None = None) -> None:
         """A yellow card (one robot fewer for 120 s) or a red card (for the rest of the
@@ -111,9 +125,13 @@ class InternalReferee:
 
     def message(self, now_us: int | None = None) -> Referee:
         now = int(time.time() * 1e6) if now_us is None else now_us
+        if self.stage != self._clock_stage:
+            self._clock_stage, self._stage_start_us = self.stage, now
         m = Referee(
             source_identifier=self.source_identifier,
             packet_timestamp=now,
+            stage_time_left=STAGE_DURATION_US.get(self.stage, 0) - (now - self._stage_start_us)
+            if self.stage in STAGE_DURATION_US else 0,
             stage=Referee.Stage.Value(self.stage),
             command=Referee.Command.Value(self.command),
             command_counter=self.command_counter,

@@ -12,6 +12,17 @@ def test_message_is_a_complete_referee_packet() -> None:
     assert m.source_identifier == ref.source_identifier
 
 
+def test_stage_time_left_runs_like_the_game_controllers() -> None:
+    """Sent in every message (the league's ssl-log-stats dereferences it): 0 before the game,
+    then the half's 5 minutes counting down from the stage's start."""
+    ref = InternalReferee()
+    m = Referee.FromString(ref.encode(now_us=1_000_000))
+    assert m.HasField("stage_time_left") and m.stage_time_left == 0
+    ref.give("FORCE_START", now_us=2_000_000)
+    assert Referee.FromString(ref.encode(now_us=2_000_000)).stage_time_left == 300_000_000
+    assert Referee.FromString(ref.encode(now_us=12_000_000)).stage_time_left == 290_000_000
+
+
 def test_commands_count_and_carry_their_position() -> None:
     ref = InternalReferee()
     ref.give("STOP")
