@@ -683,6 +683,49 @@ class Player(TypedDict):
 
 
 @with_config(_STRICT)
+class HistoryBall(TypedDict):
+    x: float
+    y: float
+    vx: float
+    vy: float
+
+
+@with_config(_STRICT)
+class HistoryRobot(TypedDict):
+    team: Team
+    id: int
+    x: float
+    y: float
+    orientation: float
+    vx: float
+    vy: float
+    omega: float
+
+
+@with_config(_STRICT)
+class HistoryWorld(TypedDict):
+    """The world model's estimate at one time (the signals a plot of a World has)."""
+
+    ball: HistoryBall | None
+    robots: list[HistoryRobot]
+
+
+@with_config(_STRICT)
+class HistorySample(TypedDict):
+    t_unix: Annotated[float, Field(description="the log's wall time of the sample")]
+    world: HistoryWorld
+
+
+@with_config(_STRICT)
+class PlayerHistory(TypedDict):
+    """GET /api/player/history: the plots' past after a seek (the world model re-run over
+    the log before the playhead)."""
+
+    epoch: Annotated[int, Field(description="the player's epoch it belongs to")]
+    samples: list[HistorySample]
+
+
+@with_config(_STRICT)
 class LogFileInfo(TypedDict):
     name: str
     path: str
@@ -821,6 +864,7 @@ EXPORTS: dict[str, object] = {
     "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff, "PresetList": PresetList,
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
+    "PlayerHistory": PlayerHistory,
     # request bodies (their optional fields are optional in TypeScript too)
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
     "EnableIn": EnableIn, "TeleportBallIn": TeleportBallIn, "TeleportRobotIn": TeleportRobotIn,

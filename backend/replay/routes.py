@@ -3,14 +3,17 @@ GET/POST /api/player, GET /api/logs, POST /api/recording."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import asyncio
+from typing import TYPE_CHECKING, Annotated
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Query
 from fastapi.responses import JSONResponse, Response
 
 from .. import contract
 from ..contract import PlayerIn, RecordingIn
-from .player import PlayerError
+from ..filters.params import FilterSettings
+from .history import history
+from .player import LogSource, PlayerError
 
 if TYPE_CHECKING:
     from ..station import Station
@@ -56,6 +59,21 @@ def player_routes(api: APIRouter, st: Station) -> None:
             return JSONResponse(status_code=status, content={"detail": [
                 {"loc": ["body", body.action], "msg": str(exc), "type": "player"}]})
         return _answer(await st.read(st.player.json))
+
+    @api.get("/player/history", response_model=None)
+    async def player_history(
+            seconds: Annotated[float, Query(gt=0, le=300, allow_inf_nan=False,
+                                            description="how far back, s")] = 30.0,
+    ) -> contract.PlayerHistory | JSONResponse:
+        """The plots' past after a seek, computed in a worker thread (not the station's)."""
+        def where() -> tuple[LogSource | None, int, int, FilterSettings]:
+            return (st.player.log, st.player.position_ns(), st.player.epoch,
+                    st.params.current.filters)
+        log, end_ns, epoch, filters = await st.read(where)
+        if log is None:
+            return JSONResponse(status_code=409, content={"detail": "no log is open"})
+        samples = await asyncio.to_thread(history, log, end_ns, seconds, filters)
+        return {"epoch": epoch, "samples": samples}
 
     @api.get("/logs")
     async def logs() -> contract.LogList:

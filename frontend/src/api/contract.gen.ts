@@ -158,6 +158,36 @@ export interface HealthMessage {
   health: Health;
 }
 
+export interface HistoryBall {
+  x: number;
+  y: number;
+  vx: number;
+  vy: number;
+}
+
+export interface HistoryRobot {
+  team: Team;
+  id: number;
+  x: number;
+  y: number;
+  orientation: number;
+  vx: number;
+  vy: number;
+  omega: number;
+}
+
+export interface HistorySample {
+  /** the log's wall time of the sample */
+  t_unix: number;
+  world: HistoryWorld;
+}
+
+/** The world model's estimate at one time (the signals a plot of a World has). */
+export interface HistoryWorld {
+  ball: HistoryBall | null;
+  robots: HistoryRobot[];
+}
+
 /** The station's own referee. */
 export interface InternalReferee {
   enabled: boolean;
@@ -262,6 +292,16 @@ export interface PlayerEvent {
   t_s: number;
   kind: "command" | "stage" | "goal" | "card" | "operator";
   label: string;
+}
+
+/**
+ * GET /api/player/history: the plots' past after a seek (the world model re-run over
+ * the log before the playhead).
+ */
+export interface PlayerHistory {
+  /** the player's epoch it belongs to */
+  epoch: number;
+  samples: HistorySample[];
 }
 
 export interface PlayerJumpIn {
