@@ -1,5 +1,5 @@
 import { expect, test, type Page } from "@playwright/test";
-import { open, type Hooks, type World } from "./helpers";
+import { open, toScreen, type Hooks, type World } from "./helpers";
 
 // The log player against the real station: the recorded 2.5 s fieldsim session in tests/data
 // (4 cameras, 12 robots, STOP at ~0.5 s, FORCE_START at ~1.1 s) opened from the Logs dialog
@@ -238,4 +238,36 @@ test("the page may not open a log outside the log folders", async ({ page }) => 
   const r = await postPlayer(page, { action: "open", path: "/etc/passwd" });
   expect(r.status()).toBe(422);
   expect((await player(page)).source).toBe("live");
+});
+
+// The pictures of the replay for the docs (TOUCHLINE_DOCS_SHOTS=1; 1280x720): the station
+// paused at 60 % of the fixture with the timeline, its markers, the REPLAY badge and the
+// recorded layer (its legend in the open layer list); then the field zoomed in with the raw
+// detections on: the recorded estimate (dashed rings) beside today's over the raw detections.
+test("docs: screenshots of the replay", async ({ page }) => {
+  test.skip(!process.env.TOUCHLINE_DOCS_SHOTS, "set TOUCHLINE_DOCS_SHOTS=1 to write docs/screenshot-replay*.png");
+  await open(page);
+  await openFixture(page);
+  await clickBar(page, 0.6);
+  const at = await player(page);
+  await expect.poll(async () => (await replayWorld(page)).replay?.epoch).toBe(at.epoch);
+  await expect.poll(async () => (await hooks(page)).recordedDrawn).toBeGreaterThanOrEqual(12);
+  await expect(page.getByTestId("referee-command")).toHaveText("FORCE_START");
+  await page.getByTestId("layers-toggle").click();
+  await expect(page.getByTestId("recorded-legend")).toBeVisible();
+  await page.mouse.move(0, 0); // no hover tip on the bar
+  await page.screenshot({ path: new URL("../../docs/screenshot-replay.png", import.meta.url).pathname });
+
+  await page.getByTestId("layer-toggle-raw").check();
+  await page.getByTestId("layers-toggle").click();
+  // zoom on our half: six robots, the rings of the recorded estimate and the raw detections
+  const p = await toScreen(page, -2000, 0);
+  await page.mouse.move(p.x, p.y);
+  for (let i = 0; i < 2; i++) await page.mouse.wheel(0, -240);
+  await page.mouse.move(0, 0);
+  await expect.poll(async () => (await hooks(page)).recordedDrawn).toBeGreaterThan(0);
+  await page.screenshot({ path: new URL("../../docs/screenshot-replay-whatif.png", import.meta.url).pathname });
+  // put the page's layers back (they are kept in this browser context only)
+  await page.getByTestId("layers-toggle").click();
+  await page.getByTestId("layer-toggle-raw").uncheck();
 });
