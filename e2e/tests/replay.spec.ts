@@ -135,6 +135,11 @@ test("replaying the fixture: open, seek, play 2x, step, jump, keyboard, back to 
       expect(w.robots.length).toBe(12);
       expect(w.recorded!.robots.length).toBe(12);
       expect(offRecorded(w, 30)).toEqual([]);
+      const worst = Math.max(...w.robots.map((r) => {
+        const q = w.recorded!.robots.find((x) => x.team === r.team && x.id === r.id)!;
+        return Math.hypot(r.x - q.x, r.y - q.y);
+      }));
+      test.info().annotations.push({ type: "largest offset from the recorded estimate (mm)", description: worst.toFixed(1) });
     }).toPass({ timeout: 15_000 });
     // the recorded estimate is drawn (12 robots and the ball), with its legend in the layer list
     await expect.poll(async () => (await hooks(page)).recordedDrawn).toBeGreaterThanOrEqual(12);
