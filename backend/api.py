@@ -8,6 +8,7 @@ import json
 import logging
 import time
 from collections.abc import AsyncIterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -401,19 +402,26 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                                          "geometry"))
             if v.player_serial != sent.player_serial:
                 await ws.send_text(v.player_json)
+            world_key = sent.world_key
             if v.world_key != sent.world_key:
+                newest = v
                 now = time.monotonic()
                 if now < next_world:  # at most ws_max_hz: wait, then send the newest
                     with contextlib.suppress(TimeoutError):
                         await asyncio.wait_for(closed.wait(), next_world - now)
                     if closed.is_set():
                         break
-                    v = st.views
+                    newest = st.views
+                    if newest.serial != v.serial:
+                        # what else changed while waiting (the player, geometry, health) is
+                        # sent on the next turn: only the world is taken from the newest views
+                        changed.set()
                 next_world = max(next_world, now) + 1.0 / st.params.current.stream.ws_max_hz
-                await ws.send_text(v.world_json)
+                await ws.send_text(newest.world_json)
+                world_key = newest.world_key
             if v.health_mono != sent.health_mono:
                 await ws.send_text(v.health_json)
-            sent = v
+            sent = replace(v, world_key=world_key)
     finally:
         unsubscribe()
         rx.cancel()

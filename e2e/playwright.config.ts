@@ -35,7 +35,8 @@ export default defineConfig({
     },
   },
   webServer: {
-    command: `.venv/bin/python -m launcher --isolated --port ${port}`,
+    // --log-dir: the replay spec opens the recorded fixture (tests/data) from the Logs dialog.
+    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data`,
     cwd: "..",
     url: `${baseURL}/api/health`,
     timeout: 60_000,

@@ -231,7 +231,11 @@ class LogPlayer:
 
     def pause(self) -> None:
         self._need_log()
-        self._anchor(self.position_ns())
+        pos = self.position_ns()
+        self._anchor(pos)
+        if self.playing and self._target_ns is None:
+            # the feed may lag the playhead by a few records: it catches up to where it stopped
+            self._target_ns = pos
         self.playing = False
         self._changed()
 
@@ -363,14 +367,16 @@ class LogPlayer:
         lg = self._need_log()
         if feed is None:
             return
-        # read ahead without emitting: the records are replayed by due() up to the target
+        # read ahead without emitting: the records are replayed by due() up to the target.
+        # Frames at or before the playhead do not count (the feed may lag it: they are due)
+        pos = self._anchor_ns
         buffered: list[Record] = []
         seen = 0
         rec = feed.ahead
         target = None
         while rec is not None:
             buffered.append(rec)
-            if rec.type == TYPE_VISION_2014:
+            if rec.type == TYPE_VISION_2014 and rec.time_ns > pos:
                 seen += 1
                 if seen == frames:
                     target = rec.time_ns
@@ -382,13 +388,15 @@ class LogPlayer:
         self._target_ns = target
 
     def _vision_time_back(self, frames: int) -> int:
-        """The receive time of the vision record ``frames`` back from the last emitted one."""
-        times = self._vision_times
-        if len(times) > frames:
-            return times[-1 - frames]
+        """The receive time of the vision record ``frames`` back from the playhead (the one
+        at the playhead, after a step, not counted)."""
+        pos = self.position_ns()
+        times = [t for t in self._vision_times if t < pos]
+        if len(times) >= frames:
+            return times[-frames]
         lg = self._need_log()
         # not in the history: scan a window before the oldest known
-        end = times[0] if times else self.position_ns()
+        end = times[0] if times else pos
         start = max(lg.t_first_ns, end - int(STEP_BACK_SEARCH_S * 1e9))
         found: list[int] = []
         for rec in lg.records(lg.offset_at(start)):

@@ -29,6 +29,8 @@ export interface Hooks {
     fieldDraws: number; rawDrawn: number; robotsDrawn: number; pathsDrawn: number; rolesDrawn: number;
     /** The ball placement mark the last field frame drew (world mm), null when none. */
     designatedDrawn: { x: number; y: number } | null;
+    /** Objects of the estimate recorded in a replayed log the last field frame drew. */
+    recordedDrawn: number;
   };
   /** The world the page holds (as received over the websocket). */
   getWorld(): World | null;

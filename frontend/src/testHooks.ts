@@ -24,6 +24,8 @@ export interface TouchlineTestApi {
     pathsDrawn: number; rolesDrawn: number;
     /** The ball placement mark the last field frame drew (world mm), null when none. */
     designatedDrawn: { x: number; y: number } | null;
+    /** Objects (robots + ball) of the recorded estimate the last field frame drew (replay). */
+    recordedDrawn: number;
   };
   /** The strategy's state in the latest world (null before the station reports one). */
   strategy(): StrategyState | null;
@@ -77,6 +79,7 @@ export function installTestHooks(): void {
       pathsDrawn: fieldStats.pathsDrawn,
       rolesDrawn: fieldStats.rolesDrawn,
       designatedDrawn: fieldStats.designatedDrawn,
+      recordedDrawn: fieldStats.recordedDrawn,
     }),
     strategy: () => appStore.getState().world?.strategy ?? null,
     roles: (ours = false) => {

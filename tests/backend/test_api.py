@@ -585,3 +585,24 @@ def test_the_other_team_is_commanded_only_where_it_can_be_addressed(  # type: ig
         teleport = c.post("/api/sim/robots/yellow/3", json={"x": 0, "y": 0})
         assert teleport.status_code == (409 if output == "robot-box" else 200), teleport.text
         assert st.drives_other_team() == (status == 200)
+
+
+def test_a_player_change_while_the_next_world_waits_reaches_the_page(client) -> None:  # type: ignore[no-untyped-def]
+    """Worlds go out at most ws_max_hz; a player message published while the next world waits
+    for its turn is sent too (it used to be taken for sent with the newer world, and lost: the
+    page stayed at "indexing 0 %" of a log that was open)."""
+    c, st = client
+    assert c.patch("/api/params", json={"stream": {"ws_max_hz": 1}}).status_code == 200
+    with c.websocket_connect("/api/ws") as ws:
+        _strict(ws.receive_text(), "the snapshot")
+        st.call_sync(st.world_topic.write, _world(1))  # sent: the next world waits ~1 s
+        _ws_until(ws, lambda m: m["type"] == "world", "the first world")
+        st.call_sync(st.world_topic.write, _world(2))
+        time.sleep(0.2)  # the client's loop is in the world's wait now
+
+        def player_changed() -> None:
+            st.player.error = "marker"
+            st.player.serial += 1
+        st.call_sync(player_changed)
+        msg = _ws_until(ws, lambda m: m["type"] == "player", "the player message", 5.0)
+    assert msg["player"]["error"] == "marker"

@@ -41,6 +41,8 @@ export type {
   PresetList,
   ProcessorHealth,
   RawCamera,
+  RawRobot,
+  RecordedWorld,
   Recording,
   RecordingIn,
   Referee,

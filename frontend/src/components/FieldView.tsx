@@ -16,6 +16,7 @@ function LayersPanel() {
   const layers = useUi((s) => s.layers);
   const [open, setOpen] = useState(false);
   const cams = useAppState((s) => s.world?.cameras.map((c) => c.camera_id).join(",") ?? "");
+  const recordedSource = useAppState((s) => s.world?.recorded?.source ?? null);
   return (
     <div className="layers" data-testid="layers">
       <div className="layers-buttons">
@@ -40,6 +41,11 @@ function LayersPanel() {
               {l.label}
             </label>
           ))}
+          {layers.recorded && recordedSource !== null && (
+            <div className="recorded-legend" data-testid="recorded-legend">
+              <i aria-hidden="true" /> recorded by {recordedSource || "the log"}
+            </div>
+          )}
           {layers.raw && cams && (
             <div className="cam-legend">
               {cams.split(",").map((c) => (

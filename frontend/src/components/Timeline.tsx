@@ -38,6 +38,17 @@ function usePendingSpeed(): number | null {
   );
 }
 
+/** Previous / next event: a bar and two triangles, drawn (the ⏮ ⏭ glyphs are missing from
+ * many fonts). */
+function EventIcon({ direction }: { direction: "prev" | "next" }) {
+  const d = "M2 2h2v12H2zM14 2v12L9 8zM9 2v12L4 8z";
+  return (
+    <svg className="tl-icon" viewBox="0 0 16 16" width="14" height="14" aria-hidden="true" focusable="false">
+      <path d={d} fill="currentColor" transform={direction === "next" ? "matrix(-1 0 0 1 16 0)" : undefined} />
+    </svg>
+  );
+}
+
 function TimelineBody({ player }: { player: Player }) {
   const world = useThrottledWorld(100);
   const pending = usePendingSpeed();
@@ -112,7 +123,7 @@ function TimelineBody({ player }: { player: Player }) {
           data-testid="timeline-prev-event"
           onClick={() => void jump("prev")}
         >
-          ⏮
+          <EventIcon direction="prev" />
         </button>
         <button
           type="button"
@@ -153,7 +164,7 @@ function TimelineBody({ player }: { player: Player }) {
           data-testid="timeline-next-event"
           onClick={() => void jump("next")}
         >
-          ⏭
+          <EventIcon direction="next" />
         </button>
         <select
           className="tl-speed"

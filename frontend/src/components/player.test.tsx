@@ -222,6 +222,24 @@ describe("Replay badge and logs", () => {
     expect(q("logs-dialog")).toBeNull();
   });
 
+  it("keeps a player message that came while the open was out over the open's older answer", async () => {
+    // a log indexed from the cache: the websocket says "open" before the POST is answered "loading"
+    let answer: (v: Response) => void = () => {};
+    vi.stubGlobal("fetch", vi.fn((url: string) =>
+      url === "/api/logs"
+        ? Promise.resolve(new Response(JSON.stringify({ folders: ["var/logs"], files: [{ name: "c.log", path: "var/logs/c.log", size_bytes: 1, modified_unix: 1 }] })))
+        : new Promise<Response>((resolve) => (answer = resolve))));
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ player: player() }));
+    await act(async () => (q("open-log") as HTMLButtonElement).click());
+    await act(async () => (q("log-open-c.log") as HTMLButtonElement).click());
+    act(() => appStore.setState({ player: logPlayer({ loading: null, epoch: 1 }) }));
+    await act(async () => answer(new Response(JSON.stringify(player({ loading: 0, file: "var/logs/c.log" })))));
+    expect(appStore.getState().player?.source).toBe("log");
+    expect(appStore.getState().player?.loading).toBeNull();
+    expect(q("logs-dialog")).toBeNull();
+  });
+
   it("stays open while the log is indexed and closes when it is done", async () => {
     stubFetch((url) =>
       url === "/api/logs"

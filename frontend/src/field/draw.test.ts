@@ -2,7 +2,8 @@ import { describe, expect, it } from "vitest";
 import type { Robot, StrategyState } from "../api/types";
 import { geometry, referee, world } from "../ws/fixtures";
 import { roleColor } from "../strategy/roles";
-import { ALL_LAYERS, drawField, roleTagPx, type DrawInput } from "./draw";
+import type { RecordedWorld } from "../api/types";
+import { ALL_LAYERS, COLORS, drawField, drawRecorded, RECORDED_DASH, roleTagPx, type DrawInput } from "./draw";
 import { robot } from "./testRobots";
 import { makeTransform, worldToCanvas } from "./transform";
 
@@ -101,7 +102,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0 });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -161,5 +162,60 @@ describe("drawField: the ball placement mark", () => {
     const off = draw("BALL_PLACEMENT_BLUE", mark, { ...ALL_LAYERS, referee: false });
     expect(off.counts.designated).toBeNull();
     expect(off.circles).toBe(0);
+  });
+});
+
+describe("drawRecorded: the estimate recorded in a replayed log", () => {
+  const rec: RecordedWorld = {
+    source: "Touchline",
+    ball: { x: 300, y: -200 },
+    robots: [
+      { team: "blue", id: 0, x: -1000, y: 30, orientation: 0 },
+      { team: "yellow", id: 0, x: 1040, y: 0, orientation: Math.PI },
+    ],
+  };
+  const ringsAt = (calls: ReturnType<typeof fakeCtx>["calls"], p: { x: number; y: number }) =>
+    calls.filter((c) => c.name === "arc" && c.dash === RECORDED_DASH.length && c.args[0] === p.x && c.args[1] === p.y);
+
+  it("draws a dashed neutral ring per recorded robot and one for the ball, at their recorded places", () => {
+    const { ctx, calls } = fakeCtx();
+    expect(drawRecorded(ctx, t, rec)).toBe(3);
+    for (const o of [...rec.robots, rec.ball!]) expect(ringsAt(calls, worldToCanvas(t, o.x, o.y))).toHaveLength(1);
+    const strokes = calls.filter((c) => c.name === "stroke");
+    expect(strokes.length).toBeGreaterThanOrEqual(3);
+    expect(new Set(strokes.map((c) => c.style))).toEqual(new Set([COLORS.recorded]));
+    // distinct from a lost robot (grey) and from both team colours
+    expect(COLORS.recorded).not.toBe(COLORS.lost);
+    expect(calls.some((c) => c.name === "fill" || c.name === "fillText")).toBe(false);
+  });
+
+  it("rings a robot just outside its body, so today's robot under it stays visible", () => {
+    const { ctx, calls } = fakeCtx();
+    drawRecorded(ctx, t, { ...rec, ball: null });
+    const ring = ringsAt(calls, worldToCanvas(t, -1000, 30))[0]!;
+    expect(Number(ring.args[2])).toBeGreaterThan(Math.max(10, 90 * t.scale));
+  });
+
+  it("skips objects without a finite position and draws nothing for an empty estimate", () => {
+    const { ctx, calls } = fakeCtx();
+    const n = drawRecorded(ctx, t, { source: "x", ball: null, robots: [{ team: "blue", id: 1, x: NaN, y: 0, orientation: 0 }] });
+    expect(n).toBe(0);
+    expect(calls.filter((c) => c.name === "arc")).toHaveLength(0);
+  });
+
+  it("is drawn by drawField in replay with the layer on, and not live or with the layer off", () => {
+    const replayWorld = world(1, { recorded: rec });
+    const on = fakeCtx();
+    expect(drawField(on.ctx, { ...input([]), world: replayWorld }).recorded).toBe(3);
+    expect(ringsAt(on.calls, worldToCanvas(t, 1040, 0))).toHaveLength(1);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input([], { ...ALL_LAYERS, recorded: false }), world: replayWorld }).recorded).toBe(0);
+    expect(ringsAt(off.calls, worldToCanvas(t, 1040, 0))).toHaveLength(0);
+    const live = fakeCtx();
+    expect(drawField(live.ctx, { ...input([]), world: world(1) }).recorded).toBe(0);
+  });
+
+  it("is on by default", () => {
+    expect(ALL_LAYERS.recorded).toBe(true);
   });
 });

@@ -1,7 +1,7 @@
 // Canvas rendering of the field, robots, targets and ball. Called from the animation
 // frame loop with the latest store state; no React involved.
 
-import type { Geometry, Robot, RobotKey, Team, World } from "../api/types";
+import type { Geometry, RecordedWorld, Robot, RobotKey, Team, World } from "../api/types";
 import { sameRobot } from "../api/types";
 import { placementTarget } from "../referee";
 import { roleColor, roleTag } from "../strategy/roles";
@@ -33,7 +33,12 @@ export const COLORS = {
   bluePath: "rgba(147,197,253,0.9)",
   yellowPath: "rgba(253,224,71,0.9)",
   roleBg: "rgba(15,23,42,0.82)",
+  /** The estimate recorded in a replayed log (what-if ghosts): neutral, unlike the lost grey. */
+  recorded: "rgba(241,245,249,0.9)",
 } as const;
+
+/** Dash of the recorded-estimate ghosts (long dashes; lost robots use a shorter [4, 3]). */
+export const RECORDED_DASH = [7, 4];
 
 /** Opacity of a predicted object (no fresh detection, position extrapolated). */
 export const PREDICTED_ALPHA = 0.45;
@@ -69,10 +74,13 @@ export interface DrawLayers {
   paths: boolean;
   /** Role tags next to our robots. */
   roles: boolean;
+  /** In replay: the estimate recorded in the log (world.recorded), as dashed ghost outlines. */
+  recorded: boolean;
 }
 
 export const ALL_LAYERS: DrawLayers = {
   raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
+  recorded: true,
 };
 
 export interface DrawInput {
@@ -106,10 +114,12 @@ export interface DrawCounts {
   roles: number;
   /** The ball placement mark drawn (world mm), null when none. */
   designated: { x: number; y: number } | null;
+  /** Objects of the recorded estimate drawn (robots + ball; 0 live or with the layer off). */
+  recorded: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -152,6 +162,8 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       drawRobot(ctx, t, sel, true, false);
       counts.robots++;
     }
+    // The recorded estimate over today's: a ring just outside each robot, so both stay visible.
+    if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
     if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.velocity) {
@@ -454,6 +466,54 @@ function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World)
       ctx.lineTo(c.x, c.y + s);
       ctx.stroke();
     }
+  }
+  ctx.restore();
+  return n;
+}
+
+/**
+ * The estimate recorded in a replayed log (what-if): each robot a dashed neutral ring a little
+ * outside the robot's body with a heading tick, the ball a dashed ring with a tick either side. Drawn
+ * over today's filter output so a difference between the two shows as an offset ring.
+ * Returns the number of objects drawn.
+ */
+export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, rec: RecordedWorld, ballRadiusMm = 21.5): number {
+  let n = 0;
+  ctx.save();
+  ctx.strokeStyle = COLORS.recorded;
+  ctx.lineWidth = 1.5;
+  ctx.setLineDash(RECORDED_DASH);
+  const rad = Math.max(MIN_ROBOT_PX, ROBOT_RADIUS_MM * t.scale) + 3;
+  for (const r of rec.robots) {
+    if (!Number.isFinite(r.x) || !Number.isFinite(r.y)) continue;
+    const c = worldToCanvas(t, r.x, r.y);
+    ctx.beginPath();
+    ctx.arc(c.x, c.y, rad, 0, 2 * Math.PI);
+    ctx.stroke();
+    if (Number.isFinite(r.orientation)) {
+      const a = angleToCanvas(r.orientation);
+      ctx.beginPath();
+      ctx.moveTo(c.x + Math.cos(a) * rad, c.y + Math.sin(a) * rad);
+      ctx.lineTo(c.x + Math.cos(a) * (rad + 6), c.y + Math.sin(a) * (rad + 6));
+      ctx.stroke();
+    }
+    n++;
+  }
+  const b = rec.ball;
+  if (b && Number.isFinite(b.x) && Number.isFinite(b.y)) {
+    const c = worldToCanvas(t, b.x, b.y);
+    const br = Math.max(4, ballRadiusMm * t.scale) + 3;
+    ctx.beginPath();
+    ctx.arc(c.x, c.y, br, 0, 2 * Math.PI);
+    ctx.stroke();
+    ctx.setLineDash([]);
+    ctx.beginPath();
+    ctx.moveTo(c.x - br - 3, c.y);
+    ctx.lineTo(c.x - br + 2, c.y);
+    ctx.moveTo(c.x + br - 2, c.y);
+    ctx.lineTo(c.x + br + 3, c.y);
+    ctx.stroke();
+    n++;
   }
   ctx.restore();
   return n;

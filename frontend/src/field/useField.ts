@@ -18,7 +18,7 @@ import { panBy, registerFieldCanvas, transformFor, viewVersion, zoomAt } from ".
 
 /** Frames the field drew (for window.__touchline.stats and bench/page_fps.mjs). */
 export const fieldStats = {
-  rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0,
+  rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0, recordedDrawn: 0,
   designatedDrawn: null as { x: number; y: number } | null,
 };
 
@@ -125,6 +125,7 @@ export function useFieldDrawing(wrapRef: RefObject<HTMLDivElement | null>, canva
       fieldStats.pathsDrawn = counts.paths;
       fieldStats.rolesDrawn = counts.roles;
       fieldStats.designatedDrawn = counts.designated;
+      fieldStats.recordedDrawn = counts.recorded;
     };
     raf = requestAnimationFrame(frame);
     return () => {

@@ -33,10 +33,14 @@ function describe(body: PlayerIn): string {
 
 /** Send one player action; resolves to true when the station took it. */
 export async function playerAction(body: PlayerIn): Promise<boolean> {
+  // The websocket's "player" messages are the truth; the answer only shows the action at once.
+  // One that came while the request was out is newer than the answer (a log indexed from the
+  // cache is open before its "open" is answered "loading"): the answer is not applied then.
+  const before = appStore.getState().player;
   try {
     const player = await postPlayer(body);
     if (player && typeof player === "object" && (player.source === "live" || player.source === "log")) {
-      appStore.setState({ player });
+      if (appStore.getState().player === before) appStore.setState({ player });
     }
     return true;
   } catch (e) {

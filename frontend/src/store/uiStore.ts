@@ -26,6 +26,11 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
   { key: "roles", label: "Role tags", help: "GK, ATK, DEF, ... next to our robots (full name in the robot panel)" },
   { key: "trails", label: "Trails", help: "last 3 s of positions" },
   { key: "referee", label: "Referee marks", help: "designated position of ball placement" },
+  {
+    key: "recorded",
+    label: "Recorded estimate",
+    help: "in replay: the robots and ball as the log's own tracker had them (dashed rings), beside today's filter output",
+  },
 ];
 
 export interface UiState {

@@ -2,7 +2,7 @@ import { afterEach, beforeEach, describe, expect, it, vi } from "vitest";
 import { createStore } from "../store/createStore";
 import { initialAppState, type AppState } from "../store/appStore";
 import { defaultWsUrl, startWsClient, type SocketLike } from "./client";
-import { health, world } from "./fixtures";
+import { health, logPlayer, player, world } from "./fixtures";
 
 class FakeSocket implements SocketLike {
   onopen: ((ev: unknown) => void) | null = null;
@@ -73,6 +73,19 @@ describe("startWsClient", () => {
     last().send({ type: "world", world: world(2) });
     expect(store.getState().world?.seq).toBe(2);
     expect(store.getState().health?.streams["vision"]?.rate_hz).toBe(60);
+    client.stop();
+  });
+
+  it("keeps the player of the snapshot and of every player message", () => {
+    const { store, last, client } = setup();
+    last().open();
+    last().send({ type: "snapshot", world: world(1), geometry: null, health: health(60), player: player() });
+    expect(store.getState().player?.source).toBe("live");
+    last().send({ type: "player", player: logPlayer({ loading: null, epoch: 3 }) });
+    expect(store.getState().player?.source).toBe("log");
+    expect(store.getState().player?.epoch).toBe(3);
+    last().send({ type: "player", player: player({ epoch: 4 }) });
+    expect(store.getState().player?.source).toBe("live");
     client.stop();
   });
 

@@ -131,6 +131,7 @@ export function startWsClient(opts: WsClientOptions): WsClient {
           geometry: next.geometry,
           health: next.health,
           params: next.params,
+          player: next.player,
           messages: next.messages,
         });
       }

@@ -153,6 +153,38 @@ def test_steps_one_camera_frame_forward_and_back(log: LogFile) -> None:
     assert h.vision_times()[-1] == here + 2 * FRAME
 
 
+def test_steps_from_a_pause_go_from_where_the_playhead_stopped(log: LogFile) -> None:
+    """The feed may lag the playhead by a few records when playing stops: a step forward goes
+    to the first frame after the playhead (never back), a step back to the last one before."""
+    h = Harness(log)
+    h.player.seek(1.0)
+    h.drain()
+    h.player.play(1.0)
+    h.clock.t += 0.1 + FRAME / S / 2  # the playhead is 6.5 frames on, nothing fed yet
+    h.player.pause()
+    paused = h.player.now_ns()
+    h.player.step(1)
+    h.drain()
+    assert h.player.now_ns() > paused
+    assert h.player.now_ns() - paused <= FRAME
+    assert h.vision_times()[-1] == h.player.now_ns()
+    h.player.step(-1)
+    h.drain()
+    assert h.player.now_ns() < paused
+    assert paused - h.player.now_ns() <= FRAME
+    # paused with the feed behind and stepped back at once: one frame before the playhead
+    h.player.play(1.0)
+    h.clock.t += 0.1
+    h.player.pause()
+    paused = h.player.now_ns()
+    h.drain()  # the feed catches up (woken by the pause)
+    assert h.vision_times()[-1] <= paused
+    assert paused - h.vision_times()[-1] < FRAME
+    h.player.step(-1)
+    h.drain()
+    assert 0 < paused - h.player.now_ns() <= FRAME
+
+
 def test_jumps_to_referee_commands(log: LogFile) -> None:
     h = Harness(log)
     h.drain()
