@@ -288,11 +288,16 @@ def health(st: Station) -> contract.Health:
     # ok: the loop works (fresh vision, relay alive). A silent referee leaves it true: the
     # station then does what the rules expect of a team (it keeps obeying the last
     # command); it is a warning about a system outside the station, in `warnings`.
-    ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
-        relay is not None and relay["alive"]
+    replaying = st.player.log is not None
     world = world_health(st)
-    if world is not None and world["stale"]:
-        ok = False
+    if replaying:
+        # the vision is the log's, on the log's clock: a paused replay is not vision lost
+        ok = relay is not None and relay["alive"]
+    else:
+        ok = bool(vision) and 0 <= vision.get("last_age_s", -1) < 1.0 and \
+            relay is not None and relay["alive"]
+        if world is not None and world["stale"]:
+            ok = False
     referee = st.referee_watch.status()
     if referee is not None:
         referee["source"] = ("internal" if referee["source_identifier"]
@@ -307,7 +312,8 @@ def health(st: Station) -> contract.Health:
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *station_lines,
-                     *_warnings(vision, relay, referee, world), *st.params.warnings],
+                     *_warnings(vision, relay, referee, world, replaying),
+                     *st.params.warnings],
         "estop": estop_view(st),
         "world": world,
         "referee": cast(contract.RefereeHealth | None, referee),
@@ -327,9 +333,12 @@ def health(st: Station) -> contract.Health:
 
 def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
               referee: dict[str, Any] | None,
-              world: contract.WorldHealth | None = None) -> list[str]:
-    """One line per problem: why ``ok`` is false, and a silent referee."""
+              world: contract.WorldHealth | None = None, replaying: bool = False) -> list[str]:
+    """One line per problem: why ``ok`` is false, and a silent referee. In replay the vision
+    is the log's: its pauses and gaps are no problem of the station's."""
     out: list[str] = []
+    if replaying:
+        vision, world = {"last_age_s": 0.0}, None
     if world is not None:
         if world["stale"] and vision.get("last_age_s", -1) >= 0 \
                 and vision.get("last_age_s", -1) < 1.0:

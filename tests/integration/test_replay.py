@@ -94,6 +94,13 @@ def test_a_live_session_is_recorded_and_replays(tmp_path: Path) -> None:
         assert w["halt_reason"] in ("", "HALT") or "vision" not in w["halt_reason"], w[
             "halt_reason"]
 
+        # the plots' past before the playhead, on the log's clock
+        h = st.get("/api/player/history?seconds=1")
+        assert h["epoch"] == st.get("/api/player")["epoch"] and len(h["samples"]) >= 20
+        assert h["samples"][-1]["t_unix"] <= w["replay"]["t_unix"] + 1e-6
+        assert h["samples"][-1]["world"]["robots"]
+        assert httpx.get(st.url + "/api/player/history?seconds=0", timeout=5).status_code == 422
+
         # step one camera frame forward and back
         here = st.get("/api/player")["position_s"]
         after = player(st, {"action": "step", "frames": 1})["position_s"]

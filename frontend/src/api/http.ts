@@ -8,6 +8,7 @@ import type {
   RefereeCommandIn,
   LogList,
   Player,
+  PlayerHistory,
   PlayerIn,
   Recording,
   RecordingIn,
@@ -181,6 +182,9 @@ export function teleportRobot(team: Team, id: number, x: number, y: number, orie
 export const getPlayer = () => request<Player>("GET", "/api/player");
 /** One player action (open, play, pause, seek, step, jump, live); answers the new state. */
 export const postPlayer = (body: PlayerIn) => request<Player>("POST", "/api/player", body);
+/** The world model's estimate over `seconds` before the playhead (plots after a seek). */
+export const getPlayerHistory = (seconds: number) =>
+  request<PlayerHistory>("GET", `/api/player/history?seconds=${encodeURIComponent(String(seconds))}`);
 /** The logs the player may open. */
 export const getLogs = () => request<LogList>("GET", "/api/logs");
 /** Start a new recording file, start or stop recording. */

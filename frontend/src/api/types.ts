@@ -30,6 +30,7 @@ export type {
   PlayInfo,
   Player,
   PlayerEvent,
+  PlayerHistory,
   PlayerJumpIn,
   PlayerLiveIn,
   PlayerOpenIn,

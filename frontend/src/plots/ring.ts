@@ -156,6 +156,31 @@ export class SampleTable {
     return { t, cols };
   }
 
+  /**
+   * Put `rows` (times ascending) before the rows held: the past of a replay after a seek.
+   * Rows not older than the oldest row held are left out; the newest rows win the capacity.
+   */
+  prepend(rows: ReadonlyArray<readonly [number, ReadonlyMap<string, number>]>): void {
+    const n = this.time.length;
+    const first = n > 0 ? this.time.get(0) : Number.POSITIVE_INFINITY;
+    const older = rows.filter(([t]) => t < first);
+    if (older.length === 0) return;
+    const keep: [number, Map<string, number>][] = [];
+    for (let i = 0; i < n; i++) {
+      const m = new Map<string, number>();
+      for (const [k, r] of this.cols) {
+        const v = r.get(i);
+        if (!Number.isNaN(v)) m.set(k, v);
+      }
+      keep.push([this.time.get(i), m]);
+    }
+    const counted = this.rows;
+    this.clear();
+    for (const [t, v] of older) this.append(t, v);
+    for (const [t, v] of keep) this.append(t, v);
+    this.rows = counted + older.length;
+  }
+
   /** Drop every row and column; `rows` keeps counting (plots compare it to see new data). */
   clear(): void {
     this.time.clear();

@@ -1,5 +1,6 @@
 // @vitest-environment jsdom
 import { afterEach, beforeEach, describe, expect, it } from "vitest";
+import type { PlayerHistory } from "../api/types";
 import { initialAppState, type AppState } from "../store/appStore";
 import { createStore } from "../store/createStore";
 import { health, replayClock, world } from "../ws/fixtures";
@@ -8,11 +9,19 @@ import { plotNow, plotsStore, replayPlayhead, samples, setPaused, startSampler, 
 describe("sampler while replaying", () => {
   let stop: () => void = () => {};
   const store = createStore<AppState>(initialAppState());
+  /** What the backend's history answers (GET /api/player/history), per test. */
+  let past: (seconds: number) => Promise<PlayerHistory> = () => new Promise(() => undefined);
+  const asked: number[] = [];
   beforeEach(() => {
     samples.clear();
     store.setState(initialAppState());
     plotsStore.setState({ paused: false, windowS: 10 });
-    stop = startSampler(store);
+    past = () => new Promise(() => undefined); // never answers unless a test says so
+    asked.length = 0;
+    stop = startSampler(store, (seconds) => {
+      asked.push(seconds);
+      return past(seconds);
+    });
   });
   afterEach(() => stop());
 
@@ -36,6 +45,35 @@ describe("sampler while replaying", () => {
     expect(times()).toEqual([1_600_000_020]);
     store.setState({ world: world(4, { replay: replayClock({ t_unix: 1_600_000_021, epoch: 2 }) }) });
     expect(times()).toEqual([1_600_000_020, 1_600_000_021]);
+  });
+
+  it("fills the window with the log's past after a seek, before the rows that came since", async () => {
+    const sample = (t: number, x: number) => ({
+      t_unix: t,
+      world: { ball: { x, y: 0, vx: 0, vy: 0 }, robots: [{ team: "blue" as const, id: 1, x, y: 0, orientation: 0, vx: 0, vy: 0, omega: 0 }] },
+    });
+    let answer: (h: PlayerHistory) => void = () => undefined;
+    past = () => new Promise((resolve) => (answer = resolve));
+    store.setState({ world: world(1, { replay: replayClock({ t_unix: 1_600_000_020, epoch: 2 }) }) });
+    store.setState({ world: world(2, { replay: replayClock({ t_unix: 1_600_000_021, epoch: 2 }) }) });
+    expect(asked).toEqual([10]); // once per new time line, for the plot window
+    answer({ epoch: 2, samples: [sample(1_600_000_011, 5), sample(1_600_000_015, 6), sample(1_600_000_020, 7)] });
+    await Promise.resolve();
+    await Promise.resolve();
+    // the sample at the seek's own time is already there (from the stream): not doubled
+    expect(times()).toEqual([1_600_000_011, 1_600_000_015, 1_600_000_020, 1_600_000_021]);
+    expect(samples.window(1_600_000_010, 1_600_000_016, ["robot.blue.1.x"]).cols[0]).toEqual([5, 6]);
+  });
+
+  it("drops a past that comes after the replay moved on to another seek", async () => {
+    let answer: (h: PlayerHistory) => void = () => undefined;
+    past = () => new Promise((resolve) => (answer = resolve));
+    store.setState({ world: world(1, { replay: replayClock({ t_unix: 1_600_000_020, epoch: 2 }) }) });
+    store.setState({ world: world(2, { replay: replayClock({ t_unix: 1_600_000_500, epoch: 3 }) }) });
+    answer({ epoch: 2, samples: [{ t_unix: 1_600_000_011, world: { ball: null, robots: [] } }] });
+    await Promise.resolve();
+    await Promise.resolve();
+    expect(times()).toEqual([1_600_000_500]);
   });
 
   it("starts again when a replay steps back without a new epoch", () => {

@@ -10,6 +10,8 @@
 import { useSyncExternalStore } from "react";
 import type { AppStore } from "../store/appStore";
 import { createStore } from "../store/createStore";
+import { getPlayerHistory } from "../api/http";
+import type { PlayerHistory } from "../api/types";
 import { SampleTable } from "./ring";
 import { healthSignals, worldSignals } from "./signals";
 
@@ -33,7 +35,10 @@ export function plotNow(): number {
   return playhead ?? nowS();
 }
 
-export function startSampler(store: AppStore): () => void {
+/** The plots' past after a seek (the world model re-run over the log before the playhead). */
+export type HistoryFetch = (seconds: number) => Promise<PlayerHistory>;
+
+export function startSampler(store: AppStore, history: HistoryFetch = getPlayerHistory): () => void {
   let world = store.getState().world;
   let health = store.getState().health;
   /** "live", or "log:<epoch>": a change starts the table again. */
@@ -55,8 +60,19 @@ export function startSampler(store: AppStore): () => void {
           // a frozen window would show nothing of the new time line
           if (plotsStore.getState().paused) plotsStore.setState({ pausedAt: t });
         }
+        const fresh = r !== null && key !== timeline;
         timeline = key;
         lastT = t;
+        if (fresh) {
+          // a new replay time line: fill the plot window with what came before the playhead
+          history(plotsStore.getState().windowS)
+            .then((h) => {
+              if (timeline === `log:${h.epoch}`) {
+                samples.prepend(h.samples.map((s) => [s.t_unix, worldSignals(s.world)] as const));
+              }
+            })
+            .catch(() => undefined); // a replay without its past still plays
+        }
         playhead = r ? t : null;
         samples.append(t, worldSignals(world));
       }

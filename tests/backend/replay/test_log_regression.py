@@ -80,3 +80,31 @@ def test_replayed_world_matches_the_live_estimate(log: LogFile) -> None:
             compared += 1
     assert compared > 200, "too few ticks compared: the fixture or the matching changed"
     assert worst < 1.0, f"replayed robots differ from the live estimate by up to {worst:.2f} mm"
+
+
+def test_history_is_the_world_model_over_the_log_before_the_playhead(log: LogFile) -> None:
+    """GET /api/player/history's core: 30 samples a second of log up to the playhead, in
+    order, each the estimate of that time (close to what the live station estimated)."""
+    from backend.filters.params import FilterSettings
+    from backend.replay.history import history
+
+    end = log.t_first_ns + int(2.0 * 1e9)
+    samples = history(log, end, 1.0, FilterSettings())
+    times = [s["t_unix"] for s in samples]
+    assert times == sorted(times)
+    assert end / 1e9 - 1.0 <= times[0] < end / 1e9 - 0.9 and times[-1] <= end / 1e9
+    assert 25 <= len(samples) <= 31
+    live: dict[int, TrackerWrapperPacket] = {}
+    for rec in log.records():
+        if rec.type == TYPE_TRACKER_2020:
+            p = TrackerWrapperPacket()
+            p.ParseFromString(rec.payload)
+            live[rec.time_ns] = p
+    last = samples[-1]
+    tracked = live[round(last["t_unix"] * 1e9)] if round(last["t_unix"] * 1e9) in live else \
+        live[max(t for t in live if t <= end)]
+    ours = {(r["team"], r["id"]): r for r in last["world"]["robots"]}
+    assert len(ours) == len(tracked.tracked_frame.robots)
+    for tr in tracked.tracked_frame.robots:
+        r = ours[_key(tr.robot_id.team, tr.robot_id.id)]
+        assert math.hypot(r["x"] - tr.pos.x * 1000, r["y"] - tr.pos.y * 1000) < 20
