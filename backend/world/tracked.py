@@ -11,6 +11,8 @@ objects are still sent, as the league's trackers do, until the world model drops
 
 from __future__ import annotations
 
+import struct
+
 from sslpb.ssl_gc_common_pb2 import BLUE, YELLOW
 from sslpb.ssl_gc_common_pb2 import Team as PbTeam
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
@@ -32,11 +34,10 @@ def team_enum(team: Team) -> PbTeam.ValueType:
     return _TEAM[team]
 
 
-def tracked_packet(world: WorldState, uuid: str, frame_number: int,
-                   source_name: str = "Touchline") -> bytes:
-    """One TrackerWrapperPacket, serialized. ``uuid`` identifies this station (kept constant
-    while it runs); ``frame_number`` increases with each packet. No capabilities yet (one ball
-    on the ground, no kick detection)."""
+def tracked_packet_pb(world: WorldState, uuid: str, frame_number: int,
+                     source_name: str = "Touchline") -> bytes:
+    """``tracked_packet`` through the generated classes: the reference its fast twin is tested
+    against (same bytes)."""
     p = TrackerWrapperPacket(uuid=uuid, source_name=source_name)
     f = p.tracked_frame
     f.frame_number = frame_number
@@ -54,3 +55,61 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
         tr.pos.x, tr.pos.y = r.x * MM, r.y * MM
         tr.vel.x, tr.vel.y = r.vx * MM, r.vy * MM
     return p.SerializeToString()
+
+
+# ---- the same bytes, encoded by hand: every world tick is recorded (and published), and the
+# generated classes cost ~1 us a field (70 us a packet with 12 robots, 1.7 % of a core at
+# 240 ticks/s); fields in field-number order, as the protobuf runtime writes them ----
+
+_F32 = struct.Struct("<f")
+_F64 = struct.Struct("<d")
+_VEC2 = struct.Struct("<BfBf")  # tag 1 (0x0d) x, tag 2 (0x15) y
+_VEC3 = struct.Struct("<BfBfBf")
+#: one TrackedRobot in the frame (tag 4), 45 bytes: robot_id {id < 128, team}, pos, orientation,
+#: vel, vel_angular, visibility
+_ROBOT = struct.Struct("<BB" "BBBBBB" "BBBfBf" "Bf" "BBBfBf" "Bf" "Bf")
+
+
+def _varint(n: int) -> bytes:
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def _len(tag: int, body: bytes) -> bytes:
+    return bytes((tag,)) + _varint(len(body)) + body
+
+
+def _vec2(tag: int, x: float, y: float) -> bytes:
+    return bytes((tag, 10)) + _VEC2.pack(0x0D, x, 0x15, y)
+
+
+def _vec3(tag: int, x: float, y: float, z: float) -> bytes:
+    return bytes((tag, 15)) + _VEC3.pack(0x0D, x, 0x15, y, 0x1D, z)
+
+
+def tracked_packet(world: WorldState, uuid: str, frame_number: int,
+                   source_name: str = "Touchline") -> bytes:
+    """One TrackerWrapperPacket, serialized. ``uuid`` identifies this station (kept constant
+    while it runs); ``frame_number`` increases with each packet. No capabilities yet (one ball
+    on the ground, no kick detection)."""
+    parts = [b"\x08" + _varint(frame_number & 0xFFFFFFFF), b"\x11" + _F64.pack(world.t_capture)]
+    b = world.ball
+    if b is not None:
+        vis = _visibility(b.visible, b.predicted, b.lost)
+        parts.append(_len(0x1A, _vec3(0x0A, b.x * MM, b.y * MM, 0.0)
+                          + _vec3(0x12, b.vx * MM, b.vy * MM, 0.0) + b"\x1d" + _F32.pack(vis)))
+    pack = _ROBOT.pack
+    for r in world.robots:
+        parts.append(pack(0x22, 45, 0x0A, 4, 0x08, r.id & 0x7F, 0x10, int(team_enum(r.team)),
+                          0x12, 10, 0x0D, r.x * MM, 0x15, r.y * MM, 0x1D, r.orientation,
+                          0x22, 10, 0x0D, r.vx * MM, 0x15, r.vy * MM, 0x2D, r.omega,
+                          0x35, _visibility(r.visible, r.predicted, r.lost)))
+    u, n = uuid.encode(), source_name.encode()
+    return _len(0x0A, u) + _len(0x12, n) + _len(0x1A, b"".join(parts))
