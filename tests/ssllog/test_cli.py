@@ -117,7 +117,7 @@ def test_export_filtered_reruns_the_world_model(tmp_path: Path) -> None:
                                      "visible"}
     assert {r["kind"] for r in rows} == {"ball", "blue", "yellow"}
     times = [float(r["t_log_s"]) for r in rows]
-    assert 1.0 <= times[0] and times[-1] <= 1.5 and times == sorted(times)
+    assert times[0] >= 1.0 and times[-1] <= 1.5 and times == sorted(times)
     raw = {}
     for x in csv.DictReader(raw_out.open()):
         if x["kind"] != "ball":
