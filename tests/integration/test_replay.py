@@ -172,3 +172,20 @@ def test_a_full_disk_stops_recording_and_the_station_goes_on(tmp_path: Path) -> 
             assert st.get("/api/health")["ok"]
     finally:
         subprocess.run(["umount", "-l", str(disk)], check=False)
+
+
+def test_make_run_log_opens_the_station_on_a_log() -> None:
+    """`make run LOG=...` (launcher --log): no simulator, the log open from the start, no
+    recording, and nothing to robots."""
+    fixture = Path(__file__).resolve().parents[1] / "data" / "fieldsim-2s.log.gz"
+    with launched("--log", str(fixture)) as st:
+        assert "fieldsim" not in st.pids and {"relay", "backend"} <= set(st.pids)
+        p = wait_until(lambda: (lambda v: v if v["source"] == "log" else None)(
+            st.get("/api/player")), 20, what="the log open")
+        assert p["file"] == str(fixture) and p["duration_s"] > 2.5
+        h = st.get("/api/health")
+        assert not h["recording"]["enabled"] and not h["recording"]["recording"]
+        assert any(w.startswith("replaying ") for w in h["warnings"])
+        player(st, {"action": "play", "speed": 0})
+        wait_until(lambda: not st.get("/api/player")["playing"], 20, what="played to the end")
+        assert (st.get("/api/health")["relay"] or {}).get("active_robots", 0) == 0
