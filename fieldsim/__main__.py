@@ -52,7 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--command-timeout", type=float, default=d.command_timeout_s, help="s")
     w.add_argument("--ball-decel", type=float, default=d.ball_rolling_decel, help="m/s^2")
     v = p.add_argument_group("vision")
-    v.add_argument("--cameras", type=int, choices=[1, 2, 4], default=d.cameras)
+    v.add_argument("--cameras", type=int, choices=[1, 2, 4, 8], default=d.cameras,
+                   help="8: two rows of four along the field (division A)")
     v.add_argument("--camera-hz", type=float, default=d.camera_hz)
     v.add_argument("--geometry-hz", type=float, default=d.geometry_hz)
     v.add_argument("--overlap-mm", type=float, default=d.camera_overlap_mm)

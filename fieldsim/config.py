@@ -49,7 +49,7 @@ class SimConfig:
     truth_events: int = 50  # the last this many go into every truth message
 
     # Vision
-    cameras: int = 4  # 1, 2 or 4
+    cameras: int = 4  # 1, 2, 4 or 8 (division A: two rows of four)
     camera_hz: float = 60.0
     camera_overlap_mm: float = 400.0  # each camera sees this far past the centre lines
     camera_height_mm: float = 4000.0
@@ -83,8 +83,8 @@ class SimConfig:
                 raise ValueError(f"{name} must be in 0..11")
         if self.generation not in (1, 2):
             raise ValueError("generation must be 1 or 2")
-        if self.cameras not in (1, 2, 4):
-            raise ValueError("cameras must be 1, 2 or 4")
+        if self.cameras not in (1, 2, 4, 8):
+            raise ValueError("cameras must be 1, 2, 4 or 8")
         for name in ("physics_hz", "camera_hz", "geometry_hz"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0")

@@ -50,7 +50,10 @@ class Camera:
 
 
 def make_cameras(config: SimConfig, geometry: FieldGeometry) -> list[Camera]:
-    """Camera ids 0..n-1. Four cameras: 0 (-x,+y), 1 (+x,+y), 2 (-x,-y), 3 (+x,-y)."""
+    """Camera ids 0..n-1. Four cameras: 0 (-x,+y), 1 (+x,+y), 2 (-x,-y), 3 (+x,-y). Eight
+    cameras (the division A layout of the last world cups): two rows of four along the field,
+    ids 0..3 on +y from -x to +x, 4..7 on -y, each overlapping its neighbours by
+    ``camera_overlap_mm``."""
     wx, wy, ov, h = geometry.wall_x, geometry.wall_y, config.camera_overlap_mm, (
         config.camera_height_mm
     )
@@ -59,6 +62,10 @@ def make_cameras(config: SimConfig, geometry: FieldGeometry) -> list[Camera]:
         rects = [(-wx, wx, -wy, wy)]
     elif config.cameras == 2:
         rects = [(-wx, ov, -wy, wy), (-ov, wx, -wy, wy)]
+    elif config.cameras == 8:
+        xs = [-wx + i * wx / 2.0 for i in range(5)]  # four columns
+        rects = [(max(-wx, xs[i] - ov), min(wx, xs[i + 1] + ov), y0, y1)
+                 for y0, y1 in ((-ov, wy), (-wy, ov)) for i in range(4)]
     else:
         rects = [
             (-wx, ov, -ov, wy),

@@ -159,3 +159,40 @@ def test_geometry_packet(division: str) -> None:
     assert [c.camera_id for c in p.geometry.calib] == [0, 1, 2, 3]
     assert all(c.derived_camera_world_tz > 0 for c in p.geometry.calib)
     assert field_size_message(g) == f
+
+
+def test_eight_cameras_cover_the_field_and_overlap() -> None:
+    """Division A with 8 cameras: every point of the field (boundary included) is seen by at
+    least one camera; points on a column or row border by two or more; each camera has its
+    own frame counter; the image of a camera is its rectangle."""
+    w, v = setup(cameras=8, division="A", blue=11, yellow=11, miss_prob=0.0)
+    cams = v.cameras
+    assert [c.camera_id for c in cams] == list(range(8))
+    g = w.geometry
+    for i in range(41):
+        for j in range(31):
+            x = -g.wall_x + i * 2 * g.wall_x / 40
+            y = -g.wall_y + j * 2 * g.wall_y / 30
+            assert any(c.sees(x, y) for c in cams), (x, y)
+    quarter = g.wall_x / 2
+    for x, y in ((-quarter, 1000.0), (0.0, -1000.0), (quarter, 0.0), (0.0, 0.0)):
+        assert sum(c.sees(x, y) for c in cams) >= 2, (x, y)
+    assert sum(c.sees(0.0, 0.0) for c in cams) == 4
+    w.teleport_ball(-quarter / 1000, 1.0)  # on the border of cameras 0 and 1 (metres)
+    seen = [k for k in range(8) if v.detect(k, w, 1.0).detection.balls]
+    assert seen == [0, 1]
+    blue: set[int] = set()
+    firsts = []
+    for k in range(8):
+        f1 = v.detect(k, w, 2.0).detection
+        f2 = v.detect(k, w, 2.0 + 1 / 75).detection
+        assert f1.camera_id == k and f2.frame_number == f1.frame_number + 1
+        firsts.append(f1.frame_number)
+        blue |= {r.robot_id for r in f1.robots_blue}
+    assert blue == set(range(11))
+    assert len(set(firsts)) == 8
+
+
+def test_eight_cameras_need_a_valid_count() -> None:
+    with pytest.raises(ValueError, match="1, 2, 4 or 8"):
+        SimConfig(cameras=6).validate()
