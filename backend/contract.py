@@ -466,6 +466,15 @@ class WorldHealth(TypedDict):
 
 
 @with_config(_STRICT)
+class ProcessHealth(TypedDict):
+    """One process of the station: what it costs the machine."""
+
+    name: Annotated[str, Field(description='"backend", "relay"')]
+    cpu_percent: Annotated[float, Field(description="% of one core over the last second")]
+    rss_mb: Annotated[float, Field(description="resident memory")]
+
+
+@with_config(_STRICT)
 class Recording(TypedDict):
     """The session recorder (SSL log files in var/logs/, docs/logformat.md)."""
 
@@ -500,6 +509,8 @@ class Health(TypedDict):
     websocket_clients: int
     engine: EngineHealth | None
     recording: Recording
+    processes: Annotated[list[ProcessHealth], Field(
+        description="CPU and memory of the backend and (from its stats) the relay")]
 
 
 # ------------------------------------------------------------------------------ parameters

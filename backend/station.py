@@ -21,6 +21,7 @@ import zmq
 import zmq.asyncio
 
 from ssllog.format import TYPE_TL_ACTION, TYPE_TL_HEALTH, TYPE_TL_PARAMS, TYPE_TRACKER_2020
+from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
@@ -133,6 +134,7 @@ class Station:
         self._stop_event: asyncio.Event | None = None
         self.runner = Runner()
         self.started_mono = time.monotonic()
+        self.cpu = CpuMeter()  # this process (every thread), for the Health tab
         self.ws_clients = 0
         self.params = ParamStore(settings.state_dir)
         overrides: dict[str, Any] = {}

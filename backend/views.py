@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf.message import DecodeError
 
+from sslnet.proc import rss_mb
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
 from . import contract
@@ -279,7 +280,8 @@ def health(st: Station) -> contract.Health:
     rs = st.relay_stats.latest_value()
     if rs is not None:
         age = time.monotonic() - rs["received_mono"]
-        relay = {k: v for k, v in rs.items() if k not in ("streams", "received_mono")}
+        relay = {k: v for k, v in rs.items()
+                 if k not in ("streams", "received_mono", "cpu_percent", "rss_mb")}
         relay["alive"] = age < 3.0
         relay["age_s"] = age
         for name, stream in rs["streams"].items():
@@ -327,7 +329,17 @@ def health(st: Station) -> contract.Health:
         "websocket_clients": st.ws_clients,
         "engine": engine_health(st),
         "recording": recording,
+        "processes": processes(st, rs),
     }
+    return out
+
+
+def processes(st: Station, relay_stats: dict[str, Any] | None) -> list[contract.ProcessHealth]:
+    out: list[contract.ProcessHealth] = [
+        {"name": "backend", "cpu_percent": st.cpu.read(), "rss_mb": rss_mb()}]
+    if relay_stats is not None:
+        out.append({"name": "relay", "cpu_percent": float(relay_stats.get("cpu_percent", 0.0)),
+                    "rss_mb": float(relay_stats.get("rss_mb", 0.0))})
     return out
 
 

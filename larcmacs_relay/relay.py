@@ -24,7 +24,7 @@ from larcmacs_relay.codecs import Command, CommandError
 from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
-from sslnet import streams
+from sslnet import proc, streams
 from sslnet.multicast import open_multicast_receiver, open_multicast_sender
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
@@ -89,6 +89,7 @@ class Relay:
         #: the emergency stop, latched until an explicit release (EmergencyStop on "estop")
         self.estop_latched = False
         self.estop_by = ""
+        self.cpu = proc.CpuMeter()
         #: robot-box output: the only team it may drive (its datagrams cannot say which)
         self._box_team: int | None = (
             (codecs.TEAM_BLUE if config.our_team == "blue" else codecs.TEAM_YELLOW)
@@ -606,6 +607,8 @@ class Relay:
             stale_stops=self.table.stale_stops,
             estop_latched=self.estop_latched,
             estop_by=self.estop_by,
+            cpu_percent=self.cpu.read(),
+            rss_mb=proc.rss_mb(),
         )
 
     async def _stats_loop(self) -> None:

@@ -59,6 +59,10 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
     assert all(s["n"] > 0 for s in stages[:3])
     assert 0 < stages[0]["p50_ms"] <= stages[1]["p50_ms"] <= stages[2]["p50_ms"] < 100
     assert procs["strategy"]["configured_hz"] == 20.0
+    # what each process costs: both busy (a camera stream at 240 Hz), neither runaway
+    cost = {p["name"]: p for p in h["processes"]}
+    assert set(cost) == {"backend", "relay"}
+    assert all(0 < p["cpu_percent"] < 400 and p["rss_mb"] > 10 for p in cost.values()), cost
 
 
 def test_demo_moves_blue_robots_and_not_yellow(station: StationHandle) -> None:

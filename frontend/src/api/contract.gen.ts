@@ -151,6 +151,8 @@ export interface Health {
   websocket_clients: number;
   engine: EngineHealth | null;
   recording: Recording;
+  /** CPU and memory of the backend and (from its stats) the relay */
+  processes: ProcessHealth[];
 }
 
 export interface HealthMessage {
@@ -369,6 +371,16 @@ export interface PresetDetail {
 /** GET /api/presets (and the answer of PUT and DELETE /api/presets/{name}). */
 export interface PresetList {
   presets: string[];
+}
+
+/** One process of the station: what it costs the machine. */
+export interface ProcessHealth {
+  /** "backend", "relay" */
+  name: string;
+  /** % of one core over the last second */
+  cpu_percent: number;
+  /** resident memory */
+  rss_mb: number;
 }
 
 export interface ProcessorHealth {

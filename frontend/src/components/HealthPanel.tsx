@@ -67,6 +67,34 @@ function Processors({ h }: { h: Health }) {
   );
 }
 
+/** CPU (% of one core) and memory of each station process, drawn against one core. */
+export function Processes({ h }: { h: Health }) {
+  const procs = h.processes ?? [];
+  if (procs.length === 0) return null;
+  const total = procs.reduce((a, p) => a + p.cpu_percent, 0);
+  return (
+    <section>
+      <h3>
+        Processes <span className="muted">CPU, % of one core · together {fmtFixed(total, 0)} %</span>
+      </h3>
+      <table className="htable" data-testid="health-processes">
+        <tbody>
+          {procs.map((p) => (
+            <tr key={p.name} data-testid={`health-process-${p.name}`}>
+              <td className="hname">{p.name}</td>
+              <td className="hbarcell">
+                <Bar value={p.cpu_percent} max={100} warn={p.cpu_percent > 50} label={`${p.name} CPU`} />
+              </td>
+              <td className="num hval">{fmtFixed(p.cpu_percent, 1)} %</td>
+              <td className="num hval">{fmtFixed(p.rss_mb, 0)} MB</td>
+            </tr>
+          ))}
+        </tbody>
+      </table>
+    </section>
+  );
+}
+
 function Topics({ h }: { h: Health }) {
   return (
     <section>
@@ -252,6 +280,7 @@ export function HealthPanel() {
         </ul>
       )}
       <Latency h={h} />
+      <Processes h={h} />
       <EnginePanel h={h} />
       <Processors h={h} />
       <Streams h={h} />

@@ -7,7 +7,7 @@ import { health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { ErrorsByReason, EstopHealth } from "./HealthPanel";
+import { ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
 
 import { domPerTest } from "../testing/dom";
 
@@ -76,6 +76,17 @@ describe("TopBar", () => {
     );
     expect(q("connection-status")?.textContent).toContain("reconnecting");
     expect(q("connection-status")?.textContent).not.toContain("connected");
+  });
+});
+
+describe("Processes", () => {
+  it("shows each process's CPU and memory, and their sum", () => {
+    act(() => t.root.render(<Processes h={health()} />));
+    expect(q("health-process-backend")?.textContent).toBe("backend23.5 %120 MB");
+    expect(q("health-process-relay")?.textContent).toBe("relay11.2 %40 MB");
+    expect(q("health-processes")?.closest("section")?.textContent).toContain("together 35 %");
+    act(() => t.root.render(<Processes h={{ ...health(), processes: [] }} />));
+    expect(q("health-processes")).toBeNull();
   });
 });
 

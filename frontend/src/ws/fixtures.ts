@@ -70,6 +70,10 @@ export function health(rate = 60): Health {
     websocket_clients: 1,
     engine: null,
     recording: recording(),
+    processes: [
+      { name: "backend", cpu_percent: 23.5, rss_mb: 120 },
+      { name: "relay", cpu_percent: 11.2, rss_mb: 40 },
+    ],
   };
 }
 
