@@ -106,9 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
            "loopback interface only (TTL 0, to --tracker-out-local): the game controller "
            "adopts the first tracker it hears, so a station never publishes on a competition "
            "network unless told to")
-    a("--tracker-out-local", type=_hostport, default=(d.tracker_out_group, d.tracker_out_port),
+    a("--tracker-out-local", type=_hostport, default=f"{d.tracker_out_group}:{d.tracker_out_port}",
       metavar="GROUP:PORT", help="where tracked vision goes on loopback (without --tracker-out)")
-    a("--no-tracker-out", dest="tracker_out_enabled", action="store_false",
+    a("--no-tracker-out", action="store_true",
       help="send no tracked vision at all, not even on loopback")
     a("--log-level", default="INFO")
     return p
@@ -144,7 +144,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         compat_commands=args.compat_commands,
         our_team=args.our_team,
         referee_out=args.referee_out,
-        tracker_out=args.tracker_out_enabled,
+        tracker_out=not args.no_tracker_out,
         tracker_out_group=args.tracker_out_local[0],
         tracker_out_port=args.tracker_out_local[1],
     )
