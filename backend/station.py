@@ -44,6 +44,7 @@ from .processors import (
     RefereeIngest,
     RelayIngest,
     StrategyProcessor,
+    TrackerPublisher,
     VisionIngest,
     WorldProcessor,
 )
@@ -52,8 +53,7 @@ from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
 from .replay.logs import LogFolders, open_log_file
 from .replay.player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
-from .world.state import Team, WorldState
-from .world.tracked import tracked_packet
+from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
@@ -205,14 +205,15 @@ class Station:
         self.publisher.muted = lambda: self.player.log is not None
         # the session recorder: made in start() (it opens a file), closed in stop()
         self.recorder: SessionRecorder | None = None
-        self._tracker_uuid = uuid.uuid4().hex
-        self._tracked_frames = 0
+        # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
+        self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
+        self.tracker.replaying = lambda: self.player.log is not None
         self._params_recorded: dict[str, Any] | None = None
         self.views = Views()
         self._view_listeners: set[Callable[[], None]] = set()
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.strategy,
-            self.control, self.internal_referee, self.publisher, ViewPublisher(self),
+            self.control, self.internal_referee, self.publisher, self.tracker, ViewPublisher(self),
             RecordingProcessor(self))
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
@@ -323,7 +324,8 @@ class Station:
             our_team=prm.team.our_team)
         self.ingest.record = self.recorder.record
         self.publisher.record = self.recorder.record
-        self.world.on_world = self._record_world
+        self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
+        self.tracker.record = self.recorder.record
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
@@ -530,15 +532,6 @@ class Station:
         if changes:
             rec.record(time.time_ns(), TYPE_TL_PARAMS, dumps(
                 {"version": version, "changes": changes, "by": ""}, "params").encode())
-
-    def _record_world(self, world: WorldState) -> None:
-        """The world estimate of every tick, as the league's tracked vision (type 5)."""
-        rec = self.recorder
-        if rec is None or self.player.log is not None:
-            return
-        self._tracked_frames += 1
-        rec.record(world.receive_time_ns or time.time_ns(), TYPE_TRACKER_2020,
-                   tracked_packet(world, self._tracker_uuid, self._tracked_frames))
 
     def operator_action(self, action: str, by: str = "",
                         details: dict[str, Any] | None = None) -> None:

@@ -100,6 +100,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     a("--referee-out", action=argparse.BooleanOptionalAction, default=None,
       help="multicast the internal referee's messages (default: only on a loopback interface)")
+    a("--tracker-out", type=_hostport, default=None, metavar="GROUP:PORT",
+      help="multicast the station's tracked vision (TrackerWrapperPacket) to GROUP:PORT on "
+           "--interface, e.g. 224.5.23.2:10010. Without it tracked vision goes out on the "
+           "loopback interface only (TTL 0, to --tracker-out-local): the game controller "
+           "adopts the first tracker it hears, so a station never publishes on a competition "
+           "network unless told to")
+    a("--tracker-out-local", type=_hostport, default=f"{d.tracker_out_group}:{d.tracker_out_port}",
+      metavar="GROUP:PORT", help="where tracked vision goes on loopback (without --tracker-out)")
+    a("--no-tracker-out", action="store_true",
+      help="send no tracked vision at all, not even on loopback")
     a("--log-level", default="INFO")
     return p
 
@@ -134,7 +144,13 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         compat_commands=args.compat_commands,
         our_team=args.our_team,
         referee_out=args.referee_out,
+        tracker_out=not args.no_tracker_out,
+        tracker_out_group=args.tracker_out_local[0],
+        tracker_out_port=args.tracker_out_local[1],
     )
+    if args.tracker_out is not None:
+        cfg = dataclasses.replace(cfg, tracker_out_lan=True, tracker_out_group=args.tracker_out[0],
+                                  tracker_out_port=args.tracker_out[1])
     if args.tracker is not None:
         cfg = dataclasses.replace(
             cfg, tracker_enabled=True, tracker_group=args.tracker[0], tracker_port=args.tracker[1]

@@ -22,6 +22,7 @@ from sslpb import (
     ssl_simulation_robot_feedback_pb2,
     touchline_pb2,
 )
+from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
 TEAM_YELLOW = touchline_pb2.TEAM_YELLOW
 TEAM_BLUE = touchline_pb2.TEAM_BLUE
@@ -85,6 +86,24 @@ def validate_tracker(data: bytes) -> str | None:
     if not data:
         return "empty tracker datagram"
     return _parse(empty_pb2.Empty(), data)
+
+
+def parse_tracked_out(data: bytes) -> tuple[TrackerWrapperPacket | None, str | None]:
+    """The station's tracked vision ("tracker-out"), checked before it goes on the network:
+    it must parse as a TrackerWrapperPacket with every required field, a non-empty uuid (the
+    game controller tells trackers apart by it) and a tracked frame. Returns the packet or
+    the reason (``classify`` gives its kind)."""
+    if not data:
+        return None, "empty tracked vision"
+    pkt = TrackerWrapperPacket()
+    reason = _parse(pkt, data)
+    if reason is not None:
+        return None, reason
+    if not pkt.uuid:
+        return None, "TrackerWrapperPacket misses required fields: uuid is empty"
+    if not pkt.HasField("tracked_frame"):
+        return None, "empty TrackerWrapperPacket: no tracked_frame"
+    return pkt, None
 
 
 # --------------------------------------------------------------------------- command model

@@ -68,6 +68,26 @@ class RelayConfig:
     # on a venue network never competes with the real game controller unless told to.
     referee_out: bool | None = None
     referee_out_ttl: int = 1
+    # The backend's world estimate ("tracker-out" topic) as the league's tracked vision
+    # (TrackerWrapperPacket). The game controller adopts the first tracker it hears, so by
+    # default it goes out on the loopback interface only (IP_MULTICAST_IF 127.0.0.1, TTL 0),
+    # to ``tracker_out_group:port``; on --interface (a venue network) only when the operator
+    # gives --tracker-out (``tracker_out_lan``).
+    tracker_out: bool = True
+    tracker_out_group: str = defaults.VISION_GROUP
+    tracker_out_port: int = defaults.TRACKER_PORT
+    tracker_out_lan: bool = False
+    tracker_out_ttl: int = 1
+
+    @property
+    def tracker_out_interface(self) -> str:
+        """The interface tracked vision leaves on: ``interface`` only when asked for
+        (--tracker-out), else loopback."""
+        return self.interface if self.tracker_out_lan else "127.0.0.1"
+
+    @property
+    def tracker_out_on_loopback(self) -> bool:
+        return self.tracker_out_interface.startswith("127.")
 
     @property
     def referee_out_enabled(self) -> bool:
@@ -87,5 +107,9 @@ class RelayConfig:
             raise ValueError("hold_time_s must be >= 0")
         if self.our_team not in ("blue", "yellow"):
             raise ValueError(f"our_team must be blue or yellow, not {self.our_team!r}")
+        if not 0 < self.tracker_out_port < 65536:
+            raise ValueError(f"tracker_out_port {self.tracker_out_port} is not a UDP port")
+        if not 1 <= self.tracker_out_ttl <= 255:
+            raise ValueError("tracker_out_ttl must be in 1..255")
         if self.kick_mps_per_volt <= 0 or self.dribbler_rpm_per_unit <= 0:
             raise ValueError("conversion factors must be > 0")

@@ -61,7 +61,7 @@ class Relay:
         self.config = config
         self.table = CommandTable(config.command_timeout_s, config.hold_time_s)
         names = ["vision", "referee", "tracker", "commands", "output", "sim_responses"]
-        names += ["sim_commands", "referee_out"]
+        names += ["sim_commands", "referee_out", "tracker_out"]
         if config.compat:
             names.append("compat_commands")
         self.streams = {n: StreamCounter(n) for n in names}
@@ -83,6 +83,12 @@ class Relay:
         self._compat_referee: zmq.Socket[bytes] | None = None
         self._udp_out: socket.socket | None = None
         self._referee_out: socket.socket | None = None
+        self._tracker_out: socket.socket | None = None
+        #: uuids of the tracked vision this relay sent: its own frames heard back on the
+        #: tracker input (same group and port, loopback) are not taken as another tracker's
+        self._own_tracker_uuids: set[str] = set()
+        #: own tracked frames heard back on the tracker input (not forwarded, not errors)
+        self.own_tracker_echoes = 0
         self._wake: asyncio.Future[None] | None = None
         self._sim_host = config.sim_host
         self._box_host = config.robot_box_host
@@ -132,6 +138,7 @@ class Relay:
             sub.setsockopt(zmq.SUBSCRIBE, b"commands")
             sub.setsockopt(zmq.SUBSCRIBE, b"sim")
             sub.setsockopt(zmq.SUBSCRIBE, b"referee-out")
+            sub.setsockopt(zmq.SUBSCRIBE, b"tracker-out")
             sub.setsockopt(zmq.SUBSCRIBE, b"estop")
             sub.bind(cfg.sub_endpoint)
             self.sub_address = _endpoint(sub)
@@ -176,6 +183,17 @@ class Relay:
                 rout = open_multicast_sender(cfg.interface, ttl=cfg.referee_out_ttl)
                 udp.append(rout)
                 self._referee_out = rout
+            if cfg.tracker_out:
+                # loopback: TTL 0, it cannot leave this host whatever the routes say
+                tout = open_multicast_sender(
+                    cfg.tracker_out_interface,
+                    ttl=0 if cfg.tracker_out_on_loopback else cfg.tracker_out_ttl)
+                udp.append(tout)
+                self._tracker_out = tout
+                log.info("tracked vision out to %s:%d via %s%s", cfg.tracker_out_group,
+                         cfg.tracker_out_port, cfg.tracker_out_interface,
+                         " (loopback only: --tracker-out to publish on --interface)"
+                         if cfg.tracker_out_on_loopback else " (the venue network)")
 
             tasks.append(asyncio.create_task(self._command_loop(sub)))
             if compat_sub is not None:
@@ -213,6 +231,7 @@ class Relay:
             self._pub = self._compat_vision = self._compat_referee = None
             self._udp_out = None
             self._referee_out = None
+            self._tracker_out = None
             for z in zsockets:
                 z.close(linger=0)
             ctx.term()
@@ -244,6 +263,9 @@ class Relay:
                 self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                 return
             receive_ns = time.time_ns()
+            if name == "tracker" and self._own_tracker_uuids and self._own_echo(data):
+                self.own_tracker_echoes += 1
+                continue
             if len(data) > self.config.max_datagram_bytes:
                 reason: str | None = (f"{len(data)} bytes, more than "
                                       f"{self.config.max_datagram_bytes}")
@@ -285,6 +307,11 @@ class Relay:
                     self._ratelog.warning("compat-referee", "Referee from %s:%d not re-encoded "
                                           "for the compat output: %s", addr[0], addr[1], why)
 
+    def _own_echo(self, data: bytes) -> bool:
+        """True if ``data`` is tracked vision this relay sent (heard back on loopback)."""
+        pkt, _ = codecs.parse_tracked_out(data)
+        return pkt is not None and pkt.uuid in self._own_tracker_uuids
+
     def _publish(self, sock: zmq.Socket[bytes] | None, frames: list[bytes]) -> None:
         if sock is None:
             return
@@ -316,6 +343,9 @@ class Relay:
             return
         if topic == b"referee-out":
             self._handle_referee_out(body)
+            return
+        if topic == b"tracker-out":
+            self._handle_tracker_out(body)
             return
         if topic == b"estop":
             self._handle_estop(body, now)
@@ -435,6 +465,32 @@ class Relay:
             self._command_error("referee_out", f"send failed: {exc}")
             return
         self.streams["referee_out"].packet(len(body))
+
+    def _handle_tracker_out(self, body: bytes) -> None:
+        """The station's world estimate goes out as the league's tracked vision, checked
+        first (a bad one is counted by reason and never sent)."""
+        cfg = self.config
+        if self._tracker_out is None:
+            self._command_error("tracker_out", "tracked vision output is off (--no-tracker-out)",
+                                "output off")
+            return
+        pkt, reason = codecs.parse_tracked_out(body)
+        if pkt is None:
+            assert reason is not None
+            self._command_error("tracker_out", reason, codecs.classify(reason, body))
+            return
+        if len(body) > cfg.max_datagram_bytes:
+            self._command_error("tracker_out", f"{len(body)} bytes, more than "
+                                f"{cfg.max_datagram_bytes}", streams.OVERSIZED)
+            return
+        if pkt.uuid not in self._own_tracker_uuids and len(self._own_tracker_uuids) < 64:
+            self._own_tracker_uuids.add(pkt.uuid)
+        try:
+            self._tracker_out.sendto(body, (cfg.tracker_out_group, cfg.tracker_out_port))
+        except OSError as exc:
+            self._command_error("tracker_out", f"send failed: {exc}", "send failed")
+            return
+        self.streams["tracker_out"].packet(len(body))
 
     async def _compat_loop(self, sub: zmq.asyncio.Socket) -> None:
         cfg = self.config

@@ -48,6 +48,9 @@ class Ports:
     vision: int = defaults.VISION_PORT_SIM
     referee_group: str = defaults.REFEREE_GROUP
     referee: int = defaults.REFEREE_PORT
+    #: where the relay multicasts the station's tracked vision on loopback
+    tracker_group: str = defaults.VISION_GROUP
+    tracker: int = defaults.TRACKER_PORT
     sim_control: int = defaults.SIM_CONTROL_PORT
     sim_blue: int = defaults.SIM_BLUE_PORT
     sim_yellow: int = defaults.SIM_YELLOW_PORT
@@ -63,6 +66,7 @@ class Ports:
             http=http or free_tcp_port(),
             vision=rnd.randrange(30000, 40000),
             referee=rnd.randrange(40000, 50000),
+            tracker=rnd.randrange(50000, 60000),  # never the league's 10010 in a test
             sim_control=free_udp_port(),
             sim_blue=free_udp_port(),
             sim_yellow=free_udp_port(),
@@ -122,6 +126,8 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
         "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
         "--pub", ports.relay_pub, "--sub", ports.relay_sub,
+        # tracked vision on loopback only; the venue network needs --relay-arg=--tracker-out=...
+        "--tracker-out-local", f"{ports.tracker_group}:{ports.tracker}",
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *cfg.relay_args,
     ]))

@@ -87,6 +87,8 @@ def build(opts: Options, ports: Ports, truth_endpoint: str, http: dict[str, int]
     for team in ("blue", "yellow"):
         backend_args = ["--our-side", str(sides[team]), *opts.backend_args]
         backend_args += ["--play", plays[team]]
+        if team == "yellow":  # one relay, one tracker source: blue's estimate
+            backend_args += ["--set", "tracker.publish=false"]
         if team == "blue" and opts.engine:
             backend_args += ["--set", f"strategy.engine={opts.engine}"]
         if opts.robot_speed_mps is not None:

@@ -147,6 +147,18 @@ class RecordingParams(Group):
                                   "stage changes (first half, half time, ...)")
 
 
+class TrackerParams(Group):
+    """The world estimate published as the league's tracked vision (TrackerWrapperPacket,
+    through the relay: on loopback unless the relay is started with --tracker-out)."""
+
+    publish: bool = Field(default=True, description="send the world estimate to the relay as "
+                          "tracked vision, one frame per world tick (the relay puts it on "
+                          "loopback only, unless started with --tracker-out)")
+    publish_in_replay: bool = Field(default=False, description="publish it while a log is "
+                                    "replayed too (off: a replay is never mistaken for the "
+                                    "live field)")
+
+
 class StationParams(Group):
     """All parameters, grouped by the part of the station that uses them."""
 
@@ -165,3 +177,5 @@ class StationParams(Group):
     stream: StreamParams = Field(default_factory=StreamParams, description="Browser stream")
     recording: RecordingParams = Field(default_factory=RecordingParams,
                                        description="Recording (SSL log files)")
+    tracker: TrackerParams = Field(default_factory=TrackerParams,
+                                   description="Tracked vision out")

@@ -77,3 +77,7 @@ def test_command_lines_of_the_station() -> None:
     assert backend[backend.index("--relay-sub") + 1] == ports.relay_sub
     assert backend[backend.index("--our-team") + 1] == "yellow"
     assert backend[-2:] == ["--play", "idle"]
+    # tracked vision: loopback only (no --tracker-out), to the isolated port
+    assert "--tracker-out" not in relay
+    assert relay[relay.index("--tracker-out-local") + 1] == f"224.5.23.2:{ports.tracker}"
+    assert ports.tracker != 10010

@@ -103,7 +103,7 @@ def test_runner_builds_fieldsim_one_relay_and_two_backends_on_isolated_ports() -
     speed = [f"control.params.{c}.v_mps=2.0" for c in ("algorithm1", "algorithm2",
                                                         "proportional")]
     assert sets(blue) == ["strategy.engine=octave", *speed]
-    assert sets(yellow) == speed
+    assert sets(yellow) == ["tracker.publish=false", *speed]  # one tracker source: blue's
     # --robot-speed station: the backends keep their own speed limits
     kids = build(Options(robot_speed_mps=None), ports, "tcp://127.0.0.1:5999", http, dirs)
-    assert all(not sets(c.argv) for c in kids)
+    assert [sets(c.argv) for c in kids[2:]] == [[], ["tracker.publish=false"]]

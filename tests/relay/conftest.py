@@ -151,6 +151,7 @@ async def running_relay(**overrides: Any) -> AsyncIterator[Harness]:
     base = RelayConfig(
         vision_port=random_multicast_port(),
         referee_port=random_multicast_port(),
+        tracker_out_port=random_multicast_port(),  # never the league's 10010 in a test
         pub_endpoint="tcp://127.0.0.1:*",
         sub_endpoint="tcp://127.0.0.1:*",
         sim_blue_port=port_of(sim_blue),
