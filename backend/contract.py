@@ -386,7 +386,10 @@ class RelayHealth(TypedDict):
     active_robots: int
     stale_robots: int
     output_rate_hz: float
-    command_latency_ms: float
+    command_latency_ms: Annotated[float, Field(
+        description="mean vision arrival -> first command datagram sent, last second")]
+    command_latency_p50_ms: float
+    command_latency_p99_ms: float
     stale_stops: int
     estop_latched: Annotated[bool, Field(description="only zeros leave the relay while true")]
     estop_by: str

@@ -650,8 +650,10 @@ class Relay:
         t = time.monotonic() if now is None else now
         while self._latencies and self._latencies[0][0] < t - 1.0:
             self._latencies.popleft()
-        lat = [v for _, v in self._latencies]
+        lat = sorted(v for _, v in self._latencies)
         latency = sum(lat) / len(lat) if lat else -1.0
+        p50 = lat[len(lat) // 2] if lat else -1.0
+        p99 = lat[min(len(lat) - 1, int(0.99 * len(lat)))] if lat else -1.0
         return touchline_pb2.RelayStats(
             time_ns=time.time_ns(),
             streams=[stream_proto(s, t) for s in self.streams.values()],
@@ -663,6 +665,8 @@ class Relay:
             stale_stops=self.table.stale_stops,
             estop_latched=self.estop_latched,
             estop_by=self.estop_by,
+            command_latency_p50_ms=p50,
+            command_latency_p99_ms=p99,
             cpu_percent=self.cpu.read(),
             rss_mb=proc.rss_mb(),
         )

@@ -92,6 +92,8 @@ def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
         "stale_robots": s.stale_robots,
         "output_rate_hz": s.output_rate_hz,
         "command_latency_ms": s.command_latency_ms,
+        "command_latency_p50_ms": s.command_latency_p50_ms,
+        "command_latency_p99_ms": s.command_latency_p99_ms,
         "stale_stops": s.stale_stops,
         "estop_latched": s.estop_latched,
         "estop_by": s.estop_by,

@@ -533,7 +533,10 @@ export interface RelayHealth {
   active_robots: number;
   stale_robots: number;
   output_rate_hz: number;
+  /** mean vision arrival -> first command datagram sent, last second */
   command_latency_ms: number;
+  command_latency_p50_ms: number;
+  command_latency_p99_ms: number;
   stale_stops: number;
   /** only zeros leave the relay while true */
   estop_latched: boolean;

@@ -185,13 +185,14 @@ function Latency({ h }: { h: Health }) {
     ["vision → command p50", lat?.p50_ms],
     ["vision → command mean", lat?.mean_ms],
     ["vision → command p99", lat?.p99_ms],
-    ["relay command latency", relay?.command_latency_ms],
+    ["arrival → command datagram p50", relay?.command_latency_p50_ms],
+    ["arrival → command datagram p99", relay?.command_latency_p99_ms],
   ];
   const max = niceMax(Math.max(...rows.map(([, v]) => v ?? 0), 1));
   return (
     <section>
       <h3>
-        Latency <span className="muted">in the backend: vision arrival → command sent; relay: command in → out (scale {max} ms)</span>
+        Latency <span className="muted">vision arrival at the relay → commands sent to the relay (backend), → the command datagram sent (relay) · scale {max} ms</span>
       </h3>
       <table className="htable" data-testid="health-latency">
         <tbody>
