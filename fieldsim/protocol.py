@@ -118,8 +118,11 @@ class CommandHandler:
         for cmd in msg.robot_commands:
             self._robot_command(team, cmd, errors)
         response.errors.extend(errors)
-        for robot in sorted(self.world.robots.values(), key=lambda r: r.id):
-            if robot.team is team:
+        # like grSim / ER-Force: one RobotFeedback per robot commanded (and on the field),
+        # ball contact while the ball touches its kicker face (World: kicker zone)
+        for rid in sorted({cmd.id for cmd in msg.robot_commands}):
+            robot = self.world.robot(team, rid)
+            if robot is not None:
                 response.feedback.add(id=robot.id, dribbler_ball_contact=robot.ball_contact)
         return response.SerializeToString()
 
