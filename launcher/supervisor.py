@@ -52,6 +52,8 @@ class Ports:
     sim_blue: int = defaults.SIM_BLUE_PORT
     sim_yellow: int = defaults.SIM_YELLOW_PORT
     grsim: int = defaults.GRSIM_COMMAND_PORT
+    grsim_status_blue: int = defaults.GRSIM_STATUS_BLUE_PORT
+    grsim_status_yellow: int = defaults.GRSIM_STATUS_YELLOW_PORT
     relay_pub: str = defaults.RELAY_PUB
     relay_sub: str = defaults.RELAY_SUB
 
@@ -67,6 +69,8 @@ class Ports:
             sim_blue=free_udp_port(),
             sim_yellow=free_udp_port(),
             grsim=free_udp_port(),
+            grsim_status_blue=free_udp_port(),
+            grsim_status_yellow=free_udp_port(),
             relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
             relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}",
         )
@@ -121,6 +125,8 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         "--output", cfg.output, "--sim-host", cfg.sim_host,
         "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
         "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+        "--grsim-status-blue-port", str(ports.grsim_status_blue),
+        "--grsim-status-yellow-port", str(ports.grsim_status_yellow),
         "--pub", ports.relay_pub, "--sub", ports.relay_sub,
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *cfg.relay_args,
