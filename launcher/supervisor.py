@@ -115,6 +115,8 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
             "--interface", cfg.interface,
             "--control-port", str(ports.sim_control), "--blue-port", str(ports.sim_blue),
             "--yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+            "--grsim-status-blue-port", str(ports.grsim_status_blue),
+            "--grsim-status-yellow-port", str(ports.grsim_status_yellow),
             *cfg.sim_args,
         ]))
     children.append(Child("relay", [
