@@ -54,6 +54,8 @@ def _ball_contact_on_and_off(station: StationHandle, transport: str) -> None:
         if transport == "sim":  # answers every command: a fresh answer and its round trip
             assert fb["age_s"] < 0.5
             assert fb["round_trip_ms"] is not None and 0.0 <= fb["round_trip_ms"] < 100.0
+            assert fb["commands_sent"] is not None and fb["commands_sent"] > 10
+            assert fb["loss"] is not None and fb["loss"] < 0.2  # loopback: next to none
         assert fb["battery_v"] is None and fb["kicker_v"] is None
         httpx.post(station.url + "/api/sim/ball",
                    json={"x": r["x"] + 1500.0 * (1 if r["x"] < 0 else -1),
