@@ -1,7 +1,8 @@
 """Decode simulator command datagrams into World calls and build the responses.
 
 Pure (no sockets): ``CommandHandler.robot_control(team, data) -> reply bytes``,
-``simulator_command(data) -> reply bytes``, ``grsim_packet(data) -> None``. Malformed input
+``simulator_command(data) -> reply bytes``, ``grsim_packet(data) -> team | None``,
+``grsim_status(team) -> Robots_Status bytes | None`` (on a change). Malformed input
 (garbage, missing required fields: the Python runtime does not enforce ``required``, so
 ``IsInitialized()`` is checked) is counted, logged rate-limited and answered with an error
 where the protocol has a response. Non-finite numbers are rejected and the robot stops.
