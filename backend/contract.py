@@ -92,6 +92,31 @@ class RobotCommand(TypedDict):
 
 
 @with_config(_STRICT)
+class RobotFeedback(TypedDict):
+    """What the robot (or the simulator for it) reports back."""
+
+    transport: Annotated[Literal["sim", "grsim"], Field(
+        description='"sim": SSL simulation protocol RobotControlResponse (answers every '
+        'command); "grsim": grSim Robots_Status (only on a change)')]
+    ball_contact: Annotated[bool, Field(
+        description="the ball touches the dribbler (dribbler_ball_contact, grSim infrared)")]
+    age_s: Annotated[float | None, Field(description="since the last answer")]
+    no_answer: Annotated[bool, Field(
+        description="commanded but no answer for more than 0.5 s")]
+    last_kick: Literal["flat", "chip"] | None
+    last_kick_age_s: Annotated[float | None, Field(description="since the last kick reported")]
+    round_trip_ms: Annotated[float | None, Field(
+        description="command sent by the relay -> answer received (mean of the last 20)")]
+    commands_sent: Annotated[int | None, Field(description="commands sent, last 2 s")]
+    answers: Annotated[int | None, Field(description="answers received, last 2 s")]
+    loss: Annotated[float | None, Field(description="1 - answers / commands sent, last 2 s")]
+    battery_v: Annotated[float | None, Field(
+        description="battery voltage, V (null until a transport reports it)")]
+    kicker_v: Annotated[float | None, Field(
+        description="kicker capacitor charge, V (null until a transport reports it)")]
+
+
+@with_config(_STRICT)
 class RobotKick(TypedDict):
     """Kicker armed: the kick speed and whether it chips."""
 
@@ -127,6 +152,7 @@ class Robot(TypedDict):
     filter: FilterName
     control: RobotControl | None
     command: RobotCommand | None
+    feedback: RobotFeedback | None
 
 
 @with_config(_STRICT)

@@ -39,6 +39,7 @@ from .processor import Every, Processor, Runner
 from .processors import (
     CommandPublisher,
     ControlProcessor,
+    FeedbackProcessor,
     InternalRefereeProcessor,
     PlayerFeed,
     RefereeIngest,
@@ -181,6 +182,7 @@ class Station:
         self.vision = VisionIngest(self.bus)
         self.referee = RefereeIngest(self.bus, self.referee_watch)
         self.world = WorldProcessor(self.bus)
+        self.feedback = FeedbackProcessor(self.bus)
         self.strategy = StrategyProcessor(self.bus, prm.team.our_team, prm.strategy)
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
                                         prm.safety.vision_stale_s)
@@ -212,8 +214,9 @@ class Station:
         self.views = Views()
         self._view_listeners: set[Callable[[], None]] = set()
         self.processors: tuple[Processor, ...] = (
-            self.player_feed, self.ingest, self.vision, self.referee, self.world, self.strategy,
-            self.control, self.internal_referee, self.publisher, self.tracker, ViewPublisher(self),
+            self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
+            self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
+            ViewPublisher(self),
             RecordingProcessor(self))
 
     # ---- the station thread: the bus and every processor run on their own event loop, so
@@ -314,7 +317,8 @@ class Station:
     async def start(self) -> None:
         s = self.settings
         self.ctx = zmq.asyncio.Context()
-        self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats"]))
+        self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats",
+                                                                b"feedback"]))
         self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
         rp = prm.recording
@@ -433,6 +437,7 @@ class Station:
         controllers start again."""
         replay = self.player.log is not None
         self.world.reset()
+        self.feedback.reset()
         self.world_topic.clear()  # no world of before the jump is shown or obeyed
         self.referee_topic.clear()  # the log's own referee is heard within 0.1 s
         self.control.motion.reset_all()

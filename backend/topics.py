@@ -28,6 +28,13 @@ class TopicSpec(Generic[T]):
 
 VISION_PACKETS = TopicSpec[tl.Envelope]("vision-packets", tl.Envelope, 64,
                                         "raw vision datagrams from the relay")
+#: what robots or a simulator answered (RobotControlResponse, grSim Robots_Status), unchanged
+FEEDBACK_PACKETS = TopicSpec[tl.RobotFeedbackEnvelope](
+    "feedback-packets", tl.RobotFeedbackEnvelope, 64,
+    "raw robot / simulator answers from the relay")
+#: {(team, id): backend.world.feedback.RobotFeedbackView}, what each robot reports back
+ROBOT_FEEDBACK = TopicSpec[dict[Any, Any]]("robot-feedback", dict, 10,
+                                           "per robot: ball contact, kicks, answers")
 REFEREE_PACKETS = TopicSpec[tl.Envelope]("referee-packets", tl.Envelope, 30,
                                          "raw referee datagrams from the relay")
 RELAY_STATS = TopicSpec[dict[str, Any]]("relay-stats", dict, 10,
@@ -54,4 +61,5 @@ PARAMS = TopicSpec[int]("params", int, 4, "the parameter version applied")
 ALL: tuple[TopicSpec[Any], ...] = (
     VISION_PACKETS, REFEREE_PACKETS, RELAY_STATS, VISION_DETECTIONS, GEOMETRY, REFEREE, WORLD,
     OPERATOR_TARGETS, TARGETS, ROBOT_COMMANDS, SIM_COMMANDS, REFEREE_OUT, ESTOP, PARAMS,
+    FEEDBACK_PACKETS, ROBOT_FEEDBACK,
 )

@@ -20,6 +20,7 @@ from .processor import Every, OnTopic
 from .referee.internal import OPERATOR_COMMANDS
 from .referee.watch import RefereeWatch
 from .strategy.plays import PLAY_INFO
+from .world.feedback import RobotFeedbackView
 from .world.state import Team
 
 if TYPE_CHECKING:
@@ -139,6 +140,18 @@ def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
     return {"source": p.source_name, "ball": ball, "robots": robots}
 
 
+def feedback_view(v: RobotFeedbackView | None) -> contract.RobotFeedback | None:
+    if v is None:
+        return None
+    return {
+        "transport": v.transport, "ball_contact": v.ball_contact, "age_s": v.age_s,
+        "no_answer": v.no_answer, "last_kick": v.last_kick,
+        "last_kick_age_s": v.last_kick_age_s, "round_trip_ms": v.round_trip_ms,
+        "commands_sent": v.commands_sent, "answers": v.answers, "loss": v.loss,
+        "battery_v": v.battery_v, "kicker_v": v.kicker_v,
+    }
+
+
 def world(st: Station) -> contract.World:
     world = st.world_topic.latest_value()
     targets: dict[tuple[Team, int], TargetEntry] = st.targets_topic.latest_value() or {}
@@ -146,6 +159,7 @@ def world(st: Station) -> contract.World:
     if ref is not None and st.control.active_referee() is None:
         ref = None  # the internal referee's own state after it was switched off
     commands = st.control.last_commands
+    feedback = st.feedback.out.latest_value() or {}
     telemetry = st.control.telemetry
     now_unix = st.player.now_ns() / 1e9  # the log's time in replay
     out: contract.World = {
@@ -206,6 +220,7 @@ def world(st: Station) -> contract.World:
                 "left_mps": cmd.velocity.left_mps,
                 "angular_radps": cmd.velocity.angular_radps,
             },
+            "feedback": feedback_view(feedback.get((r.team, r.id))),
         })
     out["robots"] = robots
     out["cameras"] = [{
@@ -276,6 +291,7 @@ def health(st: Station) -> contract.Health:
     streams["vision"] = vis
     streams["referee"] = st.referee.counter.to_dict()
     streams["zmq"] = st.ingest.counters["zmq"].to_dict()
+    streams["feedback"] = st.feedback.counter.to_dict()
     relay = None
     rs = st.relay_stats.latest_value()
     if rs is not None:

@@ -71,6 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
     n.add_argument("--blue-port", type=int, default=d.blue_port)
     n.add_argument("--yellow-port", type=int, default=d.yellow_port)
     n.add_argument("--grsim-port", type=int, default=d.grsim_port)
+    n.add_argument("--grsim-status-blue-port", type=int, default=d.grsim_status_blue_port,
+                   help="grSim Robots_Status (blue) to the last grSim command's sender")
+    n.add_argument("--grsim-status-yellow-port", type=int, default=d.grsim_status_yellow_port)
     n.add_argument("--truth-pub", default=None, metavar="ENDPOINT",
                    help="ZeroMQ PUB endpoint for ground truth, e.g. tcp://127.0.0.1:5580")
     p.add_argument("--log-level", default="INFO")
@@ -110,6 +113,8 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
         blue_port=args.blue_port,
         yellow_port=args.yellow_port,
         grsim_port=args.grsim_port,
+        grsim_status_blue_port=args.grsim_status_blue_port,
+        grsim_status_yellow_port=args.grsim_status_yellow_port,
         truth_pub=args.truth_pub,
     )
     cfg.validate()

@@ -70,6 +70,9 @@ class SimConfig:
     blue_port: int = defaults.SIM_BLUE_PORT
     yellow_port: int = defaults.SIM_YELLOW_PORT
     grsim_port: int = defaults.GRSIM_COMMAND_PORT
+    # like grSim: Robots_Status to the IP of the last grSim command's sender, on these ports
+    grsim_status_blue_port: int = defaults.GRSIM_STATUS_BLUE_PORT
+    grsim_status_yellow_port: int = defaults.GRSIM_STATUS_YELLOW_PORT
     truth_pub: str | None = None  # e.g. "tcp://127.0.0.1:5580"
     max_catch_up_steps: int = 50  # physics steps per wake-up before the sim gives up real time
 

@@ -1,7 +1,8 @@
 """Decode simulator command datagrams into World calls and build the responses.
 
 Pure (no sockets): ``CommandHandler.robot_control(team, data) -> reply bytes``,
-``simulator_command(data) -> reply bytes``, ``grsim_packet(data) -> None``. Malformed input
+``simulator_command(data) -> reply bytes``, ``grsim_packet(data) -> team | None``,
+``grsim_status(team) -> Robots_Status bytes | None`` (on a change). Malformed input
 (garbage, missing required fields: the Python runtime does not enforce ``required``, so
 ``IsInitialized()`` is checked) is counted, logged rate-limited and answered with an error
 where the protocol has a response. Non-finite numbers are rejected and the robot stops.
@@ -19,6 +20,7 @@ from google.protobuf.message import DecodeError, Message
 from fieldsim.world import MAX_ROBOT_ID, Team, World
 from sslnet.ratelog import RateLimitedLog
 from sslpb import grsim_packet_pb2 as grsim_pb
+from sslpb import grsim_robot_status_pb2 as grsim_status_pb
 from sslpb import ssl_gc_common_pb2 as common_pb
 from sslpb import ssl_simulation_control_pb2 as control_pb
 from sslpb import ssl_simulation_error_pb2 as error_pb
@@ -80,6 +82,9 @@ class CommandHandler:
 
     def __init__(self, world: World, ratelog: RateLimitedLog | None = None) -> None:
         self.world = world
+        #: grSim status: per team the last Robots_Status sent, per robot the kicks reported
+        self._status_sent: dict[Team, bytes] = {}
+        self._kicks_seen: dict[tuple[Team, int], int] = {}
         self.stats = ProtocolStats()
         self._log = ratelog if ratelog is not None else RateLimitedLog(log)
 
@@ -118,8 +123,11 @@ class CommandHandler:
         for cmd in msg.robot_commands:
             self._robot_command(team, cmd, errors)
         response.errors.extend(errors)
-        for robot in sorted(self.world.robots.values(), key=lambda r: r.id):
-            if robot.team is team:
+        # like grSim / ER-Force: one RobotFeedback per robot commanded (and on the field),
+        # ball contact while the ball touches its kicker face (World: kicker zone)
+        for rid in sorted({cmd.id for cmd in msg.robot_commands}):
+            robot = self.world.robot(team, rid)
+            if robot is not None:
                 response.feedback.add(id=robot.id, dribbler_ball_contact=robot.ball_contact)
         return response.SerializeToString()
 
@@ -239,17 +247,40 @@ class CommandHandler:
 
     # -- legacy grSim_Packet (no response) -----------------------------------------------------
 
-    def grsim_packet(self, data: bytes) -> None:
+    def grsim_status(self, team: Team) -> bytes | None:
+        """grSim's Robots_Status of ``team`` (every robot on the field: infrared = ball
+        contact, flat / chip kick since the last status), or None when nothing changed since
+        the last one returned (grSim sends only on a change)."""
+        msg = grsim_status_pb.Robots_Status()
+        for robot in sorted(self.world.robots.values(), key=lambda r: r.id):
+            if robot.team is not team:
+                continue
+            key = (team, robot.id)
+            kicked = robot.kicks != self._kicks_seen.get(key, robot.kicks)
+            self._kicks_seen[key] = robot.kicks
+            msg.robots_status.add(robot_id=robot.id, infrared=robot.ball_contact,
+                                  flat_kick=kicked and not robot.last_kick_chip,
+                                  chip_kick=kicked and robot.last_kick_chip)
+        data = msg.SerializeToString()
+        if data == self._status_sent.get(team):
+            return None
+        self._status_sent[team] = data
+        return data
+
+    def grsim_packet(self, data: bytes) -> Team | None:
+        """Applies a grSim_Packet; the team it commands (None: no commands)."""
         self.stats.datagrams[CHANNEL_GRSIM] += 1
         msg = grsim_pb.grSim_Packet()
         try:
             _parse(msg, data)
         except _Malformed as exc:
             self._malformed(CHANNEL_GRSIM, str(exc))
-            return
+            return None
         errors: list[error_pb.SimulatorError] = []
+        commanded: Team | None = None
         if msg.HasField("commands"):
             team = Team.YELLOW if msg.commands.isteamyellow else Team.BLUE
+            commanded = team
             for rc in msg.commands.robot_commands:
                 self._grsim_robot(team, rc, errors)
         if msg.HasField("replacement"):
@@ -278,6 +309,7 @@ class CommandHandler:
                     self._error(errors, ERR_INVALID_VALUE, f"robot replacement: {exc}")
         for err in errors:
             self._log.warning(f"grsim-{err.code}", "grSim packet: %s", err.message)
+        return commanded
 
     def _grsim_robot(
         self, team: Team, rc: grsim_pb.grSim_Robot_Command, errors: list[error_pb.SimulatorError]

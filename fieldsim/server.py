@@ -48,6 +48,7 @@ class _Datagrams(asyncio.DatagramProtocol):
     ) -> None:
         self.name = name
         self.sock = sock
+        self.last_addr: tuple[str, int] | None = None  # the sender of the datagram handled
         self.handle = handle
         self.sim = sim
         self.transport: asyncio.DatagramTransport | None = None
@@ -56,6 +57,7 @@ class _Datagrams(asyncio.DatagramProtocol):
         self.transport = cast(asyncio.DatagramTransport, transport)
 
     def datagram_received(self, data: bytes, addr: tuple[str | Any, int]) -> None:
+        self.last_addr = (str(addr[0]), int(addr[1]))
         try:
             reply = self.handle(data)
         except Exception:  # a bug must not take the simulator down
@@ -102,6 +104,10 @@ class FieldSim:
         self._clock = clock
         self._wallclock = wallclock
         self._transports: list[asyncio.DatagramTransport] = []
+        self._grsim_proto: _Datagrams | None = None
+        #: like grSim: Robots_Status goes to the IP of the last grSim command's sender per team
+        self.grsim_peers: dict[Team, str] = {}
+        self.grsim_status_sent = 0
         self._sender: socket.socket | None = None
         self._task: asyncio.Task[None] | None = None
         self._zmq_ctx: Any = None
@@ -127,11 +133,13 @@ class FieldSim:
             for name, port, handle in servers:
                 sock = open_udp_server(cfg.sim_host, port)
                 self.ports[name] = sock.getsockname()[1]
-                transport, _ = await loop.create_datagram_endpoint(
+                transport, proto = await loop.create_datagram_endpoint(
                     lambda n=name, h=handle, s=sock: _Datagrams(n, h, self, s),  # type: ignore[misc]
                     sock=sock,
                 )
                 self._transports.append(transport)
+                if name == "grsim":
+                    self._grsim_proto = proto
             if cfg.truth_pub:
                 self._open_truth(cfg.truth_pub)
         except BaseException:
@@ -149,7 +157,27 @@ class FieldSim:
         )
 
     def _grsim(self, data: bytes) -> None:
-        self.handler.grsim_packet(data)
+        team = self.handler.grsim_packet(data)
+        proto = self._grsim_proto
+        if team is not None and proto is not None and proto.last_addr is not None:
+            self.grsim_peers[team] = proto.last_addr[0]
+
+    def _send_grsim_status(self) -> None:
+        """grSim's Robots_Status of each team commanded through grSim_Packet, on a change."""
+        cfg = self.config
+        for team, host in self.grsim_peers.items():
+            data = self.handler.grsim_status(team)
+            if data is None or self._sender is None:
+                continue
+            port = (cfg.grsim_status_blue_port if team is Team.BLUE
+                    else cfg.grsim_status_yellow_port)
+            try:
+                self._sender.sendto(data, (host, port))
+                self.grsim_status_sent += 1
+            except OSError as exc:
+                self.send_errors += 1
+                self.ratelog.warning("grsim-status", "grSim status to %s:%d failed: %s",
+                                     host, port, exc)
 
     def _open_truth(self, endpoint: str) -> None:
         import zmq
@@ -265,6 +293,8 @@ class FieldSim:
                         break
                     world.step()
                     steps += 1
+                if steps and self.grsim_peers:
+                    self._send_grsim_status()
                 for k in range(len(next_capture)):
                     while next_capture[k] <= now:
                         tc = next_capture[k]

@@ -96,6 +96,7 @@ class Robot:
     command: Command | None = None
     ball_contact: bool = False
     kicks: int = 0
+    last_kick_chip: bool = False  # the last kick left the ground
     dribbling: bool = False  # holds the ball with its dribbler
 
 
@@ -690,6 +691,7 @@ class World:
                     ball.z = max(ball.z, 1e-6)
                 cmd.kick_speed = 0.0  # one kick per command
                 robot.kicks += 1
+                robot.last_kick_chip = ball.vz > 0.0
                 self.stats.kicks += 1
                 self.last_touch = (robot.team, robot.id)
                 self._release()  # a kick ends any hold

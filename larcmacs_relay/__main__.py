@@ -59,6 +59,10 @@ def build_parser() -> argparse.ArgumentParser:
     a("--sim-blue-port", type=int, default=d.sim_blue_port)
     a("--sim-yellow-port", type=int, default=d.sim_yellow_port)
     a("--grsim-port", type=int, default=d.grsim_port)
+    a("--grsim-status-blue-port", type=int, default=d.grsim_status_blue_port,
+      help="where grSim sends the blue Robots_Status (grsim mode)")
+    a("--grsim-status-yellow-port", type=int, default=d.grsim_status_yellow_port,
+      help="where grSim sends the yellow Robots_Status (grsim mode)")
     a(
         "--robot-box",
         type=_hostport,
@@ -129,6 +133,8 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         sim_blue_port=args.sim_blue_port,
         sim_yellow_port=args.sim_yellow_port,
         grsim_port=args.grsim_port,
+        grsim_status_blue_port=args.grsim_status_blue_port,
+        grsim_status_yellow_port=args.grsim_status_yellow_port,
         robot_box_host=args.robot_box[0],
         robot_box_port=args.robot_box[1],
         output_rate_hz=args.rate,

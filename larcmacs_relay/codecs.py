@@ -15,6 +15,7 @@ from google.protobuf.message import DecodeError, Message
 from sslnet import streams
 from sslpb import (
     grsim_packet_pb2,
+    grsim_robot_status_pb2,
     ssl_gc_common_pb2,
     ssl_gc_referee_message_pb2,
     ssl_simulation_control_pb2,
@@ -254,6 +255,25 @@ def count_response_errors(data: bytes) -> tuple[int, str]:
         return 0, ""
     first = msg.errors[0]
     return len(msg.errors), f"simulator error {first.code}: {first.message}"
+
+
+def check_robot_control_response(data: bytes) -> tuple[int, str, str | None]:
+    """A simulator's answer on a robot port: (errors it reports, the first one, why it is
+    refused: None when it is a valid RobotControlResponse, else the reason kind of
+    sslnet.streams). An empty datagram is a valid (empty) response."""
+    msg = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
+    err = _parse(msg, data)
+    if err is not None:
+        return 0, err, classify(err, data)
+    if not msg.errors:
+        return 0, "", None
+    first = msg.errors[0]
+    return len(msg.errors), f"simulator error {first.code}: {first.message}", None
+
+
+def check_grsim_status(data: bytes) -> str | None:
+    """Why ``data`` is not a grSim Robots_Status (forwarded unchanged when it is), or None."""
+    return _parse(grsim_robot_status_pb2.Robots_Status(), data)
 
 
 # --------------------------------------------------------------------------- grSim legacy

@@ -36,6 +36,11 @@ class RelayConfig:
     sim_blue_port: int = defaults.SIM_BLUE_PORT
     sim_yellow_port: int = defaults.SIM_YELLOW_PORT
     grsim_port: int = defaults.GRSIM_COMMAND_PORT
+    # grSim's Robots_Status (grsim output only): it sends them to the sender of the last
+    # command, on these ports (0: any free port, for tests)
+    grsim_status_host: str = "0.0.0.0"
+    grsim_status_blue_port: int = defaults.GRSIM_STATUS_BLUE_PORT
+    grsim_status_yellow_port: int = defaults.GRSIM_STATUS_YELLOW_PORT
     robot_box_host: str = "127.0.0.1"
     robot_box_port: int = defaults.ROBOT_BOX_PORT
     output_rate_hz: float = 120.0

@@ -25,7 +25,7 @@ from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
 from sslnet import proc, streams
-from sslnet.multicast import open_multicast_receiver, open_multicast_sender
+from sslnet.multicast import open_multicast_receiver, open_multicast_sender, open_udp_server
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
 from sslnet.streams import StreamCounter
@@ -62,6 +62,8 @@ class Relay:
         self.table = CommandTable(config.command_timeout_s, config.hold_time_s)
         names = ["vision", "referee", "tracker", "commands", "output", "sim_responses"]
         names += ["sim_commands", "referee_out", "tracker_out"]
+        if config.output == "grsim":
+            names.append("grsim_status")
         if config.compat:
             names.append("compat_commands")
         self.streams = {n: StreamCounter(n) for n in names}
@@ -73,7 +75,12 @@ class Relay:
         self.compat_referee_address = ""
         self._stop = asyncio.Event()
         self._ratelog = RateLimitedLog(log, config.log_interval_s)
-        self._sequences = {"vision": 0, "referee": 0, "tracker": 0}
+        self._sequences = {"vision": 0, "referee": 0, "tracker": 0, "feedback": 0}
+        #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
+        #: with every answer (the backend's round trip and losses)
+        self._sent: dict[tuple[int, int], tuple[int, int]] = {}
+        #: grsim output: the bound Robots_Status ports {"blue": port, "yellow": port}
+        self.grsim_status_ports: dict[str, int] = {}
         self._referee_mapper = RefereeMapper(config.our_team)
         self._pending_latency_ns: list[int] = []
         self._latencies: deque[tuple[float, float]] = deque()
@@ -179,6 +186,16 @@ class Relay:
             self._udp_out = out
             if cfg.output == "sim":
                 loop.add_reader(out.fileno(), self._drain_responses, out)
+            elif cfg.output == "grsim":
+                for label, team, port in (
+                        ("blue", codecs.TEAM_BLUE, cfg.grsim_status_blue_port),
+                        ("yellow", codecs.TEAM_YELLOW, cfg.grsim_status_yellow_port)):
+                    st = open_udp_server(cfg.grsim_status_host, port)
+                    udp.append(st)
+                    self.grsim_status_ports[label] = st.getsockname()[1]
+                    loop.add_reader(st.fileno(), self._drain_grsim_status, st, team)
+                    log.info("listening for grSim %s robot status on %s:%d", label,
+                             cfg.grsim_status_host, self.grsim_status_ports[label])
             if cfg.referee_out_enabled:
                 rout = open_multicast_sender(cfg.interface, ttl=cfg.referee_out_ttl)
                 udp.append(rout)
@@ -591,12 +608,17 @@ class Relay:
                 if cfg.output == "sim":
                     port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
                     data = codecs.encode_sim_robot_control(cmds, cfg.chip_angle_deg)
-                    self._send(data, (self._sim_host, port))
+                    sent = self._send(data, (self._sim_host, port))
                 else:
                     data = codecs.encode_grsim_commands(
                         cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg
                     )
-                    self._send(data, (self._sim_host, cfg.grsim_port))
+                    sent = self._send(data, (self._sim_host, cfg.grsim_port))
+                if sent:
+                    sent_ns = time.time_ns()
+                    for c in cmds:
+                        n, _ = self._sent.get((team, c.id), (0, 0))
+                        self._sent[(team, c.id)] = (n + 1, sent_ns)
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
@@ -613,17 +635,18 @@ class Relay:
         log.warning("last word: stop sent to %d robots (%d times)", len(zeros),
                     self.config.last_word_repeats)
 
-    def _send(self, data: bytes, addr: tuple[str, int]) -> None:
+    def _send(self, data: bytes, addr: tuple[str, int]) -> bool:
         counter = self.streams["output"]
         if self._udp_out is None:
-            return
+            return False
         try:
             self._udp_out.sendto(data, addr)
         except OSError as exc:
             counter.error("send failed", f"to {addr[0]}:{addr[1]}: {exc}")
             self._ratelog.warning("output-send", "send to %s:%d failed: %s", *addr, exc)
-            return
+            return False
         counter.packet(len(data))
+        return True
 
     def _drain_responses(self, sock: socket.socket) -> None:
         counter = self.streams["sim_responses"]
@@ -636,13 +659,72 @@ class Relay:
                 counter.error("socket error", str(exc))
                 self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
                 continue
+            receive_ns = time.time_ns()
             counter.packet(len(data))
-            n, reason = codecs.count_response_errors(data)
+            port = addr[1]
+            team = (codecs.TEAM_BLUE if port == self.config.sim_blue_port else
+                    codecs.TEAM_YELLOW if port == self.config.sim_yellow_port else None)
+            if team is None:  # the control port's SimulatorResponse: errors only
+                n, reason = codecs.count_response_errors(data)
+                kind = None if n == 0 or reason.startswith("simulator error") else \
+                    codecs.classify(reason, data)
+            else:
+                n, reason, kind = codecs.check_robot_control_response(data)
+            if kind is not None:
+                counter.error(kind, reason)
+                self._ratelog.warning("sim-resp-bad", "bad answer from the simulator at "
+                                      "%s:%d: %s", addr[0], addr[1], reason)
+                continue
             if n:
                 counter.error("simulator error", reason, n)
                 self._ratelog.warning(
                     "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
                 )
+            if team is not None:
+                self._forward_feedback(touchline_pb2.FEEDBACK_SIM_RESPONSE, team, data, addr,
+                                       receive_ns)
+
+    def _drain_grsim_status(self, sock: socket.socket, team: int) -> None:
+        """grSim's Robots_Status datagrams of one team, validated and forwarded unchanged."""
+        counter = self.streams["grsim_status"]
+        for _ in range(MAX_BATCH):
+            try:
+                data, addr = sock.recvfrom(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                counter.error("socket error", str(exc))
+                self._ratelog.warning("grsim-status-os", "grSim status socket error: %s", exc)
+                return
+            receive_ns = time.time_ns()
+            if len(data) > self.config.max_datagram_bytes:
+                counter.error(streams.OVERSIZED, f"{len(data)} bytes")
+                continue
+            reason = codecs.check_grsim_status(data)
+            if reason is not None:
+                counter.error(codecs.classify(reason, data), reason)
+                self._ratelog.warning("grsim-status-bad", "dropped grSim status from %s:%d: "
+                                      "%s", addr[0], addr[1], reason)
+                continue
+            counter.packet(len(data))
+            self._forward_feedback(touchline_pb2.FEEDBACK_GRSIM_STATUS, team, data, addr,
+                                   receive_ns)
+
+    def _forward_feedback(self, kind: touchline_pb2.FeedbackKind.ValueType, team: int,
+                          data: bytes, addr: tuple[str, int], receive_ns: int) -> None:
+        """One answer onto the PUB ("feedback"), with what was sent to the team's robots."""
+        self._sequences["feedback"] += 1
+        env = touchline_pb2.RobotFeedbackEnvelope(
+            kind=kind,
+            team=team,  # type: ignore[arg-type]
+            receive_time_ns=receive_ns,
+            sequence=self._sequences["feedback"],
+            source=f"{addr[0]}:{addr[1]}",
+            payload=data,
+            sent=[touchline_pb2.RobotSent(id=rid, commands_sent=n, last_sent_time_ns=t)
+                  for (tm, rid), (n, t) in sorted(self._sent.items()) if tm == team],
+        )
+        self._publish(self._pub, [b"feedback", env.SerializeToString()])
 
     # ------------------------------------------------------------------ stats
 

@@ -55,6 +55,8 @@ class Ports:
     sim_blue: int = defaults.SIM_BLUE_PORT
     sim_yellow: int = defaults.SIM_YELLOW_PORT
     grsim: int = defaults.GRSIM_COMMAND_PORT
+    grsim_status_blue: int = defaults.GRSIM_STATUS_BLUE_PORT
+    grsim_status_yellow: int = defaults.GRSIM_STATUS_YELLOW_PORT
     relay_pub: str = defaults.RELAY_PUB
     relay_sub: str = defaults.RELAY_SUB
 
@@ -71,6 +73,8 @@ class Ports:
             sim_blue=free_udp_port(),
             sim_yellow=free_udp_port(),
             grsim=free_udp_port(),
+            grsim_status_blue=free_udp_port(),
+            grsim_status_yellow=free_udp_port(),
             relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
             relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}",
         )
@@ -115,6 +119,8 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
             "--interface", cfg.interface,
             "--control-port", str(ports.sim_control), "--blue-port", str(ports.sim_blue),
             "--yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+            "--grsim-status-blue-port", str(ports.grsim_status_blue),
+            "--grsim-status-yellow-port", str(ports.grsim_status_yellow),
             *cfg.sim_args,
         ]))
     children.append(Child("relay", [
@@ -125,6 +131,8 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         "--output", cfg.output, "--sim-host", cfg.sim_host,
         "--sim-control-port", str(ports.sim_control), "--sim-blue-port", str(ports.sim_blue),
         "--sim-yellow-port", str(ports.sim_yellow), "--grsim-port", str(ports.grsim),
+        "--grsim-status-blue-port", str(ports.grsim_status_blue),
+        "--grsim-status-yellow-port", str(ports.grsim_status_yellow),
         "--pub", ports.relay_pub, "--sub", ports.relay_sub,
         # tracked vision on loopback only; the venue network needs --relay-arg=--tracker-out=...
         "--tracker-out-local", f"{ports.tracker_group}:{ports.tracker}",

@@ -13,6 +13,8 @@ SIM_CONTROL_PORT = 10300
 SIM_BLUE_PORT = 10301
 SIM_YELLOW_PORT = 10302
 GRSIM_COMMAND_PORT = 20011
+GRSIM_STATUS_BLUE_PORT = 30011  # grSim Robots_Status to the sender of the last command
+GRSIM_STATUS_YELLOW_PORT = 30012
 ROBOT_BOX_PORT = 10000
 
 # Touchline ZeroMQ endpoints (relay binds both).

@@ -31,6 +31,7 @@ class RelayIngest(SocketProcessor):
         self.vision_packets = bus.of(topics.VISION_PACKETS)
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
+        self.feedback_packets = bus.of(topics.FEEDBACK_PACKETS)
         self.counters = {"zmq": StreamCounter("zmq")}
         #: False while a log is replayed: live datagrams are then not fed to the pipeline
         #: (they are still recorded)
@@ -65,6 +66,17 @@ class RelayIngest(SocketProcessor):
                 c.error(streams.wire_problem(body), f"stats: {exc}")
                 return
             self.relay_stats.write(_relay_stats_dict(stats))
+            return
+        if topic == b"feedback":
+            fb = tl.RobotFeedbackEnvelope()
+            try:
+                fb.ParseFromString(body)
+            except DecodeError as exc:
+                c.error(streams.wire_problem(body), f"feedback: {exc}")
+                badlog.warning("zmq-feedback", "undecodable feedback envelope: %s", exc)
+                return
+            if self.live():  # in replay nothing is sent to robots: nothing answers for it
+                self.feedback_packets.write(fb)
             return
         env = tl.Envelope()
         try:

@@ -39,6 +39,8 @@ class StrategyProcessor(Processor):
         self.referee = bus.of(topics.REFEREE)
         self.operator = Reader(bus.of(topics.OPERATOR_TARGETS))
         self.targets = bus.of(topics.TARGETS)
+        #: what each robot reports back ({(team, id): RobotFeedbackView}): ball contact, ...
+        self.feedback = bus.of(topics.ROBOT_FEEDBACK)
         self.our_team: Team = our_team
         self.our_side_negative = True
         self.side_from_referee = True
@@ -52,6 +54,12 @@ class StrategyProcessor(Processor):
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
+
+    def ball_contact(self, team: Team, rid: int) -> bool:
+        """The robot reports the ball at its dribbler (False when it reports nothing)."""
+        views = self.feedback.latest_value() or {}
+        fb = views.get((team, rid))
+        return bool(fb is not None and fb.ball_contact)
 
     def configure(self, params: StationParams) -> None:
         t = params.team

@@ -367,3 +367,36 @@ def test_thread_wrapper_and_rates() -> None:
     # 60 Hz per camera; generous bounds for a shared 2-core machine
     assert all(45 <= c <= 65 for c in counts.values()), counts
     assert statistics.mean(counts.values()) > 50
+
+
+async def test_grsim_status_sent_to_the_command_sender() -> None:
+    """Like grSim: Robots_Status to the IP of the last grSim command's sender, on the status
+    port of the team, when a value changes."""
+    status_rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    status_rx.bind(("127.0.0.1", 0))
+    status_rx.setblocking(False)
+    cfg = SimConfig(vision_port=random_vision_port(), control_port=0, blue_port=0,
+                    yellow_port=0, grsim_port=0, seed=3,
+                    grsim_status_yellow_port=status_rx.getsockname()[1])
+    sim = FieldSim(cfg)
+    await sim.start()
+    tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        pkt = grsim_pb.grSim_Packet()
+        pkt.commands.timestamp = 0.0
+        pkt.commands.isteamyellow = True
+        pkt.commands.robot_commands.add(id=0, kickspeedx=0, kickspeedz=0, veltangent=0,
+                                        velnormal=0, velangular=0, spinner=False,
+                                        wheelsspeed=False)
+        tx.sendto(pkt.SerializeToString(), ("127.0.0.1", sim.ports["grsim"]))
+        loop = asyncio.get_running_loop()
+        data = await asyncio.wait_for(loop.sock_recv(status_rx, 65536), 3.0)
+        from sslpb.grsim_robot_status_pb2 import Robots_Status
+        status = Robots_Status.FromString(data)
+        assert status.IsInitialized()
+        assert 0 in [s.robot_id for s in status.robots_status]
+        assert sim.grsim_peers == {Team.YELLOW: "127.0.0.1"}
+    finally:
+        await sim.stop()
+        tx.close()
+        status_rx.close()

@@ -91,3 +91,20 @@ def test_touchline_command_set_layout() -> None:
     m = tl.RobotCommandSet(created_time_ns=10, sequence=1, stop_all=True)
     m.commands.add(team=tl.TEAM_BLUE, id=4, forward_mps=1.0, angular_radps=-2.0)
     assert m.SerializeToString() == want
+
+
+def test_robot_feedback_and_grsim_status_field_numbers() -> None:
+    from sslpb.grsim_robot_status_pb2 import Robots_Status
+    from sslpb.ssl_simulation_robot_feedback_pb2 import RobotControlResponse
+
+    # RobotControlResponse{feedback[{id=5, dribbler_ball_contact=true}]}: 0x12 = field 2 LEN
+    want = b"\x12\x04\x08\x05\x10\x01"
+    assert ld(2, uv(1, 5) + uv(2, 1)) == want
+    m = RobotControlResponse()
+    m.feedback.add(id=5, dribbler_ball_contact=True)
+    assert m.SerializeToString() == want
+    # Robots_Status{robots_status[{robot_id=2, infrared=true, flat_kick=false, chip_kick=true}]}
+    want = ld(1, uv(1, 2) + uv(2, 1) + uv(3, 0) + uv(4, 1))
+    s = Robots_Status()
+    s.robots_status.add(robot_id=2, infrared=True, flat_kick=False, chip_kick=True)
+    assert s.SerializeToString() == want

@@ -590,6 +590,7 @@ export interface Robot {
   filter: string;
   control: RobotControl | null;
   command: RobotCommand | null;
+  feedback: RobotFeedback | null;
 }
 
 /** The velocity the station commands, in the robot's frame. */
@@ -614,6 +615,33 @@ export interface RobotControl {
   c_estimate: number;
   heading_error_rad: number;
   restarts: number;
+}
+
+/** What the robot (or the simulator for it) reports back. */
+export interface RobotFeedback {
+  /** "sim": SSL simulation protocol RobotControlResponse (answers every command); "grsim": grSim Robots_Status (only on a change) */
+  transport: "sim" | "grsim";
+  /** the ball touches the dribbler (dribbler_ball_contact, grSim infrared) */
+  ball_contact: boolean;
+  /** since the last answer */
+  age_s: number | null;
+  /** commanded but no answer for more than 0.5 s */
+  no_answer: boolean;
+  last_kick: ("flat" | "chip") | null;
+  /** since the last kick reported */
+  last_kick_age_s: number | null;
+  /** command sent by the relay -> answer received (mean of the last 20) */
+  round_trip_ms: number | null;
+  /** commands sent, last 2 s */
+  commands_sent: number | null;
+  /** answers received, last 2 s */
+  answers: number | null;
+  /** 1 - answers / commands sent, last 2 s */
+  loss: number | null;
+  /** battery voltage, V (null until a transport reports it) */
+  battery_v: number | null;
+  /** kicker capacitor charge, V (null until a transport reports it) */
+  kicker_v: number | null;
 }
 
 /** Kicker armed: the kick speed and whether it chips. */

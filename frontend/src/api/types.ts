@@ -56,6 +56,7 @@ export type {
   Robot,
   RobotCommand,
   RobotControl,
+  RobotFeedback,
   RobotKick,
   RobotTarget,
   ServerMessage,

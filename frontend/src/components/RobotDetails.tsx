@@ -18,7 +18,53 @@ const KNOWN = new Set([
   "raw_x", "raw_y", "raw_orientation", "predicted", "lost", "filter", "control",
   // shown by StrategyFields
   "role", "path", "kick", "dribbler",
+  // shown by FeedbackFields
+  "feedback",
 ]);
+
+/** What the robot reports back: "yes" / "0.02 s ago" / "no answer for 0.8 s", round trip, losses, ... */
+export function feedbackTexts(robot: Robot): {
+  contact: string;
+  answer: string;
+  roundTrip: string;
+  loss: string;
+  kick: string;
+  battery: string;
+  kicker: string;
+} | null {
+  const fb = robot.feedback;
+  if (!fb) return null;
+  const age = fb.age_s === null ? null : `${fmtFixed(fb.age_s, 2)} s`;
+  return {
+    contact: fb.no_answer ? "unknown (no answer)" : fb.ball_contact ? "yes" : "no",
+    answer: fb.no_answer ? `no answer ${age === null ? "yet" : `for ${age}`}` : age === null ? "—" : `${age} ago (${fb.transport})`,
+    roundTrip: fb.round_trip_ms === null ? "—" : `${fmtFixed(fb.round_trip_ms, 1)} ms`,
+    loss:
+      fb.loss === null || fb.commands_sent === null || fb.answers === null
+        ? "—"
+        : `${fmtInt(fb.loss * 100)} % (${fb.answers} of ${fb.commands_sent} answered, 2 s)`,
+    kick: fb.last_kick === null ? "—" : `${fb.last_kick} ${fb.last_kick_age_s === null ? "" : `${fmtFixed(fb.last_kick_age_s, 1)} s ago`}`.trim(),
+    battery: fb.battery_v === null ? "—" : `${fmtFixed(fb.battery_v, 1)} V`,
+    kicker: fb.kicker_v === null ? "—" : `${fmtFixed(fb.kicker_v, 0)} V`,
+  };
+}
+
+/** Ball contact, answer age / "no answer", round trip, losses, last kick; voltages when reported. */
+function FeedbackFields({ robot }: { robot: Robot }) {
+  const f = feedbackTexts(robot);
+  if (!f) return <Row label="feedback" value="—" testId="robot-feedback" />;
+  return (
+    <>
+      <Row label="ball contact" value={f.contact} testId="robot-ball-contact" />
+      <Row label="answer" value={f.answer} testId="robot-feedback" />
+      {f.roundTrip !== "—" && <Row label="round trip" value={f.roundTrip} testId="robot-round-trip" />}
+      {f.loss !== "—" && <Row label="losses" value={f.loss} testId="robot-loss" />}
+      {f.kick !== "—" && <Row label="last kick" value={f.kick} testId="robot-last-kick" />}
+      {f.battery !== "—" && <Row label="battery" value={f.battery} testId="robot-battery" />}
+      {f.kicker !== "—" && <Row label="kicker charge" value={f.kicker} testId="robot-kicker-charge" />}
+    </>
+  );
+}
 
 /** "Goalkeeper (GK)", "3 waypoints · 2.41 m", "armed 4.0 m/s chip". */
 export function strategyTexts(robot: Robot): { role: string; path: string; kick: string; dribbler: string } {
@@ -133,6 +179,7 @@ export function RobotDetails({ selected, robot }: { selected: RobotKey | null; r
           />
           <Row label="controlled" value={robot.controlled ? "yes" : "no"} />
           <StrategyFields robot={robot} />
+          <FeedbackFields robot={robot} />
           <Row
             label="target"
             value={

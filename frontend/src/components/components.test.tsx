@@ -46,6 +46,50 @@ describe("RobotTable", () => {
   });
 });
 
+describe("RobotTable: ball contact", () => {
+  const fb = {
+    transport: "sim" as const, ball_contact: true, age_s: 0.01, no_answer: false, last_kick: null, last_kick_age_s: null,
+    round_trip_ms: 0.5, commands_sent: 200, answers: 190, loss: 0.05, battery_v: null, kicker_v: null,
+  };
+
+  it("shows the ball contact each robot reports, '!' when it does not answer, nothing without feedback", () => {
+    const robots = [
+      robot("blue", 0, 0, 0, { feedback: fb }),
+      robot("blue", 1, 0, 0, { feedback: { ...fb, ball_contact: false } }),
+      robot("blue", 2, 0, 0, { feedback: { ...fb, no_answer: true, age_s: 0.8 } }),
+      robot("yellow", 0, 0, 0),
+    ];
+    act(() => t.root.render(<RobotTable robots={robots} selected={null} />));
+    const cell = (key: string) => q(`robot-row-${key}`)!.querySelector('[data-testid="robot-ball"]')!;
+    expect(cell("blue-0").getAttribute("data-contact")).toBe("true");
+    expect(cell("blue-0").textContent).toBe("◉");
+    expect(cell("blue-1").getAttribute("data-state")).toBe("free");
+    expect(cell("blue-2").getAttribute("data-state")).toBe("no-answer");
+    expect(cell("blue-2").textContent).toBe("!");
+    expect(cell("blue-2").getAttribute("title")).toBe("no answer for 0.8 s");
+    expect(cell("yellow-0").getAttribute("data-state")).toBe("none");
+    expect(cell("yellow-0").textContent).toBe("");
+  });
+
+  it("shows the feedback age, round trip and losses in the details, 'no answer' when silent", () => {
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 0 }} robot={robot("blue", 0, 0, 0, { feedback: fb })} />));
+    expect(q("robot-ball-contact")?.textContent).toBe("yes");
+    expect(q("robot-feedback")?.textContent).toBe("0.01 s ago (sim)");
+    expect(q("robot-round-trip")?.textContent).toBe("0.5 ms");
+    expect(q("robot-loss")?.textContent).toBe("5 % (190 of 200 answered, 2 s)");
+    expect(q("robot-battery")).toBeNull();
+    expect(q("robot-extra-feedback")).toBeNull();
+    const silent = { ...fb, no_answer: true, age_s: 1.25, battery_v: 15.9, last_kick: "chip" as const, last_kick_age_s: 3 };
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 0 }} robot={robot("blue", 0, 0, 0, { feedback: silent })} />));
+    expect(q("robot-feedback")?.textContent).toBe("no answer for 1.25 s");
+    expect(q("robot-ball-contact")?.textContent).toBe("unknown (no answer)");
+    expect(q("robot-battery")?.textContent).toBe("15.9 V");
+    expect(q("robot-last-kick")?.textContent).toBe("chip 3.0 s ago");
+    act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 0 }} robot={robot("blue", 0, 0, 0)} />));
+    expect(q("robot-feedback")?.textContent).toBe("—");
+  });
+});
+
 describe("RobotDetails", () => {
   it("shows 'team id' for the selection", () => {
     act(() => t.root.render(<RobotDetails selected={{ team: "blue", id: 3 }} robot={robot("blue", 3, 0, 0)} />));

@@ -117,6 +117,35 @@ describe("drawField: strategy layers", () => {
     expect(chip.calls.filter((c) => c.name === "fill").map((c) => c.style)).not.toContain("#22d3ee");
   });
 
+  it("marks a robot holding the ball (orange mark at its front) and one that does not answer (dashed red ring)", () => {
+    const fb = {
+      transport: "sim" as const, ball_contact: true, age_s: 0.01, no_answer: false, last_kick: null, last_kick_age_s: null,
+      round_trip_ms: 0.5, commands_sent: 200, answers: 200, loss: 0, battery_v: null, kicker_v: null,
+    };
+    const r = robot("blue", 2, 0, 0, { orientation: 0, feedback: fb });
+    const held = fakeCtx();
+    drawField(held.ctx, input([r]));
+    const fills = held.calls.filter((c) => c.name === "fill").map((c) => c.style);
+    expect(fills).toContain(COLORS.ballContact);
+    // the mark sits in front of the robot (heading +x: right of its centre on the canvas)
+    const centre = worldToCanvas(t, 0, 0);
+    const idx = held.calls.findIndex((c) => c.name === "fill" && c.style === COLORS.ballContact);
+    const arc = held.calls.slice(0, idx).reverse().find((c) => c.name === "arc")!;
+    expect(Number(arc.args[0])).toBeGreaterThan(centre.x);
+    expect(Math.abs(Number(arc.args[1]) - centre.y)).toBeLessThan(1e-6);
+    expect(held.calls.filter((c) => c.name === "stroke").map((c) => c.style)).not.toContain(COLORS.noAnswer);
+
+    const free = fakeCtx();
+    drawField(free.ctx, input([{ ...r, feedback: { ...fb, ball_contact: false } }, robot("blue", 3, 500, 0)]));
+    expect(free.calls.filter((c) => c.name === "fill").map((c) => c.style)).not.toContain(COLORS.ballContact);
+
+    const silent = fakeCtx();
+    drawField(silent.ctx, input([{ ...r, feedback: { ...fb, ball_contact: false, no_answer: true } }]));
+    const ring = silent.calls.filter((c) => c.name === "stroke" && c.style === COLORS.noAnswer);
+    expect(ring).toHaveLength(1);
+    expect(ring[0]!.dash).toBe(2);
+  });
+
   it("uses larger role tags in large-text mode", () => {
     expect(roleTagPx(10, true)).toBeGreaterThan(roleTagPx(10, false));
     const small = fakeCtx();

@@ -30,6 +30,10 @@ export const COLORS = {
   kick: "#f43f5e",
   chip: "#c084fc",
   dribbler: "#22d3ee",
+  /** The robot reports the ball at its dribbler (feedback.ball_contact). */
+  ballContact: "#fb923c",
+  /** The robot does not answer its commands (feedback.no_answer). */
+  noAnswer: "#f87171",
   bluePath: "rgba(147,197,253,0.9)",
   yellowPath: "rgba(253,224,71,0.9)",
   roleBg: "rgba(15,23,42,0.82)",
@@ -334,6 +338,8 @@ function drawRobot(
   ctx.stroke();
 
   if (r.kick || r.dribbler) drawFrontMarks(ctx, c, heading, rad, r.kick ?? null, r.dribbler === true);
+  if (r.feedback?.ball_contact) drawBallContact(ctx, c, heading, rad);
+  if (r.feedback?.no_answer) drawNoAnswer(ctx, c, rad);
 
   // Id on top, upright.
   const fontPx = Math.max(10, Math.round(rad * 1.1));
@@ -593,6 +599,32 @@ function drawDrag(ctx: CanvasRenderingContext2D, t: FieldTransform, from: { x: n
  * Marks at the robot's front: an armed kicker is a bar just ahead of the flat front (rose for
  * a flat kick, violet for a chip); the dribbler on is a cyan dot on the front edge.
  */
+/** The ball held at the front: a small orange half-disc just outside the flat front. */
+function drawBallContact(ctx: CanvasRenderingContext2D, c: { x: number; y: number }, heading: number, rad: number) {
+  const d = rad * (FRONT_CUT + 0.12);
+  const fx = c.x + Math.cos(heading) * d;
+  const fy = c.y + Math.sin(heading) * d;
+  ctx.beginPath();
+  ctx.arc(fx, fy, Math.max(3, rad * 0.32), heading - Math.PI / 2, heading + Math.PI / 2, false);
+  ctx.closePath();
+  ctx.fillStyle = COLORS.ballContact;
+  ctx.fill();
+  ctx.lineWidth = 1;
+  ctx.strokeStyle = COLORS.robotOutline;
+  ctx.stroke();
+}
+
+/** A robot that does not answer its commands: a dashed red ring around it. */
+function drawNoAnswer(ctx: CanvasRenderingContext2D, c: { x: number; y: number }, rad: number) {
+  ctx.beginPath();
+  ctx.arc(c.x, c.y, rad + Math.max(3, rad * 0.25), 0, 2 * Math.PI);
+  ctx.setLineDash([3, 3]);
+  ctx.lineWidth = Math.max(1.5, rad * 0.12);
+  ctx.strokeStyle = COLORS.noAnswer;
+  ctx.stroke();
+  ctx.setLineDash([]);
+}
+
 function drawFrontMarks(
   ctx: CanvasRenderingContext2D,
   c: { x: number; y: number },

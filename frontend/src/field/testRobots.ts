@@ -28,6 +28,7 @@ export function robot(team: Team, id: number, x: number, y: number, extra: Parti
     filter: "kalman",
     control: null,
     command: null,
+    feedback: null,
     ...extra,
   };
 }

@@ -26,6 +26,10 @@ const world = {
       // fields other engineers add later appear without code changes:
       raw_x: 101,
       controller: { estimated_c: 0.93, reference: { x: 95 } },
+      feedback: {
+        transport: "sim", ball_contact: true, age_s: 0.008, no_answer: false, last_kick: null, last_kick_age_s: null,
+        round_trip_ms: 0.4, commands_sent: 240, answers: 238, loss: 0.008, battery_v: null, kicker_v: null,
+      },
     },
   ],
   cameras: [{ camera_id: 0, balls: [{ x: 1, y: 2 }], robots: [] }],
@@ -42,6 +46,13 @@ describe("worldSignals", () => {
     expect(s.get("robot.blue.3.controller.estimated_c")).toBe(0.93);
     expect(s.get("robot.blue.3.controller.reference.x")).toBe(95);
     expect(s.get("robot.blue.3.visible")).toBe(1);
+  });
+  it("plots what a robot reports back: ball contact as 0/1, round trip, losses (nulls skipped)", () => {
+    expect(s.get("robot.blue.3.feedback.ball_contact")).toBe(1);
+    expect(s.get("robot.blue.3.feedback.no_answer")).toBe(0);
+    expect(s.get("robot.blue.3.feedback.round_trip_ms")).toBe(0.4);
+    expect(s.get("robot.blue.3.feedback.loss")).toBe(0.008);
+    expect(s.has("robot.blue.3.feedback.battery_v")).toBe(false);
   });
   it("derives speeds and takes ball fields, skips ids, clocks, raw cameras, strings and nulls", () => {
     expect(s.get("robot.blue.3.speed_mps")).toBe(1);

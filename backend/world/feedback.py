@@ -1,0 +1,236 @@
+"""What robots and simulators answer, per robot (pure: no sockets, no clock; times are
+arguments).
+
+``decode(env)`` turns one ``RobotFeedbackEnvelope`` from the relay (a ``RobotControlResponse``
+of the SSL simulation protocol, or a grSim ``Robots_Status``) into one ``Answer`` per robot,
+or the reason it is refused (``sslnet.streams`` reasons). ``FeedbackTracker`` keeps per robot:
+ball contact (``dribbler_ball_contact`` or grSim's infrared), the last kick (grSim's flat /
+chip flags) and when, the time of the last answer, and for the transport that answers every
+command (the simulation protocol) the round trip (the relay's last send -> the answer's
+arrival at the relay) and the losses (commands sent vs answers over the last
+``LOSS_WINDOW_S``). A robot the station commands that has not answered for ``NO_ANSWER_S``
+is marked ``no_answer``. Battery and kicker voltages are a hook for real robots: they stay
+None until a transport fills them.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Literal
+
+from google.protobuf.message import DecodeError, Message
+
+from sslnet import streams
+from sslpb import grsim_robot_status_pb2 as grsim_status_pb
+from sslpb import ssl_simulation_robot_feedback_pb2 as fb_pb
+from sslpb import touchline_pb2 as tl
+
+from .state import Team
+
+Transport = Literal["sim", "grsim"]
+KickKind = Literal["flat", "chip"]
+
+#: a commanded robot without an answer for longer than this is marked no_answer
+NO_ANSWER_S = 0.5
+#: the window of the losses (commands sent vs answers)
+LOSS_WINDOW_S = 2.0
+#: round trips averaged
+RTT_SAMPLES = 20
+
+
+@dataclass(frozen=True, slots=True)
+class Answer:
+    """One robot in one answer datagram."""
+
+    id: int
+    ball_contact: bool | None = None  # None: the answer does not say
+    kick: KickKind | None = None  # a kick reported in this answer
+    battery_v: float | None = None  # hooks for real robots' telemetry
+    kicker_v: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Decoded:
+    team: Team
+    transport: Transport
+    answers: tuple[Answer, ...]
+
+
+def _team(value: int) -> Team | None:
+    return "blue" if value == tl.TEAM_BLUE else "yellow" if value == tl.TEAM_YELLOW else None
+
+
+def _parse(msg: Message, data: bytes) -> tuple[str, str] | None:
+    try:
+        msg.ParseFromString(data)
+    except (DecodeError, RuntimeError, ValueError) as exc:
+        return streams.wire_problem(data), str(exc)
+    if not msg.IsInitialized():
+        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
+        return streams.MISSING_FIELD, ", ".join(errors[:5])
+    return None
+
+
+def decode(env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
+    """The robots in ``env``'s payload, or (reason, detail) when it is refused."""
+    team = _team(env.team)
+    if team is None:
+        return streams.OTHER, f"feedback for team {env.team}"
+    if env.kind == tl.FEEDBACK_SIM_RESPONSE:
+        resp = fb_pb.RobotControlResponse()
+        why = _parse(resp, env.payload)
+        if why is not None:
+            return why
+        return Decoded(team, "sim", tuple(
+            Answer(f.id, f.dribbler_ball_contact if f.HasField("dribbler_ball_contact")
+                   else None)
+            for f in resp.feedback))
+    if env.kind == tl.FEEDBACK_GRSIM_STATUS:
+        status = grsim_status_pb.Robots_Status()
+        why = _parse(status, env.payload)
+        if why is not None:
+            return why
+        answers: list[Answer] = []
+        for s in status.robots_status:
+            if s.robot_id < 0:
+                return streams.OTHER, f"robot id {s.robot_id}"
+            kick: KickKind | None = "chip" if s.chip_kick else "flat" if s.flat_kick else None
+            answers.append(Answer(s.robot_id, s.infrared, kick))
+        return Decoded(team, "grsim", tuple(answers))
+    return streams.OTHER, f"feedback of kind {env.kind}"
+
+
+@dataclass
+class RobotFeedbackState:
+    """One robot's feedback; times are the tracker's clock (monotonic s)."""
+
+    team: Team
+    id: int
+    transport: Transport
+    ball_contact: bool = False
+    last_answer: float | None = None
+    last_kick: KickKind | None = None
+    last_kick_time: float | None = None
+    round_trips_ms: deque[float] = field(default_factory=lambda: deque(maxlen=RTT_SAMPLES))
+    #: (time, commands sent so far, answers so far), for the losses over the window
+    counts: deque[tuple[float, int, int]] = field(default_factory=deque)
+    sent_total: int = 0
+    answers_total: int = 0
+    battery_v: float | None = None
+    kicker_v: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class RobotFeedbackView:
+    """What the page and the strategy read of one robot's feedback."""
+
+    transport: Transport
+    ball_contact: bool
+    age_s: float | None  # since the last answer
+    no_answer: bool
+    last_kick: KickKind | None
+    last_kick_age_s: float | None
+    round_trip_ms: float | None
+    commands_sent: int | None  # over the last LOSS_WINDOW_S (transports answering each one)
+    answers: int | None
+    loss: float | None  # 1 - answers / commands sent
+    battery_v: float | None
+    kicker_v: float | None
+
+
+class FeedbackTracker:
+    """Per robot feedback from decoded answers; ``view`` says what it means now."""
+
+    def __init__(self) -> None:
+        self.robots: dict[tuple[Team, int], RobotFeedbackState] = {}
+        #: teams whose transport answers every command (simulation protocol)
+        self.answering: set[Team] = set()
+        #: the station's last command per robot (tracker clock)
+        self.commanded: dict[tuple[Team, int], float] = {}
+
+    def clear(self) -> None:
+        self.robots.clear()
+        self.answering.clear()
+        self.commanded.clear()
+
+    def command(self, team: Team, rid: int, now: float) -> None:
+        """The station commanded this robot at ``now``."""
+        self.commanded[(team, rid)] = now
+
+    def _state(self, team: Team, rid: int, transport: Transport) -> RobotFeedbackState:
+        st = self.robots.get((team, rid))
+        if st is None or st.transport != transport:
+            st = RobotFeedbackState(team, rid, transport)
+            self.robots[(team, rid)] = st
+        return st
+
+    def update(self, env: tl.RobotFeedbackEnvelope, dec: Decoded, now: float) -> None:
+        """One decoded answer (``dec`` from ``decode(env)``) that arrived at ``now``."""
+        team = dec.team
+        answered: set[int] = set()
+        for a in dec.answers:
+            st = self._state(team, a.id, dec.transport)
+            answered.add(a.id)
+            st.last_answer = now
+            if a.ball_contact is not None:
+                st.ball_contact = a.ball_contact
+            if a.kick is not None:
+                st.last_kick, st.last_kick_time = a.kick, now
+            if a.battery_v is not None:
+                st.battery_v = a.battery_v
+            if a.kicker_v is not None:
+                st.kicker_v = a.kicker_v
+        if dec.transport != "sim":
+            return
+        self.answering.add(team)
+        for s in env.sent:
+            st = self._state(team, s.id, "sim")
+            st.sent_total = s.commands_sent
+            if s.id in answered:
+                st.answers_total += 1
+                if s.last_sent_time_ns > 0 and env.receive_time_ns >= s.last_sent_time_ns:
+                    st.round_trips_ms.append((env.receive_time_ns - s.last_sent_time_ns) / 1e6)
+            st.counts.append((now, st.sent_total, st.answers_total))
+            while len(st.counts) > 1 and st.counts[1][0] <= now - LOSS_WINDOW_S:
+                st.counts.popleft()
+
+    def view(self, team: Team, rid: int, now: float) -> RobotFeedbackView | None:
+        st = self.robots.get((team, rid))
+        if st is None:
+            return None
+        age = None if st.last_answer is None else now - st.last_answer
+        cmd = self.commanded.get((team, rid))
+        commanded = cmd is not None and now - cmd <= NO_ANSWER_S
+        no_answer = (st.transport == "sim" and team in self.answering and commanded
+                     and (age is None or age > NO_ANSWER_S))
+        sent = answers = None
+        loss = None
+        if st.transport == "sim" and len(st.counts) >= 2:
+            _, s0, a0 = st.counts[0]
+            _, s1, a1 = st.counts[-1]
+            sent, answers = s1 - s0, a1 - a0
+            loss = min(1.0, max(0.0, 1.0 - answers / sent)) if sent > 0 else None
+        rtt = (sum(st.round_trips_ms) / len(st.round_trips_ms)) if st.round_trips_ms else None
+        return RobotFeedbackView(
+            transport=st.transport,
+            ball_contact=st.ball_contact and not no_answer,
+            age_s=age,
+            no_answer=no_answer,
+            last_kick=st.last_kick,
+            last_kick_age_s=None if st.last_kick_time is None else now - st.last_kick_time,
+            round_trip_ms=rtt,
+            commands_sent=sent,
+            answers=answers,
+            loss=loss,
+            battery_v=st.battery_v,
+            kicker_v=st.kicker_v,
+        )
+
+    def views(self, now: float) -> dict[tuple[Team, int], RobotFeedbackView]:
+        out: dict[tuple[Team, int], RobotFeedbackView] = {}
+        for key in self.robots:
+            v = self.view(key[0], key[1], now)
+            if v is not None:
+                out[key] = v
+        return out
