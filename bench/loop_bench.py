@@ -1,0 +1,153 @@
+"""The control loop at full scale beside its floor (figures, not a test).
+
+Both runs take the same input: the built-in simulator at 8 cameras x 75 Hz (600 vision
+datagrams a second), division A, 11 v 11.
+- **floor** (bench/floor/floor.py): the bare minimum of the same path from the same libraries,
+  in
+  two processes like the relay and the backend: UDP receive, ZeroMQ hop, protobuf parse, a
+  trivial command per robot, ZeroMQ hop, RobotControl encode, UDP send.
+- **Touchline**: the launcher's relay and backend (recording on, tracked vision out), the
+  "match" play.
+It prints each side's CPU (% of one core, from /proc over ``--seconds``) and the latency from a
+vision datagram's arrival at the relay to the first command datagram it caused (Touchline: the
+relay's own p50/p99 of each second, the median of them; floor: every frame), and the ratios.
+Machines are noisy: the ratios of one run are the figures that count.
+
+    PYTHONPATH=. .venv/bin/python bench/loop_bench.py [--seconds 20] [--cameras 8] [--hz 75]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from launcher.supervisor import Ports
+
+ROOT = Path(__file__).resolve().parent.parent
+TICKS = os.sysconf("SC_CLK_TCK")
+PY = sys.executable
+
+
+def cpu_s(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICKS
+
+
+def sim_args(a: argparse.Namespace) -> list[str]:
+    return ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
+            "--camera-hz", str(a.hz)]
+
+
+def measure(pids: dict[str, int], seconds: float) -> dict[str, float]:
+    c0 = {k: cpu_s(p) for k, p in pids.items()}
+    t0 = time.monotonic()
+    time.sleep(seconds)
+    dt = time.monotonic() - t0
+    return {k: (cpu_s(p) - c0[k]) / dt * 100 for k, p in pids.items()}
+
+
+def floor(a: argparse.Namespace) -> dict[str, Any]:
+    p = Ports.isolated(None)
+    pub, sub = f"tcp://127.0.0.1:{p.http + 1}", f"tcp://127.0.0.1:{p.http + 2}"
+    procs = {
+        "sim": subprocess.Popen([PY, "-m", "fieldsim", *sim_args(a), "--vision-port",
+                                 str(p.vision), "--control-port", str(p.sim_control),
+                                 "--blue-port", str(p.sim_blue), "--yellow-port",
+                                 str(p.sim_yellow), "--grsim-port", str(p.grsim)],
+                                cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+        "relay": subprocess.Popen([PY, "bench/floor/floor.py", "relay", "--vision",
+                                   f"{p.vision_group}:{p.vision}", "--pub", pub, "--sub", sub,
+                                   "--out", f"127.0.0.1:{p.sim_blue}"], cwd=ROOT,
+                                  stdout=subprocess.PIPE, text=True),
+        "backend": subprocess.Popen([PY, "bench/floor/floor.py", "bridge", "--pub", sub, "--sub",
+                                     pub], cwd=ROOT),
+    }
+    try:
+        time.sleep(a.warmup)
+        cpu = measure({k: v.pid for k, v in procs.items()}, a.seconds)
+    finally:
+        procs["relay"].send_signal(signal.SIGTERM)
+        out, _ = procs["relay"].communicate(timeout=10)
+        for k in ("backend", "sim"):
+            procs[k].terminate()
+            procs[k].wait(timeout=10)
+    lat = json.loads(out.strip().splitlines()[-1])
+    return {**cpu, "p50_ms": lat["p50_ms"], "p99_ms": lat["p99_ms"]}
+
+
+def touchline(a: argparse.Namespace) -> dict[str, Any]:
+    args = [PY, "-m", "launcher", "--isolated",
+            *(f"--sim-arg={x}" for x in sim_args(a)),
+            "--backend-arg=--set", "--backend-arg=strategy.play=match"]
+    proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            text=True)
+    assert proc.stdout is not None
+    pids: dict[str, int] = {}
+    url = ""
+    for line in proc.stdout:
+        if line.startswith("TOUCHLINE_PIDS "):
+            pids = json.loads(line.split(" ", 1)[1])
+        if line.startswith("TOUCHLINE_READY "):
+            url = line.split()[1]
+            break
+    try:
+        time.sleep(a.warmup)
+        client = httpx.Client(timeout=5)
+        p50s: list[float] = []
+        p99s: list[float] = []
+        c0 = {k: cpu_s(v) for k, v in pids.items()}
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < a.seconds:
+            time.sleep(1.0)
+            r = client.get(url + "/api/health").json()["relay"] or {}
+            if r.get("command_latency_p50_ms", -1) >= 0:
+                p50s.append(r["command_latency_p50_ms"])
+                p99s.append(r["command_latency_p99_ms"])
+        dt = time.monotonic() - t0
+        cpu = {("sim" if k == "fieldsim" else k): (cpu_s(v) - c0[k]) / dt * 100
+               for k, v in pids.items()}
+    finally:
+        proc.terminate()
+        proc.wait(timeout=20)
+    return {**cpu, "p50_ms": statistics.median(p50s) if p50s else -1,
+            "p99_ms": statistics.median(p99s) if p99s else -1,
+            "p99_worst_ms": max(p99s) if p99s else -1}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--warmup", type=float, default=5.0)
+    ap.add_argument("--cameras", type=int, default=8)
+    ap.add_argument("--hz", type=float, default=75.0)
+    a = ap.parse_args()
+    f = floor(a)
+    t = touchline(a)
+    print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz, division A, 11 v 11, "
+          f"{a.seconds:g} s (CPU in % of one core)")
+    print("| | relay | backend | relay + backend | arrival -> command p50 | p99 | simulator |")
+    print("|---|---|---|---|---|---|---|")
+    for name, r in (("floor", f), ("Touchline", t)):
+        print(f"| {name} | {r['relay']:.1f} | {r['backend']:.1f} | "
+              f"{r['relay'] + r['backend']:.1f} | {r['p50_ms']:.2f} ms | {r['p99_ms']:.2f} ms | "
+              f"{r['sim']:.1f} |")
+    ratio = (t["relay"] + t["backend"]) / max(1e-9, f["relay"] + f["backend"])
+    print(f"| Touchline / floor | {t['relay'] / max(1e-9, f['relay']):.1f}x | "
+          f"{t['backend'] / max(1e-9, f['backend']):.1f}x | {ratio:.1f}x | "
+          f"{t['p50_ms'] / max(1e-9, f['p50_ms']):.1f}x | "
+          f"{t['p99_ms'] / max(1e-9, f['p99_ms']):.1f}x | |")
+    print(f"(Touchline's worst one-second p99: {t['p99_worst_ms']:.2f} ms)")
+
+
+if __name__ == "__main__":
+    main()
