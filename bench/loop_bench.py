@@ -3,8 +3,7 @@
 Both runs take the same input: the built-in simulator at 8 cameras x 75 Hz (600 vision
 datagrams a second), division A, 11 v 11.
 - **floor** (bench/floor/floor.py): the bare minimum of the same path from the same libraries,
-  in
-  two processes like the relay and the backend: UDP receive, ZeroMQ hop, protobuf parse, a
+  in two processes like the relay and the backend: UDP receive, ZeroMQ hop, protobuf parse, a
   trivial command per robot, ZeroMQ hop, RobotControl encode, UDP send.
 - **Touchline**: the launcher's relay and backend (recording on, tracked vision out), the
   "match" play.
