@@ -15,6 +15,7 @@ import shutil
 import signal
 import tempfile
 import time
+import urllib.error
 import urllib.request
 from dataclasses import asdict
 
@@ -33,6 +34,9 @@ def wait_http(url: str, timeout_s: float) -> bool:
             with urllib.request.urlopen(url, timeout=1.0) as r:
                 if r.status == 200:
                     return True
+        except urllib.error.HTTPError as e:
+            if e.code == 401:  # up, and asking for a token (--view-token)
+                return True
         except OSError:
             pass
         time.sleep(0.2)
@@ -74,6 +78,13 @@ def main() -> int:
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
+    p.add_argument("--require-token", action="store_true",
+                   help="every change needs the operator token even on loopback (always off "
+                        "loopback); the login URL is printed at start (docs/security.md)")
+    p.add_argument("--view-token", action="store_true",
+                   help="viewing needs a token too (see python -m backend --help)")
+    p.add_argument("--estop-for-all", action="store_true",
+                   help="a viewer without the operator token may press the emergency stop")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -95,6 +106,8 @@ def main() -> int:
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
     if a.no_record:
         replay_args.append("--no-record")
+    replay_args += [f"--{flag.replace('_', '-')}" for flag in
+                    ("require_token", "view_token", "estop_for_all") if getattr(a, flag)]
     if a.record_dir:
         replay_args.append(f"--record-dir={os.path.abspath(a.record_dir)}")
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
