@@ -223,21 +223,24 @@ class AccessRule:
         return out
 
 
-def credentials(scope: Scope, headers: dict[str, str]) -> list[str]:
-    """The tokens a request presents: Bearer, the cookie, ``?token=`` (websocket only)."""
-    found: list[str] = []
+def credential(scope: Scope, headers: dict[str, str]) -> str | None:
+    """The token a request presents, the first of: ``Authorization: Bearer``, ``?token=``
+    (websocket only), the cookie. An explicit one wins over the browser's cookie, so a wrong
+    explicit token is refused even where a cookie would do."""
     auth = headers.get("authorization", "")
     if auth[:7].lower() == "bearer " and auth[7:].strip():
-        found.append(auth[7:].strip())
+        return auth[7:].strip()
+    if scope["type"] == "websocket":
+        qs: str = bytes(scope.get("query_string", b"")).decode("latin-1")
+        given = [t for t in parse_qs(qs).get("token", []) if t]
+        if given:
+            return given[0]
     # by hand: http.cookies gives up on the whole header at the first cookie it dislikes
     for part in headers.get("cookie", "").split(";"):
         name, eq, value = part.strip().partition("=")
         if eq and name == COOKIE and value.strip('" '):
-            found.append(value.strip('" '))
-    if scope["type"] == "websocket":
-        qs = scope.get("query_string", b"").decode("latin-1")
-        found += [t for t in parse_qs(qs).get("token", []) if t]
-    return found
+            return value.strip('" ')
+    return None
 
 
 def client_of(scope: Scope) -> str:
@@ -273,19 +276,16 @@ class AccessGuard:
                    for k, v in scope.get("headers", [])}
         client = client_of(scope)
         role: Role | None = None
-        presented = credentials(scope, headers)
-        if presented:
+        presented = credential(scope, headers)
+        if presented is not None:
             left = rule.limiter.blocked(client)
             if left > 0:
                 await self._refuse(scope, send, 429, f"too many wrong tokens from {client}: "
                                    f"try again in {left:.0f} s", "rate-limited")
                 return
-            for cand in presented:
-                role = rule.role_of(cand)
-                if role is not None:
-                    break
+            role = rule.role_of(presented)
             if role is None:
-                rule.failed(client, presented[0], path)
+                rule.failed(client, presented, path)
         if role != "operator":
             changes = kind == "http" and method in STATE_CHANGING
             estop = changes and path == "/api/estop"

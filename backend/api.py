@@ -250,23 +250,25 @@ def create_app(settings: Settings, station: Station | None = None,
         """Pressing is one request; a release must say ``confirm: true`` (the page asks the
         operator first) and is logged with who released it."""
         client = request.client.host if request.client else "?"
-        refused = estop_refusal(request.scope.get(ROLE_KEY), rule, body.active)
+        role = request.scope.get(ROLE_KEY, "operator")
+        refused = estop_refusal(role, rule, body.active)
         if refused is not None:
             return JSONResponse(status_code=403, content={"detail": refused})
+        who = f"{role} at {client}"  # a viewer may press it with --estop-for-all
         if not body.active and not body.confirm:
             return JSONResponse(status_code=409, content={"detail": (
                 "releasing the emergency stop must be confirmed: send "
                 '{"active": false, "confirm": true}')})
         if body.active:
-            await st.call(st.set_estop, True, f"operator at {client}")
-            log.warning("emergency stop ACTIVE: pressed by %s", client)
+            await st.call(st.set_estop, True, who)
+            log.warning("emergency stop ACTIVE: pressed by %s", who)
         else:
             was = st.estop_latch.state
-            await st.call(st.set_estop, False, f"operator at {client}")
-            log.warning("emergency stop RELEASED by %s (pressed by %s)%s", client, was.by,
+            await st.call(st.set_estop, False, who)
+            log.warning("emergency stop RELEASED by %s (pressed by %s)%s", who, was.by,
                         f": {body.reason}" if body.reason else "")
         await st.call(st.operator_action, "estop" if body.active else "estop-release",
-                      f"operator at {client}", {"reason": body.reason})
+                      who, {"reason": body.reason})
         return {"estop": body.active, **await st.call(st.estop_view)}
 
     @api.websocket("/ws")
