@@ -23,7 +23,9 @@ def main() -> None:
                "browser's Origin must be one of those too; POST/PUT/PATCH/DELETE need "
                "Content-Type: application/json or X-Touchline: 1; bodies and websocket "
                f"messages at most {MAX_BODY_BYTES / (1 << 20):g} MiB, JSON at most "
-               f"{MAX_JSON_DEPTH} levels deep.")
+               f"{MAX_JSON_DEPTH} levels deep. Access (docs/security.md): on any address but "
+               "loopback, or with --require-token, changes need the operator token "
+               "(var/token, or TOUCHLINE_TOKEN; the login URL is printed at start).")
     p.add_argument("--host", default=d.host, help="bind address (default %(default)s)")
     p.add_argument("--port", type=int, default=d.port)
     p.add_argument("--relay-pub", default=d.relay_pub, help="relay PUB endpoint to subscribe to")
