@@ -250,11 +250,11 @@ def create_app(settings: Settings, station: Station | None = None,
         """Pressing is one request; a release must say ``confirm: true`` (the page asks the
         operator first) and is logged with who released it."""
         client = request.client.host if request.client else "?"
-        role = request.scope.get(ROLE_KEY, "operator")
+        role = request.scope.get(ROLE_KEY)  # None (not set by the guard): no operator
         refused = estop_refusal(role, rule, body.active)
         if refused is not None:
             return JSONResponse(status_code=403, content={"detail": refused})
-        who = f"{role} at {client}"  # a viewer may press it with --estop-for-all
+        who = f"{role or 'operator'} at {client}"  # a viewer may press it (--estop-for-all)
         if not body.active and not body.confirm:
             return JSONResponse(status_code=409, content={"detail": (
                 "releasing the emergency stop must be confirmed: send "
