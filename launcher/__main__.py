@@ -19,6 +19,7 @@ import urllib.error
 import urllib.request
 from dataclasses import asdict
 
+from backend.access import is_loopback
 from sslnet import defaults
 from sslnet.multicast import loopback_multicast_ok
 
@@ -136,6 +137,10 @@ def main() -> int:
     url = f"http://{a.host}:{ports.http}"
     if wait_http(url + "/api/health", 30.0):
         print(f"\n  Touchline is running: {url}\n", flush=True)  # noqa: T201
+        if a.require_token or a.view_token or not is_loopback(a.host):
+            hint = ("  Changes need the operator token: open the login URL printed above "
+                    "once on each operator laptop (docs/security.md)\n")
+            print(hint, flush=True)  # noqa: T201
         # machine-readable lines for tests and scripts
         print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
         if own_state_dir is not None:

@@ -22,8 +22,10 @@ from backend.access import (
     AccessRule,
     RateLimiter,
     TokenStore,
+    base_url,
     credential,
     is_loopback,
+    print_login,
 )
 from backend.api import create_app
 from backend.config import Settings
@@ -349,3 +351,18 @@ def test_with_estop_for_all_a_viewer_presses_but_never_releases(tmp_path: Path) 
         assert c.get("/api/estop").json()["active"] is True
         # the rest stays the operator's
         assert c.post(TARGET[0], json=TARGET[1]).status_code == 401
+
+
+def test_the_printed_login_urls(tmp_path: Path) -> None:
+    assert base_url("192.168.1.20", 8000) == "http://192.168.1.20:8000"
+    assert base_url("0.0.0.0", 8000, ["*", "field.local"]) == "http://field.local:8000"
+    assert base_url("::", 8000) == "http://localhost:8000"
+    assert base_url("fe80::1", 8000) == "http://[fe80::1]:8000"
+    rule = AccessRule.from_settings("0.0.0.0", tmp_path, False, True, False)
+    said: list[str] = []
+    print_login(rule, "http://field.local:8000", said.append)
+    logins = [json.loads(s.split(" ", 1)[1]) for s in said if s.startswith("TOUCHLINE_LOGIN ")]
+    assert logins == [
+        {"role": "operator", "url": f"http://field.local:8000/login?token={rule.operator.token}"},
+        {"role": "viewer", "url": "http://field.local:8000/login?token="
+                                 f"{rule.viewer.token if rule.viewer else ''}"}]

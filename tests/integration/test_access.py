@@ -42,6 +42,7 @@ def test_the_token_is_printed_and_kept_private(guarded: StationHandle) -> None:
     token = url.split("token=", 1)[1]
     assert url.startswith(guarded.url + "/login?token=")
     assert any("operator login" in line and url in line for line in guarded.log)
+    assert any("Changes need the operator token" in line for line in guarded.log)
     assert guarded.state_dir is not None
     path = guarded.state_dir / "token"
     assert path.read_text().strip() == token
