@@ -366,3 +366,23 @@ def test_the_printed_login_urls(tmp_path: Path) -> None:
         {"role": "operator", "url": f"http://field.local:8000/login?token={rule.operator.token}"},
         {"role": "viewer", "url": "http://field.local:8000/login?token="
                                  f"{rule.viewer.token if rule.viewer else ''}"}]
+
+
+@pytest.mark.parametrize("method,path", [
+    ("POST", "/api/robots/blue/1/target"), ("POST", "/api/estop"), ("PATCH", "/api/params"),
+    ("POST", "/api/params/import"), ("POST", "/api/referee/internal/command"),
+    ("POST", "/api/referee/internal/enabled"), ("POST", "/api/referee/internal/card"),
+    ("POST", "/api/player"), ("POST", "/api/recording"), ("POST", "/api/sim/ball")])
+def test_no_control_route_takes_a_form_body_even_from_an_operator(
+        guarded: TestClient, method: str, path: str) -> None:
+    """The cookie goes with a form a browser posts; a form without X-Touchline is refused by
+    the edge (the CSRF rule), and with it no route reads a form as its body."""
+    c = guarded
+    c.get(f"/login?token={_token(c)}")
+    form = {"content-type": "application/x-www-form-urlencoded"}
+    r = c.request(method, path, content="active=true&x=1&y=2", headers={**form,
+                                                                      "x-touchline": "0"})
+    assert r.status_code == 415
+    r = c.request(method, path, content="active=true&x=1&y=2", headers=form)
+    assert r.status_code == 422, r.text  # the header (the client's default): still no form
+    assert c.get("/api/estop").json()["active"] is False
