@@ -34,6 +34,7 @@ from urllib.parse import parse_qs
 
 from sslnet.ratelog import RateLimitedLog
 
+from .contract import AccessHealth
 from .security import STATE_CHANGING, ASGIApp, Receive, Scope, Send, _answer
 
 log = logging.getLogger("touchline.access")
@@ -154,6 +155,11 @@ class RateLimiter:
             return 0.0
         return left
 
+    def blocked_count(self) -> int:
+        """Addresses refused now (read only: called from the station's thread too)."""
+        now = self.clock()
+        return sum(1 for until in list(self._blocked.values()) if until > now)
+
     def fail(self, client: str, candidate: str) -> bool:
         """Counts a wrong token; True when the client is now blocked."""
         now = self.clock()
@@ -215,6 +221,11 @@ class AccessRule:
         _ratelog.warning(f"token-{client}", "wrong token from %s (%s)%s", client, where,
                          ": refused for a while" if blocked else "")
         return blocked
+
+    def health(self) -> AccessHealth:
+        return {"token_required": self.required, "view_token": self.viewer is not None,
+                "estop_for_all": self.estop_for_all, "refused": dict(self.refused),
+                "blocked_clients": self.limiter.blocked_count()}
 
     def login_urls(self, base: str) -> list[tuple[str, str]]:
         out = [("operator", f"{base}/login?token={self.operator.token}")]

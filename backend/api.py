@@ -74,6 +74,7 @@ def create_app(settings: Settings, station: Station | None = None,
                   default_response_class=SafeJSONResponse)
     app.state.station = st
     app.state.access = rule
+    st.access_health = rule.health
     # who may do what (backend.access), behind the EdgeGuard (the last added runs first)
     app.add_middleware(AccessGuard, rule=rule)
     # host allowlist, Origin, cross-site requests and body limits, before any route

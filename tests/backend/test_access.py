@@ -386,3 +386,21 @@ def test_no_control_route_takes_a_form_body_even_from_an_operator(
     r = c.request(method, path, content="active=true&x=1&y=2", headers=form)
     assert r.status_code == 422, r.text  # the header (the client's default): still no form
     assert c.get("/api/estop").json()["active"] is False
+
+
+def test_health_says_the_rule_and_counts_refusals_and_blocked_addresses(tmp_path: Path) -> None:
+    clock = Clock()
+    with _client(tmp_path, clock, require_token=True, estop_for_all=True) as c:
+        a = c.get("/api/health").json()["access"]
+        assert a == {"token_required": True, "view_token": False, "estop_for_all": True,
+                     "refused": {}, "blocked_clients": 0}
+        c.post(TARGET[0], json=TARGET[1])
+        for i in range(10):
+            c.post(TARGET[0], json=TARGET[1], headers=_bearer(f"guess-{i}"))
+        h = c.get("/api/health").json()
+        assert h["access"]["refused"]["no operator token"] == 11
+        assert h["access"]["refused"]["wrong token"] == 10
+        assert h["access"]["blocked_clients"] == 1
+        assert any("wrong tokens" in w for w in h["warnings"])
+        clock.t += 61
+        assert c.get("/api/health").json()["access"]["blocked_clients"] == 0
