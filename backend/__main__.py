@@ -8,6 +8,7 @@ from pathlib import Path
 
 import uvicorn
 
+from .access import AccessRule, base_url, print_login
 from .api import create_app
 from .config import Settings
 from .security import MAX_BODY_BYTES, MAX_JSON_DEPTH
@@ -22,7 +23,9 @@ def main() -> None:
                "browser's Origin must be one of those too; POST/PUT/PATCH/DELETE need "
                "Content-Type: application/json or X-Touchline: 1; bodies and websocket "
                f"messages at most {MAX_BODY_BYTES / (1 << 20):g} MiB, JSON at most "
-               f"{MAX_JSON_DEPTH} levels deep.")
+               f"{MAX_JSON_DEPTH} levels deep. Access (docs/security.md): on any address but "
+               "loopback, or with --require-token, changes need the operator token "
+               "(var/token, or TOUCHLINE_TOKEN; the login URL is printed at start).")
     p.add_argument("--host", default=d.host, help="bind address (default %(default)s)")
     p.add_argument("--port", type=int, default=d.port)
     p.add_argument("--relay-pub", default=d.relay_pub, help="relay PUB endpoint to subscribe to")
@@ -45,6 +48,15 @@ def main() -> None:
                    help="a host name or address this station may be reached by besides the "
                         "bound address and localhost (repeatable; '*' for any: not on a "
                         "shared network). Other Host headers get 400 (DNS rebinding).")
+    p.add_argument("--require-token", action="store_true",
+                   help="every change needs the operator token even on loopback (it always "
+                        "does on any other address; docs/security.md)")
+    p.add_argument("--view-token", action="store_true",
+                   help="viewing (GET /api/*, the websocket) needs a token too: the viewer "
+                        "token (var/view-token, or TOUCHLINE_VIEW_TOKEN) or the operator's")
+    p.add_argument("--estop-for-all", action="store_true",
+                   help="a viewer without the operator token may press (not release) the "
+                        "emergency stop (a class)")
     p.add_argument("--relay-output", choices=["sim", "grsim", "robot-box"], default=None,
                    help="the relay's output (the launcher passes it): on robot-box, whose "
                         "datagrams have no team field, only our team is ever commanded")
@@ -69,8 +81,13 @@ def main() -> None:
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
                         log_dirs=a.log_dirs, record=not a.no_record,
-                        record_dir=a.record_dir)
+                        record_dir=a.record_dir, require_token=a.require_token,
+                        view_token=a.view_token, estop_for_all=a.estop_for_all)
     app = create_app(settings)
+    rule: AccessRule = app.state.access
+    if rule.required:
+        # the URL to open once per laptop (the launcher's output shows it)
+        print_login(rule, base_url(settings.host, settings.port, settings.allowed_hosts))
     # the page sends nothing on the websocket: a client's message is capped like a body
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,
                 ws_max_size=MAX_BODY_BYTES, log_level=a.log_level.lower(), access_log=False)

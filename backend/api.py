@@ -15,11 +15,21 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, FastAPI, HTTPException, Request, WebSocket
 from fastapi import Path as PathParam
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
 from . import contract
+from .access import (
+    COOKIE,
+    ROLE_KEY,
+    AccessGuard,
+    AccessRule,
+    base_url,
+    client_of,
+    estop_refusal,
+    print_login,
+)
 from .config import Settings
 from .contract import (
     CardIn,
@@ -44,8 +54,12 @@ TeamParam = Annotated[Literal["blue", "yellow"], PathParam(description="robot te
 IdParam = Annotated[int, PathParam(ge=0, le=15, description="robot id, 0..15")]
 
 
-def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
+def create_app(settings: Settings, station: Station | None = None,
+               access: AccessRule | None = None) -> FastAPI:
     st = station or Station(settings)
+    rule = access or AccessRule.from_settings(
+        settings.host, settings.state_dir, settings.require_token, settings.view_token,
+        settings.estop_for_all)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -59,6 +73,10 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
     app = FastAPI(title="Touchline", version="0.1.0", lifespan=lifespan,
                   default_response_class=SafeJSONResponse)
     app.state.station = st
+    app.state.access = rule
+    st.access_health = rule.health
+    # who may do what (backend.access), behind the EdgeGuard (the last added runs first)
+    app.add_middleware(AccessGuard, rule=rule)
     # host allowlist, Origin, cross-site requests and body limits, before any route
     app.add_middleware(EdgeGuard, bound_host=settings.host, allow_hosts=settings.allowed_hosts,
                        dev_origins=settings.allowed_origins)
@@ -233,20 +251,25 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         """Pressing is one request; a release must say ``confirm: true`` (the page asks the
         operator first) and is logged with who released it."""
         client = request.client.host if request.client else "?"
+        role = request.scope.get(ROLE_KEY)  # None (not set by the guard): no operator
+        refused = estop_refusal(role, rule, body.active)
+        if refused is not None:
+            return JSONResponse(status_code=403, content={"detail": refused})
+        who = f"{role or 'operator'} at {client}"  # a viewer may press it (--estop-for-all)
         if not body.active and not body.confirm:
             return JSONResponse(status_code=409, content={"detail": (
                 "releasing the emergency stop must be confirmed: send "
                 '{"active": false, "confirm": true}')})
         if body.active:
-            await st.call(st.set_estop, True, f"operator at {client}")
-            log.warning("emergency stop ACTIVE: pressed by %s", client)
+            await st.call(st.set_estop, True, who)
+            log.warning("emergency stop ACTIVE: pressed by %s", who)
         else:
             was = st.estop_latch.state
-            await st.call(st.set_estop, False, f"operator at {client}")
-            log.warning("emergency stop RELEASED by %s (pressed by %s)%s", client, was.by,
+            await st.call(st.set_estop, False, who)
+            log.warning("emergency stop RELEASED by %s (pressed by %s)%s", who, was.by,
                         f": {body.reason}" if body.reason else "")
         await st.call(st.operator_action, "estop" if body.active else "estop-release",
-                      f"operator at {client}", {"reason": body.reason})
+                      who, {"reason": body.reason})
         return {"estop": body.active, **await st.call(st.estop_view)}
 
     @api.websocket("/ws")
@@ -261,12 +284,52 @@ def create_app(settings: Settings, station: Station | None = None) -> FastAPI:
         finally:
             st.ws_clients -= 1
 
+    @api.post("/token/rotate")
+    async def token_rotate(request: Request) -> JSONResponse:
+        """A new operator token (the operator's only: the AccessGuard checked the current
+        one), written and printed; every cookie and script holding the old one is refused."""
+        try:
+            token = rule.operator.rotate()
+        except ValueError as exc:
+            return JSONResponse(status_code=409, content={"detail": str(exc)})
+        base = base_url(settings.host, settings.port, settings.allowed_hosts)
+        print_login(rule, base)
+        log.warning("operator token rotated by %s", _who(request))
+        answer = JSONResponse({"rotated": True, "login_url": f"{base}/login?token={token}"})
+        _set_cookie(answer, token)
+        return answer
+
+    @app.get("/login", response_model=None)
+    async def login(request: Request, token: str = "") -> JSONResponse | RedirectResponse:
+        """Opened once per laptop with the URL printed at start: sets the cookie that goes
+        with every request and the websocket, and opens the page."""
+        client = client_of(request.scope)
+        left = rule.limiter.blocked(client)
+        if left > 0:
+            return JSONResponse(status_code=429, content={
+                "detail": f"too many wrong tokens from {client}: try again in {left:.0f} s"})
+        if not token or rule.role_of(token) is None:
+            if token:
+                rule.failed(client, token, "/login")
+            return JSONResponse(status_code=401, content={"detail": (
+                "wrong or missing token: open the URL printed when the station started "
+                "(http://HOST:PORT/login?token=...)")})
+        answer = RedirectResponse("/", status_code=303)
+        _set_cookie(answer, token)
+        return answer
+
     _params_routes(api, st)
     player_routes(api, st)
     recording_routes(api, st)
     app.include_router(api)
     _mount_frontend(app, settings.static_dir)
     return app
+
+
+def _set_cookie(answer: JSONResponse | RedirectResponse, token: str) -> None:
+    # HttpOnly: no script reads it; SameSite=Strict: no other site's request carries it
+    answer.set_cookie(COOKIE, token, max_age=30 * 24 * 3600, path="/", httponly=True,
+                      samesite="strict")
 
 
 def _who(request: Request) -> str:

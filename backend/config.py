@@ -36,6 +36,12 @@ class Settings(BaseModel):
     record: bool = True
     #: records into this folder for this run, whatever the recording.folder parameter says
     record_dir: Path | None = None
+    #: the operator token for every change even on loopback (always off loopback)
+    require_token: bool = False
+    #: viewing (GET /api/*, the websocket) needs a token too (implies require_token)
+    view_token: bool = False
+    #: a viewer (no operator token) may press the emergency stop (a class)
+    estop_for_all: bool = False
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

@@ -519,6 +519,22 @@ class Recording(TypedDict):
 
 
 @with_config(_STRICT)
+class AccessHealth(TypedDict):
+    """Who may do what (docs/security.md) and what was refused since the start."""
+
+    token_required: Annotated[bool, Field(
+        description="changes need the operator token (not on loopback, or --require-token)")]
+    view_token: Annotated[bool, Field(description="viewing needs a token too (--view-token)")]
+    estop_for_all: Annotated[bool, Field(
+        description="a viewer may press the emergency stop (--estop-for-all)")]
+    refused: Annotated[dict[str, int], Field(
+        description='refusals by reason: "no operator token", "no viewer token", '
+                    '"wrong token", "rate-limited"')]
+    blocked_clients: Annotated[int, Field(
+        description="addresses refused now for too many wrong tokens")]
+
+
+@with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
 
@@ -540,6 +556,7 @@ class Health(TypedDict):
     recording: Recording
     processes: Annotated[list[ProcessHealth], Field(
         description="CPU and memory of the backend and (from its stats) the relay")]
+    access: AccessHealth
 
 
 # ------------------------------------------------------------------------------ parameters

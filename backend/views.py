@@ -327,6 +327,10 @@ def health(st: Station) -> contract.Health:
     if st.player.log is not None:
         station_lines.append(f"replaying {st.player.log.path}: nothing is sent to robots or "
                              "a simulator")
+    access = st.access_health()
+    if access["blocked_clients"]:
+        station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
+                             "wrong tokens (someone is guessing the operator token)")
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *station_lines,
@@ -346,6 +350,7 @@ def health(st: Station) -> contract.Health:
         "engine": engine_health(st),
         "recording": recording,
         "processes": processes(st, rs),
+        "access": access,
     }
     return out
 

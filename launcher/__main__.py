@@ -15,9 +15,11 @@ import shutil
 import signal
 import tempfile
 import time
+import urllib.error
 import urllib.request
 from dataclasses import asdict
 
+from backend.access import is_loopback
 from sslnet import defaults
 from sslnet.multicast import loopback_multicast_ok
 
@@ -33,6 +35,9 @@ def wait_http(url: str, timeout_s: float) -> bool:
             with urllib.request.urlopen(url, timeout=1.0) as r:
                 if r.status == 200:
                     return True
+        except urllib.error.HTTPError as e:
+            if e.code == 401:  # up, and asking for a token (--view-token)
+                return True
         except OSError:
             pass
         time.sleep(0.2)
@@ -74,6 +79,13 @@ def main() -> int:
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
+    p.add_argument("--require-token", action="store_true",
+                   help="every change needs the operator token even on loopback (always off "
+                        "loopback); the login URL is printed at start (docs/security.md)")
+    p.add_argument("--view-token", action="store_true",
+                   help="viewing needs a token too (see python -m backend --help)")
+    p.add_argument("--estop-for-all", action="store_true",
+                   help="a viewer without the operator token may press the emergency stop")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -95,6 +107,8 @@ def main() -> int:
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
     if a.no_record:
         replay_args.append("--no-record")
+    replay_args += [f"--{flag.replace('_', '-')}" for flag in
+                    ("require_token", "view_token", "estop_for_all") if getattr(a, flag)]
     if a.record_dir:
         replay_args.append(f"--record-dir={os.path.abspath(a.record_dir)}")
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
@@ -123,6 +137,10 @@ def main() -> int:
     url = f"http://{a.host}:{ports.http}"
     if wait_http(url + "/api/health", 30.0):
         print(f"\n  Touchline is running: {url}\n", flush=True)  # noqa: T201
+        if a.require_token or a.view_token or not is_loopback(a.host):
+            hint = ("  Changes need the operator token: open the login URL printed above "
+                    "once on each operator laptop (docs/security.md)\n")
+            print(hint, flush=True)  # noqa: T201
         # machine-readable lines for tests and scripts
         print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
         if own_state_dir is not None:

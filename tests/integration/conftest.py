@@ -28,6 +28,7 @@ class StationHandle:
     ports: dict[str, Any]
     log: list[str]
     pids: dict[str, int]
+    state_dir: Path | None = None
 
     def get(self, path: str) -> Any:
         r = httpx.get(self.url + path, timeout=5.0)
@@ -67,7 +68,9 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
         proc.kill()
         raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
     try:
-        yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}))
+        state_dir = info.get("state_dir")
+        yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}),
+                            Path(state_dir) if state_dir else None)
     finally:
         proc.send_signal(signal.SIGTERM)
         try:

@@ -11,6 +11,20 @@ export type TargetSource = "operator" | "strategy";
 
 export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage | PlayerMessage;
 
+/** Who may do what (docs/security.md) and what was refused since the start. */
+export interface AccessHealth {
+  /** changes need the operator token (not on loopback, or --require-token) */
+  token_required: boolean;
+  /** viewing needs a token too (--view-token) */
+  view_token: boolean;
+  /** a viewer may press the emergency stop (--estop-for-all) */
+  estop_for_all: boolean;
+  /** refusals by reason: "no operator token", "no viewer token", "wrong token", "rate-limited" */
+  refused: Record<string, number>;
+  /** addresses refused now for too many wrong tokens */
+  blocked_clients: number;
+}
+
 /** The filtered ball. */
 export interface Ball {
   x: number;
@@ -153,6 +167,7 @@ export interface Health {
   recording: Recording;
   /** CPU and memory of the backend and (from its stats) the relay */
   processes: ProcessHealth[];
+  access: AccessHealth;
 }
 
 export interface HealthMessage {

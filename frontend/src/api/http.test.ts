@@ -1,5 +1,14 @@
 import { afterEach, describe, expect, it, vi } from "vitest";
-import { ApiError, errorMessageFromBody, postTarget, request } from "./http";
+import {
+  ApiError,
+  errorMessageFromBody,
+  notifyUnauthorized,
+  postTarget,
+  request,
+  resetUnauthorizedNotice,
+  unauthorizedMessage,
+} from "./http";
+import { toastTexts } from "../store/toasts";
 
 describe("errorMessageFromBody", () => {
   it("reads FastAPI string details", () => {
@@ -60,5 +69,38 @@ describe("postTarget", () => {
     expect(err).toBeInstanceOf(ApiError);
     expect((err as ApiError).status).toBe(422);
     expect((err as ApiError).message).toBe("far outside the field");
+  });
+});
+
+describe("a 401 says how to log in", () => {
+  afterEach(() => {
+    vi.unstubAllGlobals();
+    resetUnauthorizedNotice();
+  });
+
+  it("toasts the login help once, and the error keeps the station's reason", async () => {
+    const detail =
+      "this station requires the operator token: open the URL printed at start (http://HOST:PORT/login?token=...), or send Authorization: Bearer <token>";
+    vi.stubGlobal("fetch", vi.fn(async () => new Response(JSON.stringify({ detail }), { status: 401 })));
+    const err = await postTarget("blue", 1, { x: 0, y: 0 }).catch((e: unknown) => e);
+    expect(err).toBeInstanceOf(ApiError);
+    expect((err as ApiError).status).toBe(401);
+    expect((err as ApiError).message).toBe(detail);
+    const shown = toastTexts().filter((t) => t.startsWith("Not logged in"));
+    expect(shown).toHaveLength(1);
+    expect(shown[0]).toContain("/login?token=");
+    await postTarget("blue", 1, { x: 0, y: 0 }).catch(() => {});
+    expect(toastTexts().filter((t) => t.startsWith("Not logged in"))).toHaveLength(1); // not repeated
+  });
+
+  it("names the viewer token when viewing is refused", () => {
+    expect(unauthorizedMessage("this station requires a token to view: ...")).toContain("viewer or operator token");
+    expect(unauthorizedMessage("this station requires the operator token")).toContain("operator token to change anything");
+  });
+
+  it("shows again after 10 s", () => {
+    expect(notifyUnauthorized("x", 0)).toBe(true);
+    expect(notifyUnauthorized("x", 5_000)).toBe(false);
+    expect(notifyUnauthorized("x", 10_001)).toBe(true);
   });
 });

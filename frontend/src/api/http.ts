@@ -24,6 +24,7 @@ import type {
   TargetAnswer,
   Team,
 } from "./types";
+import { pushToast } from "../store/toasts";
 
 export class ApiError extends Error {
   readonly status: number;
@@ -64,6 +65,35 @@ export function errorMessageFromBody(status: number, body: unknown, fallback = "
   return fallback || `HTTP ${status}`;
 }
 
+/** How to log in, for the 401 message (docs/security.md). */
+export const LOGIN_HELP =
+  "open the login URL printed when the station started (http://HOST:PORT/login?token=…) once in this browser, or ask the station's operator for it";
+
+/** The message a 401 shows: what the station wants, and how to log in. */
+export function unauthorizedMessage(serverText: string): string {
+  const view = /to view/i.test(serverText);
+  return (
+    `Not logged in: this station needs the ${view ? "viewer or operator" : "operator"} token ` +
+    `${view ? "to show anything" : "to change anything"}. To log in, ${LOGIN_HELP}.`
+  );
+}
+
+let lastUnauthorized = -Infinity;
+
+/** A 401: the station wants a token this browser does not have. Says how to log in, at most
+ * once every 10 s (every refused click would repeat it). True when shown. */
+export function notifyUnauthorized(serverText: string, now: number = Date.now()): boolean {
+  if (now - lastUnauthorized < 10_000) return false;
+  lastUnauthorized = now;
+  pushToast("error", unauthorizedMessage(serverText), 15_000);
+  return true;
+}
+
+/** For tests: the next 401 is shown again. */
+export function resetUnauthorizedNotice(): void {
+  lastUnauthorized = -Infinity;
+}
+
 export async function request<T>(method: string, path: string, body?: unknown, rawBody?: string): Promise<T> {
   let res: Response;
   try {
@@ -90,6 +120,7 @@ export async function request<T>(method: string, path: string, body?: unknown, r
     }
   }
   if (!res.ok) {
+    if (res.status === 401) notifyUnauthorized(errorMessageFromBody(res.status, parsed));
     throw new ApiError(res.status, errorMessageFromBody(res.status, parsed, `${res.status} ${res.statusText}`), parsed);
   }
   return parsed as T;

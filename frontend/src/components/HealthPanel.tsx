@@ -266,6 +266,23 @@ export function EstopHealth({ h }: { h: Health }) {
   );
 }
 
+/** Who may do what on this station (docs/security.md) and the refusals so far. */
+export function AccessHealth({ h }: { h: Health }) {
+  const a = h.access;
+  if (!a) return null;
+  const rule = a.token_required
+    ? `changes need the operator token${a.view_token ? ", viewing a token too" : ""}${a.estop_for_all ? ", every viewer may press the e-stop" : ""}`
+    : "no token needed (loopback)";
+  const refused = Object.entries(a.refused).filter(([, n]) => n > 0);
+  return (
+    <p className={a.blocked_clients > 0 ? "notice" : "muted"} data-testid="health-access">
+      Access: {rule}
+      {refused.length > 0 ? ` · refused: ${refused.map(([why, n]) => `${why} ${n}`).join(", ")}` : ""}
+      {a.blocked_clients > 0 ? ` · ${a.blocked_clients} address${a.blocked_clients === 1 ? "" : "es"} blocked for wrong tokens` : ""}
+    </p>
+  );
+}
+
 export function HealthPanel() {
   const h = useAppState((s) => s.health);
   if (!h) return <p className="muted">No health data yet.</p>;
@@ -273,6 +290,7 @@ export function HealthPanel() {
     <div className="health-panel" data-testid="health-panel">
       <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
       <EstopHealth h={h} />
+      <AccessHealth h={h} />
       {(h.warnings ?? []).length > 0 && (
         <ul className="health-warnings" data-testid="health-warnings">
           {(h.warnings ?? []).map((w, i) => (

@@ -7,7 +7,7 @@ import { health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
+import { AccessHealth, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
 
 import { domPerTest } from "../testing/dom";
 
@@ -173,6 +173,21 @@ describe("Emergency stop release", () => {
     expect(q("estop-release-dialog")).toBeNull();
     const [, press] = fetchMock.mock.calls[1] as unknown as [string, RequestInit];
     expect(JSON.parse(String(press.body))).toEqual({ active: true });
+  });
+});
+
+describe("AccessHealth", () => {
+  it("says who may do what, what was refused and whether someone is blocked", () => {
+    const h = health();
+    act(() => t.root.render(<AccessHealth h={h} />));
+    expect(q("health-access")?.textContent).toBe("Access: no token needed (loopback)");
+    const access = { token_required: true, view_token: false, estop_for_all: true, refused: { "no operator token": 3, "wrong token": 12 }, blocked_clients: 1 };
+    act(() => t.root.render(<AccessHealth h={{ ...h, access }} />));
+    const text = q("health-access")?.textContent ?? "";
+    expect(text).toContain("changes need the operator token, every viewer may press the e-stop");
+    expect(text).toContain("refused: no operator token 3, wrong token 12");
+    expect(text).toContain("1 address blocked for wrong tokens");
+    expect(q("health-access")?.className).toBe("notice");
   });
 });
 

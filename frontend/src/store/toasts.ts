@@ -35,3 +35,8 @@ export function useToasts(): Toast[] {
     () => toastStore.getState().toasts,
   );
 }
+
+/** The texts shown now (tests). */
+export function toastTexts(): string[] {
+  return toastStore.getState().toasts.map((t) => t.text);
+}

@@ -25,13 +25,14 @@ class FakeSocket implements SocketLike {
   }
 }
 
-function setup(staleMs = 4000) {
+function setup(staleMs = 4000, onNeverOpened?: () => void) {
   const store = createStore<AppState>(initialAppState());
   const sockets: FakeSocket[] = [];
   const client = startWsClient({
     url: "ws://station/api/ws",
     store,
     staleMs,
+    onNeverOpened,
     createSocket: (url) => {
       const s = new FakeSocket(url);
       sockets.push(s);
@@ -59,6 +60,18 @@ describe("startWsClient", () => {
   });
   afterEach(() => {
     vi.useRealTimers();
+  });
+
+  it("asks (onNeverOpened) only when a socket closes without opening (a refused upgrade)", () => {
+    const never = vi.fn();
+    const { last, client } = setup(4000, never);
+    last().drop(); // refused: closed before it opened
+    expect(never).toHaveBeenCalledTimes(1);
+    vi.advanceTimersByTime(60_000);
+    last().open();
+    last().drop(); // opened, then lost: not a refusal
+    expect(never).toHaveBeenCalledTimes(1);
+    client.stop();
   });
 
   it("connects, applies messages and reports the state", () => {

@@ -24,6 +24,9 @@ export interface WsClientOptions {
   staleMs?: number;
   now?: () => number;
   log?: (msg: string) => void;
+  /** A socket closed before it ever opened: the station may be down, or refusing this browser
+   * (a 401 on the upgrade, which a browser does not show): the page asks over HTTP. */
+  onNeverOpened?: () => void;
 }
 
 export interface WsClient {
@@ -84,9 +87,11 @@ export function startWsClient(opts: WsClientOptions): WsClient {
     }
     socket = ws;
     let closed = false;
+    let opened = false;
     const onGone = (reason: string) => {
       if (closed) return;
       closed = true;
+      if (!opened) opts.onNeverOpened?.();
       clearWatchdog();
       if (socket === ws) socket = null;
       ws.onopen = ws.onclose = ws.onerror = ws.onmessage = null;
@@ -100,6 +105,7 @@ export function startWsClient(opts: WsClientOptions): WsClient {
     let gotData = false;
     ws.onopen = () => {
       if (closed) return;
+      opened = true;
       // "connected" is reported with the first message (the snapshot), so that a
       // connected page always has data to show.
       lastMessageAt = now();

@@ -74,6 +74,7 @@ export function health(rate = 60): Health {
       { name: "backend", cpu_percent: 23.5, rss_mb: 120 },
       { name: "relay", cpu_percent: 11.2, rss_mb: 40 },
     ],
+    access: { token_required: false, view_token: false, estop_for_all: false, refused: {}, blocked_clients: 0 },
   };
 }
 

@@ -1,0 +1,83 @@
+import { spawn, type ChildProcess } from "node:child_process";
+import { expect, test } from "@playwright/test";
+
+// The operator token on a station that requires it (docs/security.md): a station of its own,
+// started with --require-token (no simulator), beside the one the config starts. A browser
+// that opened the printed login URL works as on loopback (the cookie goes with every request
+// and the websocket); a second browser without it is told how to log in when it tries a change.
+
+const root = new URL("../..", import.meta.url).pathname;
+const port = Number(process.env.E2E_PORT ?? "18000") + 7;
+const base = `http://127.0.0.1:${port}`;
+let station: ChildProcess | null = null;
+let loginUrl = "";
+
+test.beforeAll(async () => {
+  test.setTimeout(90_000);
+  const proc = spawn(`${root}.venv/bin/python`, ["-m", "launcher", "--isolated", "--port", String(port), "--sim", "none", "--require-token"], {
+    cwd: root,
+    env: { ...process.env, PYTHONUNBUFFERED: "1" },
+    stdio: ["ignore", "pipe", "pipe"],
+  });
+  station = proc;
+  loginUrl = await new Promise<string>((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error("the station printed no login URL")), 80_000);
+    let url = "";
+    let buf = "";
+    proc.stdout?.on("data", (chunk: Buffer) => {
+      buf += chunk.toString();
+      for (const line of buf.split("\n")) {
+        if (line.startsWith("TOUCHLINE_LOGIN ")) {
+          const info = JSON.parse(line.slice("TOUCHLINE_LOGIN ".length)) as { role: string; url: string };
+          if (info.role === "operator") url = info.url;
+        }
+        if (line.startsWith("TOUCHLINE_READY ") && url) {
+          clearTimeout(timer);
+          resolve(url);
+        }
+      }
+    });
+    proc.stderr?.resume();
+    proc.on("exit", (code) => reject(new Error(`the station exited (${code})`)));
+  });
+});
+
+test.afterAll(async () => {
+  const proc = station;
+  if (!proc || proc.exitCode !== null) return;
+  const gone = new Promise((resolve) => proc.on("exit", resolve));
+  proc.kill("SIGTERM");
+  await Promise.race([gone, new Promise((resolve) => setTimeout(resolve, 15_000))]);
+  if (proc.exitCode === null) proc.kill("SIGKILL");
+});
+
+test("the login URL makes an operator; a browser without it is told how to log in", async ({ browser }) => {
+  expect(loginUrl.startsWith(`${base}/login?token=`)).toBeTruthy();
+  const operator = await browser.newContext({ baseURL: base });
+  const op = await operator.newPage();
+  await op.goto(loginUrl);
+  await expect(op).toHaveURL(`${base}/`);
+  await expect(op.getByTestId("connection-status")).toContainText("connected");
+  await op.getByTestId("tab-referee").click();
+  await op.getByTestId("ref-STOP").click();
+  await expect(op.getByTestId("referee-command")).toHaveText("STOP");
+  await expect(op.getByTestId("toast").filter({ hasText: "Not logged in" })).toHaveCount(0);
+
+  const stranger = await browser.newContext({ baseURL: base });
+  const other = await stranger.newPage();
+  await other.goto("/");
+  // viewing stays open: the page streams
+  await expect(other.getByTestId("connection-status")).toContainText("connected");
+  await other.getByTestId("tab-referee").click();
+  await other.getByTestId("ref-HALT").click();
+  const toast = other.getByTestId("toast").filter({ hasText: "Not logged in" });
+  await expect(toast).toHaveCount(1);
+  await expect(toast).toContainText("/login?token=");
+  await expect(toast).toContainText("operator token");
+  // nothing changed: the operator's STOP stands
+  await expect(op.getByTestId("referee-command")).toHaveText("STOP");
+  const r = await other.request.post("/api/referee/internal/command", { data: { command: "HALT" } });
+  expect(r.status()).toBe(401);
+  await operator.close();
+  await stranger.close();
+});
