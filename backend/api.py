@@ -19,6 +19,8 @@ from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.websockets import WebSocketDisconnect, WebSocketState
 
+from sslnet.ratelog import RateLimitedLog
+
 from . import contract
 from .access import (
     COOKIE,
@@ -49,6 +51,7 @@ from .station import Station
 from .world.state import Team
 
 log = logging.getLogger("touchline.api")
+_ws_log = RateLimitedLog(log, interval_s=10.0)
 
 TeamParam = Annotated[Literal["blue", "yellow"], PathParam(description="robot team")]
 IdParam = Annotated[int, PathParam(ge=0, le=15, description="robot id, 0..15")]
@@ -416,11 +419,37 @@ def _params_routes(api: APIRouter, st: Station) -> None:
         return {"presets": store.list_presets()}
 
 
+#: a websocket client whose socket takes no message for this long is dropped (it reconnects
+#: and gets a snapshot): it no longer slows anyone, but it held its buffers for ever
+STALLED_CLIENT_S = 2.0
+
+
+class _Stalled(Exception):
+    pass
+
+
 async def _serve_client(ws: WebSocket, st: Station) -> None:
     """Sends a snapshot, then every change of the station's published views: the latest world
     at up to ``stream.ws_max_hz`` (a slow client only delays itself: it always gets the newest
     world, never a backlog), parameters and geometry when they change, health as published
-    (about four times a second). The station notifies; this loop never polls its state."""
+    (about four times a second). The station notifies; this loop never polls its state. A
+    client that takes nothing for ``STALLED_CLIENT_S`` is dropped."""
+    try:
+        await _serve_views(ws, st)
+    except _Stalled:
+        st.ws_dropped += 1
+        peer = f"{ws.client.host}:{ws.client.port}" if ws.client else "?"
+        _ws_log.warning("stalled", "websocket client %s took nothing for %.0f s: dropped "
+                        "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
+
+
+async def _serve_views(ws: WebSocket, st: Station) -> None:
+    async def send(text: str) -> None:
+        try:
+            await asyncio.wait_for(ws.send_text(text), STALLED_CLIENT_S)
+        except TimeoutError:
+            raise _Stalled from None
+
     closed = asyncio.Event()
     changed = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -443,7 +472,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
         await st.read(st.publish_views, True)  # fresh for this client (none may have been)
         v = st.views
         params_version = st.params.version
-        await ws.send_text(dumps({
+        await send(dumps({
             "type": "snapshot", "world": v.world, "geometry": v.geometry, "health": v.health,
             "params": {"version": params_version, "values": st.params.values()},
             "player": v.player,
@@ -457,14 +486,14 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                 break
             if st.params.version != params_version:
                 params_version = st.params.version
-                await ws.send_text(dumps({"type": "params", "version": params_version,
+                await send(dumps({"type": "params", "version": params_version,
                                           "values": st.params.values()}, "params"))
             v = st.views
             if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
-                await ws.send_text(dumps({"type": "geometry", "geometry": v.geometry},
+                await send(dumps({"type": "geometry", "geometry": v.geometry},
                                          "geometry"))
             if v.player_serial != sent.player_serial:
-                await ws.send_text(v.player_json)
+                await send(v.player_json)
             world_key = sent.world_key
             if v.world_key != sent.world_key:
                 newest = v
@@ -480,10 +509,10 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                         # sent on the next turn: only the world is taken from the newest views
                         changed.set()
                 next_world = max(next_world, now) + 1.0 / st.params.current.stream.ws_max_hz
-                await ws.send_text(newest.world_json)
+                await send(newest.world_json)
                 world_key = newest.world_key
             if v.health_mono != sent.health_mono:
-                await ws.send_text(v.health_json)
+                await send(v.health_json)
             sent = replace(v, world_key=world_key)
     finally:
         unsubscribe()

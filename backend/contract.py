@@ -552,6 +552,8 @@ class Health(TypedDict):
     latency: LatencyHealth | None
     latency_stages: list[LatencyStage]
     websocket_clients: int
+    websocket_dropped: Annotated[int, Field(
+        description="clients dropped because their socket took nothing for 2 s (stalled)")]
     engine: EngineHealth | None
     recording: Recording
     processes: Annotated[list[ProcessHealth], Field(

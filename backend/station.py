@@ -137,6 +137,7 @@ class Station:
         self.started_mono = time.monotonic()
         self.cpu = CpuMeter()  # this process (every thread), for the Health tab
         self.ws_clients = 0
+        self.ws_dropped = 0  # websocket clients dropped for taking nothing (stalled)
         #: who may do what and the refusals so far (the app sets it from its AccessRule)
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,

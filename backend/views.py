@@ -347,6 +347,7 @@ def health(st: Station) -> contract.Health:
         "latency": cast(contract.LatencyHealth, st.publisher.latency_summary()),
         "latency_stages": latency_stages(st),
         "websocket_clients": st.ws_clients,
+        "websocket_dropped": st.ws_dropped,
         "engine": engine_health(st),
         "recording": recording,
         "processes": processes(st, rs),

@@ -1,4 +1,5 @@
-"""A stalled websocket client must not slow the loop or the other clients (real uvicorn)."""
+"""A stalled websocket client must not slow the loop or the other clients, and is dropped
+after 2 s of taking nothing (real uvicorn)."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ def _big_world(k: int) -> WorldState:
     return WorldState(float(k), k, None, robots)
 
 
-def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_stalled_client_does_not_slow_the_others_and_is_dropped(tmp_path) -> None:  # type: ignore[no-untyped-def]
     port = free_tcp_port()
     settings = Settings(port=port, relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
                         relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
@@ -88,6 +89,20 @@ def test_stalled_client_does_not_slow_the_others(tmp_path) -> None:  # type: ign
         # machine still gives (the rate itself is measured in bench/ws_fanout.py)
         assert len(late) / 2.0 >= 5.0, f"only {len(late) / 2.0:.1f} new worlds/s"
         assert seqs == sorted(seqs)  # the latest only, in order
+        # the stalled clients are dropped (their socket took nothing for 2 s): counted, and
+        # their connections closed by the server (a read ends once their buffers are drained)
+        deadline = time.monotonic() + 20
+        while st.ws_dropped < 3:
+            assert time.monotonic() < deadline, f"dropped {st.ws_dropped} of 3 stalled clients"
+            time.sleep(0.05)
+        for s in stalled:
+            s.settimeout(5.0)
+            for _ in range(100_000):  # bounded: the buffers hold a few hundred KB
+                if not s.recv(65536):
+                    break
+            else:
+                raise AssertionError("a dropped client's connection stayed open")
+        assert st.ws_clients == 0
     finally:
         stop.set()
         wt.join()

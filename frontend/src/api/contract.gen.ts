@@ -163,6 +163,8 @@ export interface Health {
   latency: LatencyHealth | null;
   latency_stages: LatencyStage[];
   websocket_clients: number;
+  /** clients dropped because their socket took nothing for 2 s (stalled) */
+  websocket_dropped: number;
   engine: EngineHealth | null;
   recording: Recording;
   /** CPU and memory of the backend and (from its stats) the relay */

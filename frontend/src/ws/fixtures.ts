@@ -68,6 +68,7 @@ export function health(rate = 60): Health {
     latency: null,
     latency_stages: [],
     websocket_clients: 1,
+    websocket_dropped: 0,
     engine: null,
     recording: recording(),
     processes: [
