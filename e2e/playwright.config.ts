@@ -10,6 +10,8 @@ const baseURL = `http://127.0.0.1:${port}`;
 
 export default defineConfig({
   testDir: "tests",
+  // "docs:" tests write the pictures of docs/ (TOUCHLINE_DOCS_SHOTS=1 npm run test:e2e)
+  grepInvert: process.env.TOUCHLINE_DOCS_SHOTS ? undefined : /docs: /,
   timeout: 60_000,
   expect: { timeout: 15_000 },
   fullyParallel: false,
