@@ -185,8 +185,8 @@ function Latency({ h }: { h: Health }) {
     ["vision → command p50", lat?.p50_ms],
     ["vision → command mean", lat?.mean_ms],
     ["vision → command p99", lat?.p99_ms],
-    ["arrival → command datagram p50", relay?.command_latency_p50_ms],
-    ["arrival → command datagram p99", relay?.command_latency_p99_ms],
+    ["→ robot datagram p50", relay?.command_latency_p50_ms],
+    ["→ robot datagram p99", relay?.command_latency_p99_ms],
   ];
   const max = niceMax(Math.max(...rows.map(([, v]) => v ?? 0), 1));
   return (
