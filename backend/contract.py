@@ -504,6 +504,17 @@ class ProcessHealth(TypedDict):
 
 
 @with_config(_STRICT)
+class SupervisedProcess(TypedDict):
+    """A process the launcher started and restarts when it dies."""
+
+    name: str
+    pid: int | None
+    restarts: int
+    last_exit: Annotated[int | None, Field(description="exit code of the last crash")]
+    up_s: Annotated[float, Field(description="since it was (re)started")]
+
+
+@with_config(_STRICT)
 class Recording(TypedDict):
     """The session recorder (SSL log files in var/logs/, docs/logformat.md)."""
 
@@ -558,6 +569,8 @@ class Health(TypedDict):
     recording: Recording
     processes: Annotated[list[ProcessHealth], Field(
         description="CPU and memory of the backend and (from its stats) the relay")]
+    supervisor: Annotated[list[SupervisedProcess] | None, Field(
+        description="what the launcher started, with restarts (null: not started by it)")]
     access: AccessHealth
 
 

@@ -4,6 +4,7 @@ station publishes them (``Station.views``) or answers with them when asked."""
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from typing import TYPE_CHECKING, Any, cast
@@ -321,7 +322,11 @@ def health(st: Station) -> contract.Health:
         referee["source"] = ("internal" if referee["source_identifier"]
                              == st.referee_state.source_identifier else "game-controller")
     recording = st.recording_status()
-    station_lines: list[str] = []
+    sup = supervised(st)
+    station_lines: list[str] = [
+        f"{c['name']} restarted {c['restarts']} time{'s' if c['restarts'] > 1 else ''} by the "
+        f"launcher (last exit {c['last_exit']}, up {c['up_s']:.0f} s)"
+        for c in sup or [] if c["restarts"]]
     if recording["error"]:
         station_lines.append(f"recording stopped: {recording['error']}")
     if st.player.log is not None:
@@ -352,8 +357,24 @@ def health(st: Station) -> contract.Health:
         "recording": recording,
         "processes": processes(st, rs),
         "access": access,
+        "supervisor": sup,
     }
     return out
+
+
+def supervised(st: Station) -> list[contract.SupervisedProcess] | None:
+    """The launcher's children and their restarts (``supervisor.json`` in the state folder,
+    written by the launcher at every start and restart); None without a launcher."""
+    if st.settings.state_dir is None:
+        return None
+    try:
+        raw = json.loads((st.settings.state_dir / "supervisor.json").read_text())
+        now = time.time()
+        return [{"name": str(c["name"]), "pid": c.get("pid"), "restarts": int(c["restarts"]),
+                 "last_exit": c.get("last_exit"),
+                 "up_s": max(0.0, now - float(c["started_unix"]))} for c in raw["children"]]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def processes(st: Station, relay_stats: dict[str, Any] | None) -> list[contract.ProcessHealth]:

@@ -18,12 +18,15 @@ import time
 import urllib.error
 import urllib.request
 from dataclasses import asdict
+from pathlib import Path
 
 from backend.access import is_loopback
 from sslnet import defaults
 from sslnet.multicast import loopback_multicast_ok
 
-from .supervisor import Ports, StationConfig, Supervisor, command_lines
+from .supervisor import ROOT, Ports, StationConfig, Supervisor, command_lines
+
+ROOT_VAR = ROOT / "var"  # the backend's default state folder
 
 log = logging.getLogger("touchline.launcher")
 
@@ -123,7 +126,8 @@ def main() -> int:
         relay_args=a.relay_args,
         backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *replay_args,
                       *a.backend_args]), ports),
-        restart=True)
+        restart=True,
+        status_file=Path(a.state_dir or ROOT_VAR) / "supervisor.json")
     stopping = False
 
     def on_signal(signum: int, _frame: object) -> None:

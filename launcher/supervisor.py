@@ -9,6 +9,7 @@ benchmark) and by ``python -m match`` (two backends on one relay and one simulat
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import random
@@ -168,8 +169,13 @@ class Supervisor:
     the kernel to stop when the supervisor dies."""
 
     def __init__(self, children: list[Child], *, log_dir: Path | None = None,
-                 restart: bool = False, max_restarts: int = 5, detach: bool = False) -> None:
+                 restart: bool = False, max_restarts: int = 5, detach: bool = False,
+                 status_file: Path | None = None) -> None:
         self.children = children
+        #: where the children's pids and restarts are written (the backend's Health tab reads
+        #: it), after every start and restart; atomically
+        self.status_file = status_file
+        self._last_exit: dict[str, int | None] = {}
         self.log_dir = log_dir
         self.restart = restart
         self.max_restarts = max_restarts
@@ -182,6 +188,23 @@ class Supervisor:
             self.log_dir.mkdir(parents=True, exist_ok=True)
         for c in self.children:
             self._start(c)
+        self.write_status()
+
+    def write_status(self) -> None:
+        if self.status_file is None:
+            return
+        status = {"time_unix": time.time(), "children": [
+            {"name": c.name, "pid": c.proc.pid if c.proc is not None else None,
+             "restarts": c.restarts, "last_exit": self._last_exit.get(c.name),
+             "started_unix": time.time() - (time.monotonic() - c.started)}
+            for c in self.children]}
+        try:
+            self.status_file.parent.mkdir(parents=True, exist_ok=True)
+            tmp = self.status_file.with_suffix(".tmp")
+            tmp.write_text(json.dumps(status))
+            tmp.replace(self.status_file)
+        except OSError as exc:  # the station runs without it; the page just shows no restarts
+            log.warning("cannot write %s: %s", self.status_file, exc)
 
     def _start(self, c: Child) -> None:
         log.info("starting %s: %s", c.name, " ".join(c.argv[1:]))
@@ -217,8 +240,10 @@ class Supervisor:
                 return f"{c.name} exited {code} and keeps crashing; giving up"
             log.warning("%s exited with %s; restarting", c.name, code)
             c.restarts += 1
+            self._last_exit[c.name] = code
             time.sleep(min(2.0, 0.2 * c.restarts))
             self._start(c)
+            self.write_status()
         return None
 
     def log_tail(self, name: str, lines: int = 25) -> str:

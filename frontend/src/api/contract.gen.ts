@@ -169,6 +169,8 @@ export interface Health {
   recording: Recording;
   /** CPU and memory of the backend and (from its stats) the relay */
   processes: ProcessHealth[];
+  /** what the launcher started, with restarts (null: not started by it) */
+  supervisor: SupervisedProcess[] | null;
   access: AccessHealth;
 }
 
@@ -724,6 +726,17 @@ export interface StreamHealth {
   rate_hz: number;
   last_age_s: number;
   last_error: string;
+}
+
+/** A process the launcher started and restarts when it dies. */
+export interface SupervisedProcess {
+  name: string;
+  pid: number | null;
+  restarts: number;
+  /** exit code of the last crash */
+  last_exit: number | null;
+  /** since it was (re)started */
+  up_s: number;
 }
 
 /** POST /api/robots/{team}/{id}/target (``target`` null after DELETE). */

@@ -67,7 +67,13 @@ function Processors({ h }: { h: Health }) {
   );
 }
 
-/** CPU (% of one core) and memory of each station process, drawn against one core. */
+/** How often the launcher restarted a process (0 when not started by the launcher). */
+function restarts(h: Health, name: string): number {
+  return h.supervisor?.find((c) => c.name === name)?.restarts ?? 0;
+}
+
+/** CPU (% of one core) and memory of each station process, drawn against one core, with
+ * the launcher's restarts. */
 export function Processes({ h }: { h: Health }) {
   const procs = h.processes ?? [];
   if (procs.length === 0) return null;
@@ -87,6 +93,9 @@ export function Processes({ h }: { h: Health }) {
               </td>
               <td className="num hval">{fmtFixed(p.cpu_percent, 1)} %</td>
               <td className="num hval">{fmtFixed(p.rss_mb, 0)} MB</td>
+              <td className={`num hval ${restarts(h, p.name) ? "warn" : ""}`} data-testid={`health-restarts-${p.name}`}>
+                {restarts(h, p.name) ? `${restarts(h, p.name)} restarts` : ""}
+              </td>
             </tr>
           ))}
         </tbody>

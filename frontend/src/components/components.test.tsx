@@ -129,6 +129,10 @@ describe("Processes", () => {
     expect(q("health-process-backend")?.textContent).toBe("backend23.5 %120 MB");
     expect(q("health-process-relay")?.textContent).toBe("relay11.2 %40 MB");
     expect(q("health-processes")?.closest("section")?.textContent).toContain("together 35 %");
+    expect(q("health-restarts-relay")?.textContent).toBe("");
+    const crashed = { ...health(), supervisor: [{ name: "relay", pid: 7, restarts: 2, last_exit: -9, up_s: 3 }] };
+    act(() => t.root.render(<Processes h={crashed} />));
+    expect(q("health-restarts-relay")?.textContent).toBe("2 restarts");
     act(() => t.root.render(<Processes h={{ ...health(), processes: [] }} />));
     expect(q("health-processes")).toBeNull();
   });

@@ -69,6 +69,7 @@ export function health(rate = 60): Health {
     latency_stages: [],
     websocket_clients: 1,
     websocket_dropped: 0,
+    supervisor: null,
     engine: null,
     recording: recording(),
     processes: [
