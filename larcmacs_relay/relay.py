@@ -385,10 +385,10 @@ class Relay:
             self.table.stop_all(now)
             return
         if not self.armed:
-            # disarmed: nothing from a command set reaches a robot (a stop_all still stops)
+            # disarmed: nothing from a command set reaches a robot (the robots commanded
+            # before were zeroed when it was disarmed: zeros for the hold time, then silence)
             self._command_error("commands", "relay disarmed: command set dropped (arm it from "
                                 "the station first)", "disarmed")
-            self.table.stop_all(now)
             return
         cset = touchline_pb2.RobotCommandSet()
         try:
@@ -472,8 +472,9 @@ class Relay:
                 log.warning("ARMED (by %s): commands go to the robots", msg.by or "?")
             self.armed, self.armed_by = True, msg.by
             return
-        if self.armed:
-            log.warning("disarmed (by %s): only stops go to the robots", msg.by or "?")
+        if not self.armed:
+            return  # repeated every 0.5 s: zeros for the hold time, then silence
+        log.warning("disarmed (by %s): only stops go to the robots", msg.by or "?")
         self.armed, self.armed_by = False, msg.by
         self.table.stop_all(now)
         self._wake_output()
@@ -578,7 +579,6 @@ class Relay:
                 if result.commands:
                     self._command_error("compat_commands", "relay disarmed: commands dropped",
                                         "disarmed")
-                self.table.stop_all(now)
                 continue
             for c in result.commands:
                 self.table.update(c, now)

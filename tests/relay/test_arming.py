@@ -83,6 +83,14 @@ async def test_armed_commands_are_sent_and_a_disarm_leaves_only_zeros() -> None:
         got = await nothing_for(h, 0.1)
         assert got and all(d[3] == 0 and d[2] == 0 for d in got)  # stops only
         assert h.relay.streams["commands"].by_reason.get("disarmed", 0) >= 5
+        # the zeros last the hold time, then nothing, whatever command sets keep arriving
+        for _ in range(int(h.config.hold_time_s / 0.05) + 4):
+            await pub.send_multipart(GO)
+            await pub.send_multipart(arming(False))  # the backend repeats it
+            await asyncio.sleep(0.05)
+        drain_udp(h.out_box)
+        await pub.send_multipart(GO)
+        assert await nothing_for(h, 0.15) == []
 
 
 async def test_the_estop_disarms_and_arming_is_refused_while_latched() -> None:
