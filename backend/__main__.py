@@ -60,6 +60,9 @@ def main() -> None:
     p.add_argument("--relay-output", choices=["sim", "grsim", "robot-box"], default=None,
                    help="the relay's output (the launcher passes it): on robot-box, whose "
                         "datagrams have no team field, only our team is ever commanded")
+    p.add_argument("--require-arming", action="store_true",
+                   help="the relay drives real robots or an external simulator (the launcher "
+                        "passes it): the station starts disarmed, an operator arms it")
     p.add_argument("--log", type=Path, default=None, metavar="FILE",
                    help="replay this SSL log file (.log or .log.gz) instead of live input: "
                         "nothing is sent to robots or a simulator")
@@ -77,7 +80,7 @@ def main() -> None:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
                         our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
-                        relay_output=a.relay_output,
+                        relay_output=a.relay_output, require_arming=a.require_arming,
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
                         log_dirs=a.log_dirs, record=not a.no_record,

@@ -34,6 +34,7 @@ from .access import (
 )
 from .config import Settings
 from .contract import (
+    ArmIn,
     CardIn,
     EnableIn,
     EstopIn,
@@ -274,6 +275,23 @@ def create_app(settings: Settings, station: Station | None = None,
         await st.call(st.operator_action, "estop" if body.active else "estop-release",
                       who, {"reason": body.reason})
         return {"estop": body.active, **await st.call(st.estop_view)}
+
+    @api.get("/arm")
+    async def arm_get() -> contract.ArmingInfo:
+        return await st.call(st.arming_view)
+
+    @api.post("/arm", response_model=None)
+    async def arm(body: ArmIn, request: Request) -> contract.ArmingInfo | JSONResponse:
+        """Arms the station (real robots: commands reach them; refused with 409 and the
+        reason while vision is missing, the e-stop is active or a log is replayed) or
+        disarms it (always)."""
+        who = _who(request)
+        refused = await st.call(st.set_armed, body.armed, who)
+        if refused is not None:
+            log.warning("arming refused (%s): %s", who, refused)
+            return JSONResponse(status_code=409, content={"detail": refused})
+        await st.call(st.operator_action, "arm" if body.armed else "disarm", who, {})
+        return await st.call(st.arming_view)
 
     @api.websocket("/ws")
     async def ws_endpoint(ws: WebSocket) -> None:

@@ -26,6 +26,9 @@ class Settings(BaseModel):
     #: the relay's output as the launcher started it ("sim", "grsim", "robot-box"); the relay's
     #: own stats confirm it. None: unknown until the relay says (the other team is refused)
     relay_output: str | None = None
+    #: the relay requires arming (real robots, an external simulator; the launcher says so,
+    #: the relay's stats confirm it): the station starts disarmed, an operator arms it
+    require_arming: bool = False
     #: names the Host header may carry besides the bound address and loopback ("*": any)
     allowed_hosts: list[str] = Field(default_factory=list)
     #: a log file to replay from the start instead of live input (``make run LOG=...``)

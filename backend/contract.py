@@ -253,6 +253,23 @@ class EstopInfo(TypedDict):
 
 
 @with_config(_STRICT)
+class ArmingInfo(TypedDict):
+    """Arming: a relay driving real robots or an external simulator sends nothing but stops
+    until an operator arms the station; the e-stop disarms it."""
+
+    required: Annotated[bool, Field(
+        description="the relay requires arming (false: the built-in simulator, always armed)")]
+    armed: Annotated[bool, Field(
+        description="commands may reach the robots (always true when not required)")]
+    since: Annotated[float, Field(description="Unix s of the last arm or disarm (0: never)")]
+    by: Annotated[str, Field(description="who armed or disarmed it")]
+    relay_armed: Annotated[bool | None, Field(
+        description="the relay's arming from its statistics; null before any arrived")]
+    refusal: Annotated[str | None, Field(
+        description="why arming would be refused now (null: it would be accepted)")]
+
+
+@with_config(_STRICT)
 class StrategyState(TypedDict):
     """What the strategy is doing now (sent with every world update)."""
 
@@ -315,6 +332,10 @@ class World(TypedDict):
     referee: Referee | None
     estop: bool
     estop_info: EstopInfo
+    armed: Annotated[bool, Field(
+        description="commands may reach the robots (always true when arming is not required)")]
+    arming_required: bool
+    arming: ArmingInfo
     halt_reason: Annotated[str, Field(
         description='why every robot is held ("emergency stop", "HALT", "no vision ..."), or ""')]
     strategy: StrategyState | None
@@ -419,6 +440,8 @@ class RelayHealth(TypedDict):
     stale_stops: int
     estop_latched: Annotated[bool, Field(description="only zeros leave the relay while true")]
     estop_by: str
+    armed: Annotated[bool, Field(description="the relay sends commands (else only stops)")]
+    arming_required: Annotated[bool, Field(description="the relay started with --require-arming")]
     alive: bool
     age_s: float
 
@@ -553,6 +576,7 @@ class Health(TypedDict):
         description="the loop works (fresh vision, relay alive); a silent referee leaves it true")]
     warnings: Annotated[list[str], Field(description="one line per problem")]
     estop: EstopInfo
+    arming: ArmingInfo
     world: WorldHealth | None
     referee: RefereeHealth | None
     uptime_s: float
@@ -711,6 +735,13 @@ class TeleportRobotIn(BaseModel):
     y: float = Field(description="mm")
     orientation: float | None = Field(default=None, description="rad")
     present: bool = True
+
+
+class ArmIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    armed: bool = Field(description="true: arm (refused with 409 and the reason while vision "
+                        "is missing, the e-stop is active or a log is replayed); false: disarm "
+                        "(always)")
 
 
 class EstopIn(BaseModel):
@@ -933,13 +964,15 @@ EXPORTS: dict[str, object] = {
     "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
-    "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff, "PresetList": PresetList,
+    "ArmingInfo": ArmingInfo, "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff,
+    "PresetList": PresetList,
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
     "PlayerHistory": PlayerHistory,
     # request bodies (their optional fields are optional in TypeScript too)
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
-    "EnableIn": EnableIn, "TeleportBallIn": TeleportBallIn, "TeleportRobotIn": TeleportRobotIn,
+    "EnableIn": EnableIn, "ArmIn": ArmIn, "TeleportBallIn": TeleportBallIn,
+    "TeleportRobotIn": TeleportRobotIn,
     "EstopIn": EstopIn, "PlayerOpenIn": PlayerOpenIn, "PlayerPlayIn": PlayerPlayIn,
     "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
     "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,

@@ -165,6 +165,10 @@ class Station:
         self._estop_mono = time.monotonic()
         if self.estop_latch.active:
             self.estop_topic.write(True)
+        #: arming (a relay with --require-arming): the station starts disarmed, never persisted
+        self._armed = False
+        self.armed_by = ""
+        self.armed_since = 0.0  # Unix s of the last arm or disarm (0: never)
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
         self.world_topic = self.bus.of(topics.WORLD)
         self.geometry_topic = self.bus.of(topics.GEOMETRY)
@@ -194,6 +198,8 @@ class Station:
         self.publisher = CommandPublisher(self.bus)
         self.publisher.adopt_estop = self.adopt_relay_estop
         self.publisher.estop_by = lambda: self.estop_latch.state.by
+        self.publisher.armed = lambda: self._armed
+        self.publisher.armed_by = lambda: self.armed_by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
         self.control.may_drive_other_team = self.drives_other_team
@@ -510,6 +516,7 @@ class Station:
             self.player.serial += 1
 
     def _attach(self, log_: LogSource) -> None:
+        self.disarm("replay")  # back to live, robots are not driven by surprise
         self.player_command(self.player.attach, log_)
         log.info("replaying %s (%.1f s): nothing is sent to robots or a simulator",
                  log_.path, self.player.duration_s())
@@ -636,6 +643,54 @@ class Station:
         self.estop_latch.set(active, by)
         self._estop_mono = time.monotonic()
         self.estop_topic.write(active)
+        if active:
+            self.disarm(f"e-stop ({by or '?'})")
+
+    # ---- arming: a relay driving real robots or an external simulator sends nothing but
+    # stops until an operator arms it (CommandPublisher repeats the state to the relay) ----
+
+    @property
+    def arming_required(self) -> bool:
+        """The launcher said so (--require-arming) or the relay's stats do."""
+        rs = self.relay_stats.latest_value()
+        return self.settings.require_arming or (rs is not None
+                                                and bool(rs.get("arming_required")))
+
+    @property
+    def armed(self) -> bool:
+        """Commands may reach the robots: armed by an operator, or no arming required."""
+        return self._armed or not self.arming_required
+
+    def arm_refusal(self) -> str | None:
+        """Why arming is refused now, or None."""
+        if self.estop:
+            return "the emergency stop is active: release it first"
+        if self.player.log is not None:
+            return "replaying a log: nothing is sent to robots (go back to live first)"
+        age = self.control.vision_age_s(time.monotonic())
+        stale = self.params.current.safety.vision_stale_s
+        if age > stale:
+            seen = "no vision yet" if age == float("inf") else f"no vision for {age:.1f} s"
+            return f"vision is missing ({seen}, more than safety.vision_stale_s = {stale} s)"
+        return None
+
+    def set_armed(self, armed: bool, by: str = "") -> str | None:
+        """Arm (refused with the reason, see ``arm_refusal``) or disarm (always)."""
+        if not armed:
+            self.disarm(by)
+            return None
+        why = self.arm_refusal()
+        if why is not None:
+            return why
+        if not self._armed:
+            log.warning("ARMED by %s: commands go to the robots", by or "?")
+            self._armed, self.armed_by, self.armed_since = True, by, time.time()
+        return None
+
+    def disarm(self, by: str = "") -> None:
+        if self._armed:
+            log.warning("disarmed by %s: only stops go to the robots", by or "?")
+            self._armed, self.armed_by, self.armed_since = False, by, time.time()
 
     def adopt_relay_estop(self, by: str) -> None:
         """The relay is latched although this backend is not (its file was lost, or another
@@ -700,6 +755,9 @@ class Station:
     def estop_view(self) -> contract.EstopInfo:
         return views.estop_view(self)
 
+    def arming_view(self) -> contract.ArmingInfo:
+        return views.arming_view(self)
+
     def recording_status(self) -> contract.Recording:
         if self.recorder is None:
             return {"enabled": False, "recording": False, "file": "",
@@ -718,6 +776,7 @@ class Station:
         lost), or the internal referee (its panel follows the world message)."""
         ir, rs = self.internal_referee, self.referee_state
         return (self.world_topic.seq, self.referee_topic.seq, self.estop, self.player.serial,
+                self.armed, self.arming_required,
                 self.control.halt_reason, rs.command_counter,
                 ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
                 rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)

@@ -81,6 +81,26 @@ def estop_view(st: Station) -> contract.EstopInfo:
             "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
 
 
+def arming_view(st: Station) -> contract.ArmingInfo:
+    rs = st.relay_stats.latest_value()
+    required = st.arming_required
+    return {"required": required, "armed": st.armed, "since": st.armed_since,
+            "by": st.armed_by,
+            "relay_armed": None if rs is None else bool(rs.get("armed", True)),
+            "refusal": st.arm_refusal() if required and not st.armed else None}
+
+
+def arming_warnings(st: Station) -> list[str]:
+    """Health lines: the relay's arming differs from the station's for a while."""
+    rs = st.relay_stats.latest_value()
+    if rs is None or not st.arming_required or time.monotonic() - rs["received_mono"] > 3.0:
+        return []
+    if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
+        return ["the relay is armed although the station is not (another backend armed it?): "
+                "it is disarmed again within 0.5 s"]
+    return []
+
+
 def estop_warnings(st: Station) -> list[str]:
     """Health lines: an active stop (every page says so), a relay that has not latched it
     a few seconds after the press, and a latch file that could not be read or written."""
@@ -172,6 +192,9 @@ def world(st: Station) -> contract.World:
         "referee": None,
         "estop": st.estop,
         "estop_info": estop_view(st),
+        "armed": st.armed,
+        "arming_required": st.arming_required,
+        "arming": arming_view(st),
         "halt_reason": st.control.halt_reason,
         "strategy": None,
         "internal_referee": referee_view(st)["internal"],
@@ -338,10 +361,11 @@ def health(st: Station) -> contract.Health:
                              "wrong tokens (someone is guessing the operator token)")
     out: contract.Health = {
         "ok": ok,
-        "warnings": [*estop_warnings(st), *station_lines,
+        "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
                      *_warnings(vision, relay, referee, world, replaying),
                      *st.params.warnings],
         "estop": estop_view(st),
+        "arming": arming_view(st),
         "world": world,
         "referee": cast(contract.RefereeHealth | None, referee),
         "uptime_s": time.monotonic() - st.started_mono,

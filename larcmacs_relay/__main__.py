@@ -88,6 +88,10 @@ def build_parser() -> argparse.ArgumentParser:
     a("--chip-angle", type=float, default=d.chip_angle_deg, help="chip kick angle, degrees")
     a("--kick-mps-per-volt", type=float, default=d.kick_mps_per_volt)
     a("--dribbler-rpm-per-unit", type=float, default=d.dribbler_rpm_per_unit)
+    a("--require-arming", action="store_true",
+      help="start disarmed: no command leaves (only stops) until the backend arms the relay "
+           "(Arming on ZeroMQ topic 'arming'); an e-stop press disarms it. The launcher "
+           "passes it for real robots and external simulators")
     a("--compat", action="store_true", help="also serve the seed LARCmaCS ZeroMQ contract")
     a("--compat-vision-pub", default=d.compat_vision_pub)
     a("--compat-referee-pub", default=d.compat_referee_pub)
@@ -144,6 +148,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         chip_angle_deg=args.chip_angle,
         kick_mps_per_volt=args.kick_mps_per_volt,
         dribbler_rpm_per_unit=args.dribbler_rpm_per_unit,
+        require_arming=args.require_arming,
         compat=args.compat,
         compat_vision_pub=args.compat_vision_pub,
         compat_referee_pub=args.compat_referee_pub,

@@ -53,6 +53,9 @@ class RelayConfig:
     max_kick_mps: float = 6.5  # league limit
     dribbler_rpm_per_unit: float = 1000.0  # robot-box dribbler speed byte <-> rpm
     robot_box_charge: bool = True  # kicker-charge enable for native commands
+    # real robots or an external simulator: start disarmed, send no command (only stops)
+    # until an Arming message arms the relay; an e-stop press disarms it
+    require_arming: bool = False
 
     # Seed LARCmaCS compatibility sockets.
     compat: bool = False

@@ -102,6 +102,10 @@ class Relay:
         #: the emergency stop, latched until an explicit release (EmergencyStop on "estop")
         self.estop_latched = False
         self.estop_by = ""
+        #: --require-arming: disarmed until an Arming message arms it (a restart disarms)
+        self.arming_required = config.require_arming
+        self.armed = not config.require_arming
+        self.armed_by = ""
         self.cpu = proc.CpuMeter()
         #: robot-box output: the only team it may drive (its datagrams cannot say which)
         self._box_team: int | None = (
@@ -147,6 +151,7 @@ class Relay:
             sub.setsockopt(zmq.SUBSCRIBE, b"referee-out")
             sub.setsockopt(zmq.SUBSCRIBE, b"tracker-out")
             sub.setsockopt(zmq.SUBSCRIBE, b"estop")
+            sub.setsockopt(zmq.SUBSCRIBE, b"arming")
             sub.bind(cfg.sub_endpoint)
             self.sub_address = _endpoint(sub)
             compat_sub: zmq.asyncio.Socket | None = None
@@ -367,6 +372,9 @@ class Relay:
         if topic == b"estop":
             self._handle_estop(body, now)
             return
+        if topic == b"arming":
+            self._handle_arming(body, now)
+            return
         if topic != b"commands":
             self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
             return
@@ -375,6 +383,12 @@ class Relay:
             # latched: whatever arrives, every robot gets zero until an explicit release
             counter.packet(len(body), now)
             self.table.stop_all(now)
+            return
+        if not self.armed:
+            # disarmed: nothing from a command set reaches a robot (the robots commanded
+            # before were zeroed when it was disarmed: zeros for the hold time, then silence)
+            self._command_error("commands", "relay disarmed: command set dropped (arm it from "
+                                "the station first)", "disarmed")
             return
         cset = touchline_pb2.RobotCommandSet()
         try:
@@ -426,6 +440,9 @@ class Relay:
                 log.warning("emergency stop latched (by %s): zeros to every robot until an "
                             "explicit release", msg.by or "?")
             self.estop_latched, self.estop_by = True, msg.by
+            if self.arming_required and self.armed:
+                log.warning("disarmed by the emergency stop")
+            self.armed = not self.arming_required  # the e-stop disarms
             self.table.stop_all(now)
             self._wake_output()
         elif msg.action == touchline_pb2.EmergencyStop.RELEASE:
@@ -435,6 +452,32 @@ class Relay:
         else:
             self._command_error("commands", f"EmergencyStop with action {msg.action}",
                                 "bad command")
+
+    def _handle_arming(self, body: bytes, now: float) -> None:
+        msg = touchline_pb2.Arming()
+        try:
+            msg.ParseFromString(body)
+        except DecodeError as exc:
+            self._command_error("commands", f"Arming does not parse: {exc}",
+                                streams.wire_problem(body))
+            return
+        if not self.arming_required:
+            return  # always armed: nothing to do
+        if msg.armed:
+            if self.estop_latched:
+                self._command_error("commands", "arming refused: the emergency stop is latched",
+                                    "arming refused")
+                return
+            if not self.armed:
+                log.warning("ARMED (by %s): commands go to the robots", msg.by or "?")
+            self.armed, self.armed_by = True, msg.by
+            return
+        if not self.armed:
+            return  # repeated every 0.5 s: zeros for the hold time, then silence
+        log.warning("disarmed (by %s): only stops go to the robots", msg.by or "?")
+        self.armed, self.armed_by = False, msg.by
+        self.table.stop_all(now)
+        self._wake_output()
 
     def _command_error(self, stream: str, reason: str, kind: str = "rejected") -> None:
         self.streams[stream].error(kind, reason)
@@ -532,6 +575,11 @@ class Relay:
             if self.estop_latched:  # the latch holds for the seed's commands too
                 self.table.stop_all(now)
                 continue
+            if not self.armed:
+                if result.commands:
+                    self._command_error("compat_commands", "relay disarmed: commands dropped",
+                                        "disarmed")
+                continue
             for c in result.commands:
                 self.table.update(c, now)
             if result.commands:
@@ -576,8 +624,9 @@ class Relay:
         due = self.table.due(now)
         if not due:
             return
-        if self.estop_latched:
-            # the latch is enforced here, where every command path meets: only zeros leave
+        if self.estop_latched or not self.armed:
+            # the latch and the arming are enforced here, where every command path meets:
+            # only zeros leave (the stops of robots commanded before, for the hold time)
             due = [c.zero() for c in due]
         self._send_commands(due)
         if self._pending_latency_ns:
@@ -751,6 +800,8 @@ class Relay:
             command_latency_p99_ms=p99,
             cpu_percent=self.cpu.read(),
             rss_mb=proc.rss_mb(),
+            armed=self.armed,
+            arming_required=self.arming_required,
         )
 
     async def _stats_loop(self) -> None:

@@ -97,6 +97,12 @@ class StationConfig:
     relay_args: list[str] = field(default_factory=list)
     backend_args: list[str] = field(default_factory=list)
 
+    @property
+    def arming_required(self) -> bool:
+        """Real robots or an external simulator (anything but the built-in simulator): the
+        relay starts disarmed and the operator arms it from the page."""
+        return not (self.sim == "builtin" and self.output == "sim")
+
 
 @dataclass
 class Child:
@@ -138,12 +144,14 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         # tracked vision on loopback only; the venue network needs --relay-arg=--tracker-out=...
         "--tracker-out-local", f"{ports.tracker_group}:{ports.tracker}",
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
+        *(["--require-arming"] if cfg.arming_required else []),
         *cfg.relay_args,
     ]))
     children.append(Child("backend", [
         py, "-m", "backend", "--host", cfg.host, "--port", str(ports.http),
         "--relay-pub", ports.relay_pub, "--relay-sub", ports.relay_sub,
         "--relay-output", cfg.output,
+        *(["--require-arming"] if cfg.arming_required else []),
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *(["--state-dir", cfg.state_dir] if cfg.state_dir else []),
         *cfg.backend_args,

@@ -40,6 +40,10 @@ class CommandPublisher(SocketProcessor):
         self.estop_by: Callable[[], str] = lambda: ""
         self._estop_sent = (False, -1e9)  # (active, monotonic time) of the last latch message
         self._release_until = -1e9  # a release is being repeated until the relay confirms
+        #: the station's arming (a relay with --require-arming obeys it; others ignore it)
+        self.armed: Callable[[], bool] = lambda: False
+        self.armed_by: Callable[[], str] = lambda: ""
+        self._arming_sent = (False, -1e9)  # (armed, monotonic time) of the last Arming sent
         #: True while a log is replayed: nothing goes to robots or a simulator (the strategy
         #: and controllers may run on the replay; their commands are shown, never sent)
         self.muted: Callable[[], bool] = lambda: False
@@ -57,6 +61,7 @@ class CommandPublisher(SocketProcessor):
                 stop = tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True)
                 await self.sock.send_multipart([b"commands", stop.SerializeToString()])
             await self._estop_latch()
+            await self._arming()
             return
         self._was_muted = False
         for cs in self.reader.read_new():
@@ -88,6 +93,18 @@ class CommandPublisher(SocketProcessor):
         for raw in self.referee_out_reader.read_new():
             await self.sock.send_multipart([b"referee-out", raw])
         await self._estop_latch()
+        await self._arming()
+
+    async def _arming(self) -> None:
+        """The arming state to the relay on every change and every 0.5 s (a restarted relay
+        starts disarmed and is re-armed only if this backend is armed)."""
+        now = time.monotonic()
+        armed = self.armed()
+        was, when = self._arming_sent
+        if armed != was or now - when >= 0.5:
+            msg = tl.Arming(armed=armed, time_ns=time.time_ns(), by=self.armed_by())
+            await self.sock.send_multipart([b"arming", msg.SerializeToString()])
+            self._arming_sent = (armed, now)
 
     async def _estop_latch(self) -> None:
         """Keeps the relay's latch in step: PRESS on a press and every 0.5 s while active

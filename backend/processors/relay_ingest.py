@@ -109,6 +109,8 @@ def _relay_stats_dict(s: tl.RelayStats) -> dict[str, Any]:
         "stale_stops": s.stale_stops,
         "estop_latched": s.estop_latched,
         "estop_by": s.estop_by,
+        "armed": s.armed,
+        "arming_required": s.arming_required,
         "cpu_percent": s.cpu_percent,
         "rss_mb": s.rss_mb,
         "streams": {

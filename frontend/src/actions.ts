@@ -3,6 +3,7 @@
 import {
   ApiError,
   deleteTarget,
+  postArm,
   postEstop,
   postRefereeCard,
   postRefereeCommand,
@@ -57,6 +58,23 @@ export async function setEstop(active: boolean): Promise<void> {
     }
   } catch (e) {
     pushToast("error", `Emergency stop request failed: ${errorText(e)}`);
+  }
+}
+
+/** Arm (only after the operator confirmed it in the page's dialog) or disarm; a refusal's
+ * reason (no vision, the e-stop, a replay) shows as a toast. Resolves to success. */
+export async function setArmed(armed: boolean): Promise<boolean> {
+  try {
+    const reply = await postArm(armed);
+    // Reflect the answer at once; the next world message confirms it.
+    const world = appStore.getState().world;
+    if (world && typeof reply?.armed === "boolean") {
+      appStore.setState({ world: { ...world, armed: reply.armed, arming: reply } });
+    }
+    return true;
+  } catch (e) {
+    pushToast("error", `${armed ? "Arming refused" : "Disarm failed"}: ${errorText(e)}`);
+    return false;
   }
 }
 

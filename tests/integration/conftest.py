@@ -116,3 +116,17 @@ def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") 
             return last
         time.sleep(interval_s)
     raise AssertionError(f"timed out after {timeout_s} s waiting for {what or cond}: {last!r}")
+
+
+def arm(st: StationHandle, timeout_s: float = 10.0) -> dict[str, Any]:
+    """Arms a station whose relay requires arming (``--sim none``, real robots): retried
+    until accepted (it is refused until vision arrives); returns the arming state."""
+    def accepted() -> dict[str, Any] | None:
+        r = httpx.post(st.url + "/api/arm", json={"armed": True}, timeout=5.0)
+        if r.status_code == 409:
+            return None
+        r.raise_for_status()
+        body: dict[str, Any] = r.json()
+        return body
+    result: dict[str, Any] = wait_until(accepted, timeout_s, what="arming accepted")
+    return result

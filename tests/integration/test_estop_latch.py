@@ -17,7 +17,7 @@ import httpx
 
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 
-from .conftest import StationHandle, wait_until
+from .conftest import StationHandle, arm, wait_until
 from .test_hostile_vision import Camera
 
 
@@ -67,6 +67,7 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
     try:
         wait_until(lambda: any(r["id"] == 0 for r in bare.get("/api/world")["robots"]), 20,
                    what="blue 0 seen")
+        arm(bare)  # an external simulator: the station starts disarmed
         t0 = time.monotonic()
         assert _post(bare, "/api/robots/blue/0/target", {"x": 3000, "y": 0}).status_code == 200
         wait_until(lambda: sim.moving_since(t0), 10, what="blue 0 driven before the stop")
@@ -114,6 +115,13 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
         t_release = time.monotonic()
         r = _post(bare, "/api/estop", {"active": False, "confirm": True, "reason": "test"})
         assert r.status_code == 200 and r.json()["estop"] is False
+        # the press disarmed the station (and a restarted backend starts disarmed): a
+        # release alone drives nothing, arming again does
+        assert bare.get("/api/world")["armed"] is False
+        n = cam.frames
+        wait_until(lambda: cam.frames >= n + 30, 5, what="half a second of frames")
+        assert not sim.moving_since(t_quiet), [e for e in sim.log if e[0] >= t_quiet and e[2]]
+        arm(bare)
         wait_until(lambda: sim.moving_since(t_release), 10, what="driving after the release")
         wait_until(lambda: bare.get("/api/health")["estop"]["relay_latched"] is False, 5,
                    what="the relay released")

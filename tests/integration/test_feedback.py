@@ -9,7 +9,7 @@ from typing import Any
 
 import httpx
 
-from .conftest import StationHandle, launched, wait_until
+from .conftest import StationHandle, arm, launched, wait_until
 
 TOUCH_MM = 90.0 + 21.5 + 4.0  # robot radius + ball radius + a few mm: at the kicker face
 
@@ -27,6 +27,9 @@ def test_grsim_status_reports_ball_contact() -> None:
     """The same through grSim's legacy path: fieldsim's Robots_Status (infrared) on the
     status ports -> the relay in --output grsim -> the backend."""
     with launched("--output", "grsim") as st:
+        assert st.get("/api/world")["arming_required"] is True  # grSim: arming required
+        wait_until(lambda: _blue0(st), 20, what="blue 0 seen")
+        arm(st)
         _ball_contact_on_and_off(st, "grsim")
 
 

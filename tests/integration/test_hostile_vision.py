@@ -18,7 +18,7 @@ from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
-from .conftest import StationHandle, wait_until
+from .conftest import StationHandle, arm, wait_until
 
 
 @dataclass
@@ -104,6 +104,7 @@ def test_a_frame_from_the_future_neither_freezes_the_world_nor_drives_blind(
         # health is ok only with the relay's statistics (once a second): a loaded machine
         # may not have them yet
         wait_until(lambda: bare.get("/api/health")["relay"], 10, what="relay statistics")
+        arm(bare)  # an external simulator: the station starts disarmed
         r = httpx.post(bare.url + "/api/robots/blue/0/target", json={"x": 3000.0, "y": 0.0})
         assert r.status_code == 200, r.text
         wait_until(lambda: any(s > 0.1 for s in robots.latest(0)), 10,

@@ -16,7 +16,7 @@ import pytest
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
-from .conftest import StationHandle, launched, wait_until
+from .conftest import StationHandle, arm, launched, wait_until
 
 
 @pytest.fixture(scope="module")
@@ -79,6 +79,7 @@ def test_a_target_for_their_robot_never_drives_ours(station: StationHandle,
                            json={"strategy": {"play": "idle"}}).status_code == 200
         wait_until(lambda: station.get("/api/health")["relay"] is not None, 10,
                    what="relay stats")
+        arm(station)  # real robots: the station starts disarmed
 
         def robot3_still() -> bool:  # the play's last commands stale and zeroed by the relay
             got = [sx for rid, sx in _box_ids(box) if rid == 3]

@@ -81,3 +81,15 @@ def test_command_lines_of_the_station() -> None:
     assert "--tracker-out" not in relay
     assert relay[relay.index("--tracker-out-local") + 1] == f"224.5.23.2:{ports.tracker}"
     assert ports.tracker != 10010
+    # real robots: both the relay and the backend require arming
+    assert "--require-arming" in relay and "--require-arming" in backend
+
+
+def test_arming_is_required_for_anything_but_the_builtin_simulator() -> None:
+    ports = Ports.isolated(None)
+    for sim, output, required in (("builtin", "sim", False), ("builtin", "grsim", True),
+                                  ("none", "sim", True), ("none", "robot-box", True)):
+        kids = command_lines(StationConfig(sim=sim, output=output), ports)
+        relay, backend = (c.argv for c in kids[-2:])
+        assert ("--require-arming" in relay) is required, (sim, output)
+        assert ("--require-arming" in backend) is required, (sim, output)

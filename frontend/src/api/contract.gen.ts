@@ -25,6 +25,30 @@ export interface AccessHealth {
   blocked_clients: number;
 }
 
+export interface ArmIn {
+  /** true: arm (refused with 409 and the reason while vision is missing, the e-stop is active or a log is replayed); false: disarm (always) */
+  armed: boolean;
+}
+
+/**
+ * Arming: a relay driving real robots or an external simulator sends nothing but stops
+ * until an operator arms the station; the e-stop disarms it.
+ */
+export interface ArmingInfo {
+  /** the relay requires arming (false: the built-in simulator, always armed) */
+  required: boolean;
+  /** commands may reach the robots (always true when not required) */
+  armed: boolean;
+  /** Unix s of the last arm or disarm (0: never) */
+  since: number;
+  /** who armed or disarmed it */
+  by: string;
+  /** the relay's arming from its statistics; null before any arrived */
+  relay_armed: boolean | null;
+  /** why arming would be refused now (null: it would be accepted) */
+  refusal: string | null;
+}
+
 /** The filtered ball. */
 export interface Ball {
   x: number;
@@ -153,6 +177,7 @@ export interface Health {
   /** one line per problem */
   warnings: string[];
   estop: EstopInfo;
+  arming: ArmingInfo;
   world: WorldHealth | null;
   referee: RefereeHealth | null;
   uptime_s: number;
@@ -560,6 +585,10 @@ export interface RelayHealth {
   /** only zeros leave the relay while true */
   estop_latched: boolean;
   estop_by: string;
+  /** the relay sends commands (else only stops) */
+  armed: boolean;
+  /** the relay started with --require-arming */
+  arming_required: boolean;
   alive: boolean;
   age_s: number;
 }
@@ -806,6 +835,10 @@ export interface World {
   referee: Referee | null;
   estop: boolean;
   estop_info: EstopInfo;
+  /** commands may reach the robots (always true when arming is not required) */
+  armed: boolean;
+  arming_required: boolean;
+  arming: ArmingInfo;
   /** why every robot is held ("emergency stop", "HALT", "no vision ..."), or "" */
   halt_reason: string;
   strategy: StrategyState | null;

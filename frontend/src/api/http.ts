@@ -1,6 +1,8 @@
 // HTTP calls to the backend (docs/api.md, "HTTP"). Errors carry the server's message.
 
 import type {
+  ArmIn,
+  ArmingInfo,
   CardIn,
   EnableIn,
   EstopAnswer,
@@ -151,6 +153,12 @@ export function deleteTarget(team: Team, id: number): Promise<unknown> {
 export function postEstop(active: boolean, confirm = false): Promise<EstopAnswer> {
   const body: EstopIn = active ? { active } : { active, confirm };
   return request<EstopAnswer>("POST", "/api/estop", body);
+}
+
+/** Arm (refused with 409 and the reason: no vision, the e-stop, a replay) or disarm. */
+export function postArm(armed: boolean): Promise<ArmingInfo> {
+  const body: ArmIn = { armed };
+  return request<ArmingInfo>("POST", "/api/arm", body);
 }
 
 // ---- parameters and presets ----

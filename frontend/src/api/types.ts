@@ -2,6 +2,8 @@
 // regenerate with `make contract`), plus a few helpers of the page's own.
 
 export type {
+  ArmIn,
+  ArmingInfo,
   Ball,
   CardIn,
   EnableIn,

@@ -275,6 +275,23 @@ export function EstopHealth({ h }: { h: Health }) {
   );
 }
 
+/** Arming (real robots): armed or not, by whom, and what the relay says; nothing where it is
+ * not required (the built-in simulator). */
+export function ArmingHealth({ h }: { h: Health }) {
+  const a = h.arming;
+  if (!a || !a.required) return null;
+  const since = a.since > 0 ? new Date(a.since * 1000).toLocaleTimeString() : "";
+  const relay = a.relay_armed === null ? "relay arming unknown" : a.relay_armed ? "relay armed" : "relay disarmed";
+  return (
+    <p className={a.armed ? "notice" : "muted"} data-testid="health-arming" data-armed={a.armed ? "true" : "false"}>
+      {a.armed ? "ARMED: commands reach the robots" : "Disarmed: only stops reach the robots"}
+      {since ? ` since ${since}` : ""}
+      {a.by ? ` (${a.by})` : ""} · {relay}
+      {!a.armed && a.refusal ? ` · arming refused now: ${a.refusal}` : ""}
+    </p>
+  );
+}
+
 /** Who may do what on this station (docs/security.md) and the refusals so far. */
 export function AccessHealth({ h }: { h: Health }) {
   const a = h.access;
@@ -299,6 +316,7 @@ export function HealthPanel() {
     <div className="health-panel" data-testid="health-panel">
       <p className={h.ok ? "ok-line" : "notice"}>{h.ok ? "Station healthy" : "Station reports a problem"}</p>
       <EstopHealth h={h} />
+      <ArmingHealth h={h} />
       <AccessHealth h={h} />
       {(h.warnings ?? []).length > 0 && (
         <ul className="health-warnings" data-testid="health-warnings">

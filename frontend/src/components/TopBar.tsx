@@ -1,5 +1,5 @@
 import { useState } from "react";
-import { setEstop } from "../actions";
+import { setArmed, setEstop } from "../actions";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
 import { refereeSilentFor } from "../referee";
@@ -165,6 +165,64 @@ function EstopButton() {
   );
 }
 
+/** Where the relay drives real robots (or an external simulator) it sends nothing until an
+ * operator arms it: ARMED (red) or disarmed (grey), arming after a confirmation, disarming in
+ * one click. Nothing is shown where arming is not required (the built-in simulator). */
+function ArmControl() {
+  const required = useAppState((s) => s.world?.arming_required ?? false);
+  const armed = useAppState((s) => s.world?.armed ?? false);
+  const info = useAppState((s) => s.world?.arming ?? null);
+  const team = useAppState((s) => s.world?.strategy?.our_team ?? null);
+  const [confirming, setConfirming] = useState(false);
+  if (!required) return null;
+  const who = team ?? "our team";
+  const since = info && info.since > 0 ? new Date(info.since * 1000).toLocaleTimeString() : "";
+  const title = armed
+    ? `ARMED${since ? ` since ${since}` : ""}${info?.by ? ` (${info.by})` : ""}: commands reach the robots. Click to disarm.`
+    : `Disarmed: nothing but stops reaches the robots${info?.refusal ? ` (arming refused now: ${info.refusal})` : ""}. Click to arm.`;
+  return (
+    <>
+      <div className={`arm ${armed ? "arm-armed" : "arm-disarmed"}`} title={title}>
+        <span className="arm-state" data-testid="arm-state" data-armed={armed ? "true" : "false"} aria-live="assertive">
+          {armed ? "ARMED" : "disarmed"}
+        </span>
+        <button
+          type="button"
+          className={`btn btn-small ${armed ? "" : "btn-danger"}`}
+          data-testid="arm-button"
+          onClick={() => (armed ? void setArmed(false) : setConfirming(true))}
+        >
+          {armed ? "Disarm" : "Arm…"}
+        </button>
+      </div>
+      {confirming && !armed && (
+        <div className="overlay" role="dialog" aria-modal="true" aria-label="Arm the robots" data-testid="arm-dialog">
+          <div className="overlay-box">
+            <h2>Robots will move: arm {who}?</h2>
+            <p>Commands from the strategy and any operator targets reach the real robots at once. The emergency stop disarms.</p>
+            <div className="row">
+              <button type="button" className="btn" data-testid="arm-cancel" autoFocus onClick={() => setConfirming(false)}>
+                Stay disarmed
+              </button>
+              <button
+                type="button"
+                className="btn btn-danger"
+                data-testid="arm-confirm"
+                onClick={() => {
+                  setConfirming(false);
+                  void setArmed(true);
+                }}
+              >
+                Arm {who}
+              </button>
+            </div>
+          </div>
+        </div>
+      )}
+    </>
+  );
+}
+
 export function TopBar({ onRetryNow }: Props) {
   return (
     <header className="topbar">
@@ -181,6 +239,7 @@ export function TopBar({ onRetryNow }: Props) {
       <RecordIndicator />
       <LogsControl />
       <ViewOptions />
+      <ArmControl />
       <EstopButton />
     </header>
   );

@@ -3,11 +3,12 @@ import { act } from "react";
 import { describe, expect, it, vi } from "vitest";
 import { robot } from "../field/testRobots";
 import { appStore, initialAppState } from "../store/appStore";
-import { health, world } from "../ws/fixtures";
+import { arming, health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { AccessHealth, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
+import { AccessHealth, ArmingHealth, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
+import { toastTexts } from "../store/toasts";
 
 import { domPerTest } from "../testing/dom";
 
@@ -210,5 +211,87 @@ describe("EstopHealth", () => {
     act(() => t.root.render(<EstopHealth h={{ ...h, estop: { active: false, since: 0, by: "", relay_latched: null } }} />));
     expect(q("health-estop")?.getAttribute("data-active")).toBe("false");
     expect(q("health-estop")?.textContent).toBe("Emergency stop released · relay latch unknown");
+  });
+});
+
+describe("Arming", () => {
+  const disarmed = () => world(1, { armed: false, arming_required: true, arming: arming({ required: true, armed: false, refusal: "vision is missing" }) });
+  const armed = () => world(1, { armed: true, arming_required: true, arming: arming({ required: true, armed: true, by: "operator at 127.0.0.1" }) });
+
+  it("shows nothing where arming is not required (the built-in simulator)", () => {
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ world: world(1) }));
+    expect(q("arm-state")).toBeNull();
+    expect(q("arm-button")).toBeNull();
+  });
+
+  it("shows disarmed in grey and ARMED in red", () => {
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ world: disarmed() }));
+    expect(q("arm-state")?.textContent).toBe("disarmed");
+    expect(q("arm-state")?.parentElement?.className).toContain("arm-disarmed");
+    expect(q("arm-button")?.textContent).toBe("Arm…");
+    act(() => appStore.setState({ world: armed() }));
+    expect(q("arm-state")?.textContent).toBe("ARMED");
+    expect(q("arm-state")?.getAttribute("data-armed")).toBe("true");
+    expect(q("arm-state")?.parentElement?.className).toContain("arm-armed");
+    expect(q("arm-button")?.textContent).toBe("Disarm");
+  });
+
+  it("asks before arming, names our team, and sends the arming after the confirmation", async () => {
+    const fetchMock = vi.fn(async () => new Response(JSON.stringify(arming({ required: true, armed: true }))));
+    vi.stubGlobal("fetch", fetchMock);
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    const w = disarmed();
+    w.strategy = { play: "idle", situation: "", situation_text: "", our_team: "blue", our_side: "negative-x", side_from_referee: false, tick_ms: 0 };
+    act(() => appStore.setState({ world: w }));
+    act(() => (q("arm-button") as HTMLButtonElement).click());
+    expect(q("arm-dialog")?.textContent).toContain("Robots will move: arm blue?");
+    expect(fetchMock).not.toHaveBeenCalled();
+    act(() => (q("arm-cancel") as HTMLButtonElement).click());
+    expect(q("arm-dialog")).toBeNull();
+    expect(fetchMock).not.toHaveBeenCalled();
+    act(() => (q("arm-button") as HTMLButtonElement).click());
+    await act(async () => (q("arm-confirm") as HTMLButtonElement).click());
+    expect(fetchMock).toHaveBeenCalledTimes(1);
+    const [url, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
+    expect(url).toContain("/api/arm");
+    expect(JSON.parse(String(init.body))).toEqual({ armed: true });
+    expect(q("arm-state")?.textContent).toBe("ARMED"); // the answer, before the next world
+  });
+
+  it("disarms in one click", async () => {
+    const fetchMock = vi.fn(async () => new Response(JSON.stringify(arming({ required: true, armed: false }))));
+    vi.stubGlobal("fetch", fetchMock);
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ world: armed() }));
+    await act(async () => (q("arm-button") as HTMLButtonElement).click());
+    expect(q("arm-dialog")).toBeNull();
+    const [, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
+    expect(JSON.parse(String(init.body))).toEqual({ armed: false });
+    expect(q("arm-state")?.textContent).toBe("disarmed");
+  });
+
+  it("shows the server's refusal as a toast and stays disarmed", async () => {
+    const fetchMock = vi.fn(async () => new Response(JSON.stringify({ detail: "the emergency stop is active: release it first" }), { status: 409 }));
+    vi.stubGlobal("fetch", fetchMock);
+    act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
+    act(() => appStore.setState({ world: disarmed() }));
+    act(() => (q("arm-button") as HTMLButtonElement).click());
+    await act(async () => (q("arm-confirm") as HTMLButtonElement).click());
+    const toasts = toastTexts().join("\n");
+    expect(toasts).toContain("the emergency stop is active: release it first");
+    expect(q("arm-state")?.textContent).toBe("disarmed");
+  });
+
+  it("health says armed or not and what the relay says", () => {
+    const h = health();
+    act(() => t.root.render(<ArmingHealth h={h} />));
+    expect(q("health-arming")).toBeNull();
+    act(() => t.root.render(<ArmingHealth h={{ ...h, arming: arming({ required: true, armed: false, relay_armed: false, refusal: "vision is missing" }) }} />));
+    expect(q("health-arming")?.textContent).toBe("Disarmed: only stops reach the robots · relay disarmed · arming refused now: vision is missing");
+    act(() => t.root.render(<ArmingHealth h={{ ...h, arming: arming({ required: true, armed: true, relay_armed: true, by: "op" }) }} />));
+    expect(q("health-arming")?.getAttribute("data-armed")).toBe("true");
+    expect(q("health-arming")?.textContent).toContain("relay armed");
   });
 });

@@ -1,5 +1,6 @@
 // Test fixtures (only imported by tests).
 import type {
+  ArmingInfo,
   EngineHealth,
   Geometry,
   Health,
@@ -29,6 +30,9 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     referee: null,
     estop: false,
     estop_info: { active: false, since: 0, by: "", relay_latched: false },
+    armed: true,
+    arming_required: false,
+    arming: arming(),
     halt_reason: "",
     strategy: null,
     internal_referee: internalReferee(),
@@ -37,6 +41,17 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     ...extra,
   };
 }
+
+/** Arming: not required (the built-in simulator), so armed. */
+export const arming = (extra: Partial<ArmingInfo> = {}): ArmingInfo => ({
+  required: false,
+  armed: true,
+  since: 0,
+  by: "",
+  relay_armed: null,
+  refusal: null,
+  ...extra,
+});
 
 /** The internal referee, off (as a station starts). */
 export const internalReferee = (extra: Partial<InternalReferee> = {}): InternalReferee => ({
@@ -58,6 +73,7 @@ export function health(rate = 60): Health {
     ok: true,
     warnings: [],
     estop: { active: false, since: 0, by: "", relay_latched: false },
+    arming: arming(),
     world: null,
     referee: null,
     uptime_s: 10,

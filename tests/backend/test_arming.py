@@ -1,0 +1,181 @@
+"""Arming (a relay driving real robots): the station starts disarmed; POST /api/arm is refused
+with 409 and the reason without vision, with the e-stop active or in replay; disarming always
+works; the e-stop disarms; the publisher repeats the state to the relay."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import zmq
+import zmq.asyncio
+from fastapi.testclient import TestClient
+
+from backend import topics
+from backend.api import create_app
+from backend.bus import DataBus
+from backend.config import Settings
+from backend.processors import CommandPublisher
+from backend.station import Station
+from backend.world.state import BallState, RobotState, WorldState
+from launcher.supervisor import free_tcp_port
+from sslpb import touchline_pb2 as tl
+
+
+def _settings(tmp_path: Path, **kw: Any) -> Settings:
+    return Settings(relay_pub=f"tcp://127.0.0.1:{free_tcp_port()}",
+                    relay_sub=f"tcp://127.0.0.1:{free_tcp_port()}", static_dir=tmp_path,
+                    state_dir=tmp_path / "state", allowed_hosts=["testserver"], **kw)
+
+
+@pytest.fixture
+def armable(tmp_path: Path) -> Iterator[tuple[TestClient, Station]]:
+    st = Station(_settings(tmp_path, require_arming=True))
+    with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
+        yield c, st
+
+
+def _fresh_world() -> WorldState:
+    robots = (RobotState("blue", 3, 0.0, 0.0, 0.0, t_seen=10.0),)
+    return WorldState(10.0, time.time_ns(), BallState(1.0, 2.0, t_seen=10.0), robots)
+
+
+def _vision(st: Station) -> None:
+    st.call_sync(st.world_topic.write, _fresh_world())
+
+
+def test_the_station_starts_disarmed_and_says_so(armable: tuple[TestClient, Station]) -> None:
+    c, _ = armable
+    w = c.get("/api/world").json()
+    assert w["armed"] is False and w["arming_required"] is True
+    assert w["arming"]["required"] and not w["arming"]["armed"]
+    assert "vision" in w["arming"]["refusal"]
+    h = c.get("/api/health").json()
+    assert h["arming"]["armed"] is False and h["arming"]["required"] is True
+    assert c.get("/api/arm").json()["armed"] is False
+
+
+def test_arming_is_refused_without_vision(armable: tuple[TestClient, Station]) -> None:
+    c, st = armable
+    r = c.post("/api/arm", json={"armed": True})
+    assert r.status_code == 409
+    assert "vision is missing" in r.json()["detail"]
+    assert not st.armed
+
+
+def test_arming_with_vision_then_disarming(armable: tuple[TestClient, Station]) -> None:
+    c, st = armable
+    _vision(st)
+    r = c.post("/api/arm", json={"armed": True})
+    assert r.status_code == 200, r.text
+    assert r.json()["armed"] is True and "operator" in r.json()["by"]
+    assert c.get("/api/world").json()["armed"] is True
+    r = c.post("/api/arm", json={"armed": False})
+    assert r.status_code == 200 and r.json()["armed"] is False
+    assert not st.armed
+
+
+def test_arming_is_refused_while_the_estop_is_active_and_a_press_disarms(
+        armable: tuple[TestClient, Station]) -> None:
+    c, st = armable
+    _vision(st)
+    assert c.post("/api/arm", json={"armed": True}).status_code == 200
+    assert c.post("/api/estop", json={"active": True}).status_code == 200
+    assert not st.armed
+    w = c.get("/api/world").json()
+    assert w["armed"] is False and w["arming"]["by"].startswith("e-stop")
+    _vision(st)
+    r = c.post("/api/arm", json={"armed": True})
+    assert r.status_code == 409 and "emergency stop" in r.json()["detail"]
+    # disarming always works
+    assert c.post("/api/arm", json={"armed": False}).status_code == 200
+    assert c.post("/api/estop", json={"active": False, "confirm": True}).status_code == 200
+    assert not st.armed  # a release does not re-arm
+    _vision(st)
+    assert c.post("/api/arm", json={"armed": True}).status_code == 200
+
+
+def test_arming_is_refused_in_replay(tmp_path: Path) -> None:
+    st = Station(_settings(tmp_path, require_arming=True))
+    st.world_topic.write(_fresh_world())
+    assert st.arm_refusal() is None
+    st.player.log = object()  # type: ignore[assignment]
+    why = st.set_armed(True, "t")
+    assert why is not None and "replaying a log" in why
+    assert not st.armed
+    st.player.log = None
+    assert st.set_armed(True, "t") is None and st.armed
+
+
+def test_bad_bodies_are_refused(armable: tuple[TestClient, Station]) -> None:
+    c, _ = armable
+    assert c.post("/api/arm", json={}).status_code == 422
+    assert c.post("/api/arm", json={"armed": True, "extra": 1}).status_code == 422
+
+
+def test_without_arming_required_the_station_is_armed(tmp_path: Path) -> None:
+    st = Station(_settings(tmp_path))
+    with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
+        w = c.get("/api/world").json()
+        assert w["armed"] is True and w["arming_required"] is False
+        assert w["arming"]["refusal"] is None
+
+
+def test_the_relay_saying_it_requires_arming_is_enough(tmp_path: Path) -> None:
+    st = Station(_settings(tmp_path))
+    assert st.armed
+    st.relay_stats.write({"received_mono": time.monotonic(), "arming_required": True,
+                          "armed": False})
+    assert st.arming_required and not st.armed
+
+
+def test_operator_actions_are_recorded(armable: tuple[TestClient, Station]) -> None:
+    c, st = armable
+    actions: list[tuple[str, str]] = []
+    st.operator_action = lambda a, by="", d=None: actions.append((a, by))  # type: ignore[method-assign]
+    _vision(st)
+    c.post("/api/arm", json={"armed": True})
+    c.post("/api/arm", json={"armed": False})
+    assert [a for a, _ in actions] == ["arm", "disarm"]
+
+
+async def test_the_publisher_repeats_the_arming_state() -> None:
+    bus = DataBus({})
+    ctx = zmq.asyncio.Context()
+    try:
+        sub = ctx.socket(zmq.SUB)
+        sub.setsockopt(zmq.SUBSCRIBE, b"arming")
+        port = sub.bind_to_random_port("tcp://127.0.0.1")
+        pub = ctx.socket(zmq.PUB)
+        pub.connect(f"tcp://127.0.0.1:{port}")
+        p = CommandPublisher(bus, pub)
+        p.attach(pub)
+        armed = [False]
+        p.armed = lambda: armed[0]
+        p.armed_by = lambda: "op"
+        await asyncio.sleep(0.2)  # slow joiner
+        got: list[tl.Arming] = []
+
+        async def collect(seconds: float) -> None:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                await p.tick()
+                while await sub.poll(0):
+                    _, body = await sub.recv_multipart()
+                    got.append(tl.Arming.FromString(body))
+                await asyncio.sleep(0.02)
+        await collect(1.2)
+        assert 2 <= len(got) <= 4 and not any(m.armed for m in got)  # every 0.5 s
+        got.clear()
+        armed[0] = True
+        await collect(0.1)
+        assert got and got[0].armed and got[0].by == "op"  # at once on a change
+        pub.close(0)
+        sub.close(0)
+    finally:
+        ctx.destroy(0)
+    assert bus.of(topics.ESTOP).latest_value() is None

@@ -1,0 +1,100 @@
+"""Arming through the real processes: the station in robot-box mode (real robots) with a test
+socket as the robot box and a test camera. Disarmed, the box receives nothing at all, even
+with a target set and vision arriving; armed, the robot is driven; after an e-stop only stops
+(or nothing) arrive and the station and the relay say disarmed."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from collections.abc import Iterator
+
+import httpx
+import pytest
+
+from .conftest import StationHandle, arm, launched, wait_until
+from .test_robot_box_team import _box_ids, _camera
+
+
+@pytest.fixture(scope="module")
+def box() -> Iterator[socket.socket]:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    s.setblocking(False)
+    yield s
+    s.close()
+
+
+@pytest.fixture(scope="module")
+def station(box: socket.socket) -> Iterator[StationHandle]:
+    port = box.getsockname()[1]
+    with launched("--sim", "none", "--output", "robot-box",
+                  f"--relay-arg=--robot-box=127.0.0.1:{port}") as st:
+        yield st
+
+
+def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: ignore[type-arg]
+    return httpx.post(st.url + path, json=body, headers={"X-Touchline": "1"}, timeout=5)
+
+
+def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
+        station: StationHandle, box: socket.socket) -> None:
+    stop = threading.Event()
+    cam = threading.Thread(target=_camera, args=(station, stop), daemon=True)
+    cam.start()
+    try:
+        wait_until(lambda: len(station.get("/api/world")["robots"]) == 2, 20,
+                   what="blue 3 and yellow 3 seen")
+        w = station.get("/api/world")
+        assert w["arming_required"] is True and w["armed"] is False
+        wait_until(lambda: (station.get("/api/health")["relay"] or {}).get("arming_required"),
+                   10, what="relay stats")
+        h = station.get("/api/health")
+        assert h["relay"]["armed"] is False and h["arming"]["armed"] is False
+        # a target and a play that drives, vision arriving: still nothing leaves the relay
+        assert httpx.patch(station.url + "/api/params", headers={"X-Touchline": "1"},
+                           json={"strategy": {"play": "idle"}}).status_code == 200
+        assert _post(station, "/api/robots/blue/3/target",
+                     {"x": 3000, "y": 0}).status_code == 200
+        time.sleep(1.0)
+        assert _box_ids(box) == []
+        wait_until(lambda: (station.get("/api/health")["streams"].get("relay.commands", {})
+                            .get("errors_by_reason", {}).get("disarmed", 0)) > 0, 5,
+                   what="the dropped command sets counted")
+
+        # armed: robot 3 is driven
+        state = arm(station)
+        assert state["armed"] is True and state["required"] is True
+        wait_until(lambda: any(rid == 3 and sx != 0 for rid, sx in _box_ids(box)), 10,
+                   what="our robot 3 driven once armed")
+        wait_until(lambda: station.get("/api/health")["relay"]["armed"], 5,
+                   what="the relay armed")
+
+        # the e-stop: disarmed, only stops (or nothing) from 0.2 s after the press
+        assert _post(station, "/api/estop", {"active": True}).status_code == 200
+        time.sleep(0.2)
+        _box_ids(box)
+        time.sleep(1.0)
+        got = _box_ids(box)
+        assert all(sx == 0 for _, sx in got), got
+        w = station.get("/api/world")
+        assert w["armed"] is False and w["estop"] is True
+        wait_until(lambda: station.get("/api/health")["relay"]["armed"] is False, 5,
+                   what="the relay disarmed")
+        r = _post(station, "/api/arm", {"armed": True})
+        assert r.status_code == 409 and "emergency stop" in r.json()["detail"]
+
+        # released: still disarmed, nothing drives until armed again
+        assert _post(station, "/api/estop", {"active": False, "confirm": True}).status_code \
+            == 200
+        time.sleep(1.5)  # the zeros' hold time is 1 s: then the relay sends nothing
+        _box_ids(box)
+        time.sleep(0.5)
+        assert _box_ids(box) == []
+        assert station.get("/api/world")["armed"] is False
+    finally:
+        httpx.delete(station.url + "/api/robots/blue/3/target", headers={"X-Touchline": "1"})
+        _post(station, "/api/arm", {"armed": False})
+        stop.set()
+        cam.join(5)

@@ -1,0 +1,138 @@
+"""--require-arming: a relay driving real robots (or an external simulator) starts disarmed and
+sends nothing but stops until the backend arms it; an e-stop press disarms it."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import zmq
+
+from larcmacs_relay.__main__ import build_parser, config_from_args
+from sslpb import touchline_pb2
+from tests.relay.conftest import Harness, drain_udp, recv_udp, running_relay, wait_for
+from tests.relay.test_relay_io import command_set
+
+BLUE = touchline_pb2.TEAM_BLUE
+GO = command_set(touchline_pb2.RobotCommand(team=BLUE, id=3, forward_mps=1.0))
+
+
+def arming(armed: bool, by: str = "t") -> list[bytes]:
+    return [b"arming", touchline_pb2.Arming(armed=armed, time_ns=time.time_ns(),
+                                             by=by).SerializeToString()]
+
+
+async def connect(h: Harness) -> zmq.asyncio.Socket:
+    """A PUB to the relay's SUB; returns once a (dropped) command set has reached it."""
+    pub = h.publisher()
+    counter = h.relay.streams["commands"]
+    deadline = time.monotonic() + 3.0
+    while counter.packets + counter.errors == 0:
+        assert time.monotonic() < deadline, "relay SUB never received the probe"
+        await pub.send_multipart(command_set())
+        await asyncio.sleep(0.02)
+    return pub
+
+
+async def nothing_for(h: Harness, seconds: float) -> list[bytes]:
+    await asyncio.sleep(seconds)
+    out = []
+    while True:
+        try:
+            out.append(h.out_box.recv(64))
+        except BlockingIOError:
+            return out
+
+
+def test_the_flag_sets_require_arming() -> None:
+    args = build_parser().parse_args(["--require-arming", "--output", "robot-box"])
+    assert config_from_args(args).require_arming
+    assert not config_from_args(build_parser().parse_args([])).require_arming
+
+
+async def test_disarmed_nothing_is_sent_and_the_sets_are_counted() -> None:
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        assert not h.relay.armed
+        st = h.relay.stats()
+        assert st.arming_required and not st.armed
+        pub = await connect(h)
+        for _ in range(10):
+            await pub.send_multipart(GO)
+            await asyncio.sleep(0.01)
+        await wait_for(lambda: h.relay.streams["commands"].by_reason.get("disarmed", 0) >= 10,
+                       what="dropped sets counted")
+        assert await nothing_for(h, 0.2) == []
+        assert h.relay.table.known == 0
+
+
+async def test_armed_commands_are_sent_and_a_disarm_leaves_only_zeros() -> None:
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        pub = await connect(h)
+        await pub.send_multipart(arming(True, "op"))
+        await wait_for(lambda: h.relay.armed, what="armed")
+        assert h.relay.stats().armed
+        await pub.send_multipart(GO)
+        data, _ = await recv_udp(h.out_box)
+        assert data[1] == 3 and data[3] != 0
+        await pub.send_multipart(arming(False))
+        await wait_for(lambda: not h.relay.armed, what="disarmed")
+        drain_udp(h.out_box)
+        for _ in range(5):
+            await pub.send_multipart(GO)
+            await asyncio.sleep(0.02)
+        got = await nothing_for(h, 0.1)
+        assert got and all(d[3] == 0 and d[2] == 0 for d in got)  # stops only
+        assert h.relay.streams["commands"].by_reason.get("disarmed", 0) >= 5
+        # the zeros last the hold time, then nothing, whatever command sets keep arriving
+        for _ in range(int(h.config.hold_time_s / 0.05) + 4):
+            await pub.send_multipart(GO)
+            await pub.send_multipart(arming(False))  # the backend repeats it
+            await asyncio.sleep(0.05)
+        drain_udp(h.out_box)
+        await pub.send_multipart(GO)
+        assert await nothing_for(h, 0.15) == []
+
+
+async def test_the_estop_disarms_and_arming_is_refused_while_latched() -> None:
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        pub = await connect(h)
+        await pub.send_multipart(arming(True))
+        await wait_for(lambda: h.relay.armed, what="armed")
+        press = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.PRESS, by="t")
+        await pub.send_multipart([b"estop", press.SerializeToString()])
+        await wait_for(lambda: h.relay.estop_latched, what="latched")
+        assert not h.relay.armed
+        await pub.send_multipart(arming(True))
+        await wait_for(lambda: h.relay.streams["commands"].by_reason.get("arming refused", 0)
+                       == 1, what="refused")
+        assert not h.relay.armed
+        release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
+        await pub.send_multipart([b"estop", release.SerializeToString()])
+        await wait_for(lambda: not h.relay.estop_latched, what="released")
+        assert not h.relay.armed  # a release does not re-arm
+        await pub.send_multipart(GO)
+        assert await nothing_for(h, 0.15) == []
+
+
+async def test_a_restarted_relay_starts_disarmed() -> None:
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        pub = await connect(h)
+        await pub.send_multipart(arming(True))
+        await wait_for(lambda: h.relay.armed, what="armed")
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        assert not h.relay.armed and not h.relay.stats().armed
+        pub = await connect(h)
+        await pub.send_multipart(GO)
+        assert await nothing_for(h, 0.15) == []
+
+
+async def test_without_the_flag_it_is_always_armed() -> None:
+    async with running_relay(output="robot-box") as h:
+        st = h.relay.stats()
+        assert st.armed and not st.arming_required
+        pub = await connect(h)
+        await pub.send_multipart(arming(False))  # ignored: nothing to arm
+        await pub.send_multipart(GO)
+        data, _ = await recv_udp(h.out_box)
+        assert data[1] == 3 and data[3] != 0
+        assert h.relay.armed
