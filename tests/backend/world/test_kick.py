@@ -30,7 +30,8 @@ def feed(det: KickDetector, track: list[tuple[float, float, float]],
 def noisy(ts: list[float], pos: list[tuple[float, float]], sigma: float = 2.0,
           seed: int = 3) -> list[tuple[float, float, float]]:
     rng = random.Random(seed)
-    return [(t, x + rng.gauss(0, sigma), y + rng.gauss(0, sigma)) for t, (x, y) in zip(ts, pos)]
+    return [(t, x + rng.gauss(0, sigma), y + rng.gauss(0, sigma))
+            for t, (x, y) in zip(ts, pos, strict=True)]
 
 
 KICKER = RobotState("blue", 4, x=-111.5, y=0.0, orientation=0.0)
@@ -103,7 +104,7 @@ def test_a_bounce_off_a_wall_ends_the_kick() -> None:
                                                   -111.5 * math.sin(0.3), 0.3),))
     assert det.kicks == 1
     t_bounce = next(ts[i] for i in range(1, len(ts)) if pos[i][0] < pos[i - 1][0])
-    active = [t for t, k in zip(ts, kicks) if k is not None]
+    active = [t for t, k in zip(ts, kicks, strict=True) if k is not None]
     assert active and active[0] < t_kick + 0.05
     assert t_bounce - 0.05 < active[-1] < t_bounce + 0.06
     assert det.ended in ("ran back", "turned")
@@ -116,7 +117,7 @@ def test_a_lost_ball_ends_the_kick() -> None:
     det = KickDetector()
     kicks = feed(det, track, (KICKER,))
     assert kicks[-1] is not None
-    t, x, y = track[-1]
+    _, x, y = track[-1]
     assert det.update([], BallState(x, y, visible=False, lost=True), (KICKER,)) is None
     assert det.ended == "lost"
 
