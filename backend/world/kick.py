@@ -31,7 +31,9 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from .state import BallState, RobotState, Team
+from .state import BallState, KickedBall, RobotState, Team
+
+__all__ = ["KickConfig", "KickDetector", "KickedBall", "fit_rolling", "stop_of"]
 
 
 @dataclass
@@ -51,26 +53,6 @@ class KickConfig:
     turn_window_s: float = 0.1  # speed and direction while following: over this long
     start_fit_s: float = 0.1  # initial velocity fitted on this long after the start
     fit_window_s: float = 0.15  # stop prediction fitted on this long of the newest measurements
-
-
-@dataclass(frozen=True, slots=True)
-class KickedBall:
-    """A kick in progress (mm, mm/s, Unix s). ``vx``, ``vy``: the initial velocity;
-    ``stop_*``: where and when the ball is predicted to stop."""
-
-    robot: tuple[Team, int] | None
-    start_x: float
-    start_y: float
-    start_t: float
-    vx: float
-    vy: float
-    stop_x: float
-    stop_y: float
-    stop_t: float
-
-    @property
-    def speed(self) -> float:
-        return math.hypot(self.vx, self.vy)
 
 
 Sample = tuple[float, float, float]  # t, x, y
