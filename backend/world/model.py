@@ -124,6 +124,7 @@ class WorldModel:
         self._recv_latest = 0
         self.clocks = CameraClocks(self.config.clock)
         self.kicks = KickDetector(self.config.kicks)
+        self.kicks_enabled = True
         self._kick_fed_t = -math.inf  # the newest ball measurement the kick detector has
         #: frames and objects dropped, by reason ("time out of range", "bad camera id",
         #: "object out of field", "too many objects")
@@ -454,6 +455,10 @@ class WorldModel:
             new = [(m.t, m.x, m.y) for m in self._ball.history if m.t > self._kick_fed_t]
             if new:
                 self._kick_fed_t = new[-1][0]
-        kick = self.kicks.update(new, ball, robots)
+        if self.kicks_enabled:
+            kick = self.kicks.update(new, ball, robots)
+        else:
+            self.kicks.reset()
+            kick = None
         return WorldState(self._t_latest, self._recv_latest, ball, tuple(robots), cams,
                           kicked_ball=kick)

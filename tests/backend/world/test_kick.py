@@ -145,3 +145,22 @@ def test_a_second_kick_starts_a_new_one() -> None:
     assert det.kicks == 2
     assert kicks[-1] is not None and kicks[-1].robot == ("yellow", 9)
     assert abs(kicks[-1].speed - 5000.0) < 300.0
+
+
+def test_the_world_processor_passes_the_kick_parameters() -> None:
+    from backend.bus import DataBus
+    from backend.params.model import StationParams
+    from backend.processors.world import WorldProcessor
+
+    proc = WorldProcessor(DataBus())
+    p = StationParams()
+    p.kicks.decel_mps2 = 0.5
+    p.kicks.max_turn_deg = 45.0
+    proc.configure(p)
+    assert proc.model.kicks.config.decel_mps2 == 0.5
+    assert proc.model.kicks.config.max_turn_deg == 45.0
+    p.kicks.enabled = False
+    proc.configure(p)
+    assert not proc.model.kicks_enabled
+    proc.reset()  # a fresh model keeps the parameters
+    assert proc.model.kicks.config.decel_mps2 == 0.5 and not proc.model.kicks_enabled
