@@ -164,3 +164,20 @@ def test_the_world_processor_passes_the_kick_parameters() -> None:
     assert not proc.model.kicks_enabled
     proc.reset()  # a fresh model keeps the parameters
     assert proc.model.kicks.config.decel_mps2 == 0.5 and not proc.model.kicks_enabled
+
+
+def test_the_world_message_kick_matches_the_contract() -> None:
+    from pydantic import TypeAdapter
+
+    from backend import contract
+    from backend.views import kick_view
+
+    k = KickedBall(("blue", 4), 10.0, -20.0, 100.0, 3000.0, 4000.0, 1e4, 2e4, 112.5)
+    v = kick_view(k, 101.0)
+    assert v is not None
+    TypeAdapter(contract.BallKick).validate_python(v, strict=True)
+    assert v["robot"] == {"team": "blue", "id": 4}
+    assert v["speed_mps"] == 5.0 and v["stop_in_s"] == 11.5
+    assert kick_view(None, 0.0) is None
+    anon = kick_view(KickedBall(None, 0, 0, 0, 0, 0, 0, 0, 0), 0.0)
+    assert anon is not None and anon["robot"] is None
