@@ -173,15 +173,20 @@ class KickDetector:
         cfg = self.config
         t = s[0]
         self._pts.append(s)
-        while self._pts and t - self._pts[0][0] > 1.0:
+        keep = cfg.jump_window_s + cfg.speed_window_s + 0.2
+        while t - self._pts[0][0] > keep:
             self._pts.popleft()
-        win = [p for p in self._pts if t - p[0] <= cfg.speed_window_s]
+        win: list[Sample] = []
+        for p in reversed(self._pts):
+            if t - p[0] > cfg.speed_window_s:
+                break
+            win.append(p)
         v = _slope(win) if len(win) >= 2 else None
         if v is None:
             return
         speed = math.hypot(*v)
         self._speeds.append((t, speed, v[0], v[1]))
-        while self._speeds and t - self._speeds[0][0] > 1.0:
+        while t - self._speeds[0][0] > cfg.jump_window_s + 0.05:
             self._speeds.popleft()
         k = self._kick
         if k is not None:
@@ -195,6 +200,10 @@ class KickDetector:
             self._fit_start(k)
             if t - k.start[0] >= cfg.start_fit_s:
                 k.frozen = True
+        else:  # only the newest measurements are fitted from now on
+            keep = max(cfg.fit_window_s, cfg.turn_window_s)
+            while k.samples and t - k.samples[0][0] > keep:
+                k.samples.pop(0)
         v = _slope([p for p in k.samples if t - p[0] <= cfg.turn_window_s])
         if v is not None:
             speed = math.hypot(*v)
