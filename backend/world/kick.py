@@ -7,12 +7,14 @@ update, no clock, no I/O.
   ``speed_window_s``.
 * Start: the speed rose by more than ``jump_mps`` compared with its lowest value in the last
   ``jump_window_s``, and at least ``min_samples`` measurements left the ball's previous line
-  (noise allowance ``off_line_mm``). The kick's line is fitted through those measurements with
-  the rolling-friction model; the start time is where it meets the previous line (clamped
-  between the last measurement on it and the first off it), the start position the previous
-  line at that time. The kicker is the nearest robot whose front (``front_half_angle_deg``
-  either side of its heading) holds the start position within ``robot_radius_mm +
-  reach_mm``; no robot there: no kick.
+  (fitted on 0.1 s; noise allowance ``off_line_mm``, or four times the measurements' scatter
+  around that line if larger; the newest twice that far), and the line fitted through them
+  (with the rolling-friction model) is faster by ``jump_mps``. The start time is where the
+  kick's line meets the previous one (clamped between the last measurement on it, less the
+  allowance's worth of travel, and the first off it), the start position the previous line
+  at that time. The kicker is the nearest robot whose front (``front_half_angle_deg`` either
+  side of its heading) holds the start position within ``robot_radius_mm + reach_mm``; no
+  robot there: no kick.
 * Prediction: constant deceleration ``decel_mps2`` (fieldsim's rolling friction by default):
   a ball at p with speed v along v_hat stops at p + v_hat v^2 / (2a), after v / a. The kick's
   initial velocity is fitted on its first ``start_fit_s`` (then frozen), the stop point on its
@@ -72,6 +74,23 @@ def _slope(pts: Sequence[Sample]) -> tuple[float, float] | None:
             sum((p[0] - tm) * (p[2] - ym) for p in pts) / stt)
 
 
+def _line(pts: Sequence[Sample]) -> tuple[Sample, tuple[float, float], float] | None:
+    """Least-squares line through the points: ((t_last, x, y) on it, velocity, rms residual)."""
+    v = _slope(pts)
+    if v is None:
+        return None
+    n = len(pts)
+    tm = sum(p[0] for p in pts) / n
+    xm = sum(p[1] for p in pts) / n
+    ym = sum(p[2] for p in pts) / n
+    ss = sum((p[1] - xm - v[0] * (p[0] - tm)) ** 2 + (p[2] - ym - v[1] * (p[0] - tm)) ** 2
+             for p in pts)
+    # residual per point, both axes; n - 2 degrees of freedom per axis
+    rms = math.sqrt(ss / max(1, 2 * (n - 2))) if n > 2 else 0.0
+    t = pts[-1][0]
+    return (t, xm + v[0] * (t - tm), ym + v[1] * (t - tm)), v, rms
+
+
 def fit_rolling(pts: Sequence[Sample], decel: float,
                 u: tuple[float, float] | None = None) -> tuple[Sample, tuple[float, float]] | None:
     """Fit p(tau) = p0 + w tau - u decel tau^2 / 2 (tau from the first point's time; u the unit
@@ -126,6 +145,8 @@ class _Kick:
     v0: tuple[float, float] = (0.0, 0.0)
     frozen: bool = False
     stop: Sample = (0.0, 0.0, 0.0)  # t, x, y
+    allow: float = 0.0  # mm, the noise allowance the start was found with
+    speed0: float = 0.0  # mm/s, the fitted initial speed
 
 
 class KickDetector:
@@ -253,11 +274,11 @@ class KickDetector:
         # pb + vb (t - t_before) = pf + wn (t - tf)   (deceleration ignored over a few ms)
         den = wn - vb
         t0 = k.t_first if den <= 1e-6 else (pb - vb * k.t_before - pf + wn * tf) / den
-        t0 = min(max(t0, k.t_before), k.t_first)
+        t0 = min(max(t0, k.t_before - k.allow / wn), k.t_first)
         sx = k.p_before[0] + k.v_before[0] * (t0 - k.t_before)
         sy = k.p_before[1] + k.v_before[1] * (t0 - k.t_before)
         v0 = wn + a * (tf - t0)
-        k.u, k.start, k.v0 = u, (t0, sx, sy), (u[0] * v0, u[1] * v0)
+        k.u, k.start, k.v0, k.speed0 = u, (t0, sx, sy), (u[0] * v0, u[1] * v0), v0
         return True
 
     def _detect(self, t: float, speed: float, robots: Sequence[RobotState]) -> None:
@@ -268,27 +289,42 @@ class KickDetector:
         low = min(ref, key=lambda e: e[1])
         if speed - low[1] <= cfg.jump_mps * 1000.0:
             return
-        # the previous line: through the measurements up to the low speed's time
-        t_ref, vbx, vby = low[0], low[2], low[3]
-        before = [p for p in self._pts if p[0] <= t_ref]
+        # the previous line: fitted through the measurements of the 0.1 s up to the low
+        # speed's time; their scatter around it widens the noise allowance
+        t_ref = low[0]
+        before = [p for p in self._pts if t_ref - 0.1 <= p[0] <= t_ref]
         if not before:
             return
-        pr = before[-1]
-        after = [p for p in self._pts if p[0] > t_ref]
-        t_b, p_b = pr[0], (pr[1], pr[2])
+        fit = _line(before)
+        if fit is None:
+            t_b, p_b, vbx, vby = before[-1][0], (before[-1][1], before[-1][2]), low[2], low[3]
+            allow = cfg.off_line_mm
+        else:
+            (t_b, pbx, pby), (vbx, vby), rms = fit
+            p_b = (pbx, pby)
+            allow = max(cfg.off_line_mm, 4.0 * rms)
+        line_t, line_p = t_b, p_b
         off: list[Sample] = []
-        for p in after:
-            ex = p_b[0] + vbx * (p[0] - t_b)
-            ey = p_b[1] + vby * (p[0] - t_b)
-            if off or math.hypot(p[1] - ex, p[2] - ey) > cfg.off_line_mm:
+        for p in self._pts:
+            if p[0] <= t_ref:
+                continue
+            ex = line_p[0] + vbx * (p[0] - line_t)
+            ey = line_p[1] + vby * (p[0] - line_t)
+            if off or math.hypot(p[1] - ex, p[2] - ey) > allow:
                 off.append(p)
             else:
-                t_b, p_b = p[0], (p[1], p[2])
+                t_b, p_b = p[0], (ex, ey)
         if len(off) < cfg.min_samples:
             return
-        k = _Kick(None, t_b, p_b, (vbx, vby), off[0][0], list(off))
+        last = off[-1]
+        if math.hypot(last[1] - line_p[0] - vbx * (last[0] - line_t),
+                      last[2] - line_p[1] - vby * (last[0] - line_t)) <= 2 * allow:
+            return  # not clearly away from the line yet
+        k = _Kick(None, t_b, p_b, (vbx, vby), off[0][0], list(off), allow=allow)
         if not self._fit_start(k) or k.start[0] <= self._last_start + cfg.jump_window_s:
             return
+        if k.speed0 - math.hypot(vbx, vby) <= cfg.jump_mps * 1000.0:
+            return  # the measurements off the line are not a kick's line
         if self._kick is not None and k.start[0] <= self._kick.start[0] + cfg.jump_window_s:
             return  # the jump of the kick in progress
         robot = self._kicker(k.start[1], k.start[2], robots)

@@ -181,3 +181,11 @@ def test_the_world_message_kick_matches_the_contract() -> None:
     assert kick_view(None, 0.0) is None
     anon = kick_view(KickedBall(None, 0, 0, 0, 0, 0, 0, 0, 0), 0.0)
     assert anon is not None and anon["robot"] is None
+
+
+def test_a_still_ball_with_noisy_vision_in_front_of_a_robot_is_not_kicked() -> None:
+    ts = [i / 120 for i in range(120 * 30)]  # 30 s at 120 measurements a second
+    for sigma in (2.0, 5.0, 10.0):
+        det = KickDetector()
+        feed(det, noisy(ts, [(0.0, 0.0)] * len(ts), sigma=sigma, seed=int(sigma)), (KICKER,))
+        assert det.kicks == 0, sigma
