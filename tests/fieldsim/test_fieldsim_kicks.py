@@ -109,6 +109,31 @@ def test_a_wall_bounce_ends_a_fieldsim_kick() -> None:
     assert 0.5 < t_last - r.t_kick < 1.2
 
 
+def test_a_ball_rolling_past_fieldsim_robots_is_not_a_kick() -> None:
+    cfg = SimConfig(blue=3, yellow=3, seed=5)
+    w = World(cfg)
+    v = Vision(cfg, w.geometry)
+    for i, team in enumerate((Team.BLUE, Team.YELLOW)):
+        for rid in range(3):
+            # robots facing the ball's path, their centres 160-170 mm from it (kicker reach: 190)
+            w.teleport_robot(team, rid, -1.5 + rid * 1.0 + i * 0.5, 0.16 if i else -0.17,
+                             -math.pi / 2 if i else math.pi / 2)
+    w.teleport_ball(-3.0, 0.0, vx=2.0)
+    model = WorldModel()
+    next_capture = list(v.phases)
+    while w.t < 4.0:
+        w.step()
+        for k in range(len(next_capture)):
+            while next_capture[k] <= w.t:
+                tc = next_capture[k]
+                next_capture[k] += 1.0 / cfg.camera_hz
+                packet = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t)
+                model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
+                assert model.snapshot().kicked_ball is None
+    assert w.ball.x > 1.0 and abs(w.ball.y) < 0.01  # rolled past them all, untouched
+    assert w.stats.kicks == 0 and model.kicks.kicks == 0
+
+
 def measured_errors() -> list[str]:
     """The figures of the report (python -m tests.fieldsim.test_fieldsim_kicks)."""
     out = []
