@@ -38,6 +38,31 @@ class Vec(TypedDict):
 
 
 @with_config(_STRICT)
+class RobotRef(TypedDict):
+    team: Team
+    id: int
+
+
+@with_config(_STRICT)
+class BallKick(TypedDict):
+    """A kick in progress (backend/world/kick.py): where and when it started, its initial
+    velocity, and where and when the ball is predicted to stop (constant rolling
+    deceleration, parameter kicks.decel_mps2)."""
+
+    robot: Annotated[RobotRef | None, Field(description="the kicker (nearest robot front)")]
+    start_x: Annotated[float, Field(description="mm, where the kick began")]
+    start_y: float
+    start_t: Annotated[float, Field(description="Unix s (capture time) of the kick")]
+    vx: Annotated[float, Field(description="mm/s, initial velocity")]
+    vy: float
+    speed_mps: Annotated[float, Field(description="initial speed, m/s")]
+    stop_x: Annotated[float, Field(description="mm, predicted stop point")]
+    stop_y: float
+    stop_t: Annotated[float, Field(description="Unix s (capture time), predicted stop")]
+    stop_in_s: Annotated[float, Field(description="predicted stop_t - the world's t_capture")]
+
+
+@with_config(_STRICT)
 class Ball(TypedDict):
     """The filtered ball."""
 
@@ -53,6 +78,7 @@ class Ball(TypedDict):
     predicted: Annotated[bool, Field(description="position extrapolated: no fresh detection")]
     lost: Annotated[bool, Field(description="not seen for long: dropped from the world soon")]
     filter: FilterName
+    kick: Annotated[BallKick | None, Field(description="the kick in progress, if any")]
 
 
 @with_config(_STRICT)

@@ -22,7 +22,7 @@ from .referee.internal import OPERATOR_COMMANDS
 from .referee.watch import RefereeWatch
 from .strategy.plays import PLAY_INFO
 from .world.feedback import RobotFeedbackView
-from .world.state import Team
+from .world.state import KickedBall, Team
 
 if TYPE_CHECKING:
     from .station import Station
@@ -141,6 +141,18 @@ def referee_view(st: Station) -> contract.RefereeView:
     }
 
 
+def kick_view(k: KickedBall | None, t_ref: float) -> contract.BallKick | None:
+    if k is None:
+        return None
+    return {
+        "robot": None if k.robot is None else {"team": k.robot[0], "id": k.robot[1]},
+        "start_x": k.start_x, "start_y": k.start_y, "start_t": k.start_t,
+        "vx": k.vx, "vy": k.vy, "speed_mps": k.speed / 1000.0,
+        "stop_x": k.stop_x, "stop_y": k.stop_y, "stop_t": k.stop_t,
+        "stop_in_s": k.stop_t - t_ref,
+    }
+
+
 def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
     """A tracked-vision record of the log (m) as the page draws it (mm)."""
     if not payload:
@@ -214,7 +226,8 @@ def world(st: Station) -> contract.World:
         ball: contract.Ball = {
             "x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
             "age_s": t_ref - b.t_seen, "cameras": list(b.cameras), "raw_x": b.raw_x,
-            "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter}
+            "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter,
+            "kick": kick_view(world.kicked_ball, t_ref)}
         out["ball"] = ball
     robots: list[contract.Robot] = []
     for r in world.robots:

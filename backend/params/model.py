@@ -91,6 +91,29 @@ class WorldParams(Group):
     drop_timeout_s: float = num(3.0, 0.5, 30.0, "s", 0.5, "not seen for this long: removed")
 
 
+class KickParams(Group):
+    """Kick detection (backend/world/kick.py): a ball whose speed jumps next to a robot's
+    front starts a kick, with its stop point predicted by constant rolling deceleration."""
+
+    enabled: bool = Field(default=True, description="detect kicks (world message, tracked "
+                          "vision kicked_ball, the field's kick layer)")
+    decel_mps2: float = num(0.4, 0.05, 5.0, "m/s^2", 0.05,
+                            "rolling deceleration of the ball, for the stop prediction "
+                            "(fieldsim: 0.4; real balls roll at about 0.3-0.5 after sliding)")
+    jump_mps: float = num(1.0, 0.2, 6.0, "m/s", 0.1,
+                          "a kick: the ball's speed rises by more than this ...")
+    jump_window_s: float = num(0.05, 0.01, 0.3, "s", 0.01, "... within this long")
+    reach_mm: float = num(100.0, 0.0, 500.0, "mm", 10.0,
+                          "the kick starts at most this far beyond a robot's radius")
+    front_half_angle_deg: float = num(60.0, 10.0, 180.0, "deg", 5.0,
+                                      "a robot's front: this far either side of its heading")
+    stop_mps: float = num(0.1, 0.01, 1.0, "m/s", 0.01, "slower than this: the kick is over")
+    max_turn_deg: float = num(30.0, 5.0, 120.0, "deg", 5.0,
+                              "the ball turned more than this (touch, bounce): the kick is over")
+    fit_window_s: float = num(0.15, 0.05, 1.0, "s", 0.05,
+                              "the stop point is fitted on this long of the newest measurements")
+
+
 class SafetyParams(Group):
     """When the station commands zero on its own."""
 
@@ -166,6 +189,7 @@ class StationParams(Group):
     strategy: StrategyParams = Field(default_factory=StrategyParams,
                                      description="Strategy and plays (paper section 5.3)")
     world: WorldParams = Field(default_factory=WorldParams, description="World model")
+    kicks: KickParams = Field(default_factory=KickParams, description="Kick detection")
     filters: FilterSettings = Field(default_factory=FilterSettings,
                                     description="Vision filters (paper section 5.1)")
     control: ControlSettings = Field(default_factory=ControlSettings,

@@ -76,6 +76,11 @@ class WorldProcessor(Processor):
         wc.predict_after_s = w.predict_after_s
         wc.visible_timeout_s = w.visible_timeout_s
         wc.drop_timeout_s = w.drop_timeout_s
+        k, kc = params.kicks, self.model.kicks.config
+        self.model.kicks_enabled = k.enabled
+        kc.decel_mps2, kc.jump_mps, kc.jump_window_s = k.decel_mps2, k.jump_mps, k.jump_window_s
+        kc.reach_mm, kc.front_half_angle_deg = k.reach_mm, k.front_half_angle_deg
+        kc.stop_mps, kc.max_turn_deg, kc.fit_window_s = k.stop_mps, k.max_turn_deg, k.fit_window_s
         self.model.configure(params.filters)
 
     async def tick(self) -> None:

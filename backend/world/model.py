@@ -39,6 +39,7 @@ from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_
 from backend.filters.params import FilterKind, FilterSettings
 
 from .clock import CameraClocks, ClockConfig
+from .kick import KickConfig, KickDetector
 from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
 
 
@@ -70,6 +71,7 @@ class WorldModelConfig:
     field_half_width_mm: float = 4500.0
     field_boundary_mm: float = 300.0
     clock: ClockConfig = field(default_factory=ClockConfig)
+    kicks: KickConfig = field(default_factory=KickConfig)
 
 
 @dataclass
@@ -121,6 +123,9 @@ class WorldModel:
         self._t_latest = 0.0
         self._recv_latest = 0
         self.clocks = CameraClocks(self.config.clock)
+        self.kicks = KickDetector(self.config.kicks)
+        self.kicks_enabled = True
+        self._kick_fed_t = -math.inf  # the newest ball measurement the kick detector has
         #: frames and objects dropped, by reason ("time out of range", "bad camera id",
         #: "object out of field", "too many objects")
         self.rejected: dict[str, int] = {}
@@ -445,4 +450,15 @@ class WorldModel:
             self._cameras[c] for c in sorted(self._cameras)
             if t_now - self._cameras[c].t_capture <= cfg.camera_timeout_s
         )
-        return WorldState(self._t_latest, self._recv_latest, ball, tuple(robots), cams)
+        new: list[tuple[float, float, float]] = []
+        if self._ball is not None:
+            new = [(m.t, m.x, m.y) for m in self._ball.history if m.t > self._kick_fed_t]
+            if new:
+                self._kick_fed_t = new[-1][0]
+        if self.kicks_enabled:
+            kick = self.kicks.update(new, ball, robots)
+        else:
+            self.kicks.reset()
+            kick = None
+        return WorldState(self._t_latest, self._recv_latest, ball, tuple(robots), cams,
+                          kicked_ball=kick)

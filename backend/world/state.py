@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from domain.teams import TEAMS as TEAMS
@@ -77,12 +78,33 @@ class CameraFrame:
 
 
 @dataclass(frozen=True, slots=True)
+class KickedBall:
+    """A kick in progress (mm, mm/s, Unix s). ``vx``, ``vy``: the initial velocity;
+    ``stop_*``: where and when the ball is predicted to stop."""
+
+    robot: tuple[Team, int] | None
+    start_x: float
+    start_y: float
+    start_t: float
+    vx: float
+    vy: float
+    stop_x: float
+    stop_y: float
+    stop_t: float
+
+    @property
+    def speed(self) -> float:
+        return math.hypot(self.vx, self.vy)
+
+
+@dataclass(frozen=True, slots=True)
 class WorldState:
     t_capture: float  # Unix s of the newest frame merged
     receive_time_ns: int  # relay receive time of the latest frame merged (this machine's clock)
     ball: BallState | None
     robots: tuple[RobotState, ...]
     cameras: tuple[CameraFrame, ...] = field(default=())
+    kicked_ball: KickedBall | None = None  # the kick in progress (backend.world.kick)
 
     def robot(self, team: Team, rid: int) -> RobotState | None:
         for r in self.robots:

@@ -7,6 +7,10 @@ The world is in mm, mm/s, rad, rad/s; tracked vision is in m, m/s, rad, rad/s.
 Visibility (0..1): 1 for an object seen now, 0.5 while its position is extrapolated
 (``predicted``: not seen for a few frames), 0 once it is lost (frozen, not visible). Lost
 objects are still sent, as the league's trackers do, until the world model drops them.
+
+A kick in progress (``WorldState.kicked_ball``) is the frame's ``kicked_ball`` (start, initial
+velocity, predicted stop, kicker), and the frame then carries the capability
+DETECT_KICKED_BALLS.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import struct
 
 from sslpb.ssl_gc_common_pb2 import BLUE, YELLOW
 from sslpb.ssl_gc_common_pb2 import Team as PbTeam
+from sslpb.ssl_vision_detection_tracked_pb2 import CAPABILITY_DETECT_KICKED_BALLS
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
 from .state import Team, WorldState
@@ -54,6 +59,17 @@ def tracked_packet_pb(world: WorldState, uuid: str, frame_number: int,
         tr.robot_id.team = team_enum(r.team)
         tr.pos.x, tr.pos.y = r.x * MM, r.y * MM
         tr.vel.x, tr.vel.y = r.vx * MM, r.vy * MM
+    k = world.kicked_ball
+    if k is not None:
+        kb = f.kicked_ball
+        kb.pos.x, kb.pos.y = k.start_x * MM, k.start_y * MM
+        kb.vel.x, kb.vel.y, kb.vel.z = k.vx * MM, k.vy * MM, 0.0
+        kb.start_timestamp, kb.stop_timestamp = k.start_t, k.stop_t
+        kb.stop_pos.x, kb.stop_pos.y = k.stop_x * MM, k.stop_y * MM
+        if k.robot is not None:
+            kb.robot_id.id = k.robot[1]
+            kb.robot_id.team = team_enum(k.robot[0])
+        f.capabilities.append(CAPABILITY_DETECT_KICKED_BALLS)
     return p.SerializeToString()
 
 
@@ -97,8 +113,8 @@ def _vec3(tag: int, x: float, y: float, z: float) -> bytes:
 def tracked_packet(world: WorldState, uuid: str, frame_number: int,
                    source_name: str = "Touchline") -> bytes:
     """One TrackerWrapperPacket, serialized. ``uuid`` identifies this station (kept constant
-    while it runs); ``frame_number`` increases with each packet. No capabilities yet (one ball
-    on the ground, no kick detection)."""
+    while it runs); ``frame_number`` increases with each packet. One ball on the ground; the
+    kick in progress with the capability DETECT_KICKED_BALLS."""
     parts = [b"\x08" + _varint(frame_number & 0xFFFFFFFF), b"\x11" + _F64.pack(world.t_capture)]
     b = world.ball
     if b is not None:
@@ -111,5 +127,16 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
                           0x12, 10, 0x0D, r.x * MM, 0x15, r.y * MM, 0x1D, r.orientation,
                           0x22, 10, 0x0D, r.vx * MM, 0x15, r.vy * MM, 0x2D, r.omega,
                           0x35, _visibility(r.visible, r.predicted, r.lost)))
+    k = world.kicked_ball
+    if k is not None:
+        kick = (_vec2(0x0A, k.start_x * MM, k.start_y * MM)
+                + _vec3(0x12, k.vx * MM, k.vy * MM, 0.0)
+                + b"\x19" + _F64.pack(k.start_t) + b"\x21" + _F64.pack(k.stop_t)
+                + _vec2(0x2A, k.stop_x * MM, k.stop_y * MM))
+        if k.robot is not None:
+            kick += _len(0x32, b"\x08" + _varint(k.robot[1] & 0xFFFFFFFF)
+                         + b"\x10" + _varint(int(team_enum(k.robot[0]))))
+        parts.append(_len(0x2A, kick))
+        parts.append(b"\x30" + _varint(int(CAPABILITY_DETECT_KICKED_BALLS)))
     u, n = uuid.encode(), source_name.encode()
     return _len(0x0A, u) + _len(0x12, n) + _len(0x1A, b"".join(parts))

@@ -68,6 +68,35 @@ export interface Ball {
   lost: boolean;
   /** "raw", "median", "paper" or "kalman" */
   filter: string;
+  /** the kick in progress, if any */
+  kick: BallKick | null;
+}
+
+/**
+ * A kick in progress (backend/world/kick.py): where and when it started, its initial
+ * velocity, and where and when the ball is predicted to stop (constant rolling
+ * deceleration, parameter kicks.decel_mps2).
+ */
+export interface BallKick {
+  /** the kicker (nearest robot front) */
+  robot: RobotRef | null;
+  /** mm, where the kick began */
+  start_x: number;
+  start_y: number;
+  /** Unix s (capture time) of the kick */
+  start_t: number;
+  /** mm/s, initial velocity */
+  vx: number;
+  vy: number;
+  /** initial speed, m/s */
+  speed_mps: number;
+  /** mm, predicted stop point */
+  stop_x: number;
+  stop_y: number;
+  /** Unix s (capture time), predicted stop */
+  stop_t: number;
+  /** predicted stop_t - the world's t_capture */
+  stop_in_s: number;
 }
 
 export interface CardIn {
@@ -696,6 +725,11 @@ export interface RobotFeedback {
 export interface RobotKick {
   speed_mps: number;
   chip: boolean;
+}
+
+export interface RobotRef {
+  team: Team;
+  id: number;
 }
 
 export interface RobotTarget {

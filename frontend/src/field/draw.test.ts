@@ -3,7 +3,18 @@ import type { Robot, StrategyState } from "../api/types";
 import { geometry, referee, world } from "../ws/fixtures";
 import { roleColor } from "../strategy/roles";
 import type { RecordedWorld } from "../api/types";
-import { ALL_LAYERS, COLORS, drawField, drawRecorded, RECORDED_DASH, roleTagPx, type DrawInput } from "./draw";
+import {
+  ALL_LAYERS,
+  COLORS,
+  drawField,
+  drawRecorded,
+  KICK_CROSS_PX,
+  KICK_DASH,
+  kickMarks,
+  RECORDED_DASH,
+  roleTagPx,
+  type DrawInput,
+} from "./draw";
 import { robot } from "./testRobots";
 import { makeTransform, worldToCanvas } from "./transform";
 
@@ -102,7 +113,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0 });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -246,5 +257,54 @@ describe("drawRecorded: the estimate recorded in a replayed log", () => {
 
   it("is on by default", () => {
     expect(ALL_LAYERS.recorded).toBe(true);
+  });
+});
+
+describe("kicks: the line to a kick's predicted stop point", () => {
+  const kick = {
+    robot: { team: "yellow" as const, id: 3 },
+    start_x: -1000, start_y: 0, start_t: 100, vx: 3000, vy: 0, speed_mps: 3.0,
+    stop_x: 2500, stop_y: 400, stop_t: 107.5, stop_in_s: 7,
+  };
+  const kicked = (k: typeof kick | null = kick) => {
+    const w = world(1);
+    return { ...w, ball: { ...w.ball!, x: 0, y: 0, kick: k } };
+  };
+
+  it("goes from the ball to the stop point, with the kicker and the speed as its label", () => {
+    const m = kickMarks(t, { x: 0, y: 0 }, kick);
+    expect(m.line).toEqual([worldToCanvas(t, 0, 0), worldToCanvas(t, 2500, 400)]);
+    expect(m.stop).toEqual(worldToCanvas(t, 2500, 400));
+    expect(m.label).toBe("Y3 3.0 m/s");
+    expect(m.labelColor).toBe(COLORS.yellow);
+    const anon = kickMarks(t, { x: 0, y: 0 }, { ...kick, robot: null });
+    expect(anon.label).toBe("3.0 m/s");
+    expect(anon.labelColor).toBe(COLORS.kick);
+  });
+
+  it("has no line once the ball is at the stop point", () => {
+    expect(kickMarks(t, { x: 2500, y: 400 }, kick).line).toBeNull();
+  });
+
+  it("is drawn by drawField, dashed, with a cross at the stop point; not with the layer off or without a kick", () => {
+    const on = fakeCtx();
+    expect(drawField(on.ctx, { ...input([]), world: kicked() }).kickStop).toEqual({ x: 2500, y: 400 });
+    const stop = worldToCanvas(t, 2500, 400);
+    const dashed = on.calls.filter((c) => c.name === "stroke" && c.dash === KICK_DASH.length && c.style === COLORS.kick);
+    expect(dashed).toHaveLength(1);
+    const cross = on.calls.filter((c) => c.name === "moveTo" && c.args[0] === stop.x - KICK_CROSS_PX);
+    expect(cross.length).toBeGreaterThanOrEqual(1);
+    expect(on.calls.some((c) => c.name === "fillText" && c.args[0] === "Y3 3.0 m/s")).toBe(true);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input([], { ...ALL_LAYERS, kicks: false }), world: kicked() }).kickStop).toBeNull();
+    expect(off.calls.some((c) => c.name === "fillText" && c.args[0] === "Y3 3.0 m/s")).toBe(false);
+    const none = fakeCtx();
+    expect(drawField(none.ctx, { ...input([]), world: kicked(null) }).kickStop).toBeNull();
+  });
+
+  it("is on by default and has a layer toggle", async () => {
+    expect(ALL_LAYERS.kicks).toBe(true);
+    const { LAYER_LABELS } = await import("../store/uiStore");
+    expect(LAYER_LABELS.some((l) => l.key === "kicks")).toBe(true);
   });
 });

@@ -80,11 +80,13 @@ export interface DrawLayers {
   roles: boolean;
   /** In replay: the estimate recorded in the log (world.recorded), as dashed ghost outlines. */
   recorded: boolean;
+  /** A kick in progress (ball.kick): dashed line to the predicted stop point, a cross there, the kicker. */
+  kicks: boolean;
 }
 
 export const ALL_LAYERS: DrawLayers = {
   raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
-  recorded: true,
+  recorded: true, kicks: true,
 };
 
 export interface DrawInput {
@@ -120,10 +122,12 @@ export interface DrawCounts {
   designated: { x: number; y: number } | null;
   /** Objects of the recorded estimate drawn (robots + ball; 0 live or with the layer off). */
   recorded: number;
+  /** The predicted stop point of the kick drawn (world mm), null when none. */
+  kickStop: { x: number; y: number } | null;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0 };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -169,6 +173,12 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
     // The recorded estimate over today's: a ring just outside each robot, so both stay visible.
     if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
+    const kick = world.ball?.kick;
+    if (L.kicks && world.ball && kick) {
+      // Under the ball: the line leaves from under it.
+      drawKick(ctx, t, world.ball, kick);
+      counts.kickStop = { x: kick.stop_x, y: kick.stop_y };
+    }
     if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
@@ -412,6 +422,61 @@ function drawBall(
   ctx.lineWidth = 1.5;
   ctx.strokeStyle = COLORS.ballOutline;
   ctx.stroke();
+  ctx.restore();
+}
+
+type BallKick = NonNullable<NonNullable<World["ball"]>["kick"]>;
+
+/** Dash of the line to a kick's predicted stop point. */
+export const KICK_DASH = [6, 5];
+
+/** Half the size of the cross at a kick's stop point, px. */
+export const KICK_CROSS_PX = 6;
+
+/** What a kick in progress looks like on the canvas: the dashed line from the ball to the
+ * predicted stop point (null once the ball is there), the cross and the kicker's label. */
+export function kickMarks(
+  t: FieldTransform,
+  ball: { x: number; y: number },
+  kick: BallKick,
+): { line: [{ x: number; y: number }, { x: number; y: number }] | null; stop: { x: number; y: number }; label: string; labelColor: string } {
+  const from = worldToCanvas(t, ball.x, ball.y);
+  const stop = worldToCanvas(t, kick.stop_x, kick.stop_y);
+  const line = Math.hypot(stop.x - from.x, stop.y - from.y) > KICK_CROSS_PX ? ([from, stop] as [typeof from, typeof stop]) : null;
+  const r = kick.robot;
+  const label = r ? `${r.team === "blue" ? "B" : "Y"}${r.id} ${kick.speed_mps.toFixed(1)} m/s` : `${kick.speed_mps.toFixed(1)} m/s`;
+  return { line, stop, label, labelColor: r ? teamColor(r.team) : COLORS.kick };
+}
+
+function drawKick(ctx: CanvasRenderingContext2D, t: FieldTransform, ball: { x: number; y: number }, kick: BallKick) {
+  if (![kick.stop_x, kick.stop_y, ball.x, ball.y].every(Number.isFinite)) return;
+  const m = kickMarks(t, ball, kick);
+  ctx.save();
+  ctx.strokeStyle = COLORS.kick;
+  ctx.lineWidth = 2;
+  if (m.line) {
+    ctx.setLineDash(KICK_DASH);
+    ctx.beginPath();
+    ctx.moveTo(m.line[0].x, m.line[0].y);
+    ctx.lineTo(m.line[1].x, m.line[1].y);
+    ctx.stroke();
+    ctx.setLineDash([]);
+  }
+  const c = m.stop;
+  const k = KICK_CROSS_PX;
+  ctx.beginPath();
+  ctx.moveTo(c.x - k, c.y - k);
+  ctx.lineTo(c.x + k, c.y + k);
+  ctx.moveTo(c.x - k, c.y + k);
+  ctx.lineTo(c.x + k, c.y - k);
+  ctx.stroke();
+  ctx.font = "bold 11px system-ui, sans-serif";
+  ctx.textBaseline = "bottom";
+  ctx.lineWidth = 3;
+  ctx.strokeStyle = COLORS.roleBg;
+  ctx.strokeText(m.label, c.x + k + 2, c.y - 2);
+  ctx.fillStyle = m.labelColor;
+  ctx.fillText(m.label, c.x + k + 2, c.y - 2);
   ctx.restore();
 }
 

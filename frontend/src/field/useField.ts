@@ -20,6 +20,7 @@ import { panBy, registerFieldCanvas, transformFor, viewVersion, zoomAt } from ".
 export const fieldStats = {
   rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0, recordedDrawn: 0,
   designatedDrawn: null as { x: number; y: number } | null,
+  kickStopDrawn: null as { x: number; y: number } | null,
 };
 
 /** Pixels a press may move and still count as a click. */
@@ -126,6 +127,7 @@ export function useFieldDrawing(wrapRef: RefObject<HTMLDivElement | null>, canva
       fieldStats.rolesDrawn = counts.roles;
       fieldStats.designatedDrawn = counts.designated;
       fieldStats.recordedDrawn = counts.recorded;
+      fieldStats.kickStopDrawn = counts.kickStop;
     };
     raf = requestAnimationFrame(frame);
     return () => {

@@ -102,3 +102,19 @@ describe("search and order", () => {
     expect(out.size).toBe(0);
   });
 });
+
+describe("kick signals", () => {
+  it("a kick in progress gives ball.kick.* signals by itself (the kicker's id and team are not signals)", () => {
+    const kick = {
+      robot: { team: "blue", id: 3 }, start_x: 0, start_y: 0, start_t: 1700000000, vx: 3000, vy: 0, speed_mps: 3,
+      stop_x: 11250, stop_y: 0, stop_t: 1700000007.5, stop_in_s: 7.4,
+    };
+    const s = worldSignals({ ...world, ball: { ...world.ball, kick } });
+    expect(s.get("ball.kick.speed_mps")).toBe(3);
+    expect(s.get("ball.kick.stop_x")).toBe(11250);
+    expect(s.get("ball.kick.stop_in_s")).toBe(7.4);
+    expect([...s.keys()].some((k) => k.startsWith("ball.kick.robot"))).toBe(false);
+    const none = worldSignals({ ...world, ball: { ...world.ball, kick: null } });
+    expect([...none.keys()].some((k) => k.startsWith("ball.kick"))).toBe(false);
+  });
+});

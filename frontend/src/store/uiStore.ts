@@ -27,6 +27,11 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
   { key: "trails", label: "Trails", help: "last 3 s of positions" },
   { key: "referee", label: "Referee marks", help: "designated position of ball placement" },
   {
+    key: "kicks",
+    label: "Kicks",
+    help: "a kick in progress: dashed line to where the ball is predicted to stop, a cross there, the kicker and the kick speed",
+  },
+  {
     key: "recorded",
     label: "Recorded estimate",
     help: "in replay: the robots and ball as the log's own tracker had them (dashed rings), beside today's filter output",

@@ -23,7 +23,7 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     t_capture: 1_700_000_000 + seq / 60,
     ball: {
       x: 10, y: 20, vx: 0, vy: 0, visible: true, age_s: 0, cameras: [0],
-      raw_x: 10, raw_y: 20, predicted: false, lost: false, filter: "kalman",
+      raw_x: 10, raw_y: 20, predicted: false, lost: false, filter: "kalman", kick: null,
     },
     robots: [robot("blue", 0, -1000, 0), robot("yellow", 0, 1000, 0)],
     cameras: [],

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from backend.world.state import BallState, RobotState, WorldState
+from backend.world.state import BallState, KickedBall, RobotState, WorldState
 from backend.world.tracked import tracked_packet
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 from tests.wire import read_fields
@@ -71,6 +71,28 @@ def test_team_numbers_on_the_wire() -> None:
     assert teams == [{1: 3, 2: 1}, {1: 7, 2: 2}, {1: 0, 2: 2}]
 
 
+KICK = KickedBall(("blue", 7), start_x=400.0, start_y=-100.0, start_t=1700000000.125,
+                  vx=3000.0, vy=-400.0, stop_x=11700.0, stop_y=-1600.0, stop_t=1700000007.7)
+
+
+def kicked(k: KickedBall = KICK) -> WorldState:
+    w = world()
+    return WorldState(w.t_capture, w.receive_time_ns, w.ball, w.robots, kicked_ball=k)
+
+
+def test_a_kick_is_the_frames_kicked_ball_with_its_capability() -> None:
+    f = decode(tracked_packet(kicked(), "u", 3)).tracked_frame
+    assert list(f.capabilities) == [3]  # CAPABILITY_DETECT_KICKED_BALLS
+    k = f.kicked_ball
+    assert (k.pos.x, k.pos.y) == pytest.approx((0.4, -0.1))
+    assert (k.vel.x, k.vel.y, k.vel.z) == pytest.approx((3.0, -0.4, 0.0))
+    assert k.start_timestamp == 1700000000.125 and k.stop_timestamp == 1700000007.7
+    assert (k.stop_pos.x, k.stop_pos.y) == pytest.approx((11.7, -1.6))
+    assert (k.robot_id.id, k.robot_id.team) == (7, 2)
+    unknown = decode(tracked_packet(kicked(KickedBall(None, 0, 0, 1, 1, 0, 2, 0, 3)), "u", 3))
+    assert not unknown.tracked_frame.kicked_ball.HasField("robot_id")
+
+
 def test_round_trip_and_no_ball() -> None:
     w = WorldState(t_capture=5.0, receive_time_ns=0, ball=None, robots=())
     data = tracked_packet(w, "u", 0, source_name="Touchline test")
@@ -93,6 +115,9 @@ def test_the_hand_encoder_writes_the_runtimes_bytes() -> None:
                             predicted=i % 3 == 0) for i in range(22))
     worlds.append(WorldState(t_capture=1.8e9 + 0.123456, receive_time_ns=1, robots=many,
                              ball=BallState(x=-0.0, y=1e-30, vx=math.inf, vy=-1e38)))
+    worlds.append(kicked())
+    worlds.append(kicked(KickedBall(None, -0.0, 1e-30, 0.0, math.inf, -1e38, 1e6, -1e6, -1.0)))
+    worlds.append(kicked(KickedBall(("yellow", 200), 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0)))
     for w in worlds:
         for frame in (0, 1, 127, 128, 300_000, 2**32 - 1):
             assert tracked_packet(w, "station-ü", frame) == tracked_packet_pb(w, "station-ü",
