@@ -530,6 +530,18 @@ class RefereeHealth(TypedDict):
 
 
 @with_config(_STRICT)
+class CameraPair(TypedDict):
+    """How far camera b sees the robots both see from where camera a sees them (b - a, mm):
+    a calibration offset between two cameras. Still robots only; a running mean."""
+
+    camera_a: int
+    camera_b: int
+    dx_mm: float
+    dy_mm: float
+    samples: int
+
+
+@with_config(_STRICT)
 class WorldHealth(TypedDict):
     """The world model: its age by the receive clock, what it dropped and why."""
 
@@ -541,6 +553,7 @@ class WorldHealth(TypedDict):
     clock_resyncs: int
     camera_clock_offsets_s: Annotated[dict[str, float | None], Field(
         description="per camera: receive - capture (s)")]
+    camera_pairs: list[CameraPair]
 
 
 @with_config(_STRICT)

@@ -283,6 +283,7 @@ def world_health(st: Station) -> contract.WorldHealth | None:
         "last_rejection": model.last_rejection,
         "clock_resyncs": model.clocks.resyncs,
         "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
+        "camera_pairs": cast(list[contract.CameraPair], model.camera_pairs.view()),
     }
 
 

@@ -40,6 +40,7 @@ from backend.filters.params import FilterKind, FilterSettings
 
 from .clock import CameraClocks, ClockConfig
 from .kick import KickConfig, KickDetector
+from .camera_pairs import CameraPairs
 from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
 
 
@@ -120,6 +121,8 @@ class WorldModel:
         self._ball: _Track | None = None
         self._hyps: list[_Hypothesis] = []
         self._cameras: dict[int, CameraFrame] = {}
+        #: how far apart two cameras see the same robots (calibration offsets), per pair
+        self.camera_pairs = CameraPairs()
         self._t_latest = 0.0
         self._recv_latest = 0
         self.clocks = CameraClocks(self.config.clock)
@@ -174,6 +177,10 @@ class WorldModel:
         cfg = self.config
         if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
             # another camera at the same instant: one measurement, the mean
+            if tr.n == 1 and tr.ang is not None:  # a robot seen by a second camera: compare
+                (first,) = tr.instant_cams
+                vx, vy = tr.pos.velocity()
+                self.camera_pairs.add(first, tr.sx, tr.sy, cam, x, y, math.hypot(vx, vy))
             tr.instant_cams.add(cam)
             tr.n += 1
             tr.sx += x

@@ -99,6 +99,18 @@ export interface BallKick {
   stop_in_s: number;
 }
 
+/**
+ * How far camera b sees the robots both see from where camera a sees them (b - a, mm):
+ * a calibration offset between two cameras. Still robots only; a running mean.
+ */
+export interface CameraPair {
+  camera_a: number;
+  camera_b: number;
+  dx_mm: number;
+  dy_mm: number;
+  samples: number;
+}
+
 export interface CardIn {
   team: Team;
   card: "yellow" | "red" | "clear";
@@ -894,6 +906,7 @@ export interface WorldHealth {
   clock_resyncs: number;
   /** per camera: receive - capture (s) */
   camera_clock_offsets_s: Record<string, number | null>;
+  camera_pairs: CameraPair[];
 }
 
 export interface WorldMessage {

@@ -104,6 +104,48 @@ export function Processes({ h }: { h: Health }) {
   );
 }
 
+/** A calibration offset worth a look: two cameras this far apart on the same robots. */
+export const CAMERA_PAIR_WARN_MM = 20;
+
+/** Camera agreement: per pair of cameras, how far apart they see the robots both see (a
+ * calibration offset), and each camera's clock offset. */
+export function Cameras({ h }: { h: Health }) {
+  const w = h.world;
+  if (!w || (w.camera_pairs.length === 0 && Object.keys(w.camera_clock_offsets_s).length === 0)) return null;
+  return (
+    <section>
+      <h3>
+        Cameras <span className="muted">b − a on the robots both see (still ones), mm · clock offsets, s</span>
+      </h3>
+      {w.camera_pairs.length > 0 && (
+        <table className="htable" data-testid="health-camera-pairs">
+          <tbody>
+            {w.camera_pairs.map((p) => {
+              const off = Math.hypot(p.dx_mm, p.dy_mm);
+              return (
+                <tr key={`${p.camera_a}-${p.camera_b}`} data-testid={`health-camera-pair-${p.camera_a}-${p.camera_b}`}>
+                  <td className="hname">
+                    cam {p.camera_a} ↔ {p.camera_b}
+                  </td>
+                  <td className={`num hval ${off > CAMERA_PAIR_WARN_MM ? "warn" : ""}`}>
+                    {fmtFixed(p.dx_mm, 1)}, {fmtFixed(p.dy_mm, 1)} mm
+                  </td>
+                  <td className="num hval muted">{p.samples}</td>
+                </tr>
+              );
+            })}
+          </tbody>
+        </table>
+      )}
+      <p className="muted" data-testid="health-camera-clocks">
+        {Object.entries(w.camera_clock_offsets_s)
+          .map(([c, o]) => `cam ${c}: ${o === null ? "—" : fmtFixed(o, 3)}`)
+          .join(" · ")}
+      </p>
+    </section>
+  );
+}
+
 function Topics({ h }: { h: Health }) {
   return (
     <section>
@@ -330,6 +372,7 @@ export function HealthPanel() {
       <EnginePanel h={h} />
       <Processors h={h} />
       <Streams h={h} />
+      <Cameras h={h} />
       <Topics h={h} />
     </div>
   );

@@ -7,7 +7,7 @@ import { arming, health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { AccessHealth, ArmingHealth, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
+import { AccessHealth, ArmingHealth, Cameras, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
 import { toastTexts } from "../store/toasts";
 
 import { domPerTest } from "../testing/dom";
@@ -136,6 +136,27 @@ describe("Processes", () => {
     expect(q("health-restarts-relay")?.textContent).toBe("2 restarts");
     act(() => t.root.render(<Processes h={{ ...health(), processes: [] }} />));
     expect(q("health-processes")).toBeNull();
+  });
+});
+
+describe("Cameras", () => {
+  it("shows each camera pair's offset, marked when large, and the clock offsets", () => {
+    act(() => t.root.render(<Cameras h={health()} />));
+    expect(q("health-camera-pairs")).toBeNull();
+    const world = {
+      age_s: 0.01, stale: false, rejected: {}, recent_rejections: {}, last_rejection: "", clock_resyncs: 0,
+      camera_clock_offsets_s: { "0": 0, "1": 0.002 },
+      camera_pairs: [
+        { camera_a: 0, camera_b: 1, dx_mm: 24.96, dy_mm: -10.04, samples: 200 },
+        { camera_a: 1, camera_b: 3, dx_mm: 1.2, dy_mm: 0.4, samples: 50 },
+      ],
+    };
+    act(() => t.root.render(<Cameras h={{ ...health(), world }} />));
+    const far = q("health-camera-pair-0-1")!;
+    expect(far.textContent).toContain("25.0, -10.0 mm");
+    expect(far.querySelector(".warn")).not.toBeNull();
+    expect(q("health-camera-pair-1-3")!.querySelector(".warn")).toBeNull();
+    expect(q("health-camera-clocks")?.textContent).toBe("cam 0: 0.000 · cam 1: 0.002");
   });
 });
 
