@@ -38,9 +38,9 @@ from dataclasses import dataclass, field, replace
 from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_filter
 from backend.filters.params import FilterKind, FilterSettings
 
+from .camera_pairs import CameraPairs
 from .clock import CameraClocks, ClockConfig
 from .kick import KickConfig, KickDetector
-from .camera_pairs import CameraPairs
 from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
 
 
