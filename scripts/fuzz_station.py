@@ -300,12 +300,15 @@ class Entry:
     expect: str
 
 
-def build_pool(seed: int, size: int) -> list[Entry]:
+def build_pool(seed: int, size: int, only: set[str] | None = None) -> list[Entry]:
+    """``size`` datagrams, 70 % vision, 30 % referee (``only``: these kinds, for a diagnosis)."""
     rng = random.Random(seed)
     pool: list[Entry] = []
     for stream, kinds in (("vision", VISION_KINDS), ("referee", REFEREE_KINDS)):
         n = int(size * (0.7 if stream == "vision" else 0.3))
-        names = list(kinds)
+        names = [k for k in kinds if only is None or k in only]
+        if not names:
+            continue
         weights = [kinds[k] for k in names]
         made = rng.choices(names, weights, k=n)
         # at least a few of every kind
@@ -396,6 +399,7 @@ class Sample:
     robots: int
     restarts: int
     alive: bool
+    load: float  # the machine's 1-minute load average (a shared machine: others' work too)
 
 
 def sample(st: Station, t0: float, phase: str) -> Sample:
@@ -410,7 +414,8 @@ def sample(st: Station, t0: float, phase: str) -> Sample:
         except ProcessLookupError:
             alive = False
     return Sample(time.monotonic() - t0, phase, bool(h["ok"]), list(h["warnings"]), hz,
-                  int(w.get("seq", 0)), len(w.get("robots") or []), restarts, alive)
+                  int(w.get("seq", 0)), len(w.get("robots") or []), restarts, alive,
+                  os.getloadavg()[0])
 
 
 def counters(st: Station) -> dict[str, Any]:
@@ -444,10 +449,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--min-hz", type=float, default=40.0)
     ap.add_argument("--settle", type=float, default=3.0, help="seconds before and after")
     ap.add_argument("--json", type=Path, help="write the figures here")
+    ap.add_argument("--only", help="comma-separated kinds (diagnosis), e.g. 'huge repeated'")
     args = ap.parse_args(argv)
 
     t_build = time.monotonic()
-    pool = build_pool(args.seed, args.pool)
+    pool = build_pool(args.seed, args.pool,
+                      set(args.only.split(",")) if args.only else None)
     print(f"pool: {len(pool)} distinct datagrams in {time.monotonic() - t_build:.1f} s",
           flush=True)
     st = launch([])
@@ -601,12 +608,12 @@ def account(args: argparse.Namespace, sent: Counter[tuple[str, str]],
             "lost_bus_ring": bus - processed, "reasons": rows,
             "accepted": exp.get(ACCEPTED, 0), "uncounted": missing_total}
     print(f"\n  {'t (s)':>6} {'phase':7} {'ok':5} {'world-model':>11} {'control':>8} "
-          f"{'robots':>6} {'world seq':>9} restarts alive")
+          f"{'robots':>6} {'world seq':>9} restarts alive  load")
     prev_seq = -1
     for s in samples:
         print(f"  {s.t:6.0f} {s.phase:7} {s.ok!s:5} {s.hz.get('world-model', 0):11.0f} "
               f"{s.hz.get('control', 0):8.0f} {s.robots:6} {s.world_seq:9} {s.restarts:8} "
-              f"{s.alive}")
+              f"{s.alive!s:5} {s.load:5.1f}")
         for name in ("world-model", "control"):
             if s.hz.get(name, 0) < args.min_hz:
                 failures.append(f"t={s.t:.0f} s: {name} at {s.hz.get(name, 0):.0f} Hz "
