@@ -21,8 +21,9 @@ station's processes alive and not restarted, ``ok`` true, world-model and contro
 ``--min-hz``, the world still following the simulator (robots present, world seq
 increasing). At the end the counts by reason (relay and backend) must account for what was
 sent: counted <= expected, and expected - counted <= what was lost on the way (kernel drops of
-the relay's sockets from /proc/net/udp, plus relay -> backend losses). Prints a table; exits
-1 on any failure.
+the relay's sockets from /proc/net/udp, ZeroMQ losses between relay and backend, and what the
+backend counted as "backend behind": overwritten on its bus before it was decoded). Prints a
+table; exits 1 on any failure.
 
 Figures (2-core machine, 10^6 datagrams): see tests/fuzz/README.md.
 """
@@ -568,7 +569,7 @@ def account(args: argparse.Namespace, sent: Counter[tuple[str, str]],
         bus = after["topics"][f"{stream}-packets"] - before["topics"][f"{stream}-packets"]
         kdrops = drops1[stream][1] - drops0[stream][1]
         sent_s = sum(n for (s_name, _), n in sent.items() if s_name == stream)
-        lost_backend = forwarded - processed
+        lost_backend = forwarded - processed  # the ingests count what the bus overwrote
         counted: Counter[str] = Counter()
         for reason, n in delta_reasons(before, after, f"relay.{stream}").items():
             counted["relay." + reason] += n
@@ -577,14 +578,17 @@ def account(args: argparse.Namespace, sent: Counter[tuple[str, str]],
                     else reason] += n
         print(f"\n{stream}: sent {sent_s}, relay received {relay_in} (incl. the simulator's), "
               f"kernel dropped {kdrops} ({drops1[stream][0]} socket(s)), relay forwarded "
-              f"{forwarded}, on the backend bus {bus}, decoded {processed} "
+              f"{forwarded}, on the backend bus {bus}, counted by the ingest {processed} "
               f"(lost relay->backend {lost_backend}: {forwarded - bus} in ZeroMQ, "
-              f"{bus - processed} overwritten in the bus ring before vision/referee ingest "
-              f"read them)")
+              f"{bus - processed} on the bus, never counted)")
         print(f"  {'reason':34} {'expected':>9} {'counted':>9}")
-        lost = max(0, kdrops) + max(0, lost_backend)
+        # what the bus overwrote before the ingest decoded it is counted ("backend behind"):
+        # lost for the reasons, whatever they would have been (the simulator's frames too)
+        behind = counted.pop(streams.BEHIND, 0)
+        lost = max(0, kdrops) + max(0, forwarded - bus) + behind
+        print(f"  {streams.BEHIND + ' (counted, lost)':34} {'-':>9} {behind:9}")
         missing_total = 0
-        rows: dict[str, dict[str, int]] = {}
+        rows: dict[str, dict[str, int]] = {streams.BEHIND: {"expected": 0, "counted": behind}}
         for reason in sorted(set(exp) | set(counted)):
             if reason == ACCEPTED:
                 continue
