@@ -127,12 +127,15 @@ def valid_wrapper(rng: random.Random, *, robots: int = 6, geometry: bool = False
 
 
 def valid_referee(rng: random.Random) -> Referee:
+    """One game controller's message: the same stage and command every time (a referee
+    whose stage and command change at every datagram is a spoofed game controller, not a
+    malformed datagram: it makes the recorder start a new file per stage change)."""
     r = Referee()
-    r.packet_timestamp = rng.randrange(1 << 50)
-    r.stage = rng.choice(list(Referee.Stage.values()))
-    r.command = rng.choice(list(Referee.Command.values()))
-    r.command_counter = rng.randrange(1000)
-    r.command_timestamp = rng.randrange(1 << 50)
+    r.packet_timestamp = int(time.time() * 1e6)
+    r.stage = Referee.NORMAL_FIRST_HALF
+    r.command = Referee.STOP
+    r.command_counter = 1
+    r.command_timestamp = r.packet_timestamp
     r.source_identifier = "fuzz"
     for t in (r.yellow, r.blue):
         t.name, t.score, t.red_cards, t.yellow_cards = "TeamName", 0, 0, 0
