@@ -70,11 +70,16 @@ test-ts: setup
 test-e2e: build multicast chromium
 	npm run test:e2e
 
-# Property tests with fresh random examples, ROUNDS times (make test runs them derandomized).
+# Property tests with fresh random examples, ROUNDS times (make test runs them derandomized),
+# then the real-process target: FUZZ_COUNT malformed datagrams into a launched station
+# (scripts/fuzz_station.py, tests/fuzz/README.md).
 ROUNDS ?= 10
-fuzz: setup
+FUZZ_COUNT ?= 1000000
+FUZZ_ARGS ?=
+fuzz: setup multicast
 	for i in $$(seq $(ROUNDS)); do HYPOTHESIS_PROFILE=explore $(PY) -m pytest -q \
 	  $$(grep -rl "from hypothesis" tests --include='test_*.py') || exit 1; done
+	$(PY) scripts/fuzz_station.py --count $(FUZZ_COUNT) $(FUZZ_ARGS)
 
 bench: setup multicast
 	for b in bench/*.py; do echo "== $$b"; PYTHONPATH=. $(PY) $$b || exit 1; done

@@ -7,7 +7,9 @@ the wire format at all), ``missing required field`` (parses, but a proto2 ``requ
 is absent), ``time out of range`` (a capture time far from the receive clock: the world model),
 ``bad string`` (a string field that is not UTF-8: used with replacement characters),
 ``oversized`` (larger than the stream's limit), ``no content`` (a wrapper with neither
-detection nor geometry), ``other``."""
+detection nor geometry), ``backend behind`` (forwarded by the relay, then overwritten on the
+backend's bus before its ingest decoded it: a flood faster than the backend decodes),
+``other``."""
 
 from __future__ import annotations
 
@@ -22,9 +24,10 @@ TIME_OUT_OF_RANGE = "time out of range"
 BAD_STRING = "bad string"
 OVERSIZED = "oversized"
 NO_CONTENT = "no content"
+BEHIND = "backend behind"
 OTHER = "other"
 REASONS = (TRUNCATED, NOT_PROTOBUF, MISSING_FIELD, TIME_OUT_OF_RANGE, BAD_STRING, OVERSIZED,
-           NO_CONTENT, OTHER)
+           NO_CONTENT, BEHIND, OTHER)
 
 
 class StreamCounter:

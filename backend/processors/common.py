@@ -12,7 +12,10 @@ from google.protobuf.message import DecodeError, Message
 
 from sslnet import streams
 from sslnet.ratelog import RateLimitedLog
+from sslnet.streams import StreamCounter
+from sslpb import touchline_pb2 as tl
 
+from ..bus import Reader
 from ..processor import Processor
 
 log = logging.getLogger("touchline.processors")
@@ -40,6 +43,23 @@ class LatencyStage:
             "p99_ms": vals[min(len(vals) - 1, int(0.99 * len(vals)))],
             "n": len(vals),
         }
+
+
+def read_counting_missed(reader: Reader[tl.Envelope], counter: StreamCounter,
+                         what: str) -> list[tl.Envelope]:
+    """The new envelopes of ``reader``; those overwritten on the bus before it read them (a
+    flood faster than the ingest decodes) are counted in ``counter`` as BEHIND, so every
+    datagram the relay forwarded is counted somewhere."""
+    missed = reader.missed
+    envs = reader.read_new()
+    if reader.missed > missed:
+        n = reader.missed - missed
+        counter.rate.total += n
+        counter.error(streams.BEHIND, f"{n} {what} datagram(s) overwritten on the bus before "
+                      "they were decoded", n=n)
+        badlog.warning(f"{what}-behind", "%s ingest behind: %d datagram(s) not decoded",
+                       what, n)
+    return envs
 
 
 def parse_into(msg: Message, data: bytes) -> tuple[str, str] | None:

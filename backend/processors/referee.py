@@ -11,7 +11,7 @@ from ..bus import DataBus, Reader
 from ..processor import OnTopic, Processor
 from ..referee.watch import RefereeWatch
 from ..world.referee import decode_referee
-from .common import badlog, parse_into
+from .common import badlog, parse_into, read_counting_missed
 
 
 class RefereeIngest(Processor):
@@ -29,7 +29,7 @@ class RefereeIngest(Processor):
         self.watch = watch or RefereeWatch()
 
     async def tick(self) -> None:
-        for env in self.reader.read_new():
+        for env in read_counting_missed(self.reader, self.counter, "referee"):
             self.counter.rate.add()
             msg = Referee()
             reason = parse_into(msg, env.payload)

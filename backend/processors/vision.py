@@ -10,7 +10,7 @@ from .. import topics
 from ..bus import DataBus, Reader
 from ..processor import OnTopic, Processor
 from ..world.decode import decode_detection, geometry_to_dict
-from .common import LatencyStage, badlog, parse_into
+from .common import LatencyStage, badlog, parse_into, read_counting_missed
 
 
 class VisionIngest(Processor):
@@ -30,7 +30,7 @@ class VisionIngest(Processor):
         self._last_geometry_bad: list[str] = []  # its names that are not UTF-8
 
     async def tick(self) -> None:
-        for env in self.reader.read_new():
+        for env in read_counting_missed(self.reader, self.counter, "vision"):
             self.counter.rate.add()
             pkt = SSL_WrapperPacket()
             reason = parse_into(pkt, env.payload)

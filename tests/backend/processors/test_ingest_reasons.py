@@ -67,3 +67,20 @@ def test_the_counter_api_the_world_model_uses() -> None:
     c.error("truncated")
     assert (c.errors, c.by_reason) == (2, {"time out of range": 1, "truncated": 1})
     assert c.last_error == "truncated"
+
+
+async def test_ingest_counts_what_was_overwritten_before_it_read_it() -> None:
+    """A flood faster than the ingest decodes: what the bus overwrote before the ingest read
+    it is counted as "backend behind", so every forwarded datagram is counted somewhere."""
+    bus = DataBus({})
+    ingest = VisionIngest(bus)
+    packets = bus.of(topics.VISION_PACKETS)
+    n = packets.capacity + 36
+    for i in range(n):
+        packets.write(_env(tl.STREAM_VISION, b"\x07\x00 not a wrapper", i + 1))
+    await ingest.tick()
+    c = ingest.counter
+    assert c.by_reason == {"backend behind": 36, "not protobuf": packets.capacity}
+    assert c.errors == n and c.packets == n
+    await ingest.tick()  # nothing new: nothing more counted
+    assert c.errors == n
