@@ -19,6 +19,7 @@ import contextlib
 import errno
 import json
 import logging
+import math
 import threading
 import time
 from collections import deque
@@ -33,6 +34,8 @@ from ssllog.writer import LogWriter
 log = logging.getLogger(__name__)
 
 FLUSH_INTERVAL_S = 0.5  # well inside the promised second
+#: a stage change starts a new file only if the last stage change that did is this old
+MIN_STAGE_FILE_S = 10.0
 _POLL_S = 0.02  # the writer drains the queue this often: one wake-up per batch, not per record
 
 
@@ -63,6 +66,8 @@ class SessionRecorder:
         our_team: str = "",
         queue_size: int = 20000,
         flush_interval_s: float = FLUSH_INTERVAL_S,
+        min_stage_file_s: float = MIN_STAGE_FILE_S,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.max_bytes = max_bytes
         self.rotate_on_stage = rotate_on_stage
@@ -79,6 +84,9 @@ class SessionRecorder:
         self._enabled = enabled
         self._folder = Path(folder)
         self._stage: str | None = None
+        self._min_stage_file_s = min_stage_file_s
+        self._clock = clock
+        self._stage_rotated = -math.inf  # when a stage change last started a file
         self._closed = False
         self.dropped = 0  # records dropped because the queue was full
         self.not_recorded = 0  # records ignored while disabled, stopped by an error, closed
@@ -126,6 +134,10 @@ class SessionRecorder:
         previous, self._stage = self._stage, stage_name
         if (previous is not None and stage_name != previous and self.rotate_on_stage
                 and self._enabled and not self._closed):
+            now = self._clock()
+            if now - self._stage_rotated < self._min_stage_file_s:
+                return  # a stage that flips (a spoofed or broken referee): one file, not 10/s
+            self._stage_rotated = now
             self._control_put(_Control("rotate", f"stage {stage_name}"))
 
     def new_file(self, reason: str) -> None:

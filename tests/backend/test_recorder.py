@@ -106,6 +106,23 @@ def test_stage_change_and_request_start_new_files(tmp_path: Path) -> None:
     assert all(read(f)[1].index_offsets is not None for f in files)
 
 
+def test_a_flipping_stage_does_not_make_a_file_per_flip(tmp_path: Path) -> None:
+    """A referee whose stage flips (spoofed, broken) starts one new file, not one per flip;
+    a stage change 10 s after the last rotation starts the next."""
+    now = [100.0]
+    rec = SessionRecorder(tmp_path, clock=lambda: now[0])
+    rec.stage("NORMAL_FIRST_HALF")
+    for i in range(20):
+        now[0] += 0.05
+        rec.stage("NORMAL_HALF_TIME" if i % 2 == 0 else "NORMAL_FIRST_HALF")
+        rec.record(i + 1, 4, b"x")
+    now[0] += 10.0
+    rec.stage("NORMAL_SECOND_HALF")
+    rec.record(99, 4, b"y")
+    rec.close()
+    assert len(logs(tmp_path)) == 3  # the start, the first flip, the second half
+
+
 def test_no_stage_rotation_when_off(tmp_path: Path) -> None:
     rec = SessionRecorder(tmp_path, rotate_on_stage=False)
     rec.stage("A")
