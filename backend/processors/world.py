@@ -6,6 +6,8 @@ import time
 from collections import deque
 from collections.abc import Callable
 
+from sslnet import streams
+
 from .. import topics
 from ..bus import DataBus, Reader
 from ..params.model import StationParams
@@ -84,7 +86,13 @@ class WorldProcessor(Processor):
         self.model.configure(params.filters)
 
     async def tick(self) -> None:
+        missed = self.reader.missed
         frames = self.reader.read_new()
+        if self.reader.missed > missed:  # overwritten before merged: counted, like the ingest's
+            n = self.reader.missed - missed
+            self.model.rejected[streams.BEHIND] = self.model.rejected.get(streams.BEHIND, 0) + n
+            badlog.warning("world-behind", "world model behind: %d camera frame(s) not merged",
+                           n)
         if not frames:
             return
         self._field_from_geometry()

@@ -84,3 +84,22 @@ async def test_ingest_counts_what_was_overwritten_before_it_read_it() -> None:
     assert c.errors == n and c.packets == n
     await ingest.tick()  # nothing new: nothing more counted
     assert c.errors == n
+
+
+async def test_world_counts_frames_overwritten_before_it_merged_them() -> None:
+    """Camera frames the world model never read (the detections topic overwrote them under a
+    flood) are counted as "backend behind" in its rejections, which health adds to vision."""
+    from backend.processors import WorldProcessor
+    from backend.world.state import CameraFrame
+
+    bus = DataBus({})
+    world = WorldProcessor(bus)
+    frames = bus.of(topics.VISION_DETECTIONS)
+    n = frames.capacity + 10
+    for i in range(n):
+        t = 1000.0 + i / 60
+        frames.write(CameraFrame(0, i, t, t, int(t * 1e9), (), ()))
+    await world.tick()
+    assert world.model.rejected.get("backend behind") == 10
+    await world.tick()
+    assert world.model.rejected.get("backend behind") == 10
