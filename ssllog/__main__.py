@@ -9,13 +9,13 @@ import os
 import sys
 import tempfile
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from datetime import UTC, datetime
 from typing import TextIO
 
 from ssllog.format import TYPE_VISION_2010, TYPE_VISION_2014
 from ssllog.logfile import TYPE_NAMES, LogFile
-from ssllog.reader import LogFormatError
+from ssllog.reader import LogFormatError, Record
 from sslpb import ssl_vision_wrapper_pb2
 
 CSV_COLUMNS = (
@@ -84,25 +84,11 @@ def export_csv(
     progress: Callable[[float], None] | None = None,
 ) -> int:
     """Writes the CSV rows; returns how many. --from/--to are seconds from the log's start."""
-    start = lf.offset_at(lf.t_first_ns + round(t_from * 1e9)) if t_from is not None else None
-    end_ns = lf.t_first_ns + round(t_to * 1e9) if t_to is not None else None
-    first_off = start if start is not None else 0
-    span = max(1, lf.data_end - first_off)
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
     rows = 0
-    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
-    for n, rec in enumerate(lf.records(start)):
-        if end_ns is not None and rec.time_ns > end_ns:
-            break
-        if progress is not None and n % 4096 == 0:
-            progress((rec.offset - first_off) / span)
-        if rec.type not in (TYPE_VISION_2014, TYPE_VISION_2010):
-            continue
-        try:
-            wrapper.ParseFromString(rec.payload)
-        except Exception:  # a garbled frame is skipped
-            continue
+    for rec, wrapper in _vision(lf, t_from, t_to, (TYPE_VISION_2014, TYPE_VISION_2010),
+                                progress):
         if not wrapper.HasField("detection"):
             continue
         d = wrapper.detection
@@ -116,9 +102,37 @@ def export_csv(
                 orientation = r.orientation if r.HasField("orientation") else ""
                 writer.writerow((*head, kind, r.robot_id, r.x, r.y, orientation, r.confidence))
                 rows += 1
+    return rows
+
+
+def _vision(
+    lf: LogFile,
+    t_from: float | None,
+    t_to: float | None,
+    types: tuple[int, ...],
+    progress: Callable[[float], None] | None,
+) -> Iterator[tuple[Record, ssl_vision_wrapper_pb2.SSL_WrapperPacket]]:
+    """The vision records between --from and --to (s from the log's start), parsed (a garbled
+    one is skipped; the wrapper object is reused), with the progress by bytes."""
+    start = lf.offset_at(lf.t_first_ns + round(t_from * 1e9)) if t_from is not None else None
+    end_ns = lf.t_first_ns + round(t_to * 1e9) if t_to is not None else None
+    first_off = start if start is not None else 0
+    span = max(1, lf.data_end - first_off)
+    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
+    for n, rec in enumerate(lf.records(start)):
+        if end_ns is not None and rec.time_ns > end_ns:
+            break
+        if progress is not None and n % 4096 == 0:
+            progress((rec.offset - first_off) / span)
+        if rec.type not in types:
+            continue
+        try:
+            wrapper.ParseFromString(rec.payload)
+        except Exception:  # a garbled frame is skipped
+            continue
+        yield rec, wrapper
     if progress is not None:
         progress(1.0)
-    return rows
 
 
 FILTERED_COLUMNS = (
@@ -138,35 +152,16 @@ def export_filtered(
     """Touchline's world model re-run over the vision (the paper's filters or the Kalman
     filter, for every object): one row per object after every camera frame merged."""
     from backend.filters.params import FilterSettings
-    from backend.world.decode import decode_detection, geometry_to_dict
+    from backend.replay.history import merge_wrapper
     from backend.world.model import WorldModel
 
     model = WorldModel()
     model.configure(FilterSettings(ball=filter_name, robot=filter_name))  # type: ignore[arg-type]
-    start = lf.offset_at(lf.t_first_ns + round(t_from * 1e9)) if t_from is not None else None
-    end_ns = lf.t_first_ns + round(t_to * 1e9) if t_to is not None else None
-    first_off = start if start is not None else 0
-    span = max(1, lf.data_end - first_off)
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(FILTERED_COLUMNS)
     rows = 0
-    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
-    for n, rec in enumerate(lf.records(start)):
-        if end_ns is not None and rec.time_ns > end_ns:
-            break
-        if progress is not None and n % 4096 == 0:
-            progress((rec.offset - first_off) / span)
-        if rec.type != TYPE_VISION_2014:
-            continue
-        try:
-            wrapper.ParseFromString(rec.payload)
-        except Exception:  # a garbled frame is skipped
-            continue
-        if wrapper.HasField("geometry"):
-            g = geometry_to_dict(wrapper.geometry)
-            model.set_field(g["field_length"] / 2, g["field_width"] / 2, g["boundary_width"])
-        if not wrapper.HasField("detection") or not model.update(
-                decode_detection(wrapper.detection, rec.time_ns)):
+    for rec, wrapper in _vision(lf, t_from, t_to, (TYPE_VISION_2014,), progress):
+        if not merge_wrapper(model, wrapper, rec.time_ns):
             continue
         w = model.snapshot()
         head = (f"{(rec.time_ns - lf.t_first_ns) / 1e9:.6f}", repr(w.t_capture))
@@ -178,8 +173,6 @@ def export_filtered(
             writer.writerow((*head, r.team, r.id, r.x, r.y, r.orientation, r.vx, r.vy, r.omega,
                              int(r.visible)))
             rows += 1
-    if progress is not None:
-        progress(1.0)
     return rows
 
 

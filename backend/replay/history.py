@@ -46,16 +46,22 @@ def history(log: LogSource, end_ns: int, seconds: float, filters: FilterSettings
             pkt.ParseFromString(rec.payload)
         except DecodeError:
             continue
-        if pkt.HasField("geometry"):
-            g = geometry_to_dict(pkt.geometry)
-            model.set_field(g["field_length"] / 2, g["field_width"] / 2, g["boundary_width"])
-        if not pkt.HasField("detection") or not model.update(
-                decode_detection(pkt.detection, rec.time_ns)):
+        if not merge_wrapper(model, pkt, rec.time_ns):
             continue
         if rec.time_ns >= next_ns:
             next_ns = max(next_ns + step_ns, rec.time_ns)
             out.append({"t_unix": rec.time_ns / 1e9, "world": _sample(model.snapshot())})
     return out
+
+
+def merge_wrapper(model: WorldModel, pkt: SSL_WrapperPacket, receive_time_ns: int) -> bool:
+    """One vision datagram into ``model`` as the station's ingest and world processor do
+    (the field from a geometry packet, the detection merged); True if a frame was merged."""
+    if pkt.HasField("geometry"):
+        g = geometry_to_dict(pkt.geometry)
+        model.set_field(g["field_length"] / 2, g["field_width"] / 2, g["boundary_width"])
+    return pkt.HasField("detection") and model.update(
+        decode_detection(pkt.detection, receive_time_ns))
 
 
 def _sample(w: WorldState) -> contract.HistoryWorld:
