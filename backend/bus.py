@@ -11,7 +11,7 @@ import asyncio
 import os
 import time
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
@@ -39,6 +39,8 @@ class Topic(Generic[T]):
         self._ring: deque[Record[T]] = deque(maxlen=capacity)
         self._seq = 0
         self._waiters: list[asyncio.Event] = []
+        #: called after every write (the processor runner: a pass runs what reads this topic)
+        self.on_write: Callable[[], None] | None = None
 
     @property
     def capacity(self) -> int:
@@ -67,6 +69,8 @@ class Topic(Generic[T]):
         self._ring.append(rec)
         for ev in self._waiters:
             ev.set()
+        if self.on_write is not None:
+            self.on_write()
         return rec
 
     def latest(self) -> Record[T] | None:

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import cProfile
 import contextlib
 import logging
+import os
 import sys
 import threading
 import time
@@ -252,6 +254,7 @@ class Station:
                     ready.set()
                     raise
                 self._loop = loop
+                _schedule_profile(loop)
                 ready.set()
                 await stop_event.wait()
                 await self.stop()
@@ -830,6 +833,32 @@ class Station:
         g = self.geometry_topic.latest_value()
         return None if g is None else cast(contract.Geometry, g)
 
+
+
+PROFILE_ENV = "TOUCHLINE_PROFILE"
+
+
+def _schedule_profile(loop: asyncio.AbstractEventLoop) -> None:
+    """With ``TOUCHLINE_PROFILE=FILE`` (bench/profile_station.py) the station thread runs
+    under cProfile from ``TOUCHLINE_PROFILE_AFTER`` s after the start (default 5) for
+    ``TOUCHLINE_PROFILE_FOR`` s (default 15), then writes the statistics to FILE."""
+    out = os.environ.get(PROFILE_ENV)
+    if not out:
+        return
+    after = float(os.environ.get(PROFILE_ENV + "_AFTER", "5"))
+    span = float(os.environ.get(PROFILE_ENV + "_FOR", "15"))
+    prof = cProfile.Profile()
+
+    def stop() -> None:
+        prof.disable()
+        prof.dump_stats(out)
+        log.info("station profile of %.0f s written to %s", span, out)
+
+    def start() -> None:
+        prof.enable()
+        loop.call_later(span, stop)
+
+    loop.call_later(after, start)
 
 
 def _stop_all_bytes() -> bytes:

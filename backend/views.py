@@ -70,7 +70,8 @@ def strategy_view(st: Station) -> contract.StrategyView:
         "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
                   for n in PLAYS],
         "roles": {f"{team}/{rid}": role
-                  for rid, role in (core.strategy.roles.items() if core else [])},
+                  # a copy: the strategy's worker thread may be assigning roles now
+                  for rid, role in (dict(core.strategy.roles).items() if core else [])},
     }
 
 

@@ -6,7 +6,9 @@ from __future__ import annotations
 import logging
 import time
 from collections import deque
+from typing import Any
 
+import zmq
 import zmq.asyncio
 from google.protobuf.message import DecodeError, Message
 
@@ -79,9 +81,26 @@ class SocketProcessor(Processor):
     on its own loop when it starts and attaches (the processor itself is built earlier)."""
 
     _sock: zmq.asyncio.Socket | None = None
+    _out: Any = None
 
     def attach(self, sock: zmq.asyncio.Socket) -> None:
         self._sock = sock
+        # sends go through a plain socket on the same ZeroMQ socket: a PUB never blocks (it
+        # drops at its high-water mark), so no future and no event-loop round per send
+        self._out = zmq.Socket.shadow(sock.underlying) if isinstance(sock, zmq.Socket) \
+            else sock
+
+    def send(self, frames: list[bytes]) -> None:
+        """Sends ``frames`` now, without waiting (a PUB socket drops what it cannot queue)."""
+        if self._out is None:
+            raise RuntimeError(f"{self.name}: no socket attached (the station attaches it "
+                               "in start)")
+        try:
+            self._out.send_multipart(frames, zmq.NOBLOCK)
+        except zmq.Again:  # a full queue: like a PUB at its high-water mark, dropped
+            self.dropped += 1
+
+    dropped = 0
 
     @property
     def attached(self) -> bool:

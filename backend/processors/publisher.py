@@ -26,7 +26,8 @@ class CommandPublisher(SocketProcessor):
     def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket | None = None) -> None:
         cmds = bus.of(topics.ROBOT_COMMANDS)
         super().__init__(OnTopic(cmds, max_wait_s=0.05))
-        self._sock = sock
+        if sock is not None:
+            self.attach(sock)
         self.reader = Reader(cmds)
         self.sim_reader = Reader(bus.of(topics.SIM_COMMANDS))
         self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
@@ -59,7 +60,7 @@ class CommandPublisher(SocketProcessor):
             if not self._was_muted:  # into replay: every live robot stops now, not 0.1 s later
                 self._was_muted = True
                 stop = tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True)
-                await self.sock.send_multipart([b"commands", stop.SerializeToString()])
+                self.send([b"commands", stop.SerializeToString()])
             await self._estop_latch()
             await self._arming()
             return
@@ -84,14 +85,14 @@ class CommandPublisher(SocketProcessor):
                     dribbler_rpm=c.dribbler_rpm,
                 )
             raw = msg.SerializeToString()
-            await self.sock.send_multipart([b"commands", raw])
+            self.send([b"commands", raw])
             self.record(time.time_ns(), TYPE_TL_COMMANDS, raw)
             self.sent.add()
             self.latency.add_since(cs.source_receive_time_ns)
         for raw in self.sim_reader.read_new():
-            await self.sock.send_multipart([b"sim", raw])
+            self.send([b"sim", raw])
         for raw in self.referee_out_reader.read_new():
-            await self.sock.send_multipart([b"referee-out", raw])
+            self.send([b"referee-out", raw])
         await self._estop_latch()
         await self._arming()
 
@@ -103,7 +104,7 @@ class CommandPublisher(SocketProcessor):
         was, when = self._arming_sent
         if armed != was or now - when >= 0.5:
             msg = tl.Arming(armed=armed, time_ns=time.time_ns(), by=self.armed_by())
-            await self.sock.send_multipart([b"arming", msg.SerializeToString()])
+            self.send([b"arming", msg.SerializeToString()])
             self._arming_sent = (armed, now)
 
     async def _estop_latch(self) -> None:
@@ -137,7 +138,7 @@ class CommandPublisher(SocketProcessor):
     async def _send_estop(self, action: int) -> None:
         msg = tl.EmergencyStop(action=action, time_ns=time.time_ns(),  # type: ignore[arg-type]
                                by=self.estop_by())
-        await self.sock.send_multipart([b"estop", msg.SerializeToString()])
+        self.send([b"estop", msg.SerializeToString()])
 
     def latency_summary(self) -> dict[str, float]:
         return self.latency.summary()

@@ -27,7 +27,8 @@ class RelayIngest(SocketProcessor):
 
     def __init__(self, bus: DataBus, sock: zmq.asyncio.Socket | None = None) -> None:
         super().__init__(None)
-        self._sock = sock
+        if sock is not None:
+            self.attach(sock)
         self.vision_packets = bus.of(topics.VISION_PACKETS)
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
@@ -43,9 +44,12 @@ class RelayIngest(SocketProcessor):
         await self.sock.poll()
 
     async def tick(self) -> None:
-        for _ in range(1000):  # drain what is there, bounded so other tasks get a turn
+        # drain what is there through the plain socket (no future per message), bounded so
+        # other tasks get a turn; the pass after this tick takes the lot through the pipeline
+        recv = self._out.recv_multipart
+        for _ in range(1000):
             try:
-                frames = await self.sock.recv_multipart(flags=zmq.NOBLOCK)
+                frames = recv(zmq.NOBLOCK)
             except zmq.Again:
                 return
             self._handle(frames)

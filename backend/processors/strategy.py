@@ -86,8 +86,12 @@ class StrategyProcessor(Processor):
                                      self.params, self.our_team, self.our_side_negative,
                                      self.side_from_referee, now)
             keeper = await self._engine_keeper(prep)
-            for rid, mv in self.core.decide(prep, keeper).items():
-                key = (self.our_team, rid)
+            team = self.our_team
+            # roles and paths in a worker thread: a slow decision never holds up a control
+            # tick on the station loop (control goes on with the previous targets meanwhile)
+            moves = await asyncio.to_thread(self.core.decide, prep, keeper)
+            for rid, mv in moves.items():
+                key = (team, rid)
                 if key in out:
                     continue
                 out[key] = TargetEntry(

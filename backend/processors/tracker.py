@@ -66,5 +66,5 @@ class TrackerPublisher(SocketProcessor):
             if not replay:
                 self.record(w.receive_time_ns or time.time_ns(), TYPE_TRACKER_2020, pkt)
             if send:
-                await self.sock.send_multipart([TOPIC, pkt])
+                self.send([TOPIC, pkt])
                 self.sent.add()

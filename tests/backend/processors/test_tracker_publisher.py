@@ -21,7 +21,7 @@ class FakeSocket:
     def __init__(self) -> None:
         self.sent: list[list[bytes]] = []
 
-    async def send_multipart(self, frames: list[bytes]) -> None:
+    def send_multipart(self, frames: list[bytes], flags: int = 0) -> None:
         self.sent.append(frames)
 
 
