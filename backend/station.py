@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
-import cProfile
 import contextlib
+import cProfile
 import logging
 import os
 import sys

@@ -1,8 +1,9 @@
 """Profile of the station thread (the backend's control loop) at full scale (figures, not a test).
 
 Starts the launcher like bench/loop_bench.py (built-in simulator at 8 cameras x 75 Hz, division
-A, 11 v 11, the "match" play) with ``TOUCHLINE_PROFILE`` set, profiles ``--seconds`` after a 5 s warm-up,
-stops it and prints the top of the station thread's cProfile by own time and by cumulative time.
+A, 11 v 11, the "match" play) with ``TOUCHLINE_PROFILE`` set, profiles ``--seconds`` after a
+5 s warm-up, stops it and prints the top of the station thread's cProfile by own time and
+by cumulative time.
 
     PYTHONPATH=. .venv/bin/python bench/profile_station.py [--seconds 20] [--out /tmp/st.prof]
 """

@@ -94,7 +94,7 @@ def commands(wire: Wire) -> list[tl.RobotCommandSet]:
 
 
 async def test_a_frame_becomes_commands_in_the_sources_own_pass() -> None:
-    bus, source, procs, wire = pipeline()
+    _, source, procs, wire = pipeline()
     runner = Runner()
     for p in procs:
         runner.add(p)
@@ -125,7 +125,7 @@ async def test_a_frame_becomes_commands_in_the_sources_own_pass() -> None:
 async def test_the_pass_never_suspends() -> None:
     """Driven by hand: the coroutine of one source tick and its pass finishes on its first
     step, so nothing between the camera frame and the command waits for the event loop."""
-    bus, source, procs, wire = pipeline()
+    _, source, procs, wire = pipeline()
     runner = Runner()
     for p in procs:
         runner.add(p)
