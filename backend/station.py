@@ -5,39 +5,31 @@ immutable ``views`` it publishes and changes state only through ``call`` (the co
 from __future__ import annotations
 
 import asyncio
-import concurrent.futures
 import contextlib
-import cProfile
 import logging
-import os
-import sys
-import threading
 import time
 import uuid
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any, TypeVar, cast
 
 import zmq
 import zmq.asyncio
 
-from ssllog.format import TYPE_TL_ACTION, TYPE_TL_HEALTH, TYPE_TL_PARAMS, TYPE_TRACKER_2020
 from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
 from . import contract, topics, views
 from .bus import DataBus
-from .config import ROOT, Settings
+from .config import Settings
 from .control.goto import Target
-from .engine import NumpyEngine, OctaveEngine, PoolEngine
+from .engine.switch import EngineSwitch
 from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
-from .params.model import StationParams, StrategyParams
-from .params.store import ParamStore, deep_merge, diff, parse_setting
-from .processor import Every, Processor, Runner
+from .params.model import StationParams
+from .params.store import ParamStore, deep_merge, parse_setting
+from .processor import Processor, Runner
 from .processors import (
     CommandPublisher,
     ControlProcessor,
@@ -52,10 +44,14 @@ from .processors import (
     WorldProcessor,
 )
 from .recorder import SessionRecorder
+from .recording import RecordingControl, RecordingProcessor
 from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
-from .replay.logs import LogFolders, open_log_file
-from .replay.player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
+from .replay.control import ReplayControl
+from .replay.logs import LogFolders
+from .replay.player import LogPlayer
+from .station_loop import StationLoop
+from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
@@ -63,78 +59,12 @@ log = logging.getLogger("touchline.station")
 T = TypeVar("T")
 
 
-@dataclass(frozen=True)
-class Views:
-    """What the web side reads: built on the station thread (the only writer of station
-    state) and replaced whole, never changed, so a web thread never sees a half-made one."""
-
-    world_key: tuple[object, ...] = ()
-    world: contract.World | None = None
-    world_json: str = ""
-    health: contract.Health | None = None
-    health_json: str = ""
-    health_mono: float = -1e9
-    geometry: contract.Geometry | None = None
-    geometry_seq: int = -1
-    player: contract.Player | None = None
-    player_json: str = ""
-    player_serial: int = -1
-    #: counts every publication that changed something (websocket clients wait on it)
-    serial: int = 0
-
-
-class ViewPublisher(Processor):
-    """Publishes the station's views for the websocket clients at ``stream.ws_max_hz`` (what
-    changed only, and nothing while no client listens), health at most every 0.25 s. Eight
-    cameras merge hundreds of frames a second; a page needs no more than it can show."""
-
-    name = "views"
-    health_period_s = 0.25
-
-    def __init__(self, station: Station) -> None:
-        super().__init__(Every(60.0))
-        self.station = station
-
-    def configure(self, params: StationParams) -> None:
-        self.set_rate(params.stream.ws_max_hz)
-
-    async def tick(self) -> None:
-        self.station.publish_views()
-
-
-class RecordingProcessor(Processor):
-    """What the recorder takes besides datagrams and commands: the station's health once a
-    second, and the game stage (a new file per stage)."""
-
-    name = "recording"
-
-    def __init__(self, station: Station) -> None:
-        super().__init__(Every(10.0))
-        self.station = station
-        self._next_health = 0.0
-
-    async def tick(self) -> None:
-        st = self.station
-        rec = st.recorder
-        if rec is None or st.player.log is not None:
-            return
-        ref = st.referee_topic.latest_value()
-        if ref is not None and ref.stage:
-            rec.stage(ref.stage)
-        now = time.monotonic()
-        if now >= self._next_health:
-            self._next_health = now + 1.0
-            rec.record(time.time_ns(), TYPE_TL_HEALTH,
-                       dumps(st.health(), "health").encode())
-
-
 class Station:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
         self.ctx: zmq.asyncio.Context | None = None
-        self._loop: asyncio.AbstractEventLoop | None = None
-        self._thread: threading.Thread | None = None
-        self._stop_event: asyncio.Event | None = None
+        #: the station thread and its event loop (the command queue)
+        self.loop = StationLoop(self.start, self.stop, self._after_command)
         self.runner = Runner()
         self.started_mono = time.monotonic()
         self.cpu = CpuMeter()  # this process (every thread), for the Health tab
@@ -180,10 +110,6 @@ class Station:
         self.params_topic = self.bus.of(topics.PARAMS)
         self.referee_state = InternalReferee()
         self.referee_watch = RefereeWatch()
-        self._engine_key: tuple[str, str] | None = None
-        self._engine_gen = 0
-        self._engine_tasks: set[asyncio.Task[None]] = set()
-        self.engine_error = ""
         for spec in topics.ALL:  # every topic exists (and shows in health) from the start
             self.bus.of(spec)
         # the processors, built here and configured from the parameters; start() only gives
@@ -208,125 +134,51 @@ class Station:
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        # the compute engine for the strategy (started and replaced in the background)
+        self.engine = EngineSwitch(self.strategy)
+        # the session recorder (made in start(): it opens a file; closed in stop())
+        self.recording = RecordingControl(self)
         # the log player: in replay the pipeline runs on the log's time and nothing is sent
-        self.player = LogPlayer(emit=self._emit_replayed, reset=self._reset_pipeline)
+        self.replay = ReplayControl(self, LogFolders(self.recording.folder, settings.log_dirs))
         self.player_feed = PlayerFeed(self.player)
-        self.log_folders = LogFolders(self._recording_folder, settings.log_dirs)
-        self._opening: asyncio.Task[None] | None = None
-        #: in replay, the newest tracked-vision record of the log (the live estimate)
-        self.recorded_tracked = b""
-        self._replay_seq = 0
-        self.ingest.live = lambda: self.player.log is None
-        self.publisher.muted = lambda: self.player.log is not None
-        # the session recorder: made in start() (it opens a file), closed in stop()
-        self.recorder: SessionRecorder | None = None
+        self.ingest.live = lambda: not self.replay.replaying
+        self.publisher.muted = lambda: self.replay.replaying
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
-        self.tracker.replaying = lambda: self.player.log is not None
-        self._params_recorded: dict[str, Any] | None = None
-        self.views = Views()
-        self._view_listeners: set[Callable[[], None]] = set()
+        self.tracker.replaying = lambda: self.replay.replaying
+        # what the web side reads, published at most at the rate a page can show
+        self.hub = ViewHub(self)
+        # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
-            ViewPublisher(self),
+            ViewPublisher(self.hub),
             RecordingProcessor(self))
 
-    # ---- the station thread: the bus and every processor run on their own event loop, so
-    # web traffic (JSON encoding, websocket sends) never delays control ----
+    # ---- the station thread (backend/station_loop.py): the web side changes station state
+    # only through ``call`` (the command queue) and reads the published views ----
 
     def start_thread(self) -> None:
-        """Starts the station loop in its own thread and returns once it runs."""
-        ready = threading.Event()
-        errors: list[BaseException] = []
-
-        def main() -> None:
-            loop = asyncio.new_event_loop()
-            asyncio.set_event_loop(loop)
-            stop_event = asyncio.Event()
-            self._stop_event = stop_event
-
-            async def run() -> None:
-                try:
-                    await self.start()
-                except BaseException as exc:
-                    errors.append(exc)
-                    ready.set()
-                    raise
-                self._loop = loop
-                _schedule_profile(loop)
-                ready.set()
-                await stop_event.wait()
-                await self.stop()
-
-            try:
-                loop.run_until_complete(run())
-            except BaseException:
-                log.exception("station loop ended with an error")
-            finally:
-                self._loop = None
-                loop.close()
-
-        # control latency: let the station thread take the GIL back quickly from web work
-        sys.setswitchinterval(0.0005)
-        self._thread = threading.Thread(target=main, name="station", daemon=True)
-        self._thread.start()
-        if not ready.wait(30):
-            raise RuntimeError("station did not start within 30 s")
-        if errors:
-            raise RuntimeError(f"station failed to start: {errors[0]}") from errors[0]
+        self.loop.start_thread()
 
     def stop_thread(self) -> None:
-        loop, ev = self._loop, self._stop_event
-        if loop is not None and ev is not None:
-            loop.call_soon_threadsafe(ev.set)
-        if self._thread is not None:
-            self._thread.join(timeout=10)
-            self._thread = None
-
-    def _schedule(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
-        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
-
-        def run() -> None:
-            try:
-                fut.set_result(fn(*args))
-            except BaseException as exc:  # handed to the caller
-                fut.set_exception(exc)
-
-        loop = self._loop
-        if loop is None or threading.current_thread() is self._thread:
-            run()
-        else:
-            loop.call_soon_threadsafe(run)
-        return fut
-
-    def _apply_params_soon(self, p: StationParams, version: int) -> None:
-        self._schedule(self.apply_params, p, version)
-
-    def _command(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
-        """Queues ``fn(*args)`` for the station loop (between two ticks); once it ran, fresh
-        views are published, so the next read sees the change."""
-        def command() -> T:
-            try:
-                return fn(*args)
-            finally:
-                if self._loop is not None and self._view_listeners:
-                    self.publish_views(force=True)
-        return self._schedule(command)
+        self.loop.stop_thread()
 
     async def call(self, fn: Callable[..., T], *args: Any) -> T:
-        """The one way the web side changes station state (the command queue): runs
-        ``fn(*args)`` on the station loop and returns its result."""
-        return await asyncio.wrap_future(self._command(fn, *args))
+        """Runs ``fn(*args)`` on the station loop; fresh views are published after it."""
+        return await self.loop.call(fn, *args)
 
     async def read(self, fn: Callable[..., T], *args: Any) -> T:
-        """Runs ``fn(*args)`` on the station loop for an answer that must be current (not the
-        published views): the station thread reads its own state."""
-        return await asyncio.wrap_future(self._schedule(fn, *args))
+        """Runs ``fn(*args)`` on the station loop for an answer that must be current."""
+        return await self.loop.read(fn, *args)
 
     def call_sync(self, fn: Callable[..., T], *args: Any, timeout_s: float = 5.0) -> T:
         """``call`` for a thread without an event loop (tests, scripts)."""
-        return self._command(fn, *args).result(timeout=timeout_s)
+        return self.loop.call_sync(fn, *args, timeout_s=timeout_s)
+
+    def _after_command(self) -> None:
+        if self.hub.listening:
+            self.publish_views(force=True)
 
     async def start(self) -> None:
         s = self.settings
@@ -335,15 +187,9 @@ class Station:
                                                                 b"feedback"]))
         self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
-        rp = prm.recording
-        self.recorder = SessionRecorder(
-            self._recording_folder(), enabled=self._record_wanted(prm),
-            max_bytes=rp.max_mb << 20, rotate_on_stage=rp.rotate_on_stage,
-            our_team=prm.team.our_team)
-        self.ingest.record = self.recorder.record
-        self.publisher.record = self.recorder.record
+        rec = self.recording.open(prm)
+        self.ingest.record = self.publisher.record = self.tracker.record = rec.record
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
-        self.tracker.record = self.recorder.record
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
         self.params.subscribe(self._apply_params_soon)
@@ -351,8 +197,7 @@ class Station:
             self.runner.add(p)
         await self.runner.start()
         if s.log is not None:  # make run LOG=...: the log instead of live input
-            self._opening = asyncio.get_running_loop().create_task(
-                self._open_log(str(s.log), checked=True))
+            self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
@@ -362,234 +207,69 @@ class Station:
         event loop runs one thing at a time), then tells the clients."""
         for proc in self.processors:
             proc.configure(p)
-        self._configure_engine(p.strategy)
-        self._configure_recorder(p, version)
+        self.engine.configure(p.strategy)
+        self.recording.configure(p, version)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         sized = {s.name: s for s in topics.ALL}
         for name, size in p.bus.sizes().items():
             self.bus.of(sized[name]).resize(size)
         self.params_topic.write(version)
-        self._notify_views()
+        self.hub.notify()
 
-    # ---- the compute engine (started and replaced in the background; strategy uses it
-    # once it runs and falls back to the built-in code meanwhile) ----
+    def _apply_params_soon(self, p: StationParams, version: int) -> None:
+        self.loop.schedule(self.apply_params, p, version)
 
-    def _configure_engine(self, sp: StrategyParams) -> None:
-        key = (sp.engine, sp.scripts_dir)
-        if key == self._engine_key:
-            return
-        self._engine_key = key
-        self._engine_gen += 1
-        old = self.strategy.engine
-        self.strategy.drop_engine()
-        self.engine_error = ""
-        loop = asyncio.get_running_loop()
-        task = loop.create_task(self._swap_engine(old, sp, self._engine_gen))
-        self._engine_tasks.add(task)
-        task.add_done_callback(self._engine_tasks.discard)
+    # ---- replay (backend/replay/control.py) and the recorder (backend/recording.py) ----
 
-    async def _swap_engine(self, old: PoolEngine | None, sp: StrategyParams, gen: int) -> None:
-        if old is not None:
-            await old.close()
-        if sp.engine == "off":
-            return
-        eng: PoolEngine
-        if sp.engine == "numpy":
-            # the keeper's rule under the same name as the shipped .m example
-            eng = NumpyEngine(functions={"goalkeeper": "backend.geometry.fit:goalkeeper_target"},
-                              preload=["backend.geometry.fit"], workers=1,
-                              default_timeout_s=sp.engine_timeout_s)
-        else:
-            scripts = Path(sp.scripts_dir)
-            if not scripts.is_absolute():
-                scripts = ROOT / scripts
-            eng = OctaveEngine(str(scripts), workers=1, default_timeout_s=sp.engine_timeout_s)
-        try:
-            await eng.start()
-        except Exception as exc:
-            self.engine_error = f"{sp.engine} engine did not start: {exc}"
-            log.error("%s", self.engine_error)
-            await eng.close()
-            return
-        if gen != self._engine_gen:  # configured again meanwhile
-            await eng.close()
-            return
-        self.strategy.engine = eng
-        log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
-                 sp.goalkeeper_function)
+    @property
+    def player(self) -> LogPlayer:
+        return self.replay.player
 
-    # ---- the log player (commands run on the station thread; opening indexes in a worker
-    # thread, the loop goes on meanwhile) ----
+    @property
+    def log_folders(self) -> LogFolders:
+        return self.replay.folders
 
-    def _recording_folder(self) -> Path:
-        if self.settings.record_dir is not None:
-            return self.settings.record_dir
-        folder = self.params.current.recording.folder
-        if folder:
-            return Path(folder).expanduser()
-        return (self.settings.state_dir or ROOT / "var") / "logs"
-
-    def _emit_replayed(self, rec: Any) -> None:
-        """One record of the log onto the topics the relay ingest writes, as an envelope like
-        the relay's (bytes unchanged, the recorded receive time)."""
-        if rec.type not in PLAYED_TYPES:
-            return
-        if rec.type == TYPE_TRACKER_2020:  # the live estimate of the time: shown, not used
-            self.recorded_tracked = rec.payload
-            return
-        from sslpb import touchline_pb2 as tl
-        self._replay_seq += 1
-        vision = rec.type == 4
-        env = tl.Envelope(stream=tl.STREAM_VISION if vision else tl.STREAM_REFEREE,
-                          receive_time_ns=rec.time_ns, sequence=self._replay_seq,
-                          source="log", payload=rec.payload)
-        (self.ingest.vision_packets if vision else self.ingest.referee_packets).write(env)
-
-    def _reset_pipeline(self) -> None:
-        """Time jumped (a log opened or seeked, or back to live): the world model and the
-        controllers start again."""
-        replay = self.player.log is not None
-        self.world.reset()
-        self.feedback.reset()
-        self.world_topic.clear()  # no world of before the jump is shown or obeyed
-        self.referee_topic.clear()  # the log's own referee is heard within 0.1 s
-        self.control.motion.reset_all()
-        self.control.replay_clock = self.player.now_ns if replay else None
-        # a referee is silent by the log's clock in replay (a paused replay is not silence)
-        self.referee_watch.clock = (lambda: self.player.now_ns() / 1e9) if replay \
-            else time.monotonic
-        self.referee_watch.last_heard = None
-        self.recorded_tracked = b""
+    @property
+    def recorded_tracked(self) -> bytes:
+        return self.replay.recorded_tracked
 
     def player_command(self, fn: Callable[..., T], *args: Any) -> T:
-        """A player command on the station thread; the feed is woken to act on it."""
-        out = fn(*args)
-        self.player_feed.wake.set()
-        return out
+        return self.replay.command(fn, *args)
 
     def player_view(self) -> contract.Player:
-        return self.player.view()
+        return self.replay.view()
 
     async def open_log(self, path: str) -> contract.Player:
-        """Opens a log from the page: only files of the recording folder and of the folders
-        given with --log-dir (PlayerError otherwise). Returns at once; the player's loading
-        progress and then the log come in the "player" messages."""
-        return await self.read(self._start_open, path, False)
+        return await self.replay.open_log(path)
 
-    def _start_open(self, path: str, checked: bool) -> contract.Player:
-        if self._opening is not None and not self._opening.done():
-            raise PlayerError(f"already opening {self.player.loading_path}: wait for it")
-        real = path if checked else self.log_folders.check(path)
-        self.player.error = ""
-        self._opening = asyncio.get_running_loop().create_task(self._open_log(real, True))
-        self.player.loading, self.player.loading_path = 0.0, real
-        self.player.serial += 1
-        self.publish_views(force=True)
-        return self.player.view()
-
-    async def _open_log(self, path: str, checked: bool) -> None:
-        loop = asyncio.get_running_loop()
-        self.player.loading, self.player.loading_path = 0.0, path
-        self.player.serial += 1
-        last = [0.0]
-
-        def progress(frac: float) -> None:  # in the worker thread: hand over, a step a time
-            if frac - last[0] >= 0.02 or frac >= 1.0:
-                if int(frac * 4) > int(last[0] * 4):  # the terminal too, every quarter
-                    log.info("indexing %s: %.0f %%", path, frac * 100)
-                last[0] = frac
-                loop.call_soon_threadsafe(self._loading, frac)
-
-        try:
-            log_ = await asyncio.to_thread(open_log_file, path, self.log_folders.cache_dir(),
-                                           progress)
-        except Exception as exc:  # a bad file: said in the player, the station goes on
-            self.player.loading = None
-            self.player.error = f"cannot open {path}: {exc}"
-            self.player.serial += 1
-            log.warning("%s", self.player.error)
-            self.publish_views(force=True)
-            return
-        self._attach(log_)
-
-    def _loading(self, frac: float) -> None:
-        if self.player.loading is not None:
-            self.player.loading = frac
-            self.player.serial += 1
-
-    def _attach(self, log_: LogSource) -> None:
-        self.disarm("replay")  # back to live, robots are not driven by surprise
-        self.player_command(self.player.attach, log_)
-        log.info("replaying %s (%.1f s): nothing is sent to robots or a simulator",
-                 log_.path, self.player.duration_s())
-        self.publish_views(force=True)
-
-    # ---- the session recorder ----
-
-    def _record_wanted(self, p: StationParams) -> bool:
-        """Records live sessions unless told not to (the parameter, --no-record), when
-        replaying from the command line, or for a station that keeps no state (tests)."""
-        return (p.recording.enabled and self.settings.record and self.settings.log is None
-                and (self.settings.state_dir is not None or bool(p.recording.folder)
-                     or self.settings.record_dir is not None))
-
-    def _configure_recorder(self, p: StationParams, version: int) -> None:
-        rec = self.recorder
-        if rec is None:
-            return
-        rec.max_bytes = p.recording.max_mb << 20
-        rec.rotate_on_stage = p.recording.rotate_on_stage
-        rec.our_team = p.team.our_team
-        folder = self._recording_folder()
-        if folder != Path(rec.status()["folder"]):
-            rec.set_folder(folder)
-        rec.set_enabled(self._record_wanted(p))
-        values = p.model_dump(mode="json")
-        changes = values if self._params_recorded is None else \
-            diff(self._params_recorded, values)
-        self._params_recorded = values
-        if changes:
-            rec.record(time.time_ns(), TYPE_TL_PARAMS, dumps(
-                {"version": version, "changes": changes, "by": ""}, "params").encode())
+    @property
+    def recorder(self) -> SessionRecorder | None:
+        return self.recording.recorder
 
     def operator_action(self, action: str, by: str = "",
                         details: dict[str, Any] | None = None) -> None:
-        """Records an operator's action (target, e-stop, play, referee, teleport) in the
-        session log, with who and when."""
-        if self.recorder is not None:
-            body = {"action": action, "by": by, "time_unix": time.time(), **(details or {})}
-            self.recorder.record(time.time_ns(), TYPE_TL_ACTION,
-                                 dumps(body, "action").encode())
+        """Records an operator's action in the session log, with who and when."""
+        self.recording.operator_action(action, by, details)
 
     def recorder_command(self, action: str) -> contract.Recording:
-        """The page's recording buttons: a new file now, or recording on/off (the parameter,
-        persisted, so the next start does the same)."""
-        if action == "new-file":
-            if self.recorder is None or not self.recorder.status()["recording"]:
-                raise ValueError("not recording: start recording first")
-            self.recorder.new_file("operator")
-        else:
-            self.params.patch({"recording": {"enabled": action == "start"}})
-        return self.recording_status()
+        return self.recording.command(action)
+
+    def recording_status(self) -> contract.Recording:
+        return self.recording.status()
+
+    @property
+    def engine_error(self) -> str:
+        return self.engine.error
 
     async def stop(self) -> None:
-        if self._opening is not None:
-            self._opening.cancel()
-        self.player.close()
+        self.replay.close()
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
-        for task in list(self._engine_tasks):
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
-        eng = self.strategy.engine
-        self.strategy.drop_engine()
-        if eng is not None:
-            await eng.close()
+        await self.engine.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None
@@ -761,71 +441,23 @@ class Station:
     def arming_view(self) -> contract.ArmingInfo:
         return views.arming_view(self)
 
-    def recording_status(self) -> contract.Recording:
-        if self.recorder is None:
-            return {"enabled": False, "recording": False, "file": "",
-                    "folder": str(self._recording_folder()), "size_bytes": 0,
-                    "duration_s": 0.0, "records": 0, "dropped": 0, "error": ""}
-        s = self.recorder.status()
-        return {"enabled": bool(s["enabled"]), "recording": bool(s["recording"]),
-                "file": str(s["file"]), "folder": str(s["folder"]),
-                "size_bytes": int(s["size_bytes"]), "duration_s": float(s["duration_s"]),
-                "records": int(s["records"]), "dropped": int(s["dropped"]),
-                "error": str(s["error"] or "")}
+    @property
+    def views(self) -> Views:
+        return self.hub.views
 
     def world_version(self) -> tuple[object, ...]:
-        """Changes whenever the world message would: a new world, a referee message, the
-        e-stop, why the robots are stopped (that changes while no world is written: vision
-        lost), or the internal referee (its panel follows the world message)."""
-        ir, rs = self.internal_referee, self.referee_state
-        return (self.world_topic.seq, self.referee_topic.seq, self.estop, self.player.serial,
-                self.armed, self.arming_required,
-                self.control.halt_reason, rs.command_counter,
-                ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
-                rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
+        return self.hub.world_version()
 
     def world_json(self) -> str:
         """The world message as JSON (what every websocket client gets)."""
         return dumps({"type": "world", "world": self.world_dict()}, "world")
 
     def publish_views(self, force: bool = False) -> None:
-        """Builds what changed of the web side's views (on the station thread) and tells the
-        websocket clients. The web side only ever reads ``self.views``."""
-        if not force and not self._view_listeners:
-            return  # no websocket client: HTTP answers are built when asked
-        v = self.views
-        changes: dict[str, Any] = {}
-        key = self.world_version()
-        if force or key != v.world_key:
-            world = self.world_dict()
-            changes.update(world_key=key, world=world,
-                           world_json=dumps({"type": "world", "world": world}, "world"))
-        now = time.monotonic()
-        if force or now - v.health_mono >= ViewPublisher.health_period_s:
-            health = self.health()
-            changes.update(health=health, health_mono=now,
-                           health_json=dumps({"type": "health", "health": health}, "health"))
-        if force or self.geometry_topic.seq != v.geometry_seq:
-            changes.update(geometry=self.geometry(), geometry_seq=self.geometry_topic.seq)
-        if force or self.player.serial != v.player_serial:
-            changes.update(player=self.player.view(), player_serial=self.player.serial,
-                           player_json=self.player.json())
-        if changes:
-            self.views = replace(v, serial=v.serial + 1, **changes)
-            self._notify_views()
+        """Builds what changed of the web side's views and tells the websocket clients."""
+        self.hub.publish(force)
 
     def subscribe_views(self, listener: Callable[[], None]) -> Callable[[], None]:
-        """``listener()`` is called (on the station thread: it must only hand over, e.g. with
-        ``loop.call_soon_threadsafe``) after every publication; returns the unsubscribe."""
-        self._view_listeners.add(listener)
-        return lambda: self._view_listeners.discard(listener)
-
-    def _notify_views(self) -> None:
-        for listener in list(self._view_listeners):
-            try:
-                listener()
-            except RuntimeError:  # its web loop has closed
-                self._view_listeners.discard(listener)
+        return self.hub.subscribe(listener)
 
     def geometry(self) -> contract.Geometry | None:
         """The field as decoded (cleaned at decode time; non-finite numbers, should any get
@@ -833,32 +465,6 @@ class Station:
         g = self.geometry_topic.latest_value()
         return None if g is None else cast(contract.Geometry, g)
 
-
-
-PROFILE_ENV = "TOUCHLINE_PROFILE"
-
-
-def _schedule_profile(loop: asyncio.AbstractEventLoop) -> None:
-    """With ``TOUCHLINE_PROFILE=FILE`` (bench/profile_station.py) the station thread runs
-    under cProfile from ``TOUCHLINE_PROFILE_AFTER`` s after the start (default 5) for
-    ``TOUCHLINE_PROFILE_FOR`` s (default 15), then writes the statistics to FILE."""
-    out = os.environ.get(PROFILE_ENV)
-    if not out:
-        return
-    after = float(os.environ.get(PROFILE_ENV + "_AFTER", "5"))
-    span = float(os.environ.get(PROFILE_ENV + "_FOR", "15"))
-    prof = cProfile.Profile()
-
-    def stop() -> None:
-        prof.disable()
-        prof.dump_stats(out)
-        log.info("station profile of %.0f s written to %s", span, out)
-
-    def start() -> None:
-        prof.enable()
-        loop.call_later(span, stop)
-
-    loop.call_later(after, start)
 
 
 def _stop_all_bytes() -> bytes:

@@ -1,0 +1,86 @@
+"""The strategy's compute engine, started and replaced in the background: the strategy uses it
+once it runs and falls back to the built-in code meanwhile."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..config import ROOT
+from ..params.model import StrategyParams
+from .base import PoolEngine
+from .numpy_engine import NumpyEngine
+from .octave_engine import OctaveEngine
+
+if TYPE_CHECKING:
+    from ..processors import StrategyProcessor
+
+log = logging.getLogger("touchline.station")
+
+
+class EngineSwitch:
+    """Follows ``strategy.engine`` and ``strategy.scripts_dir``: a change closes the old
+    engine and starts the new one; ``error`` says why one did not start."""
+
+    def __init__(self, strategy: StrategyProcessor) -> None:
+        self.strategy = strategy
+        self.error = ""
+        self._key: tuple[str, str] | None = None
+        self._gen = 0
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    def configure(self, sp: StrategyParams) -> None:
+        key = (sp.engine, sp.scripts_dir)
+        if key == self._key:
+            return
+        self._key = key
+        self._gen += 1
+        old = self.strategy.engine
+        self.strategy.drop_engine()
+        self.error = ""
+        task = asyncio.get_running_loop().create_task(self._swap(old, sp, self._gen))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _swap(self, old: PoolEngine | None, sp: StrategyParams, gen: int) -> None:
+        if old is not None:
+            await old.close()
+        if sp.engine == "off":
+            return
+        eng: PoolEngine
+        if sp.engine == "numpy":
+            # the keeper's rule under the same name as the shipped .m example
+            eng = NumpyEngine(functions={"goalkeeper": "backend.geometry.fit:goalkeeper_target"},
+                              preload=["backend.geometry.fit"], workers=1,
+                              default_timeout_s=sp.engine_timeout_s)
+        else:
+            scripts = Path(sp.scripts_dir)
+            if not scripts.is_absolute():
+                scripts = ROOT / scripts
+            eng = OctaveEngine(str(scripts), workers=1, default_timeout_s=sp.engine_timeout_s)
+        try:
+            await eng.start()
+        except Exception as exc:
+            self.error = f"{sp.engine} engine did not start: {exc}"
+            log.error("%s", self.error)
+            await eng.close()
+            return
+        if gen != self._gen:  # configured again meanwhile
+            await eng.close()
+            return
+        self.strategy.engine = eng
+        log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
+                 sp.goalkeeper_function)
+
+    async def close(self) -> None:
+        for task in list(self._tasks):
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        eng = self.strategy.engine
+        self.strategy.drop_engine()
+        if eng is not None:
+            await eng.close()

@@ -1,0 +1,148 @@
+"""The station thread: the bus and every processor run on their own event loop, so web traffic
+(JSON encoding, websocket sends) never delays control. The web side changes station state only
+through the command queue (``call``) and reads what the station publishes."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import cProfile
+import logging
+import os
+import sys
+import threading
+from collections.abc import Awaitable, Callable
+from typing import Any, TypeVar
+
+log = logging.getLogger("touchline.station")
+T = TypeVar("T")
+
+PROFILE_ENV = "TOUCHLINE_PROFILE"
+
+
+class StationLoop:
+    """Runs ``start()`` on a new event loop in its own thread, keeps the loop running until
+    ``stop_thread``, then runs ``stop()``. ``after_command`` runs on the loop after every
+    command (the station publishes fresh views, so the next read sees the change)."""
+
+    def __init__(self, start: Callable[[], Awaitable[None]], stop: Callable[[], Awaitable[None]],
+                 after_command: Callable[[], None] = lambda: None) -> None:
+        self._start, self._stop, self._after_command = start, stop, after_command
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.thread: threading.Thread | None = None
+        self._stop_event: asyncio.Event | None = None
+
+    def start_thread(self) -> None:
+        """Starts the station loop in its own thread and returns once it runs."""
+        ready = threading.Event()
+        errors: list[BaseException] = []
+
+        def main() -> None:
+            loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
+            stop_event = asyncio.Event()
+            self._stop_event = stop_event
+
+            async def run() -> None:
+                try:
+                    await self._start()
+                except BaseException as exc:
+                    errors.append(exc)
+                    ready.set()
+                    raise
+                self.loop = loop
+                _schedule_profile(loop)
+                ready.set()
+                await stop_event.wait()
+                await self._stop()
+
+            try:
+                loop.run_until_complete(run())
+            except BaseException:
+                log.exception("station loop ended with an error")
+            finally:
+                self.loop = None
+                loop.close()
+
+        # control latency: let the station thread take the GIL back quickly from web work
+        sys.setswitchinterval(0.0005)
+        self.thread = threading.Thread(target=main, name="station", daemon=True)
+        self.thread.start()
+        if not ready.wait(30):
+            raise RuntimeError("station did not start within 30 s")
+        if errors:
+            raise RuntimeError(f"station failed to start: {errors[0]}") from errors[0]
+
+    def stop_thread(self) -> None:
+        loop, ev = self.loop, self._stop_event
+        if loop is not None and ev is not None:
+            loop.call_soon_threadsafe(ev.set)
+        if self.thread is not None:
+            self.thread.join(timeout=10)
+            self.thread = None
+
+    def schedule(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
+        """Runs ``fn(*args)`` on the station loop (at once when called on it, or before the
+        loop runs); its result or exception in the future."""
+        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
+
+        def run() -> None:
+            try:
+                fut.set_result(fn(*args))
+            except BaseException as exc:  # handed to the caller
+                fut.set_exception(exc)
+
+        loop = self.loop
+        if loop is None or threading.current_thread() is self.thread:
+            run()
+        else:
+            loop.call_soon_threadsafe(run)
+        return fut
+
+    def command(self, fn: Callable[..., T], *args: Any) -> concurrent.futures.Future[T]:
+        """Queues ``fn(*args)`` for the station loop (between two ticks), then
+        ``after_command``."""
+        def command() -> T:
+            try:
+                return fn(*args)
+            finally:
+                if self.loop is not None:
+                    self._after_command()
+        return self.schedule(command)
+
+    async def call(self, fn: Callable[..., T], *args: Any) -> T:
+        """The one way the web side changes station state (the command queue): runs
+        ``fn(*args)`` on the station loop and returns its result."""
+        return await asyncio.wrap_future(self.command(fn, *args))
+
+    async def read(self, fn: Callable[..., T], *args: Any) -> T:
+        """Runs ``fn(*args)`` on the station loop for an answer that must be current (not the
+        published views): the station thread reads its own state."""
+        return await asyncio.wrap_future(self.schedule(fn, *args))
+
+    def call_sync(self, fn: Callable[..., T], *args: Any, timeout_s: float = 5.0) -> T:
+        """``call`` for a thread without an event loop (tests, scripts)."""
+        return self.command(fn, *args).result(timeout=timeout_s)
+
+
+def _schedule_profile(loop: asyncio.AbstractEventLoop) -> None:
+    """With ``TOUCHLINE_PROFILE=FILE`` (bench/profile_station.py) the station thread runs
+    under cProfile from ``TOUCHLINE_PROFILE_AFTER`` s after the start (default 5) for
+    ``TOUCHLINE_PROFILE_FOR`` s (default 15), then writes the statistics to FILE."""
+    out = os.environ.get(PROFILE_ENV)
+    if not out:
+        return
+    after = float(os.environ.get(PROFILE_ENV + "_AFTER", "5"))
+    span = float(os.environ.get(PROFILE_ENV + "_FOR", "15"))
+    prof = cProfile.Profile()
+
+    def stop() -> None:
+        prof.disable()
+        prof.dump_stats(out)
+        log.info("station profile of %.0f s written to %s", span, out)
+
+    def start() -> None:
+        prof.enable()
+        loop.call_later(span, stop)
+
+    loop.call_later(after, start)
