@@ -21,7 +21,7 @@ camera positions nothing is estimated (the tracker then only has the kick detect
 
 After recognition the hop is refitted with every new detection. When its landing time has
 passed, the next hop starts at the landing point with ``restitution`` times the landing
-vertical speed (refitted once it has detections of its own); a hop slower than
+vertical speed (predicted: ``refit_bounces`` refits it on its own detections); a hop slower than
 ``min_bounce_mm_s`` ends the flight: the ball rolls (the kick detector's model again). The
 predicted stop point follows the remaining hops (constant ground velocity) and the roll
 (``decel_mm_s2``) after them.
@@ -52,15 +52,18 @@ class FlightConfig:
     restitution: float = 0.5  # fieldsim's chip_bounce_restitution
     min_bounce_mm_s: float = 300.0  # fieldsim's: a slower bounce ends the flight
     decel_mm_s2: float = 400.0  # rolling after the flight (the kick detector's decel_mps2)
-    min_samples: int = 6  # detections of a hop before it is fitted
+    min_samples: int = 8  # detections of a hop before it is fitted
     min_fit_s: float = 0.05  # ... spanning at least this long
     recognise_within_s: float = 0.5  # a kick not recognised as a chip by then is flat
     min_vz_mm_s: float = 500.0  # an arc slower upwards than this is not a chip
-    gain: float = 0.5  # the arc's residual must be below this fraction of the rolling fit's
-    min_flat_rms_mm: float = 6.0  # ... which must be worse than this (vision noise ~2 mm)
+    gain: float = 0.67  # the arc's residual must be below this fraction of the rolling fit's
+    min_flat_rms_mm: float = 2.5  # ... which must be worse than this (fieldsim's noise: 2 mm)
     max_flight_s: float = 4.0
     max_vz_mm_s: float = 10000.0  # faster upwards is not a kick
     max_rms_mm: float = 40.0  # a refit explaining the detections worse is not taken
+    # bounces refitted on their own detections (off: predicted with the restitution; a
+    # bounce's few detections, some after its real landing, made wild fits in fieldsim)
+    refit_bounces: bool = False
     bounce_vz_range: tuple[float, float] = (0.3, 2.0)  # a bounce's fitted vz / the predicted
     unseen_s: float = 0.3  # no detection for this long: the flight is given up
     keep_s: float = 1.0  # detections kept
@@ -263,6 +266,8 @@ class FlightTracker:
 
     def _refit(self, f: Flight) -> Flight:
         cfg = self.config
+        if f.hop > 0 and not cfg.refit_bounces:
+            return f
         obs = self._since(f.t0)
         if len(obs) < cfg.min_samples or obs[-1][0] - obs[0][0] < cfg.min_fit_s:
             return f
