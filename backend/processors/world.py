@@ -61,6 +61,9 @@ class WorldProcessor(Processor):
         if g is not None:
             self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
                                  g["boundary_width"])
+            # the cameras' positions: a chipped ball's height from where they see it
+            self.model.set_cameras({c["id"]: (c["x"], c["y"], c["z"])
+                                    for c in g.get("cameras", ())})
 
     def reset(self) -> None:
         """A fresh world model (time jumped: a replay was opened or seeked, or went live),

@@ -8,6 +8,7 @@ import {
   COLORS,
   drawField,
   drawRecorded,
+  flyingLabel,
   KICK_CROSS_PX,
   KICK_DASH,
   kickMarks,
@@ -113,7 +114,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -265,6 +266,7 @@ describe("kicks: the line to a kick's predicted stop point", () => {
     robot: { team: "yellow" as const, id: 3 },
     start_x: -1000, start_y: 0, start_t: 100, vx: 3000, vy: 0, speed_mps: 3.0,
     stop_x: 2500, stop_y: 400, stop_t: 107.5, stop_in_s: 7,
+    chip: false, vz: 0, land_x: null, land_y: null, land_t: null,
   };
   const kicked = (k: typeof kick | null = kick) => {
     const w = world(1);
@@ -306,5 +308,31 @@ describe("kicks: the line to a kick's predicted stop point", () => {
     expect(ALL_LAYERS.kicks).toBe(true);
     const { LAYER_LABELS } = await import("../store/uiStore");
     expect(LAYER_LABELS.some((l) => l.key === "kicks")).toBe(true);
+  });
+});
+
+describe("several balls and a chipped ball", () => {
+  it("draws the other balls faintly, under the ball, and counts them", () => {
+    const f = fakeCtx();
+    const w = world(1, {
+      other_balls: [{ x: 3000, y: -1000, age_s: 0, cameras: [1], detections: 40 }],
+    });
+    const counts = drawField(f.ctx, { ...input([]), world: { ...w, robots: [] } });
+    expect(counts.otherBalls).toBe(1);
+    const p = worldToCanvas(t, 3000, -1000);
+    expect(f.calls.some((c) => c.name === "arc" && c.args[0] === p.x && c.args[1] === p.y)).toBe(true);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input([], { ...ALL_LAYERS, filtered: false }), world: w }).otherBalls).toBe(0);
+  });
+
+  it("labels a flying ball with its height", () => {
+    const f = fakeCtx();
+    const w = world(1);
+    drawField(f.ctx, { ...input([]), world: { ...w, ball: { ...w.ball!, z: 450, vz: 1000, flying: true } } });
+    expect(flyingLabel(450)).toBe("\u2191" + "0.45 m");
+    expect(f.calls.some((c) => c.name === "fillText" && c.args[0] === flyingLabel(450))).toBe(true);
+    const ground = fakeCtx();
+    drawField(ground.ctx, { ...input([]), world: w });
+    expect(ground.calls.some((c) => c.name === "fillText" && String(c.args[0]).endsWith(" m") && String(c.args[0]).startsWith("\u2191"))).toBe(false);
   });
 });

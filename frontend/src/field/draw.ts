@@ -124,10 +124,12 @@ export interface DrawCounts {
   recorded: number;
   /** The predicted stop point of the kick drawn (world mm), null when none. */
   kickStop: { x: number; y: number } | null;
+  /** Other balls drawn faintly (a second ball left on the field). */
+  otherBalls: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -179,7 +181,14 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       drawKick(ctx, t, world.ball, kick);
       counts.kickStop = { x: kick.stop_x, y: kick.stop_y };
     }
-    if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (L.filtered) {
+      const br = g.ball_radius > 0 ? g.ball_radius : 21.5;
+      for (const o of world.other_balls ?? []) {
+        drawOtherBall(ctx, t, o, br);
+        counts.otherBalls++;
+      }
+      if (world.ball) drawBall(ctx, t, world.ball, br);
+    }
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
       if (world.ball?.visible) drawVelocity(ctx, t, world.ball.x, world.ball.y, world.ball.vx, world.ball.vy, COLORS.ball);
@@ -420,6 +429,36 @@ function drawBall(
   ctx.fillStyle = COLORS.ball;
   ctx.fill();
   ctx.lineWidth = 1.5;
+  ctx.strokeStyle = COLORS.ballOutline;
+  ctx.stroke();
+  if (ball.flying && ball.z > 0) {
+    // A chip in the air: its height, over the ground point under it.
+    ctx.font = "11px sans-serif";
+    ctx.fillStyle = COLORS.ball;
+    ctx.fillText(flyingLabel(ball.z), c.x + rad + 3, c.y - rad - 2);
+  }
+  ctx.restore();
+}
+
+/** The label of a ball in the air: its height in m. */
+export function flyingLabel(zMm: number): string {
+  return `↑${(zMm / 1000).toFixed(2)} m`;
+}
+
+/** Opacity of the other balls on the field (not the one played). */
+export const OTHER_BALL_ALPHA = 0.3;
+
+/** A ball seen besides the ball (left on the field): faint, outlined, not the one played. */
+function drawOtherBall(ctx: CanvasRenderingContext2D, t: FieldTransform, o: World["other_balls"][number], radiusMm: number) {
+  if (!Number.isFinite(o.x) || !Number.isFinite(o.y)) return;
+  const c = worldToCanvas(t, o.x, o.y);
+  ctx.save();
+  ctx.globalAlpha = OTHER_BALL_ALPHA;
+  ctx.beginPath();
+  ctx.arc(c.x, c.y, Math.max(4, radiusMm * t.scale), 0, 2 * Math.PI);
+  ctx.fillStyle = COLORS.ball;
+  ctx.fill();
+  ctx.lineWidth = 1;
   ctx.strokeStyle = COLORS.ballOutline;
   ctx.stroke();
   ctx.restore();
