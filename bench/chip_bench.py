@@ -34,6 +34,7 @@ class ChipRun:
     t_recognised: float = math.nan
     xy_err: list[float] = field(default_factory=list)  # mm, in the first flight
     z_err: list[float] = field(default_factory=list)
+    xyz_err_flying: list[float] = field(default_factory=list)  # 3D, once recognised
     land_recog: tuple[float, float] | None = None  # predicted at recognition
     land_pred: tuple[float, float] | None = None  # the first hop's, last estimate
     stop_pred: tuple[float, float] | None = None  # the kick's, 0.3 s after the kick
@@ -100,6 +101,9 @@ def chip_run(speed: float, angle_deg: float, heading: float, start: tuple[float,
                 if not landed:
                     out.xy_err.append(math.hypot(b.x - tx, b.y - ty))
                     out.z_err.append(abs(b.z - tz * 1000))
+                    if b.flying:
+                        out.xyz_err_flying.append(math.hypot(b.x - tx, b.y - ty,
+                                                             b.z - tz * 1000))
                 k_ = world.kicked_ball
                 if k_ is not None and out.stop_pred is None and (
                         world.t_capture - out.t_kick >= 0.3):
@@ -134,8 +138,8 @@ def _p(xs: list[float], q: float) -> float:
 
 
 def main() -> None:
-    print("speed angle | mode  | recog ms | xy med/p95 mm | z med/p95 mm | land err mm "
-          "(at recog/last) | stop err mm | chips")
+    print("speed angle | mode  | recog ms | xy med/p95 mm | z med/p95 mm | 3D recog med/p95 |"
+          " land err mm (at recog/last) | stop err mm | chips")
     for speed, angle, heading, start in CASES:
         for flight in (False, True):
             r = chip_run(speed, angle, heading, start, flight=flight)
@@ -146,6 +150,7 @@ def main() -> None:
             print(f"{speed:4.1f} {angle:4.0f}  | {'new' if flight else 'today':5} | "
                   f"{recog:8.0f} | {statistics.median(r.xy_err):6.0f}/{_p(r.xy_err, 0.95):5.0f}"
                   f" | {statistics.median(r.z_err):5.0f}/{_p(r.z_err, 0.95):5.0f} | "
+                  f"{_p(r.xyz_err_flying, 0.5):6.0f}/{_p(r.xyz_err_flying, 0.95):5.0f} | "
                   f"{land0:6.0f}/{land:6.0f} | {stop:11.0f} | {r.chips} (kicks {r.kicks}, "
                   f"others {r.other_ball_reports})")
 

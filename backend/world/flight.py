@@ -101,17 +101,21 @@ class Flight:
 
 def _arc_rows(obs: list[tuple[float, int, float, float]], t0: float,
               cams: dict[int, CameraPose], g: float) -> tuple[np.ndarray, np.ndarray]:
+    """The least-squares system of the module docstring: rows x then y per detection."""
+    o = np.asarray([(t - t0, px, py, *cams[cam]) for t, cam, px, py in obs])
+    tau, px, py, cx, cy, h = o.T
+    kx, ky = (px - cx) / h, (py - cy) / h
     n = len(obs)
     a = np.zeros((2 * n, 5))
-    b = np.zeros(2 * n)
-    for i, (t, cam, px, py) in enumerate(obs):
-        cx, cy, h = cams[cam]
-        tau = t - t0
-        kx, ky = (px - cx) / h, (py - cy) / h
-        a[2 * i] = (1.0, 0.0, tau, 0.0, tau * kx)
-        a[2 * i + 1] = (0.0, 1.0, 0.0, tau, tau * ky)
-        b[2 * i] = px + g * tau * tau * kx / 2.0
-        b[2 * i + 1] = py + g * tau * tau * ky / 2.0
+    a[0::2, 0] = 1.0
+    a[0::2, 2] = tau
+    a[0::2, 4] = tau * kx
+    a[1::2, 1] = 1.0
+    a[1::2, 3] = tau
+    a[1::2, 4] = tau * ky
+    b = np.empty(2 * n)
+    b[0::2] = px + g * tau * tau * kx / 2.0
+    b[1::2] = py + g * tau * tau * ky / 2.0
     return a, b
 
 
@@ -163,6 +167,7 @@ class FlightTracker:
         self._obs: deque[tuple[float, int, float, float]] = deque(maxlen=512)
         self._flight: Flight | None = None
         self._tried_kick: float | None = None  # start time of the kick given up on
+        self._fitted_t = -math.inf  # the newest detection the last fit had: fit again after
         self.chips = 0  # flights recognised (tests, health)
         self.ended = ""  # why the last flight ended
 
@@ -218,8 +223,9 @@ class FlightTracker:
             self._flight = None
             return None
         f = self._flight
+        fresh = bool(self._obs) and self._obs[-1][0] > self._fitted_t
         if f is None:
-            if kick is not None and kick.start_t != self._tried_kick:
+            if kick is not None and kick.start_t != self._tried_kick and fresh:
                 self._recognise(kick, t_now)
             return self._flight
         if not self._obs or t_now - self._obs[-1][0] > cfg.unseen_s:
@@ -233,7 +239,7 @@ class FlightTracker:
         if f is None:
             self._end("rolling")
             return None
-        self._flight = self._refit(f)
+        self._flight = self._refit(f) if fresh else f
         return self._flight
 
     def _end(self, why: str) -> None:
@@ -252,6 +258,7 @@ class FlightTracker:
         obs = self._since(t0)
         if len(obs) < cfg.min_samples or obs[-1][0] - obs[0][0] < cfg.min_fit_s:
             return
+        self._fitted_t = obs[-1][0]
         fit = fit_arc(obs, t0, self.cameras, cfg.gravity_mm_s2)
         if fit is None:
             return
@@ -271,6 +278,7 @@ class FlightTracker:
         obs = self._since(f.t0)
         if len(obs) < cfg.min_samples or obs[-1][0] - obs[0][0] < cfg.min_fit_s:
             return f
+        self._fitted_t = obs[-1][0]
         # a bounce starts where the previous hop landed: only its velocity is fitted
         start = (f.x0, f.y0) if f.hop > 0 else None
         fit = fit_arc(obs, f.t0, self.cameras, cfg.gravity_mm_s2, start)
