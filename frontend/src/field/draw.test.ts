@@ -7,6 +7,7 @@ import {
   ALL_LAYERS,
   COLORS,
   drawField,
+  chipLanding,
   drawRecorded,
   flyingLabel,
   KICK_CROSS_PX,
@@ -334,5 +335,23 @@ describe("several balls and a chipped ball", () => {
     const ground = fakeCtx();
     drawField(ground.ctx, { ...input([]), world: w });
     expect(ground.calls.some((c) => c.name === "fillText" && String(c.args[0]).endsWith(" m") && String(c.args[0]).startsWith("\u2191"))).toBe(false);
+  });
+});
+
+describe("a chip's landing point", () => {
+  it("is a ring on the kick's line, only for a chip", () => {
+    const flat = {
+      robot: null, start_x: 0, start_y: 0, start_t: 1, vx: 2000, vy: 0, speed_mps: 2,
+      stop_x: 5000, stop_y: 0, stop_t: 6, stop_in_s: 5, chip: false, vz: 0,
+      land_x: null, land_y: null, land_t: null,
+    };
+    expect(chipLanding(flat)).toBeNull();
+    const chip = { ...flat, chip: true, vz: 3000, land_x: 1200, land_y: 0, land_t: 1.6 };
+    expect(chipLanding(chip)).toEqual({ x: 1200, y: 0 });
+    const f = fakeCtx();
+    const w = world(1);
+    drawField(f.ctx, { ...input([]), world: { ...w, ball: { ...w.ball!, x: 0, y: 0, kick: chip } } });
+    const p = worldToCanvas(t, 1200, 0);
+    expect(f.calls.some((c) => c.name === "arc" && c.args[0] === p.x && c.args[1] === p.y && c.args[2] === KICK_CROSS_PX)).toBe(true);
   });
 });

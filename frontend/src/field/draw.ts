@@ -487,6 +487,13 @@ export function kickMarks(
   return { line, stop, label, labelColor: r ? teamColor(r.team) : COLORS.kick };
 }
 
+/** Where a chip's flight in progress lands (world mm), null for a flat kick. */
+export function chipLanding(kick: BallKick): { x: number; y: number } | null {
+  if (!kick.chip || kick.land_x === null || kick.land_y === null) return null;
+  if (!Number.isFinite(kick.land_x) || !Number.isFinite(kick.land_y)) return null;
+  return { x: kick.land_x, y: kick.land_y };
+}
+
 function drawKick(ctx: CanvasRenderingContext2D, t: FieldTransform, ball: { x: number; y: number }, kick: BallKick) {
   if (![kick.stop_x, kick.stop_y, ball.x, ball.y].every(Number.isFinite)) return;
   const m = kickMarks(t, ball, kick);
@@ -500,6 +507,14 @@ function drawKick(ctx: CanvasRenderingContext2D, t: FieldTransform, ball: { x: n
     ctx.lineTo(m.line[1].x, m.line[1].y);
     ctx.stroke();
     ctx.setLineDash([]);
+  }
+  const land = chipLanding(kick);
+  if (land) {
+    // A chip: where its flight in progress lands, a ring on the line.
+    const p = worldToCanvas(t, land.x, land.y);
+    ctx.beginPath();
+    ctx.arc(p.x, p.y, KICK_CROSS_PX, 0, 2 * Math.PI);
+    ctx.stroke();
   }
   const c = m.stop;
   const k = KICK_CROSS_PX;
