@@ -13,7 +13,9 @@ detection gives two equations that are LINEAR in the five unknowns (a, v, vz)::
 so a hop is one least-squares fit, over the detections of every camera (each with its own C).
 
 Recognition: the fit starts at a kick (``backend.world.kick``: its start time is where the
-ball left the ground) and runs alongside the rolling model the kick detector uses. A chip is
+ball left the ground), or, with no kick, where a ball at rest started to move (a chip towards
+the camera's nadir looks slow and may not pass the kick detector), and runs alongside the
+rolling model the kick detector uses. A chip is
 declared when the arc's vertical speed is at least ``min_vz_mm_s`` and its residual is well
 below the rolling model's (``gain``), which is already worse than the vision noise
 (``min_flat_rms_mm``): a flat kick fits the rolling model and an arc of vz ~ 0 alike. Without
@@ -55,6 +57,13 @@ class FlightConfig:
     min_samples: int = 8  # detections of a hop before it is fitted
     min_fit_s: float = 0.05  # ... spanning at least this long
     recognise_within_s: float = 0.5  # a kick not recognised as a chip by then is flat
+    # a chip the kick detector missed (its projection looked slow): a ball leaving rest is
+    # tried too, from the last time it was at rest (``rest_s`` of detections within
+    # ``rest_mm``) once it is ``launch_mm`` away
+    launch_from_rest: bool = True
+    rest_s: float = 0.1
+    rest_mm: float = 15.0
+    launch_mm: float = 100.0
     min_vz_mm_s: float = 500.0  # an arc slower upwards than this is not a chip
     gain: float = 0.67  # the arc's residual must be below this fraction of the rolling fit's
     min_flat_rms_mm: float = 2.5  # ... which must be worse than this (fieldsim's noise: 2 mm)
@@ -167,6 +176,7 @@ class FlightTracker:
         self._obs: deque[tuple[float, int, float, float]] = deque(maxlen=512)
         self._flight: Flight | None = None
         self._tried_kick: float | None = None  # start time of the kick given up on
+        self._last_t0 = -math.inf  # the start of the last flight (a launch is tried once)
         self._fitted_t = -math.inf  # the newest detection the last fit had: fit again after
         self.chips = 0  # flights recognised (tests, health)
         self.ended = ""  # why the last flight ended
@@ -225,8 +235,14 @@ class FlightTracker:
         f = self._flight
         fresh = bool(self._obs) and self._obs[-1][0] > self._fitted_t
         if f is None:
-            if kick is not None and kick.start_t != self._tried_kick and fresh:
-                self._recognise(kick, t_now)
+            if not fresh:
+                return None
+            if kick is not None and kick.start_t != self._tried_kick:
+                self._recognise(kick.start_t, t_now)
+            elif kick is None and cfg.launch_from_rest:
+                t0 = self._launch(t_now)
+                if t0 is not None:
+                    self._recognise(t0, t_now)
             return self._flight
         if not self._obs or t_now - self._obs[-1][0] > cfg.unseen_s:
             self._end("lost")
@@ -249,9 +265,31 @@ class FlightTracker:
     def _since(self, t0: float) -> list[tuple[float, int, float, float]]:
         return [o for o in self._obs if o[0] > t0]
 
-    def _recognise(self, kick: KickedBall, t_now: float) -> None:
+    def _launch(self, t_now: float) -> float | None:
+        """When a ball at rest (the detections of ``rest_s`` within ``rest_mm``) left it in
+        the last ``recognise_within_s``: the last time it was there; else None."""
         cfg = self.config
-        t0 = kick.start_t
+        obs = self._obs
+        if not obs:
+            return None
+        recent = [o for o in obs if t_now - o[0] <= cfg.recognise_within_s]
+        if len(recent) < cfg.min_samples:
+            return None
+        x0, y0 = recent[0][2], recent[0][3]
+        if math.hypot(recent[-1][2] - x0, recent[-1][3] - y0) < cfg.launch_mm:
+            return None  # still there (the common case: cheap)
+        rest = [o for o in recent if o[0] - recent[0][0] <= cfg.rest_s]
+        if len(rest) < 3 or rest[-1][0] - rest[0][0] < cfg.rest_s / 2:
+            return None
+        if any(math.hypot(o[2] - x0, o[3] - y0) > cfg.rest_mm for o in rest):
+            return None
+        t0 = max(o[0] for o in recent if math.hypot(o[2] - x0, o[3] - y0) <= cfg.rest_mm)
+        if t0 <= self._last_t0 + cfg.rest_s:
+            return None  # the launch of the flight just followed
+        return t0
+
+    def _recognise(self, t0: float, t_now: float) -> None:
+        cfg = self.config
         if t_now - t0 > cfg.recognise_within_s:
             self._tried_kick = t0  # a flat kick: not tried again
             return
@@ -269,6 +307,7 @@ class FlightTracker:
         if vz > cfg.max_vz_mm_s or rms > cfg.max_rms_mm:
             return
         self.chips += 1
+        self._last_t0 = t0
         self._flight = self._make(0, t0, x0, y0, vx, vy, vz, rms, flat, len(obs))
 
     def _refit(self, f: Flight) -> Flight:

@@ -519,6 +519,11 @@ class WorldModel:
             if self._chip_kick is None and kick is not None:
                 self._chip_kick = replace(kick, chip=True, vx=flight.vx, vy=flight.vy,
                                           vz=flight.vz)
+            elif self._chip_kick is None and flight.hop == 0:
+                # launched from rest, missed by the kick detector: a kick of no known robot
+                self._chip_kick = KickedBall(None, flight.x0, flight.y0, flight.t0, flight.vx,
+                                             flight.vy, flight.stop_x, flight.stop_y,
+                                             flight.stop_t, chip=True, vz=flight.vz)
             if self._chip_kick is not None:
                 kick = replace(self._chip_kick, stop_x=flight.stop_x, stop_y=flight.stop_y,
                                stop_t=flight.stop_t, land_x=flight.land_x,

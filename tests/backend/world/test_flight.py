@@ -87,6 +87,39 @@ def test_a_chip_is_recognised_and_followed_in_3d(
     assert new.other_ball_reports == 0  # the cameras' disagreement is not a second ball
 
 
+def test_a_chip_the_kick_detector_misses_is_taken_from_rest() -> None:
+    """Towards the nadir of the camera that sees it a chip's ground points move slowly (no
+    1 m/s jump for the kick detector): the ball leaving rest starts the fit instead."""
+    r = chip_run(3.5, 50.0, 0.3, (-5.0, -3.0))
+    assert r.kicks == 0 and r.chips == 1
+    assert r.land_pred is not None and math.dist(r.land_pred, r.land) < 100.0
+    assert r.stop_pred is not None and math.dist(r.stop_pred, r.stop) < 300.0
+    off = chip_run(3.5, 50.0, 0.3, (-5.0, -3.0), flight=False)
+    assert off.kicks == 0 and off.stop_pred is None  # today: nothing at all
+
+
+@pytest.mark.parametrize(("speed", "dribble", "seed"), [(1.0, False, 1), (2.0, True, 2)])
+def test_a_ball_pushed_or_dribbled_from_rest_is_not_a_chip(
+        speed: float, dribble: bool, seed: int) -> None:
+    from fieldsim.world import Team
+
+    cfg = SimConfig(blue=1, yellow=0, seed=seed, division="A")
+    w = World(cfg)
+    w.teleport_robot(Team.BLUE, 0, -1.0, 0.5, 0.4)
+    w.teleport_ball(-1.0 + 0.4 * math.cos(0.4), 0.5 + 0.4 * math.sin(0.4))
+    v = Vision(cfg, w.geometry)
+    model = WorldModel()
+    model.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
+    worlds = run(w, v, model, 0.3)
+    for _ in range(25):  # 2.5 s driving into the ball (and spinning with it when dribbling)
+        w.set_command(Team.BLUE, 0, speed, 0.0, 0.8 if dribble else 0.0,
+                      dribbler_rpm=1000.0 if dribble else 0.0)
+        worlds += run(w, v, model, 0.1)
+    assert math.hypot(w.ball.x + 1.0, w.ball.y - 0.5) > 1.0  # the ball did move
+    assert model.flight.chips == 0
+    assert not any(s.ball is not None and s.ball.flying for s in worlds)
+
+
 @pytest.mark.parametrize(("speed", "heading", "start", "seed", "noise"), [
     (2.5, 0.0, (-4.0, 1.0), 1, 2.0),
     (2.0, 2.0, (1.0, -3.0), 2, 2.0),
