@@ -60,6 +60,7 @@ from fieldsim.bodies import (
 )
 from fieldsim.config import SimConfig
 from fieldsim.geometry import FieldGeometry, division_geometry
+from fieldsim.lines import LineJudge
 from fieldsim.robot_physics import CONTACT_HYSTERESIS_M, Contact, RobotPhysics
 from fieldsim.shapes import Rect, clamp, push_out_of_rect
 
@@ -101,11 +102,10 @@ class World:
         # match state
         self.events: list[dict[str, Any]] = []
         self.last_touch: RobotKey | None = None
-        self.ball_in_goal: str | None = None  # "positive" / "negative": the x side
+        self.lines = LineJudge(self._hl, self._hw, self._goal_hw, self._goal_height,
+                               self.config.ball_radius_m)
         self._seq = 0
         self._t_event = 0.0  # simulated time stamped on events of the current step
-        self._out_reported = False  # ball_out / goal raised, not yet back in the field
-        self._crossed: tuple[str, float, float] | None = None  # line, x, y where it left
         self._holder: RobotKey | None = None
         # the robot that just kicked or lost the ball: no re-catch until it left its kicker zone
         self._no_catch: RobotKey | None = None
@@ -214,10 +214,8 @@ class World:
         # for a ball placed outside the field until it has been back inside
         self._release()
         self._no_catch = None
-        self.ball_in_goal = None
         self.last_touch = None
-        self._crossed = None
-        self._out_reported = not self._in_field(self.ball.x, self.ball.y)
+        self.lines.placed(self.ball.x, self.ball.y)
 
     def add_ball(self, x: float, y: float, vx: float = 0.0, vy: float = 0.0) -> Ball:
         """Leave another ball on the field (m, m/s): cameras see it, robots do not play it."""
@@ -234,6 +232,11 @@ class World:
         n = len(self.other_balls)
         self.other_balls.clear()
         return n
+
+    @property
+    def ball_in_goal(self) -> str | None:
+        """"positive" / "negative" (the x side) while a scored ball is in the goal, else None."""
+        return self.lines.ball_in_goal
 
     def teleport_robot(
         self,
@@ -475,63 +478,17 @@ class World:
     # -- lines, goals, events ----------------------------------------------------------------
     # -- lines, goals, events ----------------------------------------------------------------
 
-    def _in_field(self, x: float, y: float) -> bool:
-        """Ball centre inside the field lines (re-arms ball_out / goal)."""
-        return abs(x) <= self._hl and abs(y) <= self._hw
-
     def _check_lines(self, x0: float, y0: float) -> None:
         """Goal / ball_out events for a ball that moved from (x0, y0) this step."""
-        ball = self.ball
-        x, y = ball.x, ball.y
-        if self._in_field(x, y):
-            self._out_reported = False
-            self.ball_in_goal = None
+        call = self.lines.check(x0, y0, self.ball)
+        if call is None:
             return
-        if self._in_field(x0, y0):
-            self._crossed = self._exit_point(x0, y0, x, y)
-        if self._out_reported:
-            return
-        r = self.config.ball_radius_m
-        over_goal_line = abs(x) > self._hl + r
-        over_touch_line = abs(y) > self._hw + r
-        if not (over_goal_line or over_touch_line):
-            return
-        self._out_reported = True
-        if over_goal_line and abs(y) < self._goal_hw and ball.z < self._goal_height:
-            side = "positive" if x > 0 else "negative"
-            self.ball_in_goal = side
+        if call.kind == "goal":
             self._release()
             self.stats.goals += 1
-            cx, cy = self._crossing("goal", x, y)
-            self._emit("goal", side=side, x=cx * 1000.0, y=cy * 1000.0,
-                       last_touch=self._touch_dict())
-            return
-        if over_goal_line and over_touch_line:
-            line = self._crossed[0] if self._crossed is not None else "goal"
         else:
-            line = "goal" if over_goal_line else "touch"
-        cx, cy = self._crossing(line, x, y)
-        self.stats.ball_out += 1
-        self._emit("ball_out", line=line, x=cx * 1000.0, y=cy * 1000.0,
-                   last_touch=self._touch_dict())
-
-    def _exit_point(self, x0: float, y0: float, x1: float, y1: float) -> tuple[str, float, float]:
-        """Where the segment from inside the field lines to outside leaves them, and the line."""
-        tx = ty = math.inf
-        if abs(x1) > self._hl:
-            tx = (math.copysign(self._hl, x1) - x0) / (x1 - x0)
-        if abs(y1) > self._hw:
-            ty = (math.copysign(self._hw, y1) - y0) / (y1 - y0)
-        line, t = ("goal", tx) if tx <= ty else ("touch", ty)
-        return line, x0 + t * (x1 - x0), y0 + t * (y1 - y0)
-
-    def _crossing(self, line: str, x: float, y: float) -> tuple[float, float]:
-        """The point on ``line`` where the ball left the field (projected if unknown)."""
-        if self._crossed is not None and self._crossed[0] == line:
-            return self._crossed[1], self._crossed[2]
-        if line == "goal":
-            return math.copysign(self._hl, x), clamp(y, -self._hw, self._hw)
-        return clamp(x, -self._hl, self._hl), math.copysign(self._hw, y)
+            self.stats.ball_out += 1
+        self._emit(call.kind, **call.fields, last_touch=self._touch_dict())
 
     def _touch_dict(self) -> dict[str, Any] | None:
         if self.last_touch is None:
