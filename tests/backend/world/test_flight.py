@@ -218,3 +218,30 @@ def test_when_the_played_ball_vanishes_the_other_one_is_taken() -> None:
     assert 0.03 < t_switch < 0.2
     assert near(gone[-1], 1000.0, 1000.0) and gone[-1].other_balls == ()
     assert model.ball_recoveries == 1
+
+
+def test_the_world_processor_passes_the_chip_parameters_and_camera_positions() -> None:
+    from backend import topics
+    from backend.bus import DataBus
+    from backend.params.model import StationParams
+    from backend.processors.world import WorldProcessor
+    from backend.world.decode import geometry_to_dict
+
+    bus = DataBus()
+    proc = WorldProcessor(bus)
+    p = StationParams()
+    p.kicks.chip_restitution = 0.6
+    p.kicks.decel_mps2 = 0.5
+    proc.configure(p)
+    fc = proc.model.flight.config
+    assert (fc.enabled, fc.restitution, fc.decel_mm_s2) == (True, 0.6, 500.0)
+    p.kicks.chips = False
+    proc.configure(p)
+    proc.reset()  # a fresh model keeps the parameters
+    assert not proc.model.flight.config.enabled and proc.model.flight.config.restitution == 0.6
+    # the geometry packet's camera positions reach the model
+    cfg = SimConfig()
+    v = Vision(cfg, World(cfg).geometry)
+    bus.of(topics.GEOMETRY).write(geometry_to_dict(v.geometry_packet().geometry))
+    proc._field_from_geometry()
+    assert proc.model.flight.cameras == {c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras}
