@@ -304,7 +304,7 @@ class FlightTracker:
         flat = _flat_rms(obs, cfg.decel_mm_s2)
         if vz < cfg.min_vz_mm_s or flat < cfg.min_flat_rms_mm or rms > cfg.gain * flat:
             return
-        if vz > cfg.max_vz_mm_s or rms > cfg.max_rms_mm:
+        if not self._believable(vz) or rms > cfg.max_rms_mm:
             return
         self.chips += 1
         self._last_t0 = t0
@@ -325,7 +325,7 @@ class FlightTracker:
             return f
         (x0, y0, vx, vy, vz), rms = fit
         if f.hop == 0:
-            ok = 0.0 < vz <= cfg.max_vz_mm_s
+            ok = vz > 0.0 and self._believable(vz)
         else:
             lo, hi = cfg.bounce_vz_range
             ok = lo * f.vz0 <= vz <= hi * f.vz0
@@ -333,6 +333,12 @@ class FlightTracker:
             return f  # the detections do not make a believable hop (yet): keep the prediction
         return self._make(f.hop, f.t0, x0, y0, vx, vy, vz, rms, f.flat_rms_mm, len(obs),
                           f.vz0)
+
+    def _believable(self, vz: float) -> bool:
+        """Not faster upwards than a kick, and the apex well below every camera."""
+        cfg = self.config
+        apex = vz * vz / (2.0 * cfg.gravity_mm_s2)
+        return vz <= cfg.max_vz_mm_s and apex < 0.8 * min(p[2] for p in self.cameras.values())
 
     def _bounce(self, f: Flight) -> Flight | None:
         """The next hop from the landing of ``f``, or None once the ball rolls."""
