@@ -60,6 +60,12 @@ class BallKick(TypedDict):
     stop_y: float
     stop_t: Annotated[float, Field(description="Unix s (capture time), predicted stop")]
     stop_in_s: Annotated[float, Field(description="predicted stop_t - the world's t_capture")]
+    chip: Annotated[bool, Field(
+        description="the ball flies (3D estimate): stop after the bounces and the roll")]
+    vz: Annotated[float, Field(description="mm/s, a chip's initial vertical speed")]
+    land_x: Annotated[float | None, Field(description="mm, where the flight in progress lands")]
+    land_y: float | None
+    land_t: Annotated[float | None, Field(description="Unix s (capture time) of that landing")]
 
 
 @with_config(_STRICT)
@@ -79,6 +85,21 @@ class Ball(TypedDict):
     lost: Annotated[bool, Field(description="not seen for long: dropped from the world soon")]
     filter: FilterName
     kick: Annotated[BallKick | None, Field(description="the kick in progress, if any")]
+    z: Annotated[float, Field(description="mm above the field (a chipped ball in flight)")]
+    vz: Annotated[float, Field(description="mm/s, upwards")]
+    flying: Annotated[bool, Field(
+        description="x, y, z from the flight estimate (the cameras see it elsewhere)")]
+
+
+@with_config(_STRICT)
+class OtherBall(TypedDict):
+    """A ball seen consistently besides the ball (a second ball left on the field)."""
+
+    x: Annotated[float, Field(description="mm, its latest detection")]
+    y: float
+    age_s: Annotated[float, Field(description="since it was last seen")]
+    cameras: list[int]
+    detections: Annotated[int, Field(description="consistent detections so far")]
 
 
 @with_config(_STRICT)
@@ -353,6 +374,8 @@ class World(TypedDict):
     seq: int
     t_capture: float
     ball: Ball | None
+    other_balls: Annotated[list[OtherBall], Field(
+        description="other balls on the field (not the one played), faint on the field")]
     robots: list[Robot]
     cameras: list[RawCamera]
     referee: Referee | None
@@ -395,6 +418,16 @@ class FieldArc(TypedDict):
 
 
 @with_config(_STRICT)
+class CameraPose(TypedDict):
+    """A camera's position from its calibration (mm): the flight estimate needs it."""
+
+    id: int
+    x: float
+    y: float
+    z: Annotated[float, Field(description="height above the field")]
+
+
+@with_config(_STRICT)
 class Geometry(TypedDict):
     """The field from the geometry packet (mm)."""
 
@@ -410,6 +443,8 @@ class Geometry(TypedDict):
     max_robot_radius: float
     lines: list[FieldLine]
     arcs: list[FieldArc]
+    cameras: Annotated[list[CameraPose], Field(
+        description="where the cameras hang (calibration derived_camera_world_t*), if sent")]
 
 
 # ------------------------------------------------------------------------------ health

@@ -151,6 +151,7 @@ def kick_view(k: KickedBall | None, t_ref: float) -> contract.BallKick | None:
         "vx": k.vx, "vy": k.vy, "speed_mps": k.speed / 1000.0,
         "stop_x": k.stop_x, "stop_y": k.stop_y, "stop_t": k.stop_t,
         "stop_in_s": k.stop_t - t_ref,
+        "chip": k.chip, "vz": k.vz, "land_x": k.land_x, "land_y": k.land_y, "land_t": k.land_t,
     }
 
 
@@ -200,6 +201,7 @@ def world(st: Station) -> contract.World:
         "seq": st.world_topic.seq,
         "t_capture": world.t_capture if world else 0.0,
         "ball": None,
+        "other_balls": [],
         "robots": [],
         "cameras": [],
         "referee": None,
@@ -228,8 +230,12 @@ def world(st: Station) -> contract.World:
             "x": b.x, "y": b.y, "vx": b.vx, "vy": b.vy, "visible": b.visible,
             "age_s": t_ref - b.t_seen, "cameras": list(b.cameras), "raw_x": b.raw_x,
             "raw_y": b.raw_y, "predicted": b.predicted, "lost": b.lost, "filter": b.filter,
-            "kick": kick_view(world.kicked_ball, t_ref)}
+            "kick": kick_view(world.kicked_ball, t_ref), "z": b.z, "vz": b.vz,
+            "flying": b.flying}
         out["ball"] = ball
+    out["other_balls"] = [
+        {"x": o.x, "y": o.y, "age_s": t_ref - o.t_seen, "cameras": list(o.cameras),
+         "detections": o.detections} for o in world.other_balls]
     robots: list[contract.Robot] = []
     for r in world.robots:
         entry = targets.get((r.team, r.id))

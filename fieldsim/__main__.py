@@ -26,6 +26,14 @@ def _gains(text: str) -> list[float]:
     return values
 
 
+def _point(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected X,Y in metres") from None
+    return x, y
+
+
 def build_parser() -> argparse.ArgumentParser:
     d = SimConfig()
     p = argparse.ArgumentParser(
@@ -51,6 +59,11 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--max-speed", type=float, default=d.robot_max_speed, help="m/s")
     w.add_argument("--command-timeout", type=float, default=d.command_timeout_s, help="s")
     w.add_argument("--ball-decel", type=float, default=d.ball_rolling_decel, help="m/s^2")
+    w.add_argument("--chip-restitution", type=float, default=d.chip_bounce_restitution,
+                   help="vertical speed kept by a chipped ball's bounce")
+    w.add_argument("--other-ball", type=_point, action="append", default=[], metavar="X,Y",
+                   help="leave another ball at X,Y (m): seen by the cameras, not played "
+                        "(repeatable)")
     v = p.add_argument_group("vision")
     v.add_argument("--cameras", type=int, choices=[1, 2, 4, 8], default=d.cameras,
                    help="8: two rows of four along the field (division A)")
@@ -96,6 +109,8 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
         robot_max_speed=args.max_speed,
         command_timeout_s=args.command_timeout,
         ball_rolling_decel=args.ball_decel,
+        chip_bounce_restitution=args.chip_restitution,
+        other_balls=list(args.other_ball),
         cameras=args.cameras,
         camera_hz=args.camera_hz,
         geometry_hz=args.geometry_hz,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from sslnet import defaults
 
@@ -43,6 +43,8 @@ class SimConfig:
     goal_wall_restitution: float = 0.2  # the ball on the goal walls (and a scored ball's mouth)
     dribbler_max_omega: float = 8.0  # rad/s: a robot spinning faster drops a held ball
     dribbler_max_accel: float = 6.0  # m/s^2: a robot accelerating harder drops a held ball
+    # balls left on the field besides the ball (x, y in m): seen by the cameras, not played
+    other_balls: list[tuple[float, float]] = field(default_factory=list)
 
     # Events (goal, ball_out, collision) kept by the World and carried in the truth
     events_kept: int = 256  # World.events holds at most this many (oldest dropped)
@@ -101,6 +103,12 @@ class SimConfig:
             raise ValueError("need 0 < gain_min <= gain_max")
         if self.gains is not None and any(not g > 0 for g in self.gains):
             raise ValueError("gains must be > 0")
+        if not 0.0 <= self.chip_bounce_restitution < 1.0:
+            raise ValueError("chip_bounce_restitution must be in [0, 1)")
+        if not self.gravity > 0:
+            raise ValueError("gravity must be > 0")
+        if len(self.other_balls) > 8:
+            raise ValueError("at most 8 other balls")
         if not 0.0 <= self.goal_wall_restitution <= 1.0:
             raise ValueError("goal_wall_restitution must be in [0, 1]")
         if not self.goal_wall_thickness_m > 0:

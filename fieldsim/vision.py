@@ -5,81 +5,23 @@ Each camera sees a rectangle of the field (a quadrant for 4 cameras, a half for 
 cameras, each with its own noise, like SSL-Vision. Faults: Gaussian noise on position and
 orientation, missed detections (per object and camera), false balls (on a robot or anywhere in
 view). Every camera has its own random stream and frame counter, so output is deterministic for
-a seed and a sequence of calls.
+a seed and a sequence of calls. A ball in the air is reported where the camera's ray through it
+meets the ground (``cameras.Camera.ground_point``), with no height, as SSL-Vision does; the
+other balls left on the field (``World.other_balls``) are detected like the ball.
 """
 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
 
+from fieldsim.cameras import Camera, camera_calibration, make_cameras
 from fieldsim.config import SimConfig
 from fieldsim.geometry import FieldGeometry, field_size_message
 from fieldsim.world import ROBOT_HEIGHT_M, Team, World, wrap_angle
 from sslpb import ssl_vision_detection_pb2 as det_pb
-from sslpb import ssl_vision_geometry_pb2 as geom_pb
 from sslpb import ssl_vision_wrapper_pb2 as wrapper_pb
 
-IMAGE_WIDTH = 1280
-IMAGE_HEIGHT = 1024
-
-
-@dataclass(frozen=True)
-class Camera:
-    """A camera looking straight down at (cx, cy) from height h; it sees [x0,x1] x [y0,y1]."""
-
-    camera_id: int
-    cx: float  # mm
-    cy: float
-    height: float
-    x0: float
-    x1: float
-    y0: float
-    y1: float
-    focal: float  # px
-
-    def sees(self, x: float, y: float) -> bool:
-        return self.x0 <= x <= self.x1 and self.y0 <= y <= self.y1
-
-    def pixel(self, x: float, y: float, z: float = 0.0) -> tuple[float, float]:
-        """Pinhole projection of a field point (mm) to pixels."""
-        depth = max(1.0, self.height - z)
-        px = IMAGE_WIDTH / 2.0 + self.focal * (x - self.cx) / depth
-        py = IMAGE_HEIGHT / 2.0 - self.focal * (y - self.cy) / depth
-        return px, py
-
-
-def make_cameras(config: SimConfig, geometry: FieldGeometry) -> list[Camera]:
-    """Camera ids 0..n-1. Four cameras: 0 (-x,+y), 1 (+x,+y), 2 (-x,-y), 3 (+x,-y). Eight
-    cameras (the division A layout of the last world cups): two rows of four along the field,
-    ids 0..3 on +y from -x to +x, 4..7 on -y, each overlapping its neighbours by
-    ``camera_overlap_mm``."""
-    wx, wy, ov, h = geometry.wall_x, geometry.wall_y, config.camera_overlap_mm, (
-        config.camera_height_mm
-    )
-    rects: list[tuple[float, float, float, float]]
-    if config.cameras == 1:
-        rects = [(-wx, wx, -wy, wy)]
-    elif config.cameras == 2:
-        rects = [(-wx, ov, -wy, wy), (-ov, wx, -wy, wy)]
-    elif config.cameras == 8:
-        xs = [-wx + i * wx / 2.0 for i in range(5)]  # four columns
-        rects = [(max(-wx, xs[i] - ov), min(wx, xs[i + 1] + ov), y0, y1)
-                 for y0, y1 in ((-ov, wy), (-wy, ov)) for i in range(4)]
-    else:
-        rects = [
-            (-wx, ov, -ov, wy),
-            (-ov, wx, -ov, wy),
-            (-wx, ov, -wy, ov),
-            (-ov, wx, -wy, ov),
-        ]
-    cams = []
-    for i, (x0, x1, y0, y1) in enumerate(rects):
-        cx, cy = (x0 + x1) / 2.0, (y0 + y1) / 2.0
-        half_w, half_h = (x1 - x0) / 2.0, (y1 - y0) / 2.0
-        focal = min(IMAGE_WIDTH / 2.0 * h / half_w, IMAGE_HEIGHT / 2.0 * h / half_h)
-        cams.append(Camera(i, cx, cy, h, x0, x1, y0, y1, focal))
-    return cams
+__all__ = ["Camera", "Vision", "camera_calibration", "make_cameras"]
 
 
 class Vision:
@@ -126,16 +68,21 @@ class Vision:
         frame.camera_id = camera_id
         noise, noise_rad, miss = cfg.noise_mm, cfg.noise_rad, cfg.miss_prob
 
-        ball = world.ball
-        bx = (ball.x + ball.vx * extrapolate_s) * 1000.0
-        by = (ball.y + ball.vy * extrapolate_s) * 1000.0
-        bz = ball.z * 1000.0
-        if cam.sees(bx, by):
+        for ball in (world.ball, *world.other_balls):
+            # at the capture instant: along the velocity, and up or down the parabola in flight
+            bz = ball.z + ball.vz * extrapolate_s
+            if ball.z > 0.0:
+                bz -= world.config.gravity * extrapolate_s * extrapolate_s / 2.0
+            bx, by = cam.ground_point((ball.x + ball.vx * extrapolate_s) * 1000.0,
+                                      (ball.y + ball.vy * extrapolate_s) * 1000.0,
+                                      max(0.0, bz) * 1000.0)
+            if not cam.sees(bx, by):
+                continue
             if miss > 0.0 and rng.random() < miss:
                 self.missed_detections += 1
             else:
                 self._add_ball(frame, cam, rng, bx + rng.gauss(0.0, noise),
-                               by + rng.gauss(0.0, noise), bz, self._confidence(rng))
+                               by + rng.gauss(0.0, noise), 0.0, self._confidence(rng))
 
         visible: list[tuple[float, float]] = []
         for robot in world.robots.values():
@@ -197,23 +144,3 @@ class Vision:
         for cam in self.cameras:
             packet.geometry.calib.append(camera_calibration(cam))
         return packet
-
-
-def camera_calibration(cam: Camera) -> geom_pb.SSL_GeometryCameraCalibration:
-    """Calibration of a camera looking straight down (rotation of pi about the x axis)."""
-    c = geom_pb.SSL_GeometryCameraCalibration()
-    c.camera_id = cam.camera_id
-    c.focal_length = cam.focal
-    c.principal_point_x = IMAGE_WIDTH / 2.0
-    c.principal_point_y = IMAGE_HEIGHT / 2.0
-    c.distortion = 0.0
-    # quaternion (x, y, z, w) of a half turn about x: world -> camera
-    c.q0, c.q1, c.q2, c.q3 = 1.0, 0.0, 0.0, 0.0
-    # t = -R * C with R = diag(1, -1, -1)
-    c.tx, c.ty, c.tz = -cam.cx, cam.cy, cam.height
-    c.derived_camera_world_tx = cam.cx
-    c.derived_camera_world_ty = cam.cy
-    c.derived_camera_world_tz = cam.height
-    c.pixel_image_width = IMAGE_WIDTH
-    c.pixel_image_height = IMAGE_HEIGHT
-    return c

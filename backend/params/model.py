@@ -112,6 +112,11 @@ class KickParams(Group):
                               "the ball turned more than this (touch, bounce): the kick is over")
     fit_window_s: float = num(0.15, 0.05, 1.0, "s", 0.05,
                               "the stop point is fitted on this long of the newest measurements")
+    chips: bool = Field(default=True, description="estimate chipped balls in 3D from the "
+                        "cameras' positions (backend/world/flight.py)")
+    chip_restitution: float = num(0.5, 0.0, 0.95, "", 0.05,
+                                  "vertical speed a chipped ball keeps at a bounce, for its "
+                                  "landing and stop prediction (fieldsim: 0.5)")
 
 
 class SafetyParams(Group):

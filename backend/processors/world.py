@@ -61,6 +61,9 @@ class WorldProcessor(Processor):
         if g is not None:
             self.model.set_field(g["field_length"] / 2, g["field_width"] / 2,
                                  g["boundary_width"])
+            # the cameras' positions: a chipped ball's height from where they see it
+            self.model.set_cameras({c["id"]: (c["x"], c["y"], c["z"])
+                                    for c in g.get("cameras", ())})
 
     def reset(self) -> None:
         """A fresh world model (time jumped: a replay was opened or seeked, or went live),
@@ -83,6 +86,9 @@ class WorldProcessor(Processor):
         kc.decel_mps2, kc.jump_mps, kc.jump_window_s = k.decel_mps2, k.jump_mps, k.jump_window_s
         kc.reach_mm, kc.front_half_angle_deg = k.reach_mm, k.front_half_angle_deg
         kc.stop_mps, kc.max_turn_deg, kc.fit_window_s = k.stop_mps, k.max_turn_deg, k.fit_window_s
+        fc = self.model.flight.config
+        fc.enabled, fc.restitution = k.chips, k.chip_restitution
+        fc.decel_mm_s2 = k.decel_mps2 * 1000.0
         self.model.configure(params.filters)
 
     async def tick(self) -> None:

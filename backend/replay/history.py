@@ -60,6 +60,7 @@ def merge_wrapper(model: WorldModel, pkt: SSL_WrapperPacket, receive_time_ns: in
     if pkt.HasField("geometry"):
         g = geometry_to_dict(pkt.geometry)
         model.set_field(g["field_length"] / 2, g["field_width"] / 2, g["boundary_width"])
+        model.set_cameras({c["id"]: (c["x"], c["y"], c["z"]) for c in g["cameras"]})
     return pkt.HasField("detection") and model.update(
         decode_detection(pkt.detection, receive_time_ns))
 

@@ -88,4 +88,22 @@ def geometry_to_dict(geo: SSL_GeometryData, bad: list[str] | None = None) -> dic
         "max_robot_radius": positive(f.HasField("max_robot_radius"), f.max_robot_radius, 90.0),
         "lines": lines,
         "arcs": arcs,
+        "cameras": camera_poses(geo),
     }
+
+
+def camera_poses(geo: SSL_GeometryData) -> list[dict[str, Any]]:
+    """Each calibration's camera position (``derived_camera_world_t*``, mm), where sent,
+    finite and above the field; one per camera id (the first)."""
+    out: list[dict[str, Any]] = []
+    seen: set[int] = set()
+    for c in geo.calib:
+        if not (c.HasField("derived_camera_world_tx") and c.HasField("derived_camera_world_ty")
+                and c.HasField("derived_camera_world_tz")):
+            continue
+        x, y, z = c.derived_camera_world_tx, c.derived_camera_world_ty, c.derived_camera_world_tz
+        if not _finite(x, y, z) or z <= 0 or c.camera_id in seen or c.camera_id > 63:
+            continue
+        seen.add(c.camera_id)
+        out.append({"id": c.camera_id, "x": x, "y": y, "z": z})
+    return out

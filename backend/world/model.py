@@ -27,6 +27,18 @@ prediction from its recent raw track, and the nearest one within the distance th
 have travelled at ``ball_max_speed_mm_s`` is taken. Candidates not taken feed hypotheses; a
 hypothesis confirmed by ``ball_recover_count`` consistent detections while the tracked ball has
 not been seen for ``ball_recover_after_s`` replaces it (teleport, fast kick, wrong start).
+
+Several balls: a ball seen while the tracked one keeps being seen never replaces it; a
+hypothesis confirmed by ``other_ball_confirm_count`` detections, farther than
+``other_ball_min_distance_mm`` from the ball, is reported in ``WorldState.other_balls`` (a
+second ball left on the field) until it is not seen for ``ball_hypothesis_timeout_s``.
+
+Chipped balls (``backend.world.flight``): with the camera positions known (``set_cameras``,
+from the geometry packet) a kick whose detections fit a ballistic arc better than a roll is a
+flight; while it lasts, each camera's detection is moved from the ground to under the ball
+before it is associated and merged (the cameras see a flying ball at different places), and
+the ball's x, y, z, vx, vy, vz are the arc's. Between a kick's start and its recognition the
+cameras of one instant may disagree by up to ``ball_camera_disparity_mm``.
 """
 
 from __future__ import annotations
@@ -40,8 +52,18 @@ from backend.filters.params import FilterKind, FilterSettings
 
 from .camera_pairs import CameraPairs
 from .clock import CameraClocks, ClockConfig
+from .flight import CameraPose, FlightConfig, FlightTracker
 from .kick import KickConfig, KickDetector
-from .state import BallState, CameraFrame, RawBall, RobotState, Team, WorldState
+from .state import (
+    BallState,
+    CameraFrame,
+    KickedBall,
+    OtherBall,
+    RawBall,
+    RobotState,
+    Team,
+    WorldState,
+)
 
 
 @dataclass
@@ -62,6 +84,9 @@ class WorldModelConfig:
     ball_recover_after_s: float = 0.05  # tracked ball unseen this long before switching
     ball_hypothesis_timeout_s: float = 0.1  # a hypothesis not confirmed again is forgotten
     ball_max_hypotheses: int = 16
+    ball_camera_disparity_mm: float = 400.0  # a kick's rising ball: cameras of one instant
+    other_ball_confirm_count: int = 10  # consistent detections before another ball is reported
+    other_ball_min_distance_mm: float = 300.0  # nearer to the ball: not another ball
     velocity_smoothing: float = 0.3  # unused since the filters give velocities (kept for params)
     # sanity limits on what a frame may carry (the rest is dropped and counted)
     max_camera_id: int = 63
@@ -73,6 +98,7 @@ class WorldModelConfig:
     field_boundary_mm: float = 300.0
     clock: ClockConfig = field(default_factory=ClockConfig)
     kicks: KickConfig = field(default_factory=KickConfig)
+    flight: FlightConfig = field(default_factory=FlightConfig)
 
 
 @dataclass
@@ -110,6 +136,7 @@ class _Hypothesis:
     t: float
     count: int
     points: list[tuple[float, float, float]]
+    cams: dict[int, float] = field(default_factory=dict)  # camera -> capture time seen
 
 
 class WorldModel:
@@ -129,6 +156,8 @@ class WorldModel:
         self.kicks = KickDetector(self.config.kicks)
         self.kicks_enabled = True
         self._kick_fed_t = -math.inf  # the newest ball measurement the kick detector has
+        self.flight = FlightTracker(self.config.flight)
+        self._chip_kick: KickedBall | None = None  # the kick of the flight in progress
         #: frames and objects dropped, by reason ("time out of range", "bad camera id",
         #: "object out of field", "too many objects")
         self.rejected: dict[str, int] = {}
@@ -227,6 +256,10 @@ class WorldModel:
         c = self.config
         c.field_half_length_mm, c.field_half_width_mm = half_length_mm, half_width_mm
         c.field_boundary_mm = max(0.0, boundary_mm)
+
+    def set_cameras(self, poses: dict[int, CameraPose]) -> None:
+        """Camera positions (x, y, height, mm) from the geometry packet's calibration."""
+        self.flight.set_cameras(poses)
 
     def _on_field(self, x: float, y: float) -> bool:
         c = self.config
@@ -335,26 +368,33 @@ class WorldModel:
         if dt < -cfg.merge_window_s or (dt <= 0 and cam in bt.instant_cams):
             return  # an older frame than the ball's latest measurement
         same_instant = abs(dt) <= cfg.merge_window_s and cam not in bt.instant_cams
+        flying = self.flight.flight is not None
+        # a flying ball: each camera's detection moved to under the ball
+        ground = [self.flight.ground(t, cam, b.x, b.y) if flying else (b.x, b.y)
+                  for b in cands]
         if same_instant:
             ref: tuple[float, float] = (bt.raw.x, bt.raw.y)
             gate = cfg.ball_gate_slack_mm
+            if not flying and self.kicks.kick is not None:
+                gate += cfg.ball_camera_disparity_mm  # perhaps rising, not yet recognised
         else:
             vx, vy = bt.raw_vel.velocity()
             ref = (bt.raw.x + vx * dt, bt.raw.y + vy * dt)
             gate = self._gate(dt) if dt <= cfg.ball_assoc_window_s else -1.0
         best_i, best_d2 = -1, gate * gate if gate >= 0 else -1.0
-        for i, b in enumerate(cands):
-            d2 = (b.x - ref[0]) ** 2 + (b.y - ref[1]) ** 2
+        for i, (gx, gy) in enumerate(ground):
+            d2 = (gx - ref[0]) ** 2 + (gy - ref[1]) ** 2
             if d2 <= best_d2:
                 best_i, best_d2 = i, d2
         if best_i >= 0:
             b = cands[best_i]
-            self._measure(bt, t, cam, b.x, b.y, 0.0)
+            if self._measure(bt, t, cam, ground[best_i][0], ground[best_i][1], 0.0):
+                self.flight.observe(t, cam, b.x, b.y)
             rest = cands[:best_i] + cands[best_i + 1:]
         else:
             rest = cands
         self.ball_rejected_gate += len(rest)
-        self._hypothesise(rest, t)
+        self._hypothesise(rest, t, cam)
         if best_i < 0 and dt >= cfg.ball_recover_after_s:
             confirmed = [h for h in self._hyps
                          if h.t == t and h.count >= cfg.ball_recover_count]
@@ -362,7 +402,7 @@ class WorldModel:
                 h = max(confirmed, key=lambda h: h.count)
                 self._jump(h)
 
-    def _hypothesise(self, cands: list[RawBall], t: float) -> None:
+    def _hypothesise(self, cands: list[RawBall], t: float, cam: int) -> None:
         cfg = self.config
         self._hyps = [h for h in self._hyps if t - h.t <= cfg.ball_hypothesis_timeout_s]
         for b in cands:
@@ -376,9 +416,10 @@ class WorldModel:
                     match, best = h, d
             if match is None:
                 if len(self._hyps) < cfg.ball_max_hypotheses:
-                    self._hyps.append(_Hypothesis(b.x, b.y, t, 1, [(t, b.x, b.y)]))
+                    self._hyps.append(_Hypothesis(b.x, b.y, t, 1, [(t, b.x, b.y)], {cam: t}))
             else:
                 match.x, match.y, match.t = b.x, b.y, t
+                match.cams[cam] = t
                 match.count += 1
                 match.points.append((t, b.x, b.y))
                 del match.points[:-8]
@@ -467,5 +508,47 @@ class WorldModel:
         else:
             self.kicks.reset()
             kick = None
+        flight = self.flight.update(kick, t_now) if ball is not None else None
+        if flight is None:
+            self._chip_kick = None
+        elif ball is not None:
+            x, y, z, vx, vy, vz = flight.at(t_now, self.flight.config.gravity_mm_s2)
+            ball = replace(ball, x=x, y=y, z=z, vx=vx, vy=vy, vz=vz, flying=True)
+            # the chip's kick lasts as long as its flight (the detector, seeing the estimate
+            # jump from the cameras' ground points to under the ball, may have ended it)
+            if self._chip_kick is None and kick is not None:
+                self._chip_kick = replace(kick, chip=True, vx=flight.vx, vy=flight.vy,
+                                          vz=flight.vz)
+            elif self._chip_kick is None and flight.hop == 0:
+                # launched from rest, missed by the kick detector: a kick of no known robot
+                self._chip_kick = KickedBall(None, flight.x0, flight.y0, flight.t0, flight.vx,
+                                             flight.vy, flight.stop_x, flight.stop_y,
+                                             flight.stop_t, chip=True, vz=flight.vz)
+            if self._chip_kick is not None:
+                kick = replace(self._chip_kick, stop_x=flight.stop_x, stop_y=flight.stop_y,
+                               stop_t=flight.stop_t, land_x=flight.land_x,
+                               land_y=flight.land_y, land_t=flight.t_land)
+                if flight.hop == 0:
+                    kick = replace(kick, vx=flight.vx, vy=flight.vy, vz=flight.vz)
+                    self._chip_kick = kick
         return WorldState(self._t_latest, self._recv_latest, ball, tuple(robots), cams,
-                          kicked_ball=kick)
+                          kicked_ball=kick, other_balls=self._other_balls(ball, t_now),
+                          flying_balls=bool(self.flight.cameras) and self.flight.config.enabled)
+
+    def _other_balls(self, ball: BallState | None, t_now: float) -> tuple[OtherBall, ...]:
+        """Confirmed hypotheses away from the ball: other balls on the field."""
+        cfg = self.config
+        out = []
+        for h in self._hyps:
+            if h.count < cfg.other_ball_confirm_count:
+                continue
+            if t_now - h.t > cfg.ball_hypothesis_timeout_s:
+                continue
+            if ball is not None and not ball.lost and math.hypot(
+                    h.x - ball.x, h.y - ball.y) < cfg.other_ball_min_distance_mm:
+                continue
+            cams = tuple(sorted(c for c, tc in h.cams.items()
+                                if c >= 0 and h.t - tc <= cfg.camera_window_s))
+            out.append(OtherBall(h.x, h.y, h.t, cams, h.count))
+        out.sort(key=lambda o: (o.x, o.y))
+        return tuple(out)

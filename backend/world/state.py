@@ -45,6 +45,21 @@ class BallState:
     predicted: bool = False
     lost: bool = False
     filter: str = ""
+    # a chipped ball in the air (backend.world.flight): height and vertical speed, else 0
+    z: float = 0.0  # mm
+    vz: float = 0.0  # mm/s
+    flying: bool = False  # x, y, z from the flight estimate (ground point under the ball)
+
+
+@dataclass(frozen=True, slots=True)
+class OtherBall:
+    """A ball seen consistently besides the ball (a second ball left on the field)."""
+
+    x: float  # mm, its latest detection
+    y: float
+    t_seen: float
+    cameras: tuple[int, ...]
+    detections: int  # consistent detections so far
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,6 +106,11 @@ class KickedBall:
     stop_x: float
     stop_y: float
     stop_t: float
+    chip: bool = False  # the ball flies (backend.world.flight): stop after hops and roll
+    vz: float = 0.0  # mm/s, a chip's initial vertical speed (vx, vy: its ground velocity)
+    land_x: float | None = None  # mm, where the flight in progress lands
+    land_y: float | None = None
+    land_t: float | None = None
 
     @property
     def speed(self) -> float:
@@ -105,6 +125,8 @@ class WorldState:
     robots: tuple[RobotState, ...]
     cameras: tuple[CameraFrame, ...] = field(default=())
     kicked_ball: KickedBall | None = None  # the kick in progress (backend.world.kick)
+    other_balls: tuple[OtherBall, ...] = ()  # balls seen consistently besides the ball
+    flying_balls: bool = False  # camera positions known: a chip's height is estimated
 
     def robot(self, team: Team, rid: int) -> RobotState | None:
         for r in self.robots:

@@ -11,6 +11,11 @@ objects are still sent, as the league's trackers do, until the world model drops
 A kick in progress (``WorldState.kicked_ball``) is the frame's ``kicked_ball`` (start, initial
 velocity, predicted stop, kicker), and the frame then carries the capability
 DETECT_KICKED_BALLS.
+
+The ball's height and vertical speed are a chip's flight estimate (``backend.world.flight``; 0
+on the ground); frames carry DETECT_FLYING_BALLS while the world model knows the camera
+positions it needs for that. Other balls on the field (``WorldState.other_balls``) follow the
+ball in ``balls`` (position, visibility 1, no velocity), with DETECT_MULTIPLE_BALLS.
 """
 
 from __future__ import annotations
@@ -19,7 +24,12 @@ import struct
 
 from sslpb.ssl_gc_common_pb2 import BLUE, YELLOW
 from sslpb.ssl_gc_common_pb2 import Team as PbTeam
-from sslpb.ssl_vision_detection_tracked_pb2 import CAPABILITY_DETECT_KICKED_BALLS
+from sslpb.ssl_vision_detection_tracked_pb2 import (
+    CAPABILITY_DETECT_FLYING_BALLS,
+    CAPABILITY_DETECT_KICKED_BALLS,
+    CAPABILITY_DETECT_MULTIPLE_BALLS,
+    Capability,
+)
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
 from .state import Team, WorldState
@@ -50,8 +60,11 @@ def tracked_packet_pb(world: WorldState, uuid: str, frame_number: int,
     b = world.ball
     if b is not None:
         tb = f.balls.add(visibility=_visibility(b.visible, b.predicted, b.lost))
-        tb.pos.x, tb.pos.y, tb.pos.z = b.x * MM, b.y * MM, 0.0
-        tb.vel.x, tb.vel.y, tb.vel.z = b.vx * MM, b.vy * MM, 0.0
+        tb.pos.x, tb.pos.y, tb.pos.z = b.x * MM, b.y * MM, b.z * MM
+        tb.vel.x, tb.vel.y, tb.vel.z = b.vx * MM, b.vy * MM, b.vz * MM
+    for o in world.other_balls:
+        ob = f.balls.add(visibility=1.0)
+        ob.pos.x, ob.pos.y, ob.pos.z = o.x * MM, o.y * MM, 0.0
     for r in world.robots:
         tr = f.robots.add(orientation=r.orientation, vel_angular=r.omega,
                           visibility=_visibility(r.visible, r.predicted, r.lost))
@@ -63,14 +76,25 @@ def tracked_packet_pb(world: WorldState, uuid: str, frame_number: int,
     if k is not None:
         kb = f.kicked_ball
         kb.pos.x, kb.pos.y = k.start_x * MM, k.start_y * MM
-        kb.vel.x, kb.vel.y, kb.vel.z = k.vx * MM, k.vy * MM, 0.0
+        kb.vel.x, kb.vel.y, kb.vel.z = k.vx * MM, k.vy * MM, k.vz * MM
         kb.start_timestamp, kb.stop_timestamp = k.start_t, k.stop_t
         kb.stop_pos.x, kb.stop_pos.y = k.stop_x * MM, k.stop_y * MM
         if k.robot is not None:
             kb.robot_id.id = k.robot[1]
             kb.robot_id.team = team_enum(k.robot[0])
-        f.capabilities.append(CAPABILITY_DETECT_KICKED_BALLS)
+    f.capabilities.extend(_capabilities(world))
     return p.SerializeToString()
+
+
+def _capabilities(world: WorldState) -> list[Capability.ValueType]:
+    caps: list[Capability.ValueType] = []
+    if world.flying_balls:
+        caps.append(CAPABILITY_DETECT_FLYING_BALLS)
+    if world.other_balls:
+        caps.append(CAPABILITY_DETECT_MULTIPLE_BALLS)
+    if world.kicked_ball is not None:
+        caps.append(CAPABILITY_DETECT_KICKED_BALLS)
+    return caps
 
 
 # ---- the same bytes, encoded by hand: every world tick is recorded (and published), and the
@@ -81,6 +105,7 @@ _F32 = struct.Struct("<f")
 _F64 = struct.Struct("<d")
 _VEC2 = struct.Struct("<BfBf")  # tag 1 (0x0d) x, tag 2 (0x15) y
 _VEC3 = struct.Struct("<BfBfBf")
+_ONE = _F32.pack(1.0)
 #: one TrackedRobot in the frame (tag 4), 45 bytes: robot_id {id < 128, team}, pos, orientation,
 #: vel, vel_angular, visibility
 _ROBOT = struct.Struct("<BB" "BBBBBB" "BBBfBf" "Bf" "BBBfBf" "Bf" "Bf")
@@ -113,14 +138,17 @@ def _vec3(tag: int, x: float, y: float, z: float) -> bytes:
 def tracked_packet(world: WorldState, uuid: str, frame_number: int,
                    source_name: str = "Touchline") -> bytes:
     """One TrackerWrapperPacket, serialized. ``uuid`` identifies this station (kept constant
-    while it runs); ``frame_number`` increases with each packet. One ball on the ground; the
-    kick in progress with the capability DETECT_KICKED_BALLS."""
+    while it runs); ``frame_number`` increases with each packet. The ball (its height when
+    flying), the other balls, the kick in progress, the capabilities (module docstring)."""
     parts = [b"\x08" + _varint(frame_number & 0xFFFFFFFF), b"\x11" + _F64.pack(world.t_capture)]
     b = world.ball
     if b is not None:
         vis = _visibility(b.visible, b.predicted, b.lost)
-        parts.append(_len(0x1A, _vec3(0x0A, b.x * MM, b.y * MM, 0.0)
-                          + _vec3(0x12, b.vx * MM, b.vy * MM, 0.0) + b"\x1d" + _F32.pack(vis)))
+        parts.append(_len(0x1A, _vec3(0x0A, b.x * MM, b.y * MM, b.z * MM)
+                          + _vec3(0x12, b.vx * MM, b.vy * MM, b.vz * MM)
+                          + b"\x1d" + _F32.pack(vis)))
+    for o in world.other_balls:
+        parts.append(_len(0x1A, _vec3(0x0A, o.x * MM, o.y * MM, 0.0) + b"\x1d" + _ONE))
     pack = _ROBOT.pack
     for r in world.robots:
         parts.append(pack(0x22, 45, 0x0A, 4, 0x08, r.id & 0x7F, 0x10, int(team_enum(r.team)),
@@ -130,13 +158,13 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
     k = world.kicked_ball
     if k is not None:
         kick = (_vec2(0x0A, k.start_x * MM, k.start_y * MM)
-                + _vec3(0x12, k.vx * MM, k.vy * MM, 0.0)
+                + _vec3(0x12, k.vx * MM, k.vy * MM, k.vz * MM)
                 + b"\x19" + _F64.pack(k.start_t) + b"\x21" + _F64.pack(k.stop_t)
                 + _vec2(0x2A, k.stop_x * MM, k.stop_y * MM))
         if k.robot is not None:
             kick += _len(0x32, b"\x08" + _varint(k.robot[1] & 0xFFFFFFFF)
                          + b"\x10" + _varint(int(team_enum(k.robot[0]))))
         parts.append(_len(0x2A, kick))
-        parts.append(b"\x30" + _varint(int(CAPABILITY_DETECT_KICKED_BALLS)))
+    parts.extend(b"\x30" + _varint(int(c)) for c in _capabilities(world))
     u, n = uuid.encode(), source_name.encode()
     return _len(0x0A, u) + _len(0x12, n) + _len(0x1A, b"".join(parts))

@@ -126,7 +126,7 @@ def test_the_contract_refuses_an_undeclared_key() -> None:
     geo = {"field_length": 9000.0, "field_width": 6000.0, "goal_width": 1000.0,
            "goal_depth": 180.0, "boundary_width": 300.0, "penalty_area_depth": 1000.0,
            "penalty_area_width": 2000.0, "center_circle_radius": 500.0, "ball_radius": 21.5,
-           "max_robot_radius": 90.0, "lines": [], "arcs": []}
+           "max_robot_radius": 90.0, "lines": [], "arcs": [], "cameras": []}
     _valid(contract.Geometry, geo, "a geometry")
     with pytest.raises(AssertionError, match="extra"):
         _valid(contract.Geometry, {**geo, "goal_colour": "blue"}, "a geometry with more")

@@ -70,6 +70,12 @@ export interface Ball {
   filter: string;
   /** the kick in progress, if any */
   kick: BallKick | null;
+  /** mm above the field (a chipped ball in flight) */
+  z: number;
+  /** mm/s, upwards */
+  vz: number;
+  /** x, y, z from the flight estimate (the cameras see it elsewhere) */
+  flying: boolean;
 }
 
 /**
@@ -97,6 +103,15 @@ export interface BallKick {
   stop_t: number;
   /** predicted stop_t - the world's t_capture */
   stop_in_s: number;
+  /** the ball flies (3D estimate): stop after the bounces and the roll */
+  chip: boolean;
+  /** mm/s, a chip's initial vertical speed */
+  vz: number;
+  /** mm, where the flight in progress lands */
+  land_x: number | null;
+  land_y: number | null;
+  /** Unix s (capture time) of that landing */
+  land_t: number | null;
 }
 
 /**
@@ -109,6 +124,15 @@ export interface CameraPair {
   dx_mm: number;
   dy_mm: number;
   samples: number;
+}
+
+/** A camera's position from its calibration (mm): the flight estimate needs it. */
+export interface CameraPose {
+  id: number;
+  x: number;
+  y: number;
+  /** height above the field */
+  z: number;
 }
 
 export interface CardIn {
@@ -204,6 +228,8 @@ export interface Geometry {
   max_robot_radius: number;
   lines: FieldLine[];
   arcs: FieldArc[];
+  /** where the cameras hang (calibration derived_camera_world_t*), if sent */
+  cameras: CameraPose[];
 }
 
 export interface GeometryMessage {
@@ -318,6 +344,18 @@ export interface LogFileInfo {
 export interface LogList {
   folders: string[];
   files: LogFileInfo[];
+}
+
+/** A ball seen consistently besides the ball (a second ball left on the field). */
+export interface OtherBall {
+  /** mm, its latest detection */
+  x: number;
+  y: number;
+  /** since it was last seen */
+  age_s: number;
+  cameras: number[];
+  /** consistent detections so far */
+  detections: number;
 }
 
 export interface ParamChange {
@@ -876,6 +914,8 @@ export interface World {
   seq: number;
   t_capture: number;
   ball: Ball | null;
+  /** other balls on the field (not the one played), faint on the field */
+  other_balls: OtherBall[];
   robots: Robot[];
   cameras: RawCamera[];
   referee: Referee | null;

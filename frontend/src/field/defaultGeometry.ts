@@ -57,6 +57,7 @@ const divisionBDims: Omit<Geometry, "lines" | "arcs"> = {
   center_circle_radius: 500,
   ball_radius: 21.5,
   max_robot_radius: 90,
+  cameras: [],
 };
 
 export const DEFAULT_GEOMETRY: Geometry = { ...divisionBDims, ...standardMarkings(divisionBDims) };

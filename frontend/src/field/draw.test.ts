@@ -7,7 +7,9 @@ import {
   ALL_LAYERS,
   COLORS,
   drawField,
+  chipLanding,
   drawRecorded,
+  flyingLabel,
   KICK_CROSS_PX,
   KICK_DASH,
   kickMarks,
@@ -113,7 +115,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -265,6 +267,7 @@ describe("kicks: the line to a kick's predicted stop point", () => {
     robot: { team: "yellow" as const, id: 3 },
     start_x: -1000, start_y: 0, start_t: 100, vx: 3000, vy: 0, speed_mps: 3.0,
     stop_x: 2500, stop_y: 400, stop_t: 107.5, stop_in_s: 7,
+    chip: false, vz: 0, land_x: null, land_y: null, land_t: null,
   };
   const kicked = (k: typeof kick | null = kick) => {
     const w = world(1);
@@ -306,5 +309,49 @@ describe("kicks: the line to a kick's predicted stop point", () => {
     expect(ALL_LAYERS.kicks).toBe(true);
     const { LAYER_LABELS } = await import("../store/uiStore");
     expect(LAYER_LABELS.some((l) => l.key === "kicks")).toBe(true);
+  });
+});
+
+describe("several balls and a chipped ball", () => {
+  it("draws the other balls faintly, under the ball, and counts them", () => {
+    const f = fakeCtx();
+    const w = world(1, {
+      other_balls: [{ x: 3000, y: -1000, age_s: 0, cameras: [1], detections: 40 }],
+    });
+    const counts = drawField(f.ctx, { ...input([]), world: { ...w, robots: [] } });
+    expect(counts.otherBalls).toBe(1);
+    const p = worldToCanvas(t, 3000, -1000);
+    expect(f.calls.some((c) => c.name === "arc" && c.args[0] === p.x && c.args[1] === p.y)).toBe(true);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input([], { ...ALL_LAYERS, filtered: false }), world: w }).otherBalls).toBe(0);
+  });
+
+  it("labels a flying ball with its height", () => {
+    const f = fakeCtx();
+    const w = world(1);
+    drawField(f.ctx, { ...input([]), world: { ...w, ball: { ...w.ball!, z: 450, vz: 1000, flying: true } } });
+    expect(flyingLabel(450)).toBe("\u2191" + "0.45 m");
+    expect(f.calls.some((c) => c.name === "fillText" && c.args[0] === flyingLabel(450))).toBe(true);
+    const ground = fakeCtx();
+    drawField(ground.ctx, { ...input([]), world: w });
+    expect(ground.calls.some((c) => c.name === "fillText" && String(c.args[0]).endsWith(" m") && String(c.args[0]).startsWith("\u2191"))).toBe(false);
+  });
+});
+
+describe("a chip's landing point", () => {
+  it("is a ring on the kick's line, only for a chip", () => {
+    const flat = {
+      robot: null, start_x: 0, start_y: 0, start_t: 1, vx: 2000, vy: 0, speed_mps: 2,
+      stop_x: 5000, stop_y: 0, stop_t: 6, stop_in_s: 5, chip: false, vz: 0,
+      land_x: null, land_y: null, land_t: null,
+    };
+    expect(chipLanding(flat)).toBeNull();
+    const chip = { ...flat, chip: true, vz: 3000, land_x: 1200, land_y: 0, land_t: 1.6 };
+    expect(chipLanding(chip)).toEqual({ x: 1200, y: 0 });
+    const f = fakeCtx();
+    const w = world(1);
+    drawField(f.ctx, { ...input([]), world: { ...w, ball: { ...w.ball!, x: 0, y: 0, kick: chip } } });
+    const p = worldToCanvas(t, 1200, 0);
+    expect(f.calls.some((c) => c.name === "arc" && c.args[0] === p.x && c.args[1] === p.y && c.args[2] === KICK_CROSS_PX)).toBe(true);
   });
 });

@@ -124,10 +124,12 @@ export interface DrawCounts {
   recorded: number;
   /** The predicted stop point of the kick drawn (world mm), null when none. */
   kickStop: { x: number; y: number } | null;
+  /** Other balls drawn faintly (a second ball left on the field). */
+  otherBalls: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -179,7 +181,14 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       drawKick(ctx, t, world.ball, kick);
       counts.kickStop = { x: kick.stop_x, y: kick.stop_y };
     }
-    if (world.ball && L.filtered) drawBall(ctx, t, world.ball, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (L.filtered) {
+      const br = g.ball_radius > 0 ? g.ball_radius : 21.5;
+      for (const o of world.other_balls ?? []) {
+        drawOtherBall(ctx, t, o, br);
+        counts.otherBalls++;
+      }
+      if (world.ball) drawBall(ctx, t, world.ball, br);
+    }
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
       if (world.ball?.visible) drawVelocity(ctx, t, world.ball.x, world.ball.y, world.ball.vx, world.ball.vy, COLORS.ball);
@@ -422,6 +431,36 @@ function drawBall(
   ctx.lineWidth = 1.5;
   ctx.strokeStyle = COLORS.ballOutline;
   ctx.stroke();
+  if (ball.flying && ball.z > 0) {
+    // A chip in the air: its height, over the ground point under it.
+    ctx.font = "11px sans-serif";
+    ctx.fillStyle = COLORS.ball;
+    ctx.fillText(flyingLabel(ball.z), c.x + rad + 3, c.y - rad - 2);
+  }
+  ctx.restore();
+}
+
+/** The label of a ball in the air: its height in m. */
+export function flyingLabel(zMm: number): string {
+  return `↑${(zMm / 1000).toFixed(2)} m`;
+}
+
+/** Opacity of the other balls on the field (not the one played). */
+export const OTHER_BALL_ALPHA = 0.3;
+
+/** A ball seen besides the ball (left on the field): faint, outlined, not the one played. */
+function drawOtherBall(ctx: CanvasRenderingContext2D, t: FieldTransform, o: World["other_balls"][number], radiusMm: number) {
+  if (!Number.isFinite(o.x) || !Number.isFinite(o.y)) return;
+  const c = worldToCanvas(t, o.x, o.y);
+  ctx.save();
+  ctx.globalAlpha = OTHER_BALL_ALPHA;
+  ctx.beginPath();
+  ctx.arc(c.x, c.y, Math.max(4, radiusMm * t.scale), 0, 2 * Math.PI);
+  ctx.fillStyle = COLORS.ball;
+  ctx.fill();
+  ctx.lineWidth = 1;
+  ctx.strokeStyle = COLORS.ballOutline;
+  ctx.stroke();
   ctx.restore();
 }
 
@@ -448,6 +487,13 @@ export function kickMarks(
   return { line, stop, label, labelColor: r ? teamColor(r.team) : COLORS.kick };
 }
 
+/** Where a chip's flight in progress lands (world mm), null for a flat kick. */
+export function chipLanding(kick: BallKick): { x: number; y: number } | null {
+  if (!kick.chip || kick.land_x === null || kick.land_y === null) return null;
+  if (!Number.isFinite(kick.land_x) || !Number.isFinite(kick.land_y)) return null;
+  return { x: kick.land_x, y: kick.land_y };
+}
+
 function drawKick(ctx: CanvasRenderingContext2D, t: FieldTransform, ball: { x: number; y: number }, kick: BallKick) {
   if (![kick.stop_x, kick.stop_y, ball.x, ball.y].every(Number.isFinite)) return;
   const m = kickMarks(t, ball, kick);
@@ -461,6 +507,14 @@ function drawKick(ctx: CanvasRenderingContext2D, t: FieldTransform, ball: { x: n
     ctx.lineTo(m.line[1].x, m.line[1].y);
     ctx.stroke();
     ctx.setLineDash([]);
+  }
+  const land = chipLanding(kick);
+  if (land) {
+    // A chip: where its flight in progress lands, a ring on the line.
+    const p = worldToCanvas(t, land.x, land.y);
+    ctx.beginPath();
+    ctx.arc(p.x, p.y, KICK_CROSS_PX, 0, 2 * Math.PI);
+    ctx.stroke();
   }
   const c = m.stop;
   const k = KICK_CROSS_PX;

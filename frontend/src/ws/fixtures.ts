@@ -24,7 +24,9 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     ball: {
       x: 10, y: 20, vx: 0, vy: 0, visible: true, age_s: 0, cameras: [0],
       raw_x: 10, raw_y: 20, predicted: false, lost: false, filter: "kalman", kick: null,
+      z: 0, vz: 0, flying: false,
     },
+    other_balls: [],
     robots: [robot("blue", 0, -1000, 0), robot("yellow", 0, 1000, 0)],
     cameras: [],
     referee: null,

@@ -122,3 +122,30 @@ def test_the_hand_encoder_writes_the_runtimes_bytes() -> None:
         for frame in (0, 1, 127, 128, 300_000, 2**32 - 1):
             assert tracked_packet(w, "station-ü", frame) == tracked_packet_pb(w, "station-ü",
                                                                                frame)
+
+
+def chipped() -> WorldState:
+    """A chip in the air (camera positions known) with a second ball left on the field."""
+    from dataclasses import replace
+
+    from backend.world.state import OtherBall
+
+    w = kicked(KickedBall(("blue", 2), 0.0, 0.0, 1.0, 2000.0, 0.0, 5000.0, 0.0, 4.0, chip=True,
+                          vz=3000.0, land_x=1200.0, land_y=0.0, land_t=1.6))
+    ball = replace(w.ball, z=450.0, vz=-1000.0, flying=True)  # type: ignore[arg-type]
+    return replace(w, ball=ball, flying_balls=True,
+                   other_balls=(OtherBall(-2000.0, 1000.0, 1.0, (1, 3), 50),))
+
+
+def test_a_flying_ball_and_other_balls_on_the_wire() -> None:
+    f = decode(tracked_packet(chipped(), "u", 3)).tracked_frame
+    assert list(f.capabilities) == [1, 2, 3]  # FLYING, MULTIPLE, KICKED
+    assert len(f.balls) == 2
+    b, o = f.balls
+    assert (b.pos.z, b.vel.z) == pytest.approx((0.45, -1.0))
+    assert (o.pos.x, o.pos.y, o.pos.z) == pytest.approx((-2.0, 1.0, 0.0))
+    assert o.visibility == 1.0 and not o.HasField("vel")
+    assert f.kicked_ball.vel.z == pytest.approx(3.0)
+    from backend.world.tracked import tracked_packet_pb
+    for frame in (0, 300):
+        assert tracked_packet(chipped(), "s", frame) == tracked_packet_pb(chipped(), "s", frame)
