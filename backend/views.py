@@ -395,6 +395,9 @@ def health(st: Station) -> contract.Health:
         "recording": recording,
         "processes": processes(st, rs),
         "access": access,
+        "operators": st.operators.sessions(),
+        "driving": st.operators.driving(),
+        "operator_actions": st.operators.actions()[:50],
         "supervisor": sup,
     }
     return out
