@@ -623,7 +623,8 @@ class DrivingInfo(TypedDict):
     """Who drives a team (one operator per team: docs/security.md, "Several operators")."""
 
     team: str
-    key: Annotated[str, Field(description="the holder's session id (the page knows its own)")]
+    key: Annotated[str, Field(
+        description="the holder: name@address (GET /api/operators tells the page its own)")]
     name: str
     address: str
     since_unix: float

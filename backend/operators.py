@@ -4,10 +4,9 @@ Pure (no I/O; the clocks are injected): the station keeps one ``Operators``; the
 (backend/routes_operators.py) calls it from the web loop and the station thread reads it for
 the health, hence the one lock inside.
 
-* **Identity**: an operator is a *key* (the page's session id, sent on every request and on
-  the websocket; a script without one is keyed by its name and address) with a name (given at
-  login), a role and an address. Each websocket client is a *session* (id, name, role,
-  address, connected since).
+* **Identity**: an operator is a *key* (routes_operators: the name given at login and the
+  address) with a name, a role and an address. Each websocket client is a *session* (id,
+  name, role, address, connected since).
 * **Driving** is held by one operator per team: the first who drives (a target, a play, a
   teleported robot) takes it; another gets a refusal naming the holder, may ask for it (the
   holder's page shows the request with an accept) or take it over (the page confirms first).
@@ -20,7 +19,6 @@ the health, hence the one lock inside.
 
 from __future__ import annotations
 
-import re
 import threading
 import time
 import unicodedata
@@ -32,8 +30,6 @@ from typing import Any
 from .contract import DrivingInfo, OperatorAction, OperatorInfo
 
 MAX_NAME = 32
-#: the page's session id: what it sends (a random token), nothing else is taken as one
-_KEY = re.compile(r"[A-Za-z0-9_-]{8,64}")
 
 
 def clean_name(raw: str | None) -> str | None:
@@ -44,11 +40,6 @@ def clean_name(raw: str | None) -> str | None:
     kept = "".join(c for c in raw if unicodedata.category(c)[0] != "C")
     name = " ".join(kept.split())[:MAX_NAME].strip()
     return name or None
-
-
-def clean_key(raw: str | None) -> str | None:
-    """The page's session id if it looks like one (else None: the caller is keyed by name)."""
-    return raw if raw and _KEY.fullmatch(raw) else None
 
 
 @dataclass(frozen=True)

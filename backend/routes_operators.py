@@ -19,11 +19,9 @@ from starlette.requests import HTTPConnection
 
 from .access import ROLE_KEY, client_of, is_loopback
 from .contract import DrivingIn
-from .operators import DrivingRefused, Who, clean_key, clean_name
+from .operators import DrivingRefused, Who, clean_name
 from .station import Station
 
-#: the page's session id (random, per page load) on every request; ``?session=`` on the websocket
-SESSION_HEADER = "x-touchline-session"
 #: the name given at login (``/login?name=`` or the page's own prompt); not a secret
 NAME_COOKIE = "touchline_name"
 #: the parameter version the page's change was made on (``?version=`` works too)
@@ -34,13 +32,14 @@ TeamParam = Annotated[Literal["blue", "yellow"], PathParam(description="team")]
 
 def who_of(conn: HTTPConnection) -> Who:
     """The operator behind a request or websocket: the name from its cookie (else "local" on
-    loopback, "unnamed" elsewhere), the role the AccessGuard found, its address and key."""
+    loopback, "unnamed" elsewhere), the role the AccessGuard found, its address. An operator
+    is a name at an address: the tabs of one browser and the scripts of one laptop under the
+    same name are one operator (the browser's requests and its websocket carry the cookie)."""
     address = client_of(conn.scope)
     role = str(conn.scope.get(ROLE_KEY) or "operator")
     name = clean_name(unquote(conn.cookies.get(NAME_COOKIE, ""))) or (
         "local" if is_loopback(address) else "unnamed")
-    key = clean_key(conn.headers.get(SESSION_HEADER) or conn.query_params.get("session"))
-    return Who(key or f"{name}@{address}", name, role, address)
+    return Who(f"{name}@{address}", name, role, address)
 
 
 async def check_driving(request: Request, st: Station, team: str) -> None:

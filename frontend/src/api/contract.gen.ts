@@ -124,7 +124,7 @@ export interface DrivingIn {
 /** Who drives a team (one operator per team: docs/security.md, "Several operators"). */
 export interface DrivingInfo {
   team: string;
-  /** the holder's session id (the page knows its own) */
+  /** the holder: name@address (GET /api/operators tells the page its own) */
   key: string;
   name: string;
   address: string;
