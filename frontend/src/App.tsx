@@ -3,6 +3,7 @@ import { sameRobot } from "./api/types";
 import { FieldView } from "./components/FieldView";
 import { HealthPanel } from "./components/HealthPanel";
 import { HelpOverlay } from "./components/HelpOverlay";
+import { DrivingRequests, NamePrompt } from "./components/OperatorsPanel";
 import { ParamsPanel } from "./components/ParamsPanel";
 import { PlotsPanel } from "./components/PlotsPanel";
 import { RefereePanel } from "./components/RefereePanel";
@@ -67,6 +68,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
           <Hint />
         </div>
         <aside className="panel">
+          <NamePrompt />
           <nav className="tabs" role="tablist" aria-label="Panels">
             {TABS.map((t) => (
               <button
@@ -96,6 +98,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
       </main>
       <HelpOverlay />
       <Toasts />
+      <DrivingRequests />
     </div>
   );
 }
