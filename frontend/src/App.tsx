@@ -68,7 +68,6 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
           <Hint />
         </div>
         <aside className="panel">
-          <NamePrompt />
           <nav className="tabs" role="tablist" aria-label="Panels">
             {TABS.map((t) => (
               <button
@@ -85,6 +84,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
             ))}
           </nav>
           <div className="tab-body" role="tabpanel">
+            <NamePrompt />
             {tab === "robots" && <RobotsTab />}
             {tab === "params" && <ParamsPanel />}
             {/* Plots stay mounted (hidden) so their buffers and uPlot instances survive tab switches. */}
