@@ -426,6 +426,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
     async def params_import(request: Request) -> contract.ParamsState:
         body = await _json_body(request)
         store.replace(body["values"] if isinstance(body, dict) and "values" in body else body)
+        await st.call(st.operator_action, "params-import", _who(request), {})
         return await _applied()
 
     @api.get("/presets")
@@ -445,8 +446,9 @@ def _params_routes(api: APIRouter, st: Station) -> None:
                 "diff_from_current": diff(store.values(), values)}
 
     @api.post("/presets/{name}/load")
-    async def preset_load(name: str) -> contract.ParamsState:
+    async def preset_load(name: str, request: Request) -> contract.ParamsState:
         store.load_preset(name)
+        await st.call(st.operator_action, "preset-load", _who(request), {"preset": name})
         return await _applied()
 
     @api.delete("/presets/{name}")

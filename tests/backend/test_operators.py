@@ -251,3 +251,17 @@ def test_a_parameter_change_made_on_an_old_version_is_refused_with_the_value_now
     r = c.patch("/api/params", json={"stream": {"ws_max_hz": 20}},
                 headers={**B, "x-touchline-params-version": "old"})
     assert r.status_code == 422
+
+
+def test_every_operator_action_is_listed_with_who(station) -> None:  # type: ignore[no-untyped-def]
+    c, st, _ = station
+    assert c.put("/api/presets/p1", headers=A).status_code == 200
+    assert c.post("/api/presets/p1/load", headers=A).status_code == 200
+    assert c.post("/api/params/import", json={"values": {}}, headers=A).status_code == 200
+    assert c.post("/api/referee/internal/command", json={"command": "STOP"},
+                  headers=A).status_code == 200
+    assert c.post("/api/arm", json={"armed": False}, headers=A).status_code == 200
+    assert c.post("/api/estop", json={"active": True}, headers=B).status_code == 200
+    acts = [(a["action"], a["by"].split(" ")[0]) for a in st.health()["operator_actions"]]
+    assert acts == [("estop", "bob"), ("disarm", "alice"), ("referee", "alice"),
+                    ("params-import", "alice"), ("preset-load", "alice")]
