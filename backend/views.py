@@ -397,7 +397,7 @@ def health(st: Station) -> contract.Health:
         "access": access,
         "operators": st.operators.sessions(),
         "driving": st.operators.driving(),
-        "operator_actions": st.operators.actions()[:50],
+        "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
     }
     return out
