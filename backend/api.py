@@ -47,6 +47,14 @@ from .jsonsafe import SafeJSONResponse, dumps
 from .params.store import ParamError, PresetNotFound, diff, format_errors
 from .referee.internal import RefereeCommandError
 from .replay.routes import player_routes, recording_routes
+from .routes_operators import (
+    check_driving,
+    check_params,
+    operator_routes,
+    set_name_cookie,
+    who_of,
+    ws_session,
+)
 from .security import EdgeGuard
 from .station import Station
 from .world.state import Team
@@ -148,6 +156,7 @@ def create_app(settings: Settings, station: Station | None = None,
     async def set_target(team: TeamParam, rid: IdParam, body: TargetIn,
                          request: Request) -> contract.TargetAnswer:
         _check_team(team, rid)
+        await check_driving(request, st, team)
         await _check_on_field(body.x, body.y, "target")
         await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
         await st.call(st.operator_action, "target", _who(request),
@@ -159,6 +168,7 @@ def create_app(settings: Settings, station: Station | None = None,
     @api.delete("/robots/{team}/{rid}/target")
     async def clear_target(team: TeamParam, rid: IdParam,
                            request: Request) -> contract.TargetAnswer:
+        await check_driving(request, st, team)
         await st.call(st.clear_target, team, rid)
         await st.call(st.operator_action, "clear-target", _who(request),
                       {"team": team, "id": rid})
@@ -177,6 +187,7 @@ def create_app(settings: Settings, station: Station | None = None,
     async def teleport_robot(team: TeamParam, rid: IdParam,
                              body: TeleportRobotIn, request: Request) -> dict[str, Any]:
         _check_simulator()
+        await check_driving(request, st, team)
         await _check_on_field(body.x, body.y)
         await st.call(st.teleport_robot, team, rid, body.x, body.y, body.orientation,
                       body.present)
@@ -254,12 +265,11 @@ def create_app(settings: Settings, station: Station | None = None,
     async def estop(body: EstopIn, request: Request) -> dict[str, Any] | JSONResponse:
         """Pressing is one request; a release must say ``confirm: true`` (the page asks the
         operator first) and is logged with who released it."""
-        client = request.client.host if request.client else "?"
         role = request.scope.get(ROLE_KEY)  # None (not set by the guard): no operator
         refused = estop_refusal(role, rule, body.active)
         if refused is not None:
             return JSONResponse(status_code=403, content={"detail": refused})
-        who = f"{role or 'operator'} at {client}"  # a viewer may press it (--estop-for-all)
+        who = str(who_of(request))  # a viewer may press it (--estop-for-all); never locked
         if not body.active and not body.confirm:
             return JSONResponse(status_code=409, content={"detail": (
                 "releasing the emergency stop must be confirmed: send "
@@ -299,7 +309,8 @@ def create_app(settings: Settings, station: Station | None = None,
         await ws.accept()
         st.ws_clients += 1
         try:
-            await _serve_client(ws, st)
+            with ws_session(ws, st):
+                await _serve_client(ws, st)
         except (WebSocketDisconnect, RuntimeError, ConnectionError):
             pass
         finally:
@@ -321,9 +332,11 @@ def create_app(settings: Settings, station: Station | None = None,
         return answer
 
     @app.get("/login", response_model=None)
-    async def login(request: Request, token: str = "") -> JSONResponse | RedirectResponse:
+    async def login(request: Request, token: str = "",
+                    name: str = "") -> JSONResponse | RedirectResponse:
         """Opened once per laptop with the URL printed at start: sets the cookie that goes
-        with every request and the websocket, and opens the page."""
+        with every request and the websocket, and opens the page. ``name``: the operator's
+        name the others see (else the page asks for one)."""
         client = client_of(request.scope)
         left = rule.limiter.blocked(client)
         if left > 0:
@@ -337,12 +350,14 @@ def create_app(settings: Settings, station: Station | None = None,
                 "(http://HOST:PORT/login?token=...)")})
         answer = RedirectResponse("/", status_code=303)
         _set_cookie(answer, token)
+        set_name_cookie(answer, name)
         return answer
 
     _params_routes(api, st)
     player_routes(api, st)
     recording_routes(api, st)
     app.include_router(api)
+    app.include_router(operator_routes(st))
     _mount_frontend(app, settings.static_dir)
     return app
 
@@ -354,8 +369,8 @@ def _set_cookie(answer: JSONResponse | RedirectResponse, token: str) -> None:
 
 
 def _who(request: Request) -> str:
-    """Who did it, for the session log: the client's address (issue 12 adds names)."""
-    return f"operator at {request.client.host}" if request.client else "operator"
+    """Who did it, for the session log and the action list: name, role and address."""
+    return str(who_of(request))
 
 
 async def _json_body(request: Request) -> Any:
@@ -389,8 +404,11 @@ def _params_routes(api: APIRouter, st: Station) -> None:
     @api.patch("/params")
     async def params_patch(request: Request) -> contract.ParamsState:
         body = await _json_body(request)
+        await check_params(request, st, body)
         store.patch(body)
-        await st.call(st.operator_action, "params", _who(request),
+        strategy = body.get("strategy") if isinstance(body, dict) else None
+        play = isinstance(strategy, dict) and "play" in strategy
+        await st.call(st.operator_action, "play" if play else "params", _who(request),
                       {"changes": body})
         log.info("parameters changed to version %d", store.version)
         return await _applied()
@@ -408,6 +426,7 @@ def _params_routes(api: APIRouter, st: Station) -> None:
     async def params_import(request: Request) -> contract.ParamsState:
         body = await _json_body(request)
         store.replace(body["values"] if isinstance(body, dict) and "values" in body else body)
+        await st.call(st.operator_action, "params-import", _who(request), {})
         return await _applied()
 
     @api.get("/presets")
@@ -427,8 +446,9 @@ def _params_routes(api: APIRouter, st: Station) -> None:
                 "diff_from_current": diff(store.values(), values)}
 
     @api.post("/presets/{name}/load")
-    async def preset_load(name: str) -> contract.ParamsState:
+    async def preset_load(name: str, request: Request) -> contract.ParamsState:
         store.load_preset(name)
+        await st.call(st.operator_action, "preset-load", _who(request), {"preset": name})
         return await _applied()
 
     @api.delete("/presets/{name}")

@@ -643,6 +643,45 @@ class AccessHealth(TypedDict):
 
 
 @with_config(_STRICT)
+class OperatorInfo(TypedDict):
+    """One page connected (a websocket client): who, from where, since when."""
+
+    session: Annotated[int, Field(description="this connection's number")]
+    name: Annotated[str, Field(description="the name given at login")]
+    role: Annotated[str, Field(description='"operator" or "viewer"')]
+    address: str
+    since_unix: float
+
+
+@with_config(_STRICT)
+class DrivingInfo(TypedDict):
+    """Who drives a team (one operator per team: docs/security.md, "Several operators")."""
+
+    team: str
+    key: Annotated[str, Field(
+        description="the holder: name@address (GET /api/operators tells the page its own)")]
+    name: str
+    address: str
+    since_unix: float
+    connected: Annotated[bool, Field(
+        description="the holder has a page open (else it is released a few seconds after)")]
+    requested_by: Annotated[str | None, Field(description="who asked to drive, if anyone")]
+    requested_key: str | None
+    requested_unix: float | None
+
+
+@with_config(_STRICT)
+class OperatorAction(TypedDict):
+    """One operator action (the newest are kept; the session log has them all)."""
+
+    seq: int
+    time_unix: float
+    action: Annotated[str, Field(description="target, params, play, referee, estop, arm, ...")]
+    by: str
+    details: str
+
+
+@with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
 
@@ -670,6 +709,10 @@ class Health(TypedDict):
     supervisor: Annotated[list[SupervisedProcess] | None, Field(
         description="what the launcher started, with restarts (null: not started by it)")]
     access: AccessHealth
+    operators: Annotated[list[OperatorInfo], Field(description="the pages connected")]
+    driving: Annotated[list[DrivingInfo], Field(description="who drives which team")]
+    operator_actions: Annotated[list[OperatorAction], Field(
+        description="the latest operator actions, newest first")]
 
 
 # ------------------------------------------------------------------------------ parameters
@@ -816,6 +859,11 @@ class ArmIn(BaseModel):
     armed: bool = Field(description="true: arm (refused with 409 and the reason while vision "
                         "is missing, the e-stop is active or a log is replayed); false: disarm "
                         "(always)")
+
+
+class DrivingIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    confirm: bool = Field(default=False, description="required (true) to take over driving")
 
 
 class EstopIn(BaseModel):
@@ -1039,7 +1087,8 @@ EXPORTS: dict[str, object] = {
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
     "ArmingInfo": ArmingInfo, "TargetAnswer": TargetAnswer, "ParamsDiff": ParamsDiff,
-    "PresetList": PresetList,
+    "PresetList": PresetList, "OperatorInfo": OperatorInfo, "DrivingInfo": DrivingInfo,
+    "OperatorAction": OperatorAction,
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
     "PlayerHistory": PlayerHistory,
@@ -1047,7 +1096,8 @@ EXPORTS: dict[str, object] = {
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
     "EnableIn": EnableIn, "ArmIn": ArmIn, "TeleportBallIn": TeleportBallIn,
     "TeleportRobotIn": TeleportRobotIn,
-    "EstopIn": EstopIn, "PlayerOpenIn": PlayerOpenIn, "PlayerPlayIn": PlayerPlayIn,
+    "EstopIn": EstopIn, "DrivingIn": DrivingIn, "PlayerOpenIn": PlayerOpenIn,
+    "PlayerPlayIn": PlayerPlayIn,
     "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
     "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,
 }

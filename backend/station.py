@@ -27,6 +27,7 @@ from .engine.switch import EngineSwitch
 from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
+from .operators import Operators
 from .params.model import StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Processor, Runner
@@ -70,6 +71,8 @@ class Station:
         self.cpu = CpuMeter()  # this process (every thread), for the Health tab
         self.ws_clients = 0
         self.ws_dropped = 0  # websocket clients dropped for taking nothing (stalled)
+        #: who is connected, who drives which team, what each operator did (issue 12)
+        self.operators = Operators()
         #: who may do what and the refusals so far (the app sets it from its AccessRule)
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,
@@ -249,7 +252,9 @@ class Station:
 
     def operator_action(self, action: str, by: str = "",
                         details: dict[str, Any] | None = None) -> None:
-        """Records an operator's action in the session log, with who and when."""
+        """Records an operator's action (target, e-stop, play, referee, teleport, arming,
+        driving) in the session log and in the page's list, with who and when."""
+        self.operators.record(action, by, details)
         self.recording.operator_action(action, by, details)
 
     def recorder_command(self, action: str) -> contract.Recording:

@@ -402,6 +402,9 @@ def health(st: Station) -> contract.Health:
         "recording": recording,
         "processes": processes(st, rs),
         "access": access,
+        "operators": st.operators.sessions(),
+        "driving": st.operators.driving(),
+        "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
     }
     return out

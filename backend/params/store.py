@@ -81,6 +81,17 @@ def diff(a: dict[str, Any], b: dict[str, Any],
     return out
 
 
+def _leaves(tree: dict[str, Any], path: tuple[str, ...] = ()
+            ) -> list[tuple[tuple[str, ...], Any]]:
+    out: list[tuple[tuple[str, ...], Any]] = []
+    for k, v in tree.items():
+        if isinstance(v, dict) and v:
+            out += _leaves(v, (*path, str(k)))
+        else:
+            out.append(((*path, str(k)), v))
+    return out
+
+
 def parse_setting(item: str) -> dict[str, Any]:
     """``"group.key=value"`` (a command-line override) as a patch ``{"group": {"key": value}}``.
     The value is JSON when it parses (numbers, true, null, objects), else the text itself."""
@@ -129,6 +140,9 @@ class ParamStore:
         self.defaults = StationParams()
         self.current = StationParams()
         self.version = 0
+        #: dotted leaf path -> the version that last changed it (since the start): a change
+        #: made on an older version of the page is refused for the leaves changed since
+        self.changed_in: dict[str, int] = {}
         self._listeners: list[Callable[[StationParams, int], None]] = []
         #: problems with the state folder found at start-up (health shows them)
         self.warnings: list[str] = []
@@ -225,14 +239,34 @@ class ParamStore:
     def _set(self, new: StationParams) -> StationParams:
         if new == self.current:
             return new
+        changed = diff(self.values(), new.model_dump(mode="json"))
         self.current = new
         self.version += 1
+        for c in changed:
+            self.changed_in[c["path"]] = self.version
         if self.file is not None:
             atomic_write_json(self.file, {"schema": FILE_SCHEMA, "version": self.version,
                                           "values": self.values()})
         for fn in self._listeners:
             fn(new, self.version)
         return new
+
+    def changed_since(self, changes: Any, version: int) -> list[ParamChange]:
+        """The leaves ``changes`` (a patch) would set that changed after ``version`` (the one
+        the caller saw): ``{"path", "from": what the caller wants, "to": the value now}``."""
+        if not isinstance(changes, dict):
+            return []
+        values = self.values()
+        out: list[ParamChange] = []
+        for path, wanted in _leaves(changes):
+            dotted = ".".join(path)
+            if any(v > version and (k == dotted or k.startswith(dotted + "."))
+                   for k, v in self.changed_in.items()):
+                now: Any = values
+                for part in path:
+                    now = now.get(part) if isinstance(now, dict) else None
+                out.append({"path": dotted, "from": wanted, "to": now})
+        return out
 
     def diff_from_defaults(self) -> list[ParamChange]:
         return diff(self.defaults.model_dump(mode="json"), self.values())

@@ -3,6 +3,7 @@ import { sameRobot } from "./api/types";
 import { FieldView } from "./components/FieldView";
 import { HealthPanel } from "./components/HealthPanel";
 import { HelpOverlay } from "./components/HelpOverlay";
+import { DrivingRequests, NamePrompt } from "./components/OperatorsPanel";
 import { ParamsPanel } from "./components/ParamsPanel";
 import { PlotsPanel } from "./components/PlotsPanel";
 import { RefereePanel } from "./components/RefereePanel";
@@ -83,6 +84,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
             ))}
           </nav>
           <div className="tab-body" role="tabpanel">
+            <NamePrompt />
             {tab === "robots" && <RobotsTab />}
             {tab === "params" && <ParamsPanel />}
             {/* Plots stay mounted (hidden) so their buffers and uPlot instances survive tab switches. */}
@@ -96,6 +98,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
       </main>
       <HelpOverlay />
       <Toasts />
+      <DrivingRequests />
     </div>
   );
 }

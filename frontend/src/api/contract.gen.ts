@@ -140,6 +140,27 @@ export interface CardIn {
   card: "yellow" | "red" | "clear";
 }
 
+export interface DrivingIn {
+  /** required (true) to take over driving */
+  confirm?: boolean;
+}
+
+/** Who drives a team (one operator per team: docs/security.md, "Several operators"). */
+export interface DrivingInfo {
+  team: string;
+  /** the holder: name@address (GET /api/operators tells the page its own) */
+  key: string;
+  name: string;
+  address: string;
+  since_unix: number;
+  /** the holder has a page open (else it is released a few seconds after) */
+  connected: boolean;
+  /** who asked to drive, if anyone */
+  requested_by: string | null;
+  requested_key: string | null;
+  requested_unix: number | null;
+}
+
 export interface EnableIn {
   enabled: boolean;
 }
@@ -264,6 +285,12 @@ export interface Health {
   /** what the launcher started, with restarts (null: not started by it) */
   supervisor: SupervisedProcess[] | null;
   access: AccessHealth;
+  /** the pages connected */
+  operators: OperatorInfo[];
+  /** who drives which team */
+  driving: DrivingInfo[];
+  /** the latest operator actions, newest first */
+  operator_actions: OperatorAction[];
 }
 
 export interface HealthMessage {
@@ -344,6 +371,28 @@ export interface LogFileInfo {
 export interface LogList {
   folders: string[];
   files: LogFileInfo[];
+}
+
+/** One operator action (the newest are kept; the session log has them all). */
+export interface OperatorAction {
+  seq: number;
+  time_unix: number;
+  /** target, params, play, referee, estop, arm, ... */
+  action: string;
+  by: string;
+  details: string;
+}
+
+/** One page connected (a websocket client): who, from where, since when. */
+export interface OperatorInfo {
+  /** this connection's number */
+  session: number;
+  /** the name given at login */
+  name: string;
+  /** "operator" or "viewer" */
+  role: string;
+  address: string;
+  since_unix: number;
 }
 
 /** A ball seen consistently besides the ball (a second ball left on the field). */

@@ -4,11 +4,15 @@ import type {
   ArmIn,
   ArmingInfo,
   CardIn,
+  DrivingIn,
+  DrivingInfo,
   EnableIn,
   EstopAnswer,
   EstopIn,
   RefereeCommandIn,
   LogList,
+  OperatorAction,
+  OperatorInfo,
   Player,
   PlayerHistory,
   PlayerIn,
@@ -96,7 +100,13 @@ export function resetUnauthorizedNotice(): void {
   lastUnauthorized = -Infinity;
 }
 
-export async function request<T>(method: string, path: string, body?: unknown, rawBody?: string): Promise<T> {
+export async function request<T>(
+  method: string,
+  path: string,
+  body?: unknown,
+  rawBody?: string,
+  extraHeaders: Record<string, string> = {},
+): Promise<T> {
   let res: Response;
   try {
     res = await fetch(path, {
@@ -105,8 +115,8 @@ export async function request<T>(method: string, path: string, body?: unknown, r
       // a page on another site cannot send it without a preflight the station never grants
       headers:
         body === undefined && rawBody === undefined
-          ? { "X-Touchline": "1" }
-          : { "Content-Type": "application/json", "X-Touchline": "1" },
+          ? { "X-Touchline": "1", ...extraHeaders }
+          : { "Content-Type": "application/json", "X-Touchline": "1", ...extraHeaders },
       body: rawBody !== undefined ? rawBody : body === undefined ? undefined : JSON.stringify(body),
     });
   } catch (e) {
@@ -167,7 +177,16 @@ export type ParamsReply = ParamsState;
 export type DiffEntry = ParamChange;
 
 export const getParamsSchema = () => request<Record<string, unknown>>("GET", "/api/params/schema");
-export const patchParams = (patch: Record<string, unknown>) => request<ParamsReply>("PATCH", "/api/params", patch);
+/** PATCH the parameters; `version`: the one the page showed when the change was made (a
+ * value changed since by someone else is refused with 409 and the value now). */
+export const patchParams = (patch: Record<string, unknown>, version?: number) =>
+  request<ParamsReply>(
+    "PATCH",
+    "/api/params",
+    patch,
+    undefined,
+    version === undefined ? {} : { "X-Touchline-Params-Version": String(version) },
+  );
 export const importParams = (text: string) => request<ParamsReply>("POST", "/api/params/import", undefined, text);
 export const listPresets = () => request<PresetList>("GET", "/api/presets");
 export const savePreset = (name: string) => request<PresetList>("PUT", `/api/presets/${encodeURIComponent(name)}`);
@@ -231,3 +250,29 @@ export function postRecording(action: RecordingIn["action"]): Promise<Recording>
   const body: RecordingIn = { action };
   return request<Recording>("POST", "/api/recording", body);
 }
+
+// ---- several operators (docs/security.md) ----
+
+export interface Me {
+  key: string;
+  name: string;
+  role: string;
+  address: string;
+}
+export interface OperatorsState {
+  me: Me;
+  operators: OperatorInfo[];
+  driving: DrivingInfo[];
+  actions: OperatorAction[];
+}
+export const getOperators = () => request<OperatorsState>("GET", "/api/operators");
+/** Ask the holder for driving `team` (a free team is taken at once). */
+export const requestDriving = (team: Team) => request<OperatorsState>("POST", `/api/driving/${team}/request`);
+/** The holder gives driving to the one who asked. */
+export const giveDriving = (team: Team) => request<OperatorsState>("POST", `/api/driving/${team}/give`);
+/** Take over driving: the page asks the operator first (the station wants `confirm`). */
+export function takeDriving(team: Team): Promise<OperatorsState> {
+  const body: DrivingIn = { confirm: true };
+  return request<OperatorsState>("POST", `/api/driving/${team}/take`, body);
+}
+export const releaseDriving = (team: Team) => request<OperatorsState>("POST", `/api/driving/${team}/release`);

@@ -3,6 +3,10 @@
 
 export type {
   ArmIn,
+  DrivingIn,
+  DrivingInfo,
+  OperatorAction,
+  OperatorInfo,
   ArmingInfo,
   Ball,
   CardIn,

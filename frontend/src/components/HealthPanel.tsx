@@ -2,6 +2,7 @@ import type { Health } from "../api/types";
 import { fmtFixed } from "../format";
 import { useAppState } from "../store/hooks";
 import { engineOf, engineRows } from "../strategy/engine";
+import { OperatorsHealth } from "./OperatorsPanel";
 
 /** A horizontal bar: value/max filled, an optional marker (e.g. the configured rate). */
 function Bar({ value, max, marker, warn, label }: { value: number; max: number; marker?: number | null; warn?: boolean; label?: string }) {
@@ -360,6 +361,7 @@ export function HealthPanel() {
       <EstopHealth h={h} />
       <ArmingHealth h={h} />
       <AccessHealth h={h} />
+      <OperatorsHealth h={h} />
       {(h.warnings ?? []).length > 0 && (
         <ul className="health-warnings" data-testid="health-warnings">
           {(h.warnings ?? []).map((w, i) => (

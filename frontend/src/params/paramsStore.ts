@@ -45,10 +45,12 @@ export async function commitField(f: FieldDesc, value: unknown): Promise<string 
 
 export async function commitPatch(patch: Record<string, unknown>, f?: FieldDesc): Promise<string | null> {
   try {
-    acceptParams(await patchParams(patch));
+    // the version the page shows: a value someone changed since is refused (409), saying the
+    // value now (which the websocket has brought to the form)
+    acceptParams(await patchParams(patch, appStore.getState().params?.version));
     return null;
   } catch (e) {
-    if (e instanceof ApiError && e.status === 422) {
+    if (e instanceof ApiError && (e.status === 422 || e.status === 409)) {
       const errs = errorsByField(e.body);
       return (f && errorForField(errs, f)) || e.message;
     }

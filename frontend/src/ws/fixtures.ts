@@ -95,6 +95,9 @@ export function health(rate = 60): Health {
       { name: "relay", cpu_percent: 11.2, rss_mb: 40 },
     ],
     access: { token_required: false, view_token: false, estop_for_all: false, refused: {}, blocked_clients: 0 },
+    operators: [],
+    driving: [],
+    operator_actions: [],
   };
 }
 
