@@ -1,0 +1,147 @@
+"""Typed dependencies of the routes (the full-stack-fastapi-template's ``api/deps.py``): the
+station, the access rule, the settings, and **who may call a route**.
+
+Every route states its access with one of ``ViewerDep``/``OperatorDep``/``EstopDep``/
+``PublicDep`` (as a parameter when it uses the caller, else in ``dependencies=[...]``):
+the rule lives beside the route, a test walks ``app.routes`` and fails on a state-changing
+route without one, and docs/api.md's table of who may call what is generated from them.
+
+The AccessGuard middleware (backend.access) stays the first line of defence: it reads the
+credential once, counts wrong tokens, answers 429 to a blocked address and refuses a websocket
+before it is accepted; it leaves the caller's role (None: no or a wrong token) in
+``scope[ROLE_KEY]``. The dependencies decide from that role what this route allows.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal
+
+from fastapi import Depends, HTTPException, WebSocketException
+from fastapi.requests import HTTPConnection
+from fastapi.routing import APIRoute, APIWebSocketRoute
+from starlette.routing import BaseRoute
+
+from sslnet.ratelog import RateLimitedLog
+
+from ..access import NEED_OPERATOR, NEED_VIEWER, ROLE_KEY, AccessRule, Role, client_of
+from ..config import Settings
+from ..station import Station
+
+log = logging.getLogger("touchline.access")
+_ratelog = RateLimitedLog(log, interval_s=30.0)
+
+Access = Literal["anyone", "viewer", "operator", "estop"]
+
+
+@dataclass(frozen=True)
+class Caller:
+    """Who calls: the role the credential gives (None: none or a wrong one; every caller is
+    the operator where no token is required) and the client's address."""
+
+    role: Role | None
+    address: str
+
+    @property
+    def who(self) -> str:
+        """For the session log and the e-stop's ``by``."""
+        return f"{self.role or 'operator'} at {self.address}"
+
+
+def get_station(conn: HTTPConnection) -> Station:
+    station: Station = conn.app.state.station
+    return station
+
+
+def get_rule(conn: HTTPConnection) -> AccessRule:
+    rule: AccessRule = conn.app.state.access
+    return rule
+
+
+def get_settings(conn: HTTPConnection) -> Settings:
+    settings: Settings = conn.app.state.settings
+    return settings
+
+
+StationDep = Annotated[Station, Depends(get_station)]
+RuleDep = Annotated[AccessRule, Depends(get_rule)]
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+
+
+def _caller(conn: HTTPConnection, rule: AccessRule) -> Caller:
+    role: Role | None = "operator" if not rule.required else conn.scope.get(ROLE_KEY)
+    return Caller(role, client_of(conn.scope))
+
+
+def _refuse(conn: HTTPConnection, rule: AccessRule, status: int, reason: str,
+            key: str) -> HTTPException | WebSocketException:
+    rule.refused[key] = rule.refused.get(key, 0) + 1
+    _ratelog.warning(f"access-{key}", "refused %s %s from %s: %s",
+                     conn.scope.get("method", "websocket"), conn.url.path,
+                     client_of(conn.scope), reason)
+    if conn.scope["type"] == "websocket":  # the guard refused it before; a second line
+        return WebSocketException(code=1008, reason=reason[:120])
+    return HTTPException(status, reason)
+
+
+def anyone(conn: HTTPConnection, rule: RuleDep) -> Caller:
+    """Open to anyone (the login page checks its token itself)."""
+    return _caller(conn, rule)
+
+
+def viewer(conn: HTTPConnection, rule: RuleDep) -> Caller:
+    """Reading: anyone, or with ``--view-token`` the viewer or operator token."""
+    caller = _caller(conn, rule)
+    if caller.role is None and rule.viewer is not None:
+        raise _refuse(conn, rule, 401, NEED_VIEWER, "no viewer token")
+    return Caller(caller.role or "viewer", caller.address)
+
+
+def operator(conn: HTTPConnection, rule: RuleDep) -> Caller:
+    """Changing something: the operator token (every caller where none is required)."""
+    caller = _caller(conn, rule)
+    if caller.role != "operator":
+        raise _refuse(conn, rule, 401, NEED_OPERATOR, "no operator token")
+    return caller
+
+
+def estop(conn: HTTPConnection, rule: RuleDep) -> Caller:
+    """The emergency stop: a viewer reaches the route, which applies the e-stop rule to what
+    the body asks (``backend.access.estop_refusal``: press or release)."""
+    return viewer(conn, rule)
+
+
+PublicDep = Annotated[Caller, Depends(anyone)]
+ViewerDep = Annotated[Caller, Depends(viewer)]
+OperatorDep = Annotated[Caller, Depends(operator)]
+EstopDep = Annotated[Caller, Depends(estop)]
+#: for ``dependencies=[...]`` where the route does not use the caller
+PUBLIC, VIEWER, OPERATOR = Depends(anyone), Depends(viewer), Depends(operator)
+
+ACCESS: dict[Callable[..., Any], Access] = {
+    anyone: "anyone", viewer: "viewer", operator: "operator", estop: "estop"}
+#: what each access means, for docs/api.md
+ACCESS_DOC: dict[Access, str] = {
+    "anyone": "anyone",
+    "viewer": "**viewer**: anyone, or with `--view-token` the viewer or operator token",
+    "operator": "**operator**",
+    "estop": "**e-stop rule**: an operator presses and releases; a viewer gets 403, unless the "
+             "station runs with `--estop-for-all`: then a viewer may press it, never release it",
+}
+
+
+def access_of(route: BaseRoute) -> Access | None:
+    """The access a route's dependencies give it (the strictest if several), or None."""
+    if not isinstance(route, APIRoute | APIWebSocketRoute):
+        return None
+    order: list[Access] = ["anyone", "viewer", "estop", "operator"]
+    found = -1
+    stack = list(route.dependant.dependencies)
+    while stack:
+        dep = stack.pop()
+        if dep.call in ACCESS:
+            found = max(found, order.index(ACCESS[dep.call]))
+        stack += dep.dependencies
+    return order[found] if found >= 0 else None

@@ -1,0 +1,61 @@
+"""The login URL (sets the cookie) and the operator token's rotation."""
+
+from __future__ import annotations
+
+import logging
+
+from fastapi import APIRouter
+from fastapi.requests import HTTPConnection
+from fastapi.responses import JSONResponse, RedirectResponse
+
+from ..access import COOKIE, base_url, client_of, print_login
+from .deps import PUBLIC, OperatorDep, RuleDep, SettingsDep
+
+log = logging.getLogger("touchline.api")
+
+router = APIRouter(tags=["login"])
+
+
+def _set_cookie(answer: JSONResponse | RedirectResponse, token: str) -> None:
+    # HttpOnly: no script reads it; SameSite=Strict: no other site's request carries it
+    answer.set_cookie(COOKIE, token, max_age=30 * 24 * 3600, path="/", httponly=True,
+                      samesite="strict")
+
+
+@router.get("/login", response_model=None, dependencies=[PUBLIC])
+async def login(conn: HTTPConnection, rule: RuleDep,
+                token: str = "") -> JSONResponse | RedirectResponse:
+    """Opened once per laptop with the URL printed at start: sets the cookie that goes
+    with every request and the websocket, and opens the page. Anyone may open it: the
+    token it carries is checked here (and counted when wrong)."""
+    client = client_of(conn.scope)
+    left = rule.limiter.blocked(client)
+    if left > 0:
+        return JSONResponse(status_code=429, content={
+            "detail": f"too many wrong tokens from {client}: try again in {left:.0f} s"})
+    if not token or rule.role_of(token) is None:
+        if token:
+            rule.failed(client, token, "/login")
+        return JSONResponse(status_code=401, content={"detail": (
+            "wrong or missing token: open the URL printed when the station started "
+            "(http://HOST:PORT/login?token=...)")})
+    answer = RedirectResponse("/", status_code=303)
+    _set_cookie(answer, token)
+    return answer
+
+
+@router.post("/api/token/rotate")
+async def token_rotate(rule: RuleDep, settings: SettingsDep,
+                       caller: OperatorDep) -> JSONResponse:
+    """A new operator token (the operator's only: the current one was checked), written and
+    printed; every cookie and script holding the old one is refused."""
+    try:
+        token = rule.operator.rotate()
+    except ValueError as exc:
+        return JSONResponse(status_code=409, content={"detail": str(exc)})
+    base = base_url(settings.host, settings.port, settings.allowed_hosts)
+    print_login(rule, base)
+    log.warning("operator token rotated by %s", caller.who)
+    answer = JSONResponse({"rotated": True, "login_url": f"{base}/login?token={token}"})
+    _set_cookie(answer, token)
+    return answer
