@@ -19,10 +19,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
-from fastapi import Depends, HTTPException, WebSocketException
+from fastapi import Depends, FastAPI, HTTPException, WebSocketException
+from fastapi.dependencies.models import Dependant
 from fastapi.requests import HTTPConnection
-from fastapi.routing import APIRoute, APIWebSocketRoute
-from starlette.routing import BaseRoute
+from fastapi.routing import iter_route_contexts
 
 from sslnet.ratelog import RateLimitedLog
 
@@ -132,16 +132,34 @@ ACCESS_DOC: dict[Access, str] = {
 }
 
 
-def access_of(route: BaseRoute) -> Access | None:
-    """The access a route's dependencies give it (the strictest if several), or None."""
-    if not isinstance(route, APIRoute | APIWebSocketRoute):
+def access_of(route: Any) -> Access | None:
+    """The access a route's dependencies give it (the strictest if several; the router's
+    own count), or None: no access dependency, or no dependencies at all (FastAPI's
+    ``/openapi.json`` and ``/docs``, which are plain Starlette routes)."""
+    dependant: Dependant | None = getattr(route, "dependant", None)
+    if dependant is None:
         return None
     order: list[Access] = ["anyone", "viewer", "estop", "operator"]
     found = -1
-    stack = list(route.dependant.dependencies)
+    stack = list(dependant.dependencies)
     while stack:
         dep = stack.pop()
         if dep.call in ACCESS:
             found = max(found, order.index(ACCESS[dep.call]))
         stack += dep.dependencies
     return order[found] if found >= 0 else None
+
+
+def route_access(app: FastAPI) -> list[tuple[str, str, Access | None]]:
+    """(method, path, access) of every route of the app, as it serves them (routers included
+    with their prefixes and dependencies); ``WEBSOCKET`` for a websocket, no ``HEAD``."""
+    out: list[tuple[str, str, Access | None]] = []
+    for ctx in iter_route_contexts(app.routes):
+        path = ctx.path
+        if path is None:  # a mount (the page's files)
+            continue
+        methods = ctx.methods
+        access = access_of(ctx)
+        for m in sorted(methods - {"HEAD"}) if methods is not None else ["WEBSOCKET"]:
+            out.append((m, path, access))
+    return out
