@@ -10,11 +10,13 @@ from . import (
     estop,
     login,
     params,
+    recording,
     referee,
     replay,
     robots,
     sim,
     strategy,
+    token,
     views,
     ws,
 )
@@ -22,4 +24,5 @@ from . import (
 #: every router, in the order the app includes them
 ROUTERS: tuple[APIRouter, ...] = (
     views.router, ws.router, robots.router, sim.router, strategy.router, referee.router,
-    estop.router, arming.router, params.router, replay.router, login.router)
+    estop.router, arming.router, params.router, replay.router, recording.router,
+    token.router, login.router)

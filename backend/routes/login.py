@@ -1,22 +1,18 @@
-"""The login URL (sets the cookie) and the operator token's rotation."""
+"""The login URL: sets the cookie that carries the token."""
 
 from __future__ import annotations
-
-import logging
 
 from fastapi import APIRouter
 from fastapi.requests import HTTPConnection
 from fastapi.responses import JSONResponse, RedirectResponse
 
-from ..access import COOKIE, base_url, client_of, print_login
-from .deps import PUBLIC, OperatorDep, RuleDep, SettingsDep
-
-log = logging.getLogger("touchline.api")
+from ..access import COOKIE, client_of
+from .deps import PUBLIC, RuleDep
 
 router = APIRouter(tags=["login"])
 
 
-def _set_cookie(answer: JSONResponse | RedirectResponse, token: str) -> None:
+def set_cookie(answer: JSONResponse | RedirectResponse, token: str) -> None:
     # HttpOnly: no script reads it; SameSite=Strict: no other site's request carries it
     answer.set_cookie(COOKIE, token, max_age=30 * 24 * 3600, path="/", httponly=True,
                       samesite="strict")
@@ -40,22 +36,5 @@ async def login(conn: HTTPConnection, rule: RuleDep,
             "wrong or missing token: open the URL printed when the station started "
             "(http://HOST:PORT/login?token=...)")})
     answer = RedirectResponse("/", status_code=303)
-    _set_cookie(answer, token)
-    return answer
-
-
-@router.post("/api/token/rotate")
-async def token_rotate(rule: RuleDep, settings: SettingsDep,
-                       caller: OperatorDep) -> JSONResponse:
-    """A new operator token (the operator's only: the current one was checked), written and
-    printed; every cookie and script holding the old one is refused."""
-    try:
-        token = rule.operator.rotate()
-    except ValueError as exc:
-        return JSONResponse(status_code=409, content={"detail": str(exc)})
-    base = base_url(settings.host, settings.port, settings.allowed_hosts)
-    print_login(rule, base)
-    log.warning("operator token rotated by %s", caller.who)
-    answer = JSONResponse({"rotated": True, "login_url": f"{base}/login?token={token}"})
-    _set_cookie(answer, token)
+    set_cookie(answer, token)
     return answer

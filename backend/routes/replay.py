@@ -1,5 +1,5 @@
-"""The log player and the recorder (docs/api.md, "Replay and recording"):
-GET/POST /api/player, GET /api/player/history, GET /api/logs, POST /api/recording."""
+"""The log player (docs/api.md, "Replay and recording"): GET/POST /api/player,
+GET /api/player/history, GET /api/logs."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import JSONResponse, Response
 
 from .. import contract
-from ..contract import PlayerIn, RecordingIn
+from ..contract import PlayerIn
 from ..filters.params import FilterSettings
 from ..replay.history import history
 from ..replay.player import LogSource, PlayerError
@@ -82,13 +82,3 @@ async def player_history(
 @router.get("/logs", dependencies=[VIEWER])
 async def logs(st: StationDep) -> contract.LogList:
     return await st.read(st.log_folders.listing)
-
-
-@router.post("/recording", response_model=None, dependencies=[OPERATOR])
-async def recording_post(body: RecordingIn,
-                         st: StationDep) -> contract.Recording | JSONResponse:
-    """A new file now, or recording on/off (the recording.enabled parameter)."""
-    try:
-        return await st.call(st.recorder_command, body.action)
-    except ValueError as exc:
-        return JSONResponse(status_code=409, content={"detail": str(exc)})
