@@ -122,14 +122,6 @@ PUBLIC, VIEWER, OPERATOR = Depends(anyone), Depends(viewer), Depends(operator)
 
 ACCESS: dict[Callable[..., Any], Access] = {
     anyone: "anyone", viewer: "viewer", operator: "operator", estop: "estop"}
-#: what each access means, for docs/api.md
-ACCESS_DOC: dict[Access, str] = {
-    "anyone": "anyone",
-    "viewer": "**viewer**: anyone, or with `--view-token` the viewer or operator token",
-    "operator": "**operator**",
-    "estop": "**e-stop rule**: an operator presses and releases; a viewer gets 403, unless the "
-             "station runs with `--estop-for-all`: then a viewer may press it, never release it",
-}
 
 
 def access_of(route: Any) -> Access | None:
