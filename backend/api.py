@@ -20,7 +20,7 @@ from .access import AccessGuard, AccessRule
 from .config import Settings
 from .jsonsafe import SafeJSONResponse
 from .params.store import ParamError, PresetNotFound, format_errors
-from .routes.deps import PUBLIC
+from .routes.deps import PUBLIC, refusal_before_body
 from .security import EdgeGuard
 from .station import Station
 
@@ -57,7 +57,11 @@ def create_app(settings: Settings, station: Station | None = None,
                        dev_origins=settings.allowed_origins)
 
     @app.exception_handler(RequestValidationError)
-    async def validation_handler(_req: Request, exc: RequestValidationError) -> JSONResponse:
+    async def validation_handler(req: Request, exc: RequestValidationError) -> JSONResponse:
+        refused = refusal_before_body(req)  # who may call it comes first
+        if refused is not None:
+            return SafeJSONResponse(status_code=refused.status_code,
+                                    content={"detail": refused.detail})
         # The default handler echoes the input, and a NaN input makes it fail with a 500.
         return SafeJSONResponse(status_code=422,
                                 content={"detail": format_errors(exc.errors())})

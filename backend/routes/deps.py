@@ -155,3 +155,18 @@ def route_access(app: FastAPI) -> list[tuple[str, str, Access | None]]:
         for m in sorted(methods - {"HEAD"}) if methods is not None else ["WEBSOCKET"]:
             out.append((m, path, access))
     return out
+
+
+def refusal_before_body(conn: HTTPConnection) -> HTTPException | None:
+    """The route's access refusal for a request whose body FastAPI could not parse (it
+    answers 422 before any dependency runs): a caller without the right token is told 401,
+    as for a well-formed body, not what was wrong with a body it may not send anyway."""
+    check = {"viewer": viewer, "operator": operator, "estop": estop}.get(
+        access_of(conn.scope.get("route")) or "")
+    if check is None:
+        return None
+    try:
+        check(conn, get_rule(conn))
+    except HTTPException as exc:
+        return exc
+    return None

@@ -94,3 +94,19 @@ def test_the_dependency_refuses_without_the_guard(tmp_path: Path) -> None:
         r = c.get("/api/world")
         assert r.status_code == 401 and r.json()["detail"] == NEED_VIEWER
     assert bare.state.access.refused == {"no operator token": 1, "no viewer token": 1}
+
+
+def test_a_body_that_does_not_parse_is_refused_for_the_token_first(tmp_path: Path) -> None:
+    """FastAPI answers an unparsable body before any dependency runs: the access rule is
+    applied all the same, so a caller without the token learns nothing about the body."""
+    cfg = _settings(tmp_path, require_token=True)
+    with TestClient(create_app(cfg, Station(cfg)), headers={"X-Touchline": "1"}) as c:
+        json_type = {"content-type": "application/json"}
+        r = c.post("/api/robots/blue/1/target", content=b"{not json", headers=json_type)
+        assert r.status_code == 401 and r.json()["detail"] == NEED_OPERATOR
+        r = c.post("/api/estop", content=b"{not json", headers=json_type)
+        assert r.status_code == 422  # the e-stop's rule needs the body: a viewer may press
+        token = c.app.state.access.operator.token  # type: ignore[attr-defined]
+        r = c.post("/api/robots/blue/1/target", content=b"{not json",
+                   headers={**json_type, "authorization": f"Bearer {token}"})
+        assert r.status_code == 422 and r.json()["detail"][0]["type"] == "json_invalid"
