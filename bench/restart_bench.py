@@ -74,6 +74,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kills", type=int, default=5)
     ap.add_argument("--poll-ms", type=float, default=5.0)
+    ap.add_argument("--logs", type=Path, default=None,
+                    help="keep the children's logs in this folder (default: a temporary one)")
     args = ap.parse_args()
     poll_s = args.poll_ms / 1000
 
@@ -81,7 +83,8 @@ def main() -> int:
         ports = Ports.isolated(None)
         cfg = StationConfig(state_dir=str(Path(tmp) / "state"),
                             backend_args=["--no-record"])
-        sup = Supervisor(command_lines(cfg, ports), log_dir=Path(tmp) / "logs", restart=True,
+        sup = Supervisor(command_lines(cfg, ports), log_dir=args.logs or Path(tmp) / "logs",
+                         restart=True,
                          max_restarts=args.kills + 1)
         base = f"http://127.0.0.1:{ports.http}"
         sup.start()
