@@ -35,7 +35,7 @@ from urllib.parse import parse_qs
 from sslnet.ratelog import RateLimitedLog
 
 from .contract import AccessHealth
-from .security import STATE_CHANGING, ASGIApp, Receive, Scope, Send, _answer
+from .security import ASGIApp, Receive, Scope, Send, _answer
 
 log = logging.getLogger("touchline.access")
 _ratelog = RateLimitedLog(log, interval_s=30.0)
@@ -260,8 +260,12 @@ def client_of(scope: Scope) -> str:
 
 
 class AccessGuard:
-    """The ASGI middleware enforcing an ``AccessRule`` (behind the EdgeGuard: Host, Origin and
-    the JSON/X-Touchline rule are checked first). Leaves the role in ``scope[ROLE_KEY]``."""
+    """The ASGI middleware in front of every route (behind the EdgeGuard: Host, Origin and
+    the JSON/X-Touchline rule are checked first): reads the credential once, counts wrong
+    tokens, answers 429 to a blocked address, refuses a websocket without a token where
+    viewing needs one (before it is accepted), and leaves the caller's role in
+    ``scope[ROLE_KEY]`` (None: no or a wrong token). What a role may do on a route is that
+    route's dependency (``backend.routes.deps``)."""
 
     def __init__(self, app: ASGIApp, *, rule: AccessRule) -> None:
         self.app = app
@@ -273,7 +277,6 @@ class AccessGuard:
             await self.app(scope, receive, send)
             return
         path: str = scope.get("path", "")
-        method = scope.get("method", "GET") if kind == "http" else "WEBSOCKET"
         rule = self.rule
         if not rule.required:
             scope[ROLE_KEY] = "operator"
@@ -297,16 +300,11 @@ class AccessGuard:
             role = rule.role_of(presented)
             if role is None:
                 rule.failed(client, presented, path)
-        if role != "operator":
-            changes = kind == "http" and method in STATE_CHANGING
-            estop = changes and path == "/api/estop"
-            if changes and not estop:
-                await self._refuse(scope, send, 401, NEED_OPERATOR, "no operator token")
-                return
-            if role is None and rule.viewer is not None:
-                await self._refuse(scope, send, 401, NEED_VIEWER, "no viewer token")
-                return
-            role = role or "viewer"
+        if kind == "websocket" and role is None and rule.viewer is not None:
+            # refused before it is accepted, with the JSON reason (the route's VIEWER
+            # dependency could only close an accepted socket)
+            await self._refuse(scope, send, 401, NEED_VIEWER, "no viewer token")
+            return
         scope[ROLE_KEY] = role
         await self.app(scope, receive, send)
 

@@ -1,10 +1,10 @@
 """Several operators (issue 12): who is connected, who drives each team, what each one did.
 
 Pure (no I/O; the clocks are injected): the station keeps one ``Operators``; the web side
-(backend/routes_operators.py) calls it from the web loop and the station thread reads it for
+(backend/routes/operators.py) calls it from the web loop and the station thread reads it for
 the health, hence the one lock inside.
 
-* **Identity**: an operator is a *key* (routes_operators: the name given at login and the
+* **Identity**: an operator is a *key* (backend/routes/operators.py: the name given at login and the
   address) with a name, a role and an address. Each websocket client is a *session* (id,
   name, role, address, connected since).
 * **Driving** is held by one operator per team: the first who drives (a target, a play, a

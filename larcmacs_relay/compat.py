@@ -6,8 +6,6 @@ import json
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from larcmacs_relay.codecs import (
     TEAM_BLUE,
     TEAM_YELLOW,
@@ -124,6 +122,10 @@ def decode_command_matrix(
     dribbler_rpm_per_unit when DribblerEnable. The seed bytes are kept for the robot box.
     Raises ValueError if the size is wrong; rows with non-finite values are reported in errors.
     """
+    # numpy here, not at import: it is only for --compat, and importing it took most of a
+    # (re)started relay's time to come up (bench/restart_bench.py)
+    import numpy as np
+
     if len(data) != MATRIX_BYTES:
         raise ValueError(f"command matrix has {len(data)} bytes, expected {MATRIX_BYTES}")
     m = np.frombuffer(data, dtype="<f8").reshape(MATRIX_ROWS, MATRIX_COLS)

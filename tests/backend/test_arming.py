@@ -179,3 +179,22 @@ async def test_the_publisher_repeats_the_arming_state() -> None:
     finally:
         ctx.destroy(0)
     assert bus.of(topics.ESTOP).latest_value() is None
+
+
+@pytest.mark.parametrize("output,status", [("sim", 200), ("grsim", 200), ("robot-box", 409)])
+def test_teleports_go_to_a_simulator_only_so_arming_does_not_gate_them(
+        tmp_path: Path, output: str, status: int) -> None:
+    """An external simulator under --require-arming takes teleports disarmed (nothing physical
+    moves); real robots (robot-box) never take one, armed or not (docs/api.md)."""
+    st = Station(_settings(tmp_path, require_arming=True, relay_output=output))
+    with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
+        for armed in (False, True):
+            if armed:
+                _vision(st)
+                assert c.post("/api/arm", json={"armed": True}).status_code == 200
+            assert st.armed is armed
+            ball = c.post("/api/sim/ball", json={"x": 0, "y": 0})
+            robot = c.post("/api/sim/robots/blue/3", json={"x": 0, "y": 0})
+            assert (ball.status_code, robot.status_code) == (status, status), ball.text
+            if status == 409:
+                assert "robot-box" in ball.json()["detail"]

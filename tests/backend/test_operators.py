@@ -1,5 +1,5 @@
 """Several operators (issue 12): the driving lock and the action list (backend/operators.py),
-and their routes with two operators on one station (backend/routes_operators.py)."""
+and their routes with two operators on one station (backend/routes/operators.py)."""
 
 import time
 from collections.abc import Iterator

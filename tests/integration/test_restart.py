@@ -1,6 +1,7 @@
 """The launcher restarts a crashed child and the station says so: the relay killed with
 SIGKILL comes back, its restart shows in health (supervisor, a warning line), and the station
-is healthy again with the new relay's data."""
+is healthy again with the new relay's data: frames captured after it started, in the backend's
+world, and its statistics (how soon: bench/restart_bench.py)."""
 
 from __future__ import annotations
 
@@ -26,8 +27,13 @@ def test_a_killed_relay_is_restarted_and_reported() -> None:
         relay = next(c for c in h["supervisor"] if c["name"] == "relay")
         assert relay["pid"] != old and relay["last_exit"] == -signal.SIGKILL
         assert any(w.startswith("relay restarted 1 time by the launcher") for w in h["warnings"])
-        # the new relay's data: fresh vision through it and its statistics
+        # the new relay's data: vision captured after it started (only it can have carried
+        # that) in the backend's world, and its own statistics
+        started_unix = time.time() - relay["up_s"]
+        wait_until(lambda: st.get("/api/world")["t_capture"] > started_unix, 20,
+                   what="a frame through the new relay in the backend's world")
         wait_until(lambda: (lambda h: h if h["ok"] and h["relay"] and h["relay"]["alive"]
-                            and h["relay"]["age_s"] < 1.5 else None)(st.get("/api/health")),
-                   20, what="the station healthy with the new relay")
+                            and h["relay"]["time_ns"] > started_unix * 1e9 else None)(
+                                st.get("/api/health")),
+                   20, what="the station healthy with the new relay's statistics")
         assert time.monotonic() - killed < 25

@@ -9,7 +9,7 @@ import time
 import zmq
 
 from larcmacs_relay.__main__ import build_parser, config_from_args
-from sslpb import touchline_pb2
+from sslpb import ssl_simulation_control_pb2, touchline_pb2
 from tests.relay.conftest import Harness, drain_udp, recv_udp, running_relay, wait_for
 from tests.relay.test_relay_io import command_set
 
@@ -136,3 +136,22 @@ async def test_without_the_flag_it_is_always_armed() -> None:
         data, _ = await recv_udp(h.out_box)
         assert data[1] == 3 and data[3] != 0
         assert h.relay.armed
+
+
+async def test_a_teleport_never_reaches_real_robots_armed_or_not() -> None:
+    """Why teleports need no arming (docs/api.md): only a simulator takes them. In robot-box
+    mode the backend refuses them (409) and the relay drops one that comes all the same."""
+    cmd = ssl_simulation_control_pb2.SimulatorCommand()
+    cmd.control.teleport_ball.x, cmd.control.teleport_ball.y = 1.0, 0.5
+    async with running_relay(output="robot-box", require_arming=True) as h:
+        pub = await connect(h)
+        counter = h.relay.streams["sim_commands"]
+        for armed in (False, True):
+            await pub.send_multipart(arming(armed))
+            await wait_for(lambda a=armed: h.relay.armed == a, what=f"armed={armed}")
+            before = counter.errors
+            await pub.send_multipart([b"sim", cmd.SerializeToString()])
+            await wait_for(lambda b=before: counter.errors > b,
+                           what="the teleport dropped and counted")
+            assert await nothing_for(h, 0.1) == []
+        assert counter.by_reason.get("rejected", 0) == 2
