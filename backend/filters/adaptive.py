@@ -34,7 +34,10 @@ from .params import AdaptiveParams, FilterKind
 
 Vec = tuple[float, float]
 
-_LOG2PI = math.log(2 * math.pi)
+import os
+ETA=float(os.environ.get("ETA","0.2"))
+DELTA=float(os.environ.get("DELTA","0.2"))
+Q0=float(os.environ.get("Q0","300"))
 
 
 class AdaptiveIMM:
@@ -43,9 +46,9 @@ class AdaptiveIMM:
     ``dims=1`` filters x only (orientation through :class:`AngleFilter`, y is ignored)."""
 
     __slots__ = (
-        "_age", "_far", "_pend", "_prev", "_t",
+        "_age", "_backup", "_far", "_far0", "_pend", "_prev", "_t", "_ta",
         "dims", "gap_s", "gate2", "kind", "max_speed", "mu", "n_far", "outlier_rate", "q_m",
-        "q_s", "r", "r_max", "r_min", "rejected", "rho_accept", "s", "switch_ms", "switch_sm",
+        "q_max", "q_min", "q_s", "r", "r_max", "r_min", "rejected", "rho_accept", "s", "switch_ms", "switch_sm",
         "vx", "horizon",
     )
 
@@ -57,11 +60,13 @@ class AdaptiveIMM:
         if angle:
             r0, rmin, rmax = p.angle_init_noise_rad, p.angle_min_noise_rad, p.angle_max_noise_rad
             self.q_m = p.angle_accel_noise_rad_s2 ** 2
+            self.q_min, self.q_max = 1e-4, 1e4 ** 2
             self.q_s = p.angle_still_drift_rad_s ** 2
             self.max_speed = p.angle_max_rate_rad_s
         else:
             r0, rmin, rmax = p.init_noise_mm, p.min_noise_mm, p.max_noise_mm
-            self.q_m = p.accel_noise_mm_s2 ** 2
+            self.q_m = Q0 ** 2
+            self.q_min, self.q_max = 1.0, 1e5 ** 2
             self.q_s = p.still_drift_mm_s ** 2
             self.max_speed = p.max_speed_mm_s
         self.r = r0 * r0
@@ -76,13 +81,16 @@ class AdaptiveIMM:
         self.outlier_rate = 0.0
         self.n_far = 0
         self._t: float | None = None
-        self._age = 0  # accepted measurements so far (the noise average's count)
+        self._ta = 0.0  # time of the last measurement used
+        self._age = 0.0  # accepted measurements so far (the noise average's count)
         self.mu = 0.5  # probability of "still"
         # still model per axis [x, P]; moving model per axis [x, v, Ppp, Ppv, Pvv]
         self.s: list[float] = []
         self.vx: list[float] = []
         self._pend: tuple[float, float, float] | None = None  # last reachable rejected (t, x, y)
         self._far: tuple[float, float, float] | None = None  # last unreachable one
+        self._far0 = (0.0, 0.0, 0.0)  # the first of the run of unreachable ones
+        self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # state before the last update (revise)
 
     # -- state -------------------------------------------------------------------------------
@@ -96,15 +104,17 @@ class AdaptiveIMM:
         self._prev = None
         self._pend = None
         self.s, self.vx = [], []
-        self._age = 0
+        self._age = 0.0
         self.n_far = 0
 
     def _save(self) -> tuple[object, ...]:
         return (self._t, self.mu, list(self.s), list(self.vx), self.r, self._age,
-                self.outlier_rate, self._pend, self.n_far, self.rejected, self._far, self.q_m)
+                self.outlier_rate, self._pend, self.n_far, self.rejected, self._far, self.q_m,
+                self._ta)
 
     def _load(self, st: tuple[object, ...]) -> None:
-        (t, mu, s, vx, r, age, rho, pend, nfar, rej, far, qm) = st
+        (t, mu, s, vx, r, age, rho, pend, nfar, rej, far, qm, ta) = st
+        self._ta = ta  # type: ignore[assignment]
         self._far = far  # type: ignore[assignment]
         self.q_m = qm  # type: ignore[assignment]
         self._t = t  # type: ignore[assignment]
@@ -125,8 +135,8 @@ class AdaptiveIMM:
         self.s = [x, r, y, r]
         self.vx = [x, v[0], r, 0.0, pv, y, v[1], r, 0.0, pv]
         self.mu = mu
-        self._t = t
-        self._pend = self._far = None
+        self._t = self._ta = t
+        self._pend = self._far = self._backup = None
         self.n_far = 0
         return (x, y)
 
@@ -210,7 +220,7 @@ class AdaptiveIMM:
         # both models' corrections
         out_s: list[float] = []
         out_m: list[float] = []
-        r_sum = 0.0
+        r_s = r_m = w_s = w_m = 0.0
         for ax in (0, 1) if two else (0,):
             x0, p0, xp, v1, ap, bp, cp, ns, nm, ss, sm = pri[11 * ax:11 * ax + 11]
             g = p0 / ss
@@ -219,7 +229,14 @@ class AdaptiveIMM:
             out_m += (xp + k0 * nm, v1 + k1 * nm, (1.0 - k0) * ap, (1.0 - k0) * bp,
                       cp - k1 * bp)
             # noise sample: the innovation's excess over the prediction's own variance
-            r_sum += cs * (ns * ns - p0) + cm * (nm * nm - ap)
+            # weighted by (r / S)^2, the information a squared innovation carries about r
+            ws, wm = r / ss, r / sm
+            ws *= ws
+            wm *= wm
+            r_s += ws * (ns * ns - p0)
+            r_m += wm * (nm * nm - ap)
+            w_s += ws
+            w_m += wm
         # model likelihoods (log, Gaussian) and the new probabilities
         ls = -0.5 * (d2s + lds)
         lm = -0.5 * (d2m + ldm)
@@ -230,13 +247,25 @@ class AdaptiveIMM:
         self.mu = min(1.0 - 1e-6, max(1e-6, mu))
         self.s = out_s
         self.vx = out_m
-        self._pend = None
+        self._pend = self._far = self._backup = None
+        self._ta = t
         self.n_far = 0
         self.outlier_rate -= self.outlier_rate / self.horizon
-        # running noise estimate: 1/n at first, then a sliding horizon
-        self._age += 1
-        w = 1.0 / min(self._age + 1, self.horizon)
-        r_new = r + w * (r_sum / (2 if two else 1) - r)
+        # process noise: grow when the moving model's innovations are larger than it predicts,
+        # shrink slowly otherwise (the smallest q the data agree with)
+        nis = d2m / (2 if two else 1)
+        self.q_m = min(self.q_max, max(self.q_min, self.q_m * math.exp(
+            ETA * (min(nis, 20.0) - 1.0 - DELTA))))
+        # running noise estimate: weighted mean of the samples, 1/n at first, then a horizon
+        mu = self.mu
+        wt = mu * w_s + (1.0 - mu) * w_m
+        if wt > 1e-9:
+            sample = (mu * r_s + (1.0 - mu) * r_m) / wt
+            self._age += wt / (2 if two else 1)
+            w = wt / (2 if two else 1) / min(self._age + 1.0, self.horizon)
+            r_new = r + w * (sample - r)
+        else:
+            r_new = r
         self.r = min(self.r_max, max(self.r_min, r_new))
         return self.estimate_fast()
 
@@ -245,25 +274,48 @@ class AdaptiveIMM:
         """A measurement outside both models' gates: an outlier, a maneuver or a new place."""
         self.rejected += 1
         two = self.dims == 2
+        bk = self._backup
+        if bk is not None:
+            # the last step re-initialised on a jump; if this measurement fits the track from
+            # before that jump, the jump was an outlier after all: go back to that track
+            self._backup = None
+            cur = self._save()
+            n_rej = self.rejected
+            self._load(bk)
+            self.rejected = n_rej
+            out = self._step(t, zx, zy)
+            if self.rejected == n_rej:
+                return out
+            self._load(cur)
+            self.rejected = n_rej
         ex = self.estimate_fast()
         dx, dy = zx - ex[0], (zy - ex[1]) if two else 0.0
-        reach = self.max_speed * dt + math.sqrt(self.gate2 * self.r)
+        lim0 = math.sqrt(self.gate2 * self.r)
+        reach = self.max_speed * (t - self._ta) + lim0
         pend = self._pend
-        reachable = dx * dx + dy * dy <= reach * reach
+        confirmed = False
+        v = (0.0, 0.0)
+        if pend is not None and t > pend[0]:  # does it continue the last reachable jump?
+            px, py = zx - pend[1], (zy - pend[2]) if two else 0.0
+            tp = t - pend[0]
+            lim = self.max_speed * tp + lim0
+            # a maneuver continues away from where the object was, in about the same direction
+            ox, oy = pend[1] - ex[0], (pend[2] - ex[1]) if two else 0.0
+            along = px * ox + py * oy
+            if (px * px + py * py <= lim * lim and along > 0.0
+                    and along * along >= 0.5 * (px * px + py * py) * (ox * ox + oy * oy)):
+                confirmed = True
+                v = (px / tp, py / tp)
+        reachable = confirmed or dx * dx + dy * dy <= reach * reach
         if reachable:
-            confirmed = False
-            v = ((dx / dt, dy / dt) if dt > 0 else (0.0, 0.0))
-            if pend is not None and t > pend[0]:
-                px, py = zx - pend[1], (zy - pend[2]) if two else 0.0
-                tp = t - pend[0]
-                lim = self.max_speed * tp + math.sqrt(self.gate2 * self.r)
-                if px * px + py * py <= lim * lim:
-                    confirmed = True
-                    v = (px / tp, py / tp)
+            if not confirmed and dt > 0:
+                v = (dx / dt, dy / dt)
             if confirmed or self.outlier_rate < self.rho_accept:
                 dv2 = v[0] * v[0] + v[1] * v[1]
-                self.n_far = 0
-                return self._init(t, zx, zy, v, mu=1e-3, pvv=dv2 + self.r / max(dt, 1e-3) ** 2)
+                bk = self._save_pred(pri, cs)
+                self._init(t, zx, zy, v, mu=1e-3, pvv=dv2 + self.r / max(dt, 1e-3) ** 2)
+                self._backup = bk
+                return (zx, zy)
             self._pend = (t, zx, zy)
         else:
             self._pend = None
@@ -271,23 +323,33 @@ class AdaptiveIMM:
             far = self._far
             if far is not None and t > far[0]:
                 fx, fy = zx - far[1], (zy - far[2]) if two else 0.0
-                lim = self.max_speed * (t - far[0]) + math.sqrt(self.gate2 * self.r)
+                lim = self.max_speed * (t - far[0]) + lim0
                 self.n_far = self.n_far + 1 if fx * fx + fy * fy <= lim * lim else 1
             else:
                 self.n_far = 1
+            if self.n_far == 1:
+                self._far0 = (t, zx, zy)
             self._far = (t, zx, zy)
             if self.n_far >= 3:
-                return self._init(t, zx, zy)
+                f0 = self._far0
+                tf = max(t - f0[0], 1e-3)
+                return self._init(t, zx, zy, ((zx - f0[1]) / tf, (zy - f0[2]) / tf))
         self.outlier_rate += (1.0 - self.outlier_rate) / self.horizon
         # keep the predictions (no correction) and the prior model probabilities
+        self._load(self._save_pred(pri, cs))
+        return self.estimate_fast()
+
+    def _save_pred(self, pri: list[float], cs: float) -> tuple[object, ...]:
+        """The state with both models' predictions and the prior model probabilities."""
         s: list[float] = []
         m: list[float] = []
-        for ax in (0, 1) if two else (0,):
+        for ax in (0, 1) if self.dims == 2 else (0,):
             x0, p0, xp, v1, ap, bp, cp = pri[11 * ax:11 * ax + 7]
             s += (x0, p0)
             m += (xp, v1, ap, bp, cp)
-        self.s, self.vx, self.mu = s, m, cs
-        return self.estimate_fast()
+        st = list(self._save())
+        st[1], st[2], st[3] = cs, s, m
+        return tuple(st)
 
     # -- output ------------------------------------------------------------------------------
 
