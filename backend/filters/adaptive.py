@@ -46,7 +46,7 @@ class AdaptiveIMM:
     ``dims=1`` filters x only (orientation through :class:`AngleFilter`, y is ignored)."""
 
     __slots__ = (
-        "_age", "_backup", "_far", "_far0", "_pend", "_prev", "_t", "_ta",
+        "_age", "_backup", "_hist", "_far", "_far0", "_pend", "_prev", "_t", "_ta",
         "dims", "gap_s", "gate2", "kind", "max_speed", "mu", "n_far", "outlier_rate", "q_m",
         "q_max", "q_min", "q_s", "r", "r_max", "r_min", "rejected", "rho_accept", "s", "switch_ms", "switch_sm",
         "vx", "horizon",
@@ -91,6 +91,7 @@ class AdaptiveIMM:
         self._far: tuple[float, float, float] | None = None  # last unreachable one
         self._far0 = (0.0, 0.0, 0.0)  # the first of the run of unreachable ones
         self._backup: tuple[object, ...] | None = None  # the track before a jump
+        self._hist: list[float] = []  # the last two measurements used: t, x, y, t, x, y
         self._prev: tuple[object, ...] | None = None  # state before the last update (revise)
 
     # -- state -------------------------------------------------------------------------------
@@ -110,10 +111,11 @@ class AdaptiveIMM:
     def _save(self) -> tuple[object, ...]:
         return (self._t, self.mu, list(self.s), list(self.vx), self.r, self._age,
                 self.outlier_rate, self._pend, self.n_far, self.rejected, self._far, self.q_m,
-                self._ta)
+                self._ta, self._hist)
 
     def _load(self, st: tuple[object, ...]) -> None:
-        (t, mu, s, vx, r, age, rho, pend, nfar, rej, far, qm, ta) = st
+        (t, mu, s, vx, r, age, rho, pend, nfar, rej, far, qm, ta, hist) = st
+        self._hist = hist  # type: ignore[assignment]
         self._ta = ta  # type: ignore[assignment]
         self._far = far  # type: ignore[assignment]
         self.q_m = qm  # type: ignore[assignment]
@@ -136,6 +138,7 @@ class AdaptiveIMM:
         self.vx = [x, v[0], r, 0.0, pv, y, v[1], r, 0.0, pv]
         self.mu = mu
         self._t = self._ta = t
+        self._hist = [t, x, y]
         self._pend = self._far = self._backup = None
         self.n_far = 0
         return (x, y)
@@ -220,7 +223,6 @@ class AdaptiveIMM:
         # both models' corrections
         out_s: list[float] = []
         out_m: list[float] = []
-        r_s = r_m = w_s = w_m = 0.0
         for ax in (0, 1) if two else (0,):
             x0, p0, xp, v1, ap, bp, cp, ns, nm, ss, sm = pri[11 * ax:11 * ax + 11]
             g = p0 / ss
@@ -228,15 +230,6 @@ class AdaptiveIMM:
             k0, k1 = ap / sm, bp / sm
             out_m += (xp + k0 * nm, v1 + k1 * nm, (1.0 - k0) * ap, (1.0 - k0) * bp,
                       cp - k1 * bp)
-            # noise sample: the innovation's excess over the prediction's own variance
-            # weighted by (r / S)^2, the information a squared innovation carries about r
-            ws, wm = r / ss, r / sm
-            ws *= ws
-            wm *= wm
-            r_s += ws * (ns * ns - p0)
-            r_m += wm * (nm * nm - ap)
-            w_s += ws
-            w_m += wm
         # model likelihoods (log, Gaussian) and the new probabilities
         ls = -0.5 * (d2s + lds)
         lm = -0.5 * (d2m + ldm)
@@ -256,16 +249,28 @@ class AdaptiveIMM:
         nis = d2m / (2 if two else 1)
         self.q_m = min(self.q_max, max(self.q_min, self.q_m * math.exp(
             ETA * (min(nis, 20.0) - 1.0 - DELTA))))
-        # running noise estimate: weighted mean of the samples, 1/n at first, then a horizon
-        mu = self.mu
-        wt = mu * w_s + (1.0 - mu) * w_m
-        if wt > 1e-9:
-            sample = (mu * r_s + (1.0 - mu) * r_m) / wt
-            self._age += wt / (2 if two else 1)
-            w = wt / (2 if two else 1) / min(self._age + 1.0, self.horizon)
-            r_new = r + w * (sample - r)
+        # measurement noise from the second differences of the measurements used (independent
+        # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - rho (z_k-1 -
+        # z_k-2) has variance (1 + (1 + rho)^2 + rho^2) r when the motion is smooth
+        r_new = r
+        h = self._hist
+        if len(h) == 6:
+            t1, x1, y1, t2, x2, y2 = h
+            if t1 > t2 and t > t1:
+                rho = (t - t1) / (t1 - t2)
+                ex = zx - x1 - rho * (x1 - x2)
+                e2 = ex * ex
+                if two:
+                    ey = zy - y1 - rho * (y1 - y2)
+                    e2 = 0.5 * (e2 + ey * ey)
+                sample = min(e2 / (1.0 + (1.0 + rho) ** 2 + rho * rho), 16.0 * r)
+                self._age += 1.0
+                r_new = r + (sample - r) / min(self._age + 1.0, self.horizon)
+            self._hist = [t, zx, zy, t1, x1, y1]
+        elif len(h) == 3:
+            self._hist = [t, zx, zy, *h]
         else:
-            r_new = r
+            self._hist = [t, zx, zy]
         self.r = min(self.r_max, max(self.r_min, r_new))
         return self.estimate_fast()
 
