@@ -323,7 +323,7 @@ class AdaptiveIMM:
                 return (zx, zy)
             self._pend = (t, zx, zy)
         else:
-            self._pend = None
+            # (an outlier between two frames of a maneuver leaves the maneuver's first frame)
             # a run of far measurements that agree with each other: the object is elsewhere
             far = self._far
             if far is not None and t > far[0]:
