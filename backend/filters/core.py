@@ -18,7 +18,7 @@ from typing import Protocol
 
 from domain.angles import wrap_angle
 
-from .adaptive import AdaptiveIMM
+from .adaptive import AdaptiveIMM, AdaptiveIMM1D
 from .params import (
     AdaptiveParams,
     FilterKind,
@@ -406,8 +406,8 @@ def make_filter(kind: FilterKind, params: AnyParams | None = None,
     """A new filter of ``kind``; ``params`` must be that kind's model (None: defaults).
     ``angle=True`` picks the orientation parameters (rad) where a kind has them."""
     if kind == "adaptive":
-        return AdaptiveIMM(params if isinstance(params, AdaptiveParams) else None, angle=angle,
-                           dims=1 if angle else 2)
+        ap = params if isinstance(params, AdaptiveParams) else None
+        return AdaptiveIMM1D(ap) if angle else AdaptiveIMM(ap)
     if kind == "raw":
         return RawFilter(params if isinstance(params, RawParams) else None)
     if kind == "median":

@@ -90,8 +90,17 @@ class AdaptiveParams(BaseModel):
         "upper bound of the estimated measurement noise")
     noise_horizon: int = num(100, 5, 10000, "samples", 10,
         "measurements the noise and outlier-rate estimates average over")
-    accel_noise_mm_s2: float = num(4000.0, 1.0, 1e6, "mm/s^2", 100.0,
-        "moving model: std of the white acceleration")
+    accel_init_mm_s2: float = num(30.0, 0.1, 1e6, "mm/s^2", 10.0,
+        "moving model: std of the white acceleration before any data (then estimated)")
+    accel_min_mm_s2: float = num(1.0, 0.01, 1e6, "mm/s^2", 1.0,
+        "moving model: lower bound of the estimated acceleration noise")
+    accel_max_mm_s2: float = num(1e5, 1.0, 1e7, "mm/s^2", 1000.0,
+        "moving model: upper bound of the estimated acceleration noise")
+    accel_adapt_rate: float = num(0.3, 0.0, 2.0, "", 0.05,
+        "how fast the acceleration noise follows the innovations (log step per unit of "
+        "normalised innovation squared)")
+    accel_shrink_bias: float = num(0.5, 0.0, 5.0, "", 0.1,
+        "normalised innovation squared below 1 + this shrinks the acceleration noise")
     still_drift_mm_s: float = num(0.1, 0.0, 1000.0, "mm/s^0.5", 0.5,
         "still model: random-walk drift of the position")
     still_to_moving_per_s: float = num(0.1, 0.01, 30.0, "1/s", 0.1,
@@ -100,6 +109,9 @@ class AdaptiveParams(BaseModel):
         "switching rate moving -> still")
     gate_sigma: float = num(4.5, 2.0, 20.0, "sigma", 0.5,
         "a measurement farther than this many standard deviations is not used as is")
+    outlier_rate_trust: float = num(0.02, 0.0, 1.0, "", 0.01,
+        "below this estimated outlier rate a reachable jump is a maneuver at once (above it, "
+        "once the next measurement confirms it)")
     max_speed_mm_s: float = num(6500.0, 100.0, 20000.0, "mm/s", 100.0,
         "a jump farther than this speed allows is an outlier, not a maneuver")
     gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,
@@ -110,8 +122,12 @@ class AdaptiveParams(BaseModel):
         "orientation: lower bound of the estimated noise")
     angle_max_noise_rad: float = num(0.5, 1e-3, 3.0, "rad", 0.01,
         "orientation: upper bound of the estimated noise")
-    angle_accel_noise_rad_s2: float = num(40.0, 0.01, 1e4, "rad/s^2", 1.0,
-        "orientation, moving model: std of the white angular acceleration")
+    angle_accel_init_rad_s2: float = num(10.0, 0.001, 1e4, "rad/s^2", 1.0,
+        "orientation, moving model: std of the white angular acceleration before any data")
+    angle_accel_min_rad_s2: float = num(0.01, 1e-4, 1e4, "rad/s^2", 0.01,
+        "orientation: lower bound of the estimated angular acceleration noise")
+    angle_accel_max_rad_s2: float = num(1000.0, 0.01, 1e5, "rad/s^2", 10.0,
+        "orientation: upper bound of the estimated angular acceleration noise")
     angle_still_drift_rad_s: float = num(0.002, 0.0, 10.0, "rad/s^0.5", 0.001,
         "orientation, still model: random-walk drift")
     angle_max_rate_rad_s: float = num(30.0, 0.1, 200.0, "rad/s", 1.0,
