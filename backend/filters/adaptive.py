@@ -24,35 +24,32 @@ re-initialises the filter.
 
 Plain float arithmetic per axis (no numpy): for a 2-state filter CPython's float operations are
 several times faster than small matrices, and this runs for every object in every camera frame.
+The state is one list of floats, unpacked at the start of a step and replaced by a new list at
+its end: one bytecode instead of twenty attribute reads, and the list before the step is kept
+as it is, so ``revise`` (a second camera at the same instant) costs nothing until it is used.
 """
 
 from __future__ import annotations
 
 import math
-from operator import attrgetter
 
 from .params import AdaptiveParams, FilterKind
 
 Vec = tuple[float, float]
 
-#: everything that changes per step (saved before a step so that ``revise`` can redo it)
-_STATE = (
-    "_t", "_ta", "mu", "r", "q_m", "_age", "outlier_rate", "rejected", "n_far",
-    "sx", "sy", "spx", "spy", "mx", "my", "mvx", "mvy", "mpx", "mpy", "mbx", "mby", "mcx", "mcy",
-    "_h", "_pend", "_far", "_far0", "_backup",
-)
-_get_state = attrgetter(*_STATE)
+# the state list: times, model probability of "still", noise estimates, then both models
+# (still: x, y and their variances; moving: x, y, vx, vy, covariance [[p, b], [b, c]] per axis)
+# t ta mu r q age rho | sx sy spx spy | mx my mvx mvy mpx mpy mbx mby mcx mcy
+_MU, _R, _Q, _RHO = 2, 3, 4, 6
 
 
 class AdaptiveIMM:
-    """Still/moving IMM with estimated noise and robust gating (see the module doc), 2-D.
+    """Still/moving IMM with estimated noise and robust gating (see the module doc), 2-D."""
 
-    State per model and axis: still ``x, P``; moving ``x, v`` with covariance ``P = [[p, b],
-    [b, c]]``. ``mu`` is the probability of "still"."""
-
-    __slots__ = (*_STATE, "_prev", "gap_s", "gate2", "horizon", "kind", "max_speed", "q_max",
-                 "q_min", "q_s", "r_max", "r_min", "rho_accept", "switch_ms", "switch_sm",
-                 "q_down", "q_rate")
+    __slots__ = ("S", "_backup", "_far", "_far0", "_h", "_pend", "_prev", "gap_s", "gate2",
+                 "horizon", "kind", "max_speed", "n_far", "q_down", "q_max", "q_min", "q_rate",
+                 "q_s", "r0", "q0", "r_max", "r_min", "rejected", "rho_accept", "switch_ms",
+                 "switch_sm")
 
     dims = 2
 
@@ -70,9 +67,9 @@ class AdaptiveIMM:
             q0, qmin, qmax = p.accel_init_mm_s2, p.accel_min_mm_s2, p.accel_max_mm_s2
             self.q_s = p.still_drift_mm_s ** 2
             self.max_speed = p.max_speed_mm_s
-        self.r = r0 * r0
+        self.r0 = r0 * r0
         self.r_min, self.r_max = rmin * rmin, rmax * rmax
-        self.q_m = q0 * q0
+        self.q0 = q0 * q0
         self.q_min, self.q_max = qmin * qmin, qmax * qmax
         self.q_rate = p.accel_adapt_rate
         self.q_down = 1.0 + p.accel_shrink_bias
@@ -83,20 +80,12 @@ class AdaptiveIMM:
         self.switch_ms = p.moving_to_still_per_s
         self.rho_accept = p.outlier_rate_trust
         self.rejected = 0
-        self.outlier_rate = 0.0
-        self.n_far = 0
-        self._t: float | None = None
-        self._ta = 0.0  # time of the last measurement used
-        self._age = 0.0  # samples in the noise average
-        self.mu = 0.5
-        self.sx = self.sy = self.spx = self.spy = 0.0
-        self.mx = self.my = self.mvx = self.mvy = 0.0
-        self.mpx = self.mpy = self.mbx = self.mby = self.mcx = self.mcy = 0.0
-        # the last two measurements used (t, x, y, t, x, y), for the noise estimate
-        self._h: tuple[float, ...] = ()
+        self.S: list[float] = []  # empty: nothing measured yet
+        self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
         self._far: tuple[float, float, float] | None = None  # last unreachable measurement
         self._far0 = (0.0, 0.0, 0.0)  # the first of a run of unreachable ones
+        self.n_far = 0
         self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # the state before the last update
 
@@ -104,33 +93,56 @@ class AdaptiveIMM:
 
     @property
     def t_last(self) -> float | None:
-        return self._t
+        return self.S[0] if self.S else None
+
+    @property
+    def mu(self) -> float:
+        """Probability that the object is still."""
+        return self.S[_MU] if self.S else 0.5
+
+    @property
+    def r(self) -> float:
+        """Estimated measurement noise variance."""
+        return self.S[_R] if self.S else self.r0
+
+    @property
+    def q_m(self) -> float:
+        """Estimated white-acceleration variance of the moving model."""
+        return self.S[_Q] if self.S else self.q0
+
+    @property
+    def outlier_rate(self) -> float:
+        return self.S[_RHO] if self.S else 0.0
+
+    def noise(self) -> float:
+        """The estimated measurement noise (std, units of the measurement)."""
+        return math.sqrt(self.r)
 
     def reset(self) -> None:
-        self._t = None
+        """Forget the object; the noise estimates are kept (they describe the camera)."""
+        if self.S:
+            self.r0, self.q0 = self.S[_R], self.S[_Q]
+        self.S = []
         self._prev = self._pend = self._far = self._backup = None
         self._h = ()
-        self._age = 0.0
         self.n_far = 0
 
     def _save(self) -> tuple[object, ...]:
-        return _get_state(self)  # type: ignore[no-any-return]
+        return (self.S, self._h, self._pend, self._far, self._far0, self._backup, self.n_far)
 
     def _load(self, st: tuple[object, ...]) -> None:
-        for k, v in zip(_STATE, st, strict=True):
-            setattr(self, k, v)
+        (self.S, self._h, self._pend, self._far, self._far0, self._backup,  # type: ignore
+         self.n_far) = st
 
     def _init(self, t: float, x: float, y: float, v: Vec = (0.0, 0.0), mu: float = 0.5,
               pvv: float | None = None) -> Vec:
-        r = self.r
+        S = self.S
+        if S:
+            r, q, age, rho = S[_R], S[_Q], S[5], S[_RHO]
+        else:
+            r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.sx, self.sy, self.spx, self.spy = x, y, r, r
-        self.mx, self.my, self.mvx, self.mvy = x, y, v[0], v[1]
-        self.mpx = self.mpy = r
-        self.mbx = self.mby = 0.0
-        self.mcx = self.mcy = pv
-        self.mu = mu
-        self._t = self._ta = t
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], r, r, 0.0, 0.0, pv, pv]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = None
         self.n_far = 0
@@ -139,20 +151,25 @@ class AdaptiveIMM:
     # -- the step ----------------------------------------------------------------------------
 
     def update(self, t_s: float, x: float, y: float) -> Vec:
-        self._prev = _get_state(self)
+        self._prev = (self.S, self._h, self._pend, self._far, self._far0, self._backup,
+                      self.n_far)
         return self._step(t_s, x, y)
 
     def revise(self, x: float, y: float) -> Vec:
-        if self._prev is None or self._t is None:
-            return self.update(0.0 if self._t is None else self._t, x, y)
-        t = self._t
+        if self._prev is None or not self.S:
+            return self.update(self.S[0] if self.S else 0.0, x, y)
+        t = self.S[0]
         self._load(self._prev)
         return self._step(t, x, y)
 
-    def _mixing(self, dt: float) -> tuple[float, float, float, float]:
-        """Prior probability of still, and the mixing weights (still's share of the still
-        model's start, still's share of the moving model's start)."""
-        ms = self.mu
+    def _step(self, t: float, zx: float, zy: float) -> Vec:
+        S = self.S
+        if not S or t - S[0] > self.gap_s:
+            return self._init(t, zx, zy)
+        (t0, ta, ms, r, q, age, rho, sx, sy, spx, spy,
+         mx, my, mvx, mvy, mpx, mpy, mbx, mby, mcx, mcy) = S
+        dt = t - t0 if t > t0 else 0.0
+        # Markov switching over dt, then the mixing weights (still's share of each model's start)
         a = self.switch_sm * dt
         b = self.switch_ms * dt
         if a > 0.5:
@@ -163,164 +180,135 @@ class AdaptiveIMM:
         cm = 1.0 - cs
         ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
         wm_s = a * ms / cm if cm > 1e-12 else 0.0
-        return cs, cm, ws_s, wm_s
-
-    def _step(self, t: float, zx: float, zy: float) -> Vec:
-        t0 = self._t
-        if t0 is None or t - t0 > self.gap_s:
-            return self._init(t, zx, zy)
-        dt = t - t0 if t > t0 else 0.0
-        self._t = t
-        r = self.r
-        cs, cm, ws_s, wm_s = self._mixing(dt)
         ws_m = 1.0 - ws_s
         wm_m = 1.0 - wm_s
         qs = self.q_s * dt
-        q = self.q_m
         dt2 = dt * dt
         q11 = q * dt2 * dt2 * 0.25
         q12 = q * dt2 * dt * 0.5
         q22 = q * dt2
         # -- x: mix, predict, innovate
-        xs, ps, xm, vm, pa, pb, pc = (self.sx, self.spx, self.mx, self.mvx, self.mpx, self.mbx,
-                                      self.mcx)
-        x0 = ws_s * xs + ws_m * xm
-        es = xs - x0
-        em = xm - x0
-        p0x = ws_s * (ps + es * es) + ws_m * (pa + em * em) + qs
-        x1 = wm_s * xs + wm_m * xm
-        v1x = wm_m * vm
-        es = xs - x1
-        em = xm - x1
-        ev = vm - v1x
-        a1 = wm_s * (ps + es * es) + wm_m * (pa + em * em)
-        b1 = wm_m * (pb + em * ev) - wm_s * es * v1x
-        c1 = wm_s * v1x * v1x + wm_m * (pc + ev * ev)
+        x0x = ws_s * sx + ws_m * mx
+        es = sx - x0x
+        em = mx - x0x
+        p0x = ws_s * (spx + es * es) + ws_m * (mpx + em * em) + qs
+        x1 = wm_s * sx + wm_m * mx
+        v1x = wm_m * mvx
+        es = sx - x1
+        em = mx - x1
+        ev = mvx - v1x
+        a1 = wm_s * (spx + es * es) + wm_m * (mpx + em * em)
+        b1 = wm_m * (mbx + em * ev) - wm_s * es * v1x
+        c1 = wm_s * v1x * v1x + wm_m * (mcx + ev * ev)
         xpx = x1 + v1x * dt
         apx = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
         bpx = b1 + dt * c1 + q12
         cpx = c1 + q22
-        x0x = x0
-        nsx = zx - x0
+        nsx = zx - x0x
         nmx = zx - xpx
         ssx = p0x + r
         smx = apx + r
         # -- y
-        xs, ps, xm, vm, pa, pb, pc = (self.sy, self.spy, self.my, self.mvy, self.mpy, self.mby,
-                                      self.mcy)
-        x0 = ws_s * xs + ws_m * xm
-        es = xs - x0
-        em = xm - x0
-        p0y = ws_s * (ps + es * es) + ws_m * (pa + em * em) + qs
-        x1 = wm_s * xs + wm_m * xm
-        v1y = wm_m * vm
-        es = xs - x1
-        em = xm - x1
-        ev = vm - v1y
-        a1 = wm_s * (ps + es * es) + wm_m * (pa + em * em)
-        b1 = wm_m * (pb + em * ev) - wm_s * es * v1y
-        c1 = wm_s * v1y * v1y + wm_m * (pc + ev * ev)
+        x0y = ws_s * sy + ws_m * my
+        es = sy - x0y
+        em = my - x0y
+        p0y = ws_s * (spy + es * es) + ws_m * (mpy + em * em) + qs
+        x1 = wm_s * sy + wm_m * my
+        v1y = wm_m * mvy
+        es = sy - x1
+        em = my - x1
+        ev = mvy - v1y
+        a1 = wm_s * (spy + es * es) + wm_m * (mpy + em * em)
+        b1 = wm_m * (mby + em * ev) - wm_s * es * v1y
+        c1 = wm_s * v1y * v1y + wm_m * (mcy + ev * ev)
         xpy = x1 + v1y * dt
         apy = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
         bpy = b1 + dt * c1 + q12
         cpy = c1 + q22
-        x0y = x0
-        nsy = zy - x0
+        nsy = zy - x0y
         nmy = zy - xpy
         ssy = p0y + r
         smy = apy + r
         d2s = nsx * nsx / ssx + nsy * nsy / ssy
         d2m = nmx * nmx / smx + nmy * nmy / smy
         if d2s > self.gate2 and d2m > self.gate2:
-            pred = (x0x, x0y, p0x, p0y, xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy)
-            return self._rejected(t, dt, zx, zy, pred, cs)
-        # -- corrections
-        g = p0x / ssx
-        self.sx = x0x + g * nsx
-        self.spx = (1.0 - g) * p0x
-        g = p0y / ssy
-        self.sy = x0y + g * nsy
-        self.spy = (1.0 - g) * p0y
-        k0 = apx / smx
-        k1 = bpx / smx
-        self.mx = xpx + k0 * nmx
-        self.mvx = v1x + k1 * nmx
-        self.mpx = (1.0 - k0) * apx
-        self.mbx = (1.0 - k0) * bpx
-        self.mcx = cpx - k1 * bpx
-        k0 = apy / smy
-        k1 = bpy / smy
-        self.my = xpy + k0 * nmy
-        self.mvy = v1y + k1 * nmy
-        self.mpy = (1.0 - k0) * apy
-        self.mby = (1.0 - k0) * bpy
-        self.mcy = cpy - k1 * bpy
-        # -- model probabilities: Gaussian likelihood ratio still / moving
+            return self._rejected(t, dt, zx, zy, [
+                t, ta, cs, r, q, age, rho, x0x, x0y, p0x, p0y,
+                xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy])
+        # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2m - d2s)
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(smx * smy / (ssx * ssy))
         mu = cs * lr / (cs * lr + cm)
-        self.mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        self._accepted(t, d2m * 0.5, zx, zy)
-        return (self.mu * self.sx + (1.0 - self.mu) * self.mx,
-                self.mu * self.sy + (1.0 - self.mu) * self.my)
-
-    def _accepted(self, t: float, nis: float, zx: float, zy: float) -> None:
-        """Bookkeeping after a measurement was used: outlier rate, q and r estimates."""
-        if self._pend is not None or self._far is not None or self._backup is not None:
-            self._pend = self._far = self._backup = None
-        self._ta = t
-        self.n_far = 0
-        self.outlier_rate -= self.outlier_rate / self.horizon
-        # process noise: grow when the moving model's innovations are larger than it predicts
-        # (normalised innovation squared > 1), shrink slowly otherwise: the smallest q the data
+        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
+        # -- process noise: grows when the moving model's innovations exceed what it predicts
+        # (normalised innovation squared > 1), shrinks slowly otherwise: the smallest q the data
         # agree with
-        q = self.q_m * math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
-        self.q_m = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
-        # measurement noise from the second differences of the measurements used (independent
-        # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - rho (z_k-1 -
-        # z_k-2) has variance (1 + (1 + rho)^2 + rho^2) r while the motion is smooth
+        nis = 0.5 * d2m
+        q *= math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
+        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+        # -- measurement noise from the second differences of the measurements used (independent
+        # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - c (z_k-1 -
+        # z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is smooth
         h = self._h
         if len(h) == 6:
-            t1, x1, y1, t2, x2, y2 = h
+            t1, h1x, h1y, t2, h2x, h2y = h
             if t1 > t2 and t > t1:
-                rho = (t - t1) / (t1 - t2)
-                ex = zx - x1 - rho * (x1 - x2)
-                ey = zy - y1 - rho * (y1 - y2)
-                r = self.r
-                e2 = 0.5 * (ex * ex + ey * ey) if self.dims == 2 else ex * ex
-                sample = e2 / (1.0 + (1.0 + rho) ** 2 + rho * rho)
+                c = (t - t1) / (t1 - t2)
+                ex = zx - h1x - c * (h1x - h2x)
+                ey = zy - h1y - c * (h1y - h2y)
+                sample = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
                 if sample > 16.0 * r:
                     sample = 16.0 * r
-                self._age += 1.0
-                r += (sample - r) / (self._age + 1.0 if self._age < self.horizon
-                                     else self.horizon)
-                self.r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
-            self._h = (t, zx, zy, t1, x1, y1)
+                age += 1.0
+                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+            self._h = (t, zx, zy, t1, h1x, h1y)
         else:
             self._h = (t, zx, zy, *h[:3])
+        if self._pend is not None or self._far is not None or self._backup is not None:
+            self._pend = self._far = self._backup = None
+            self.n_far = 0
+        # -- corrections
+        g = p0x / ssx
+        sx = x0x + g * nsx
+        g = p0y / ssy
+        sy = x0y + g * nsy
+        k0 = apx / smx
+        k1 = bpx / smx
+        k2 = apy / smy
+        k3 = bpy / smy
+        mx = xpx + k0 * nmx
+        my = xpy + k2 * nmy
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy,
+                  (1.0 - p0x / ssx) * p0x, (1.0 - p0y / ssy) * p0y,
+                  mx, my, v1x + k1 * nmx, v1y + k3 * nmy,
+                  (1.0 - k0) * apx, (1.0 - k2) * apy, (1.0 - k0) * bpx, (1.0 - k2) * bpy,
+                  cpx - k1 * bpx, cpy - k3 * bpy]
+        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
 
-    def _rejected(self, t: float, dt: float, zx: float, zy: float, pred: tuple[float, ...],
-                  cs: float) -> Vec:
-        """A measurement outside both models' gates: an outlier, a maneuver or a new place."""
+    def _rejected(self, t: float, dt: float, zx: float, zy: float, pred: list[float]) -> Vec:
+        """A measurement outside both models' gates: an outlier, a maneuver or a new place.
+        ``pred``: the state with both models' predictions and the prior probabilities."""
         self.rejected += 1
         bk = self._backup
         if bk is not None:
             # the last step re-initialised on a jump; if this measurement fits the track from
             # before that jump, the jump was an outlier after all: go back to that track
             self._backup = None
-            cur = _get_state(self)
+            cur = self._save()
             n_rej = self.rejected
             self._load(bk)
-            self.rejected = n_rej
             out = self._step(t, zx, zy)
             if self.rejected == n_rej:
                 return out
             self._load(cur)
             self.rejected = n_rej
+        S = self.S
         ex, ey = self.estimate_fast()
         dx, dy = zx - ex, zy - ey
-        lim0 = math.sqrt(self.gate2 * self.r)
-        reach = self.max_speed * (t - self._ta) + lim0
+        r = pred[_R]
+        lim0 = math.sqrt(self.gate2 * r)
+        reach = self.max_speed * (t - S[1]) + lim0
         pend = self._pend
         confirmed = False
         v = (0.0, 0.0)
@@ -338,11 +326,11 @@ class AdaptiveIMM:
         if confirmed or dx * dx + dy * dy <= reach * reach:
             if not confirmed and dt > 0:
                 v = (dx / dt, dy / dt)
-            if confirmed or self.outlier_rate < self.rho_accept:
+            if confirmed or pred[_RHO] < self.rho_accept:
                 dv2 = v[0] * v[0] + v[1] * v[1]
-                self._set_pred(pred, cs)
-                bk = _get_state(self)
-                self._init(t, zx, zy, v, mu=1e-3, pvv=dv2 + self.r / max(dt, 1e-3) ** 2)
+                self.S = pred
+                bk = self._save()
+                self._init(t, zx, zy, v, mu=1e-3, pvv=dv2 + r / max(dt, 1e-3) ** 2)
                 self._backup = bk
                 return (zx, zy)
             self._pend = (t, zx, zy)
@@ -362,43 +350,37 @@ class AdaptiveIMM:
             if self.n_far >= 3:
                 f0 = self._far0
                 tf = max(t - f0[0], 1e-3)
+                self.S = pred
                 return self._init(t, zx, zy, ((zx - f0[1]) / tf, (zy - f0[2]) / tf))
-        self.outlier_rate += (1.0 - self.outlier_rate) / self.horizon
-        self._set_pred(pred, cs)
+        pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
+        self.S = pred
         return self.estimate_fast()
-
-    def _set_pred(self, pred: tuple[float, ...], cs: float) -> None:
-        """Keep both models' predictions (no correction) and the prior model probability."""
-        (self.sx, self.sy, self.spx, self.spy, self.mx, self.my, self.mvx, self.mvy,
-         self.mpx, self.mpy, self.mbx, self.mby, self.mcx, self.mcy) = pred
-        self.mu = cs
 
     # -- output ------------------------------------------------------------------------------
 
     def estimate_fast(self) -> Vec:
-        mu = self.mu
-        return (mu * self.sx + (1.0 - mu) * self.mx, mu * self.sy + (1.0 - mu) * self.my)
+        S = self.S
+        mu = S[2]
+        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
 
     def estimate(self) -> Vec | None:
-        return None if self._t is None else self.estimate_fast()
+        return self.estimate_fast() if self.S else None
 
     def velocity(self) -> Vec:
-        if self._t is None:
+        S = self.S
+        if not S:
             return (0.0, 0.0)
-        w = 1.0 - self.mu
-        return (w * self.mvx, w * self.mvy)
+        w = 1.0 - S[2]
+        return (w * S[13], w * S[14])
 
     def predict(self, t_s: float) -> Vec | None:
-        if self._t is None:
+        S = self.S
+        if not S:
             return None
+        w = 1.0 - S[2]
+        dt = t_s - S[0]
         ex, ey = self.estimate_fast()
-        vx, vy = self.velocity()
-        dt = t_s - self._t
-        return (ex + vx * dt, ey + vy * dt)
-
-    def noise(self) -> float:
-        """The estimated measurement noise (std, units of the measurement)."""
-        return math.sqrt(self.r)
+        return (ex + w * S[13] * dt, ey + w * S[14] * dt)
 
 
 class AdaptiveIMM1D(AdaptiveIMM):
@@ -412,38 +394,38 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
-    def update(self, t_s: float, x: float, y: float) -> Vec:
-        return super().update(t_s, x, 0.0)
-
-    def revise(self, x: float, y: float) -> Vec:
-        return super().revise(x, 0.0)
-
     def _step(self, t: float, zx: float, zy: float) -> Vec:
-        t0 = self._t
-        if t0 is None or t - t0 > self.gap_s:
+        S = self.S
+        if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
+        (t0, ta, ms, r, q, age, rho, sx, _, spx, _,
+         mx, _, mvx, _, mpx, _, mbx, _, mcx, _) = S
         dt = t - t0 if t > t0 else 0.0
-        self._t = t
-        r = self.r
-        cs, cm, ws_s, wm_s = self._mixing(dt)
+        a = self.switch_sm * dt
+        b = self.switch_ms * dt
+        if a > 0.5:
+            a = 0.5
+        if b > 0.5:
+            b = 0.5
+        cs = (1.0 - a) * ms + b * (1.0 - ms)
+        cm = 1.0 - cs
+        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+        wm_s = a * ms / cm if cm > 1e-12 else 0.0
         ws_m = 1.0 - ws_s
         wm_m = 1.0 - wm_s
-        q = self.q_m
         dt2 = dt * dt
-        xs, ps, xm, vm, pa, pb, pc = (self.sx, self.spx, self.mx, self.mvx, self.mpx, self.mbx,
-                                      self.mcx)
-        x0 = ws_s * xs + ws_m * xm
-        es = xs - x0
-        em = xm - x0
-        p0 = ws_s * (ps + es * es) + ws_m * (pa + em * em) + self.q_s * dt
-        x1 = wm_s * xs + wm_m * xm
-        v1 = wm_m * vm
-        es = xs - x1
-        em = xm - x1
-        ev = vm - v1
-        a1 = wm_s * (ps + es * es) + wm_m * (pa + em * em)
-        b1 = wm_m * (pb + em * ev) - wm_s * es * v1
-        c1 = wm_s * v1 * v1 + wm_m * (pc + ev * ev)
+        x0 = ws_s * sx + ws_m * mx
+        es = sx - x0
+        em = mx - x0
+        p0 = ws_s * (spx + es * es) + ws_m * (mpx + em * em) + self.q_s * dt
+        x1 = wm_s * sx + wm_m * mx
+        v1 = wm_m * mvx
+        es = sx - x1
+        em = mx - x1
+        ev = mvx - v1
+        a1 = wm_s * (spx + es * es) + wm_m * (mpx + em * em)
+        b1 = wm_m * (mbx + em * ev) - wm_s * es * v1
+        c1 = wm_s * v1 * v1 + wm_m * (mcx + ev * ev)
         xp = x1 + v1 * dt
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
@@ -455,21 +437,38 @@ class AdaptiveIMM1D(AdaptiveIMM):
         d2s = ns * ns / ss
         d2m = nm * nm / sm
         if d2s > self.gate2 and d2m > self.gate2:
-            pred = (x0, 0.0, p0, 0.0, xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0)
-            return self._rejected(t, dt, zx, 0.0, pred, cs)
-        g = p0 / ss
-        self.sx = x0 + g * ns
-        self.spx = (1.0 - g) * p0
-        k0 = ap / sm
-        k1 = bp / sm
-        self.mx = xp + k0 * nm
-        self.mvx = v1 + k1 * nm
-        self.mpx = (1.0 - k0) * ap
-        self.mbx = (1.0 - k0) * bp
-        self.mcx = cp - k1 * bp
+            return self._rejected(t, dt, zx, 0.0, [
+                t, ta, cs, r, q, age, rho, x0, 0.0, p0, 0.0,
+                xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0])
         e = 0.5 * (d2m - d2s)
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
         mu = cs * lr / (cs * lr + cm)
-        self.mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        self._accepted(t, d2m, zx, 0.0)
-        return (self.mu * self.sx + (1.0 - self.mu) * self.mx, 0.0)
+        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
+        q *= math.exp(self.q_rate * ((d2m if d2m < 20.0 else 20.0) - self.q_down))
+        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+        h = self._h
+        if len(h) == 6:
+            t1, h1x, _, t2, h2x, _ = h
+            if t1 > t2 and t > t1:
+                c = (t - t1) / (t1 - t2)
+                ex = zx - h1x - c * (h1x - h2x)
+                sample = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                if sample > 16.0 * r:
+                    sample = 16.0 * r
+                age += 1.0
+                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+            self._h = (t, zx, 0.0, t1, h1x, 0.0)
+        else:
+            self._h = (t, zx, 0.0, *h[:3])
+        if self._pend is not None or self._far is not None or self._backup is not None:
+            self._pend = self._far = self._backup = None
+            self.n_far = 0
+        sx = x0 + p0 / ss * ns
+        k0 = ap / sm
+        k1 = bp / sm
+        mx = xp + k0 * nm
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0,
+                  (1.0 - p0 / ss) * p0, 0.0, mx, 0.0, v1 + k1 * nm, 0.0,
+                  (1.0 - k0) * ap, 0.0, (1.0 - k0) * bp, 0.0, cp - k1 * bp, 0.0]
+        return (mu * sx + (1.0 - mu) * mx, 0.0)
