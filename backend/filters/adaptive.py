@@ -163,6 +163,8 @@ class AdaptiveIMM:
         return self._step(t, x, y)
 
     def _step(self, t: float, zx: float, zy: float) -> Vec:
+        if self._backup is not None:
+            self._after_jump(t, zx, zy)
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, zy)
@@ -231,7 +233,9 @@ class AdaptiveIMM:
         smy = apy + r
         d2s = nsx * nsx / ssx + nsy * nsy / ssy
         d2m = nmx * nmx / smx + nmy * nmy / smy
-        if d2s > self.gate2 and d2m > self.gate2:
+        # gate: inside the gate of a model that is not all but ruled out (a model of
+        # negligible probability can be wide enough to take anything)
+        if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0x, p0y,
                 xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy])
@@ -286,23 +290,34 @@ class AdaptiveIMM:
                   cpx - k1 * bpx, cpy - k3 * bpy]
         return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
 
+    def _after_jump(self, t: float, zx: float, zy: float) -> None:
+        """The step after a jump re-initialised the track: keep the new track unless this
+        measurement fits the old track (inside its gate) and is nearer its prediction than
+        the new one's; then the jump was a stray measurement and the old track goes on."""
+        bk = self._backup
+        self._backup = None
+        assert bk is not None
+        S = self.S
+        w = 1.0 - S[2]
+        dt = t - S[0]
+        ex, ey = self.estimate_fast()
+        nx, ny = zx - ex - w * S[13] * dt, zy - ey - w * S[14] * dt
+        cur = self._save()
+        self._load(bk)
+        S = self.S
+        w = 1.0 - S[2]
+        dt = t - S[0]
+        ex, ey = self.estimate_fast()
+        ox, oy = zx - ex - w * S[13] * dt, zy - ey - w * S[14] * dt
+        o2 = ox * ox + oy * oy
+        if o2 > 2.0 * self.gate2 * S[_R] or nx * nx + ny * ny <= o2:
+            self._load(cur)  # an outlier for both, or the new track is nearer
+        self._backup = None
+
     def _rejected(self, t: float, dt: float, zx: float, zy: float, pred: list[float]) -> Vec:
         """A measurement outside both models' gates: an outlier, a maneuver or a new place.
         ``pred``: the state with both models' predictions and the prior probabilities."""
         self.rejected += 1
-        bk = self._backup
-        if bk is not None:
-            # the last step re-initialised on a jump; if this measurement fits the track from
-            # before that jump, the jump was an outlier after all: go back to that track
-            self._backup = None
-            cur = self._save()
-            n_rej = self.rejected
-            self._load(bk)
-            out = self._step(t, zx, zy)
-            if self.rejected == n_rej:
-                return out
-            self._load(cur)
-            self.rejected = n_rej
         S = self.S
         ex, ey = self.estimate_fast()
         dx, dy = zx - ex, zy - ey
@@ -350,8 +365,11 @@ class AdaptiveIMM:
             if self.n_far >= 3:
                 f0 = self._far0
                 tf = max(t - f0[0], 1e-3)
+                v = ((zx - f0[1]) / tf, (zy - f0[2]) / tf)
+                if v[0] * v[0] + v[1] * v[1] > self.max_speed * self.max_speed:
+                    v = (0.0, 0.0)
                 self.S = pred
-                return self._init(t, zx, zy, ((zx - f0[1]) / tf, (zy - f0[2]) / tf))
+                return self._init(t, zx, zy, v)
         pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
         self.S = pred
         return self.estimate_fast()
@@ -395,6 +413,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         super().__init__(params, angle)
 
     def _step(self, t: float, zx: float, zy: float) -> Vec:
+        if self._backup is not None:
+            self._after_jump(t, zx, 0.0)
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
@@ -436,7 +456,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         sm = ap + r
         d2s = ns * ns / ss
         d2m = nm * nm / sm
-        if d2s > self.gate2 and d2m > self.gate2:
+        if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
             return self._rejected(t, dt, zx, 0.0, [
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, 0.0,
                 xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0])
