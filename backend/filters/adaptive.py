@@ -331,11 +331,16 @@ class AdaptiveIMM:
             px, py = zx - pend[1], zy - pend[2]
             tp = t - pend[0]
             lim = self.max_speed * tp + lim0
-            # a maneuver continues away from where the object was, in about the same direction
+            # a maneuver continues away from where the object was, in about the same direction;
+            # a track that drifted off sees two measurements that move as it does
             ox, oy = pend[1] - ex, pend[2] - ey
             along = px * ox + py * oy
-            if (px * px + py * py <= lim * lim and along > 0.0
-                    and along * along >= 0.5 * (px * px + py * py) * (ox * ox + oy * oy)):
+            w = 1.0 - S[2]
+            gx, gy = px - w * S[13] * tp, py - w * S[14] * tp
+            if px * px + py * py <= lim * lim and (
+                    (along > 0.0 and along * along >= 0.5 * (px * px + py * py)
+                     * (ox * ox + oy * oy))
+                    or gx * gx + gy * gy <= 2.0 * self.gate2 * r):
                 confirmed = True
                 v = (px / tp, py / tp)
         if confirmed or dx * dx + dy * dy <= reach * reach:
