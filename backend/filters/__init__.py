@@ -2,7 +2,6 @@
 default: an adaptive still/moving IMM."""
 
 from .adaptive import AdaptiveIMM
-
 from .core import (
     AngleFilter,
     KalmanCV,
@@ -26,7 +25,7 @@ from .params import (
 )
 
 __all__ = [
-    "FILTER_KINDS", "AdaptiveIMM", "AdaptiveParams", "AngleFilter", "FilterKind", "FilterSettings", "KalmanCV", "KalmanParams",
-    "MedianFilter", "MedianParams", "MedianWeighted", "PaperFilter", "PaperParams",
-    "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter",
+    "FILTER_KINDS", "AdaptiveIMM", "AdaptiveParams", "AngleFilter", "FilterKind", "FilterSettings",
+    "KalmanCV", "KalmanParams", "MedianFilter", "MedianParams", "MedianWeighted", "PaperFilter",
+    "PaperParams", "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter",
 ]

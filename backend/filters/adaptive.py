@@ -253,6 +253,7 @@ class AdaptiveIMM:
         # -- measurement noise from the second differences of the measurements used (independent
         # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - c (z_k-1 -
         # z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is smooth
+        # (the initial value counts as one sample: a prior against a lucky first sample)
         h = self._h
         if len(h) == 6:
             t1, h1x, h1y, t2, h2x, h2y = h

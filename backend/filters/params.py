@@ -103,9 +103,9 @@ class AdaptiveParams(BaseModel):
         "normalised innovation squared below 1 + this shrinks the acceleration noise")
     still_drift_mm_s: float = num(0.1, 0.0, 1000.0, "mm/s^0.5", 0.5,
         "still model: random-walk drift of the position")
-    still_to_moving_per_s: float = num(0.1, 0.01, 30.0, "1/s", 0.1,
+    still_to_moving_per_s: float = num(0.03, 0.001, 30.0, "1/s", 0.1,
         "switching rate still -> moving")
-    moving_to_still_per_s: float = num(0.1, 0.01, 30.0, "1/s", 0.1,
+    moving_to_still_per_s: float = num(0.03, 0.001, 30.0, "1/s", 0.1,
         "switching rate moving -> still")
     gate_sigma: float = num(4.5, 2.0, 20.0, "sigma", 0.5,
         "a measurement farther than this many standard deviations is not used as is")

@@ -179,7 +179,7 @@ def lag(seed: int, runs: int, noise: float, v_mm_s: float = 2000.0) -> dict[str,
 def noise_estimate(seed: int, noise: float, p_out: float, scenario: int = 0,
                    runs: int = 5) -> list[float]:
     """The adaptive filter's noise estimate (std, mm) at the end of each run."""
-    name, traj, secs = SCENARIOS[scenario]
+    _name, traj, secs = SCENARIOS[scenario]
     rng = random.Random(seed)
     out = []
     for _ in range(runs):
