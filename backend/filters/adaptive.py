@@ -39,8 +39,13 @@ Vec = tuple[float, float]
 
 # the state list: times, model probability of "still", noise estimates, then both models
 # (still: x, y and their variances; moving: x, y, vx, vy, covariance [[p, b], [b, c]] per axis)
-# t ta mu r q age rho | sx sy spx spy | mx my mvx mvy mpx mpy mbx mby mcx mcy
+# t ta mu r q age rho | sx sy spx spy | mx my mvx mvy mpx mpy mbx mby mcx mcy | ux uy
+# (ux, uy: running mean of the moving model's normalised innovations, for the bias test)
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
+import os
+BIAS_A = float(os.environ.get('BIAS_A', '0.1'))
+#: 1 / (2 x the variance of the running mean of unit white noise)
+BIAS_K = (2.0 - BIAS_A) / BIAS_A / 2.0
 
 
 class AdaptiveIMM:
@@ -142,7 +147,8 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], r, r, 0.0, 0.0, pv, pv]
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], r, r, 0.0, 0.0, pv, pv,
+                  0.0, 0.0]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = None
         self.n_far = 0
@@ -169,7 +175,7 @@ class AdaptiveIMM:
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, zy)
         (t0, ta, ms, r, q, age, rho, sx, sy, spx, spy,
-         mx, my, mvx, mvy, mpx, mpy, mbx, mby, mcx, mcy) = S
+         mx, my, mvx, mvy, mpx, mpy, mbx, mby, mcx, mcy, ux, uy) = S
         dt = t - t0 if t > t0 else 0.0
         # Markov switching over dt, then the mixing weights (still's share of each model's start)
         a = self.switch_sm * dt
@@ -238,7 +244,7 @@ class AdaptiveIMM:
         if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0x, p0y,
-                xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy])
+                xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy, ux, uy])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2m - d2s)
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(smx * smy / (ssx * ssy))
@@ -247,7 +253,11 @@ class AdaptiveIMM:
         # -- process noise: grows when the moving model's innovations exceed what it predicts
         # (normalised innovation squared > 1), shrinks slowly otherwise: the smallest q the data
         # agree with
-        nis = 0.5 * d2m
+        # and when they keep one sign (an acceleration the model does not have): the running
+        # mean of the normalised innovations, squared over its variance, is ~1 when unbiased
+        ux += BIAS_A * (nmx / math.sqrt(smx) - ux)
+        uy += BIAS_A * (nmy / math.sqrt(smy) - uy)
+        nis = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
         q *= math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
         q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
         # -- measurement noise from the second differences of the measurements used (independent
@@ -288,7 +298,7 @@ class AdaptiveIMM:
                   (1.0 - p0x / ssx) * p0x, (1.0 - p0y / ssy) * p0y,
                   mx, my, v1x + k1 * nmx, v1y + k3 * nmy,
                   (1.0 - k0) * apx, (1.0 - k2) * apy, (1.0 - k0) * bpx, (1.0 - k2) * bpy,
-                  cpx - k1 * bpx, cpy - k3 * bpy]
+                  cpx - k1 * bpx, cpy - k3 * bpy, ux, uy]
         return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
@@ -425,7 +435,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
         (t0, ta, ms, r, q, age, rho, sx, _, spx, _,
-         mx, _, mvx, _, mpx, _, mbx, _, mcx, _) = S
+         mx, _, mvx, _, mpx, _, mbx, _, mcx, _, ux, _) = S
         dt = t - t0 if t > t0 else 0.0
         a = self.switch_sm * dt
         b = self.switch_ms * dt
@@ -465,12 +475,14 @@ class AdaptiveIMM1D(AdaptiveIMM):
         if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
             return self._rejected(t, dt, zx, 0.0, [
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, 0.0,
-                xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0])
+                xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0, ux, 0.0])
         e = 0.5 * (d2m - d2s)
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
         mu = cs * lr / (cs * lr + cm)
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        q *= math.exp(self.q_rate * ((d2m if d2m < 20.0 else 20.0) - self.q_down))
+        ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+        nis = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
+        q *= math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
         q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
         h = self._h
         if len(h) == 6:
@@ -496,5 +508,5 @@ class AdaptiveIMM1D(AdaptiveIMM):
         mx = xp + k0 * nm
         self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0,
                   (1.0 - p0 / ss) * p0, 0.0, mx, 0.0, v1 + k1 * nm, 0.0,
-                  (1.0 - k0) * ap, 0.0, (1.0 - k0) * bp, 0.0, cp - k1 * bp, 0.0]
+                  (1.0 - k0) * ap, 0.0, (1.0 - k0) * bp, 0.0, cp - k1 * bp, 0.0, ux, 0.0]
         return (mu * sx + (1.0 - mu) * mx, 0.0)
