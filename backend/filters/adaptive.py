@@ -42,19 +42,41 @@ Vec = tuple[float, float]
 # t ta mu r q age rho | sx sy spx spy | mx my mvx mvy mpx mpy mbx mby mcx mcy | ux uy
 # (ux, uy: running mean of the moving model's normalised innovations, for the bias test)
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
-import os
-BIAS_A = float(os.environ.get('BIAS_A', '0.1'))
-#: 1 / (2 x the variance of the running mean of unit white noise)
+#: weight of a new normalised innovation in its running mean (the bias test)
+BIAS_A = 0.1
+#: 1 / (2 x the variance of that running mean for unit white noise)
 BIAS_K = (2.0 - BIAS_A) / BIAS_A / 2.0
 
 
 class AdaptiveIMM:
     """Still/moving IMM with estimated noise and robust gating (see the module doc), 2-D."""
 
-    __slots__ = ("S", "_backup", "_far", "_far0", "_h", "_pend", "_prev", "gap_s", "gate2",
-                 "horizon", "kind", "max_speed", "n_far", "q_down", "q_max", "q_min", "q_rate",
-                 "q_s", "r0", "q0", "r_max", "r_min", "rejected", "rho_accept", "switch_ms",
-                 "switch_sm")
+    __slots__ = (
+        "S",
+        "_backup",
+        "_far",
+        "_h",
+        "_pend",
+        "_prev",
+        "gap_s",
+        "gate2",
+        "horizon",
+        "kind",
+        "max_speed",
+        "q0",
+        "q_down",
+        "q_max",
+        "q_min",
+        "q_rate",
+        "q_s",
+        "r0",
+        "r_max",
+        "r_min",
+        "rejected",
+        "rho_accept",
+        "switch_ms",
+        "switch_sm",
+    )
 
     dims = 2
 
@@ -88,9 +110,9 @@ class AdaptiveIMM:
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
-        self._far: tuple[float, float, float] | None = None  # last unreachable measurement
-        self._far0 = (0.0, 0.0, 0.0)  # the first of a run of unreachable ones
-        self.n_far = 0
+        # recent rejected measurements (t, x, y), the last 0.3 s: a lost track is re-acquired
+        # on three of them that lie on one line
+        self._far: tuple[tuple[float, float, float], ...] | None = None
         self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # the state before the last update
 
@@ -130,14 +152,12 @@ class AdaptiveIMM:
         self.S = []
         self._prev = self._pend = self._far = self._backup = None
         self._h = ()
-        self.n_far = 0
 
     def _save(self) -> tuple[object, ...]:
-        return (self.S, self._h, self._pend, self._far, self._far0, self._backup, self.n_far)
+        return (self.S, self._h, self._pend, self._far, self._backup)
 
     def _load(self, st: tuple[object, ...]) -> None:
-        (self.S, self._h, self._pend, self._far, self._far0, self._backup,  # type: ignore
-         self.n_far) = st
+        (self.S, self._h, self._pend, self._far, self._backup) = st  # type: ignore
 
     def _init(self, t: float, x: float, y: float, v: Vec = (0.0, 0.0), mu: float = 0.5,
               pvv: float | None = None) -> Vec:
@@ -151,14 +171,12 @@ class AdaptiveIMM:
                   0.0, 0.0]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = None
-        self.n_far = 0
         return (x, y)
 
     # -- the step ----------------------------------------------------------------------------
 
     def update(self, t_s: float, x: float, y: float) -> Vec:
-        self._prev = (self.S, self._h, self._pend, self._far, self._far0, self._backup,
-                      self.n_far)
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup)
         return self._step(t_s, x, y)
 
     def revise(self, x: float, y: float) -> Vec:
@@ -282,7 +300,6 @@ class AdaptiveIMM:
             self._h = (t, zx, zy, *h[:3])
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
-            self.n_far = 0
         # -- corrections
         g = p0x / ssx
         sx = x0x + g * nsx
@@ -348,7 +365,7 @@ class AdaptiveIMM:
             along = px * ox + py * oy
             w = 1.0 - S[2]
             gx, gy = px - w * S[13] * tp, py - w * S[14] * tp
-            if px * px + py * py <= lim * lim and (
+            if px * px + py * py <= min(lim * lim, self.max_speed ** 2 * tp * tp * 1.44) and (
                     (along > 0.0 and along * along >= 0.5 * (px * px + py * py)
                      * (ox * ox + oy * oy))
                     or gx * gx + gy * gy <= 2.0 * self.gate2 * r):
@@ -357,6 +374,10 @@ class AdaptiveIMM:
         if confirmed or dx * dx + dy * dy <= reach * reach:
             if not confirmed and dt > 0:
                 v = (dx / dt, dy / dt)
+            sp2 = v[0] * v[0] + v[1] * v[1]
+            if sp2 > self.max_speed * self.max_speed:
+                k = self.max_speed / math.sqrt(sp2)
+                v = (v[0] * k, v[1] * k)
             if confirmed or pred[_RHO] < self.rho_accept:
                 dv2 = v[0] * v[0] + v[1] * v[1]
                 self.S = pred
@@ -365,27 +386,27 @@ class AdaptiveIMM:
                 self._backup = bk
                 return (zx, zy)
             self._pend = (t, zx, zy)
-        else:
-            # a run of far measurements that agree with each other: the object is elsewhere
-            # (an outlier between two frames of a maneuver keeps the maneuver's first frame)
-            far = self._far
-            if far is not None and t > far[0]:
-                fx, fy = zx - far[1], zy - far[2]
-                lim = self.max_speed * (t - far[0]) + lim0
-                self.n_far = self.n_far + 1 if fx * fx + fy * fy <= lim * lim else 1
-            else:
-                self.n_far = 1
-            if self.n_far == 1:
-                self._far0 = (t, zx, zy)
-            self._far = (t, zx, zy)
-            if self.n_far >= 3:
-                f0 = self._far0
-                tf = max(t - f0[0], 1e-3)
-                v = ((zx - f0[1]) / tf, (zy - f0[2]) / tf)
-                if v[0] * v[0] + v[1] * v[1] > self.max_speed * self.max_speed:
-                    v = (0.0, 0.0)
-                self.S = pred
-                return self._init(t, zx, zy, v)
+        # three recent rejected measurements on one line at a possible speed: the track is
+        # lost (started on an outlier, or a jump nobody confirmed) and that line is the object
+        far = self._far or ()
+        ms2 = self.max_speed * self.max_speed
+        tol2 = 4.0 * self.gate2 * r
+        for j in range(len(far) - 1, 0, -1):
+            tj, xj, yj = far[j]
+            d = t - tj
+            if d <= 0.0:
+                continue
+            vx, vy = (zx - xj) / d, (zy - yj) / d
+            if vx * vx + vy * vy > ms2:
+                continue
+            for i in range(j):
+                ti, xi, yi = far[i]
+                d = t - ti
+                ox, oy = xi - zx + vx * d, yi - zy + vy * d
+                if ox * ox + oy * oy <= tol2:
+                    self.S = pred
+                    return self._init(t, zx, zy, (vx, vy))
+        self._far = (*(f for f in far[-5:] if t - f[0] < 0.3), (t, zx, zy))
         pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
         self.S = pred
         return self.estimate_fast()
@@ -501,7 +522,6 @@ class AdaptiveIMM1D(AdaptiveIMM):
             self._h = (t, zx, 0.0, *h[:3])
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
-            self.n_far = 0
         sx = x0 + p0 / ss * ns
         k0 = ap / sm
         k1 = bp / sm
