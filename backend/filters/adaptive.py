@@ -276,7 +276,7 @@ class AdaptiveIMM:
         ux += BIAS_A * (nmx / math.sqrt(smx) - ux)
         uy += BIAS_A * (nmy / math.sqrt(smy) - uy)
         nis = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
-        q *= math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
+        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
         q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
         # -- measurement noise from the second differences of the measurements used (independent
         # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - c (z_k-1 -
@@ -355,6 +355,7 @@ class AdaptiveIMM:
         pend = self._pend
         confirmed = False
         v = (0.0, 0.0)
+        pvv = 0.0
         if pend is not None and t > pend[0]:  # does it continue the last reachable jump?
             px, py = zx - pend[1], zy - pend[2]
             tp = t - pend[0]
@@ -371,6 +372,7 @@ class AdaptiveIMM:
                     or gx * gx + gy * gy <= 2.0 * self.gate2 * r):
                 confirmed = True
                 v = (px / tp, py / tp)
+                pvv = 4.0 * r / (tp * tp)  # a velocity from two measurements
         if confirmed or dx * dx + dy * dy <= reach * reach:
             if not confirmed and dt > 0:
                 v = (dx / dt, dy / dt)
@@ -379,10 +381,11 @@ class AdaptiveIMM:
                 k = self.max_speed / math.sqrt(sp2)
                 v = (v[0] * k, v[1] * k)
             if confirmed or pred[_RHO] < self.rho_accept:
-                dv2 = v[0] * v[0] + v[1] * v[1]
+                if not confirmed:  # from one measurement: the kick may have come mid-frame
+                    pvv = v[0] * v[0] + v[1] * v[1] + r / max(dt, 1e-3) ** 2
                 self.S = pred
                 bk = self._save()
-                self._init(t, zx, zy, v, mu=1e-3, pvv=dv2 + r / max(dt, 1e-3) ** 2)
+                self._init(t, zx, zy, v, mu=1e-3, pvv=pvv)
                 self._backup = bk
                 return (zx, zy)
             self._pend = (t, zx, zy)
@@ -503,7 +506,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         ux += BIAS_A * (nm / math.sqrt(sm) - ux)
         nis = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
-        q *= math.exp(self.q_rate * ((nis if nis < 20.0 else 20.0) - self.q_down))
+        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
         q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
         h = self._h
         if len(h) == 6:

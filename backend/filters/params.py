@@ -94,7 +94,7 @@ class AdaptiveParams(BaseModel):
         "moving model: std of the white acceleration before any data (then estimated)")
     accel_min_mm_s2: float = num(1.0, 0.01, 1e6, "mm/s^2", 1.0,
         "moving model: lower bound of the estimated acceleration noise")
-    accel_max_mm_s2: float = num(1e5, 1.0, 1e7, "mm/s^2", 1000.0,
+    accel_max_mm_s2: float = num(2e4, 1.0, 1e7, "mm/s^2", 1000.0,
         "moving model: upper bound of the estimated acceleration noise")
     accel_adapt_rate: float = num(0.3, 0.0, 2.0, "", 0.05,
         "how fast the acceleration noise follows the innovations (log step per unit of "
