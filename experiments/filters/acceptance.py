@@ -115,7 +115,10 @@ def rmse(maker: Maker, runs: list[Run]) -> float:
 
 def tuned_kalman(runs: list[Run], noise: float) -> tuple[float, float, float]:
     """(RMSE, acceleration noise, gate) of the best Kalman filter of the grid on these runs."""
-    return min((rmse(lambda q=q, g=g: KalmanCV(q, noise, g), runs), q, g)
+    def maker(q: float, g: float) -> Maker:
+        return lambda: KalmanCV(q, noise, g)
+
+    return min((rmse(maker(q, g), runs), q, g)
                for q in KALMAN_GRID_Q for g in KALMAN_GRID_GATE)
 
 
