@@ -58,6 +58,7 @@ class AdaptiveIMM:
         "_h",
         "_pend",
         "_prev",
+        "_pri",
         "gap_s",
         "gate2",
         "horizon",
@@ -115,6 +116,7 @@ class AdaptiveIMM:
         self._far: tuple[tuple[float, float, float], ...] | None = None
         self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # the state before the last update
+        self._pri: tuple[float, ...] | None = None  # the last step's predictions (revise)
 
     # -- state -------------------------------------------------------------------------------
 
@@ -150,7 +152,7 @@ class AdaptiveIMM:
         if self.S:
             self.r0, self.q0 = self.S[_R], self.S[_Q]
         self.S = []
-        self._prev = self._pend = self._far = self._backup = None
+        self._prev = self._pend = self._far = self._backup = self._pri = None
         self._h = ()
 
     def _save(self) -> tuple[object, ...]:
@@ -183,11 +185,15 @@ class AdaptiveIMM:
         if self._prev is None or not self.S:
             return self.update(self.S[0] if self.S else 0.0, x, y)
         t = self.S[0]
+        pri = self._pri
         self._load(self._prev)
+        if pri is not None and pri[0] == t:  # the last step's predictions are still good
+            return self._correct(pri, x, y)
         return self._step(t, x, y)
 
     def _step(self, t: float, zx: float, zy: float) -> Vec:
-        if self._backup is not None:
+        cache = self._backup is None  # (after a jump, revise takes the long way)
+        if not cache:
             self._after_jump(t, zx, zy)
         S = self.S
         if not S or t - S[0] > self.gap_s:
@@ -230,10 +236,6 @@ class AdaptiveIMM:
         apx = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
         bpx = b1 + dt * c1 + q12
         cpx = c1 + q22
-        nsx = zx - x0x
-        nmx = zx - xpx
-        ssx = p0x + r
-        smx = apx + r
         # -- y
         x0y = ws_s * sy + ws_m * my
         es = sy - x0y
@@ -251,6 +253,20 @@ class AdaptiveIMM:
         apy = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
         bpy = b1 + dt * c1 + q12
         cpy = c1 + q22
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, p0x, xpx, v1x, apx, bpx, cpx,
+               x0y, p0y, xpy, v1y, apy, bpy, cpy)
+        self._pri = pri if cache else None
+        return self._correct(pri, zx, zy)
+
+    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+        """The measurement against both models' predictions ``pri`` (a step's second half,
+        all a ``revise`` has to redo)."""
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, p0x, xpx, v1x, apx, bpx, cpx,
+         x0y, p0y, xpy, v1y, apy, bpy, cpy) = pri
+        nsx = zx - x0x
+        nmx = zx - xpx
+        ssx = p0x + r
+        smx = apx + r
         nsy = zy - x0y
         nmy = zy - xpy
         ssy = p0y + r
@@ -453,7 +469,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         super().__init__(params, angle)
 
     def _step(self, t: float, zx: float, zy: float) -> Vec:
-        if self._backup is not None:
+        cache = self._backup is None
+        if not cache:
             self._after_jump(t, zx, 0.0)
         S = self.S
         if not S or t - S[0] > self.gap_s:
@@ -490,6 +507,12 @@ class AdaptiveIMM1D(AdaptiveIMM):
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp)
+        self._pri = pri if cache else None
+        return self._correct(pri, zx, 0.0)
+
+    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp) = pri
         ns = zx - x0
         nm = zx - xp
         ss = p0 + r
