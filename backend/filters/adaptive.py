@@ -54,11 +54,13 @@ class AdaptiveIMM:
     __slots__ = (
         "S",
         "_backup",
+        "_book",
         "_far",
         "_h",
         "_pend",
         "_prev",
         "_pri",
+        "_pri_h",
         "gap_s",
         "gate2",
         "horizon",
@@ -117,6 +119,8 @@ class AdaptiveIMM:
         self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # the state before the last update
         self._pri: tuple[float, ...] | None = None  # the last step's predictions (revise)
+        self._book: tuple[float, ...] | None = None  # the last measurement used, to learn from
+        self._pri_h: tuple[float, ...] = ()  # _h when the predictions were made
 
     # -- state -------------------------------------------------------------------------------
 
@@ -152,14 +156,14 @@ class AdaptiveIMM:
         if self.S:
             self.r0, self.q0 = self.S[_R], self.S[_Q]
         self.S = []
-        self._prev = self._pend = self._far = self._backup = self._pri = None
+        self._prev = self._pend = self._far = self._backup = self._pri = self._book = None
         self._h = ()
 
     def _save(self) -> tuple[object, ...]:
-        return (self.S, self._h, self._pend, self._far, self._backup)
+        return (self.S, self._h, self._pend, self._far, self._backup, self._book)
 
     def _load(self, st: tuple[object, ...]) -> None:
-        (self.S, self._h, self._pend, self._far, self._backup) = st  # type: ignore
+        (self.S, self._h, self._pend, self._far, self._backup, self._book) = st  # type: ignore
 
     def _init(self, t: float, x: float, y: float, v: Vec = (0.0, 0.0), mu: float = 0.5,
               pvv: float | None = None) -> Vec:
@@ -172,13 +176,13 @@ class AdaptiveIMM:
         self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], r, r, 0.0, 0.0, pv, pv,
                   0.0, 0.0]
         self._h = (t, x, y)
-        self._pend = self._far = self._backup = None
+        self._pend = self._far = self._backup = self._book = None
         return (x, y)
 
     # -- the step ----------------------------------------------------------------------------
 
     def update(self, t_s: float, x: float, y: float) -> Vec:
-        self._prev = (self.S, self._h, self._pend, self._far, self._backup)
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         return self._step(t_s, x, y)
 
     def revise(self, x: float, y: float) -> Vec:
@@ -188,6 +192,7 @@ class AdaptiveIMM:
         pri = self._pri
         self._load(self._prev)
         if pri is not None and pri[0] == t:  # the last step's predictions are still good
+            self._book, self._h = None, self._pri_h  # (the step had learnt from its book)
             return self._correct(pri, x, y)
         return self._step(t, x, y)
 
@@ -200,6 +205,9 @@ class AdaptiveIMM:
             return self._init(t, zx, zy)
         (t0, ta, ms, r, q, age, rho, sx, sy, spx, spy,
          mx, my, mvx, mvy, mpx, mpy, mbx, mby, mcx, mcy, ux, uy) = S
+        if self._book is not None:
+            q, r, age, ux, uy = self._bookkeep(self._book, q, r, age, ux, uy)
+            self._book = None
         dt = t - t0 if t > t0 else 0.0
         # Markov switching over dt, then the mixing weights (still's share of each model's start)
         a = self.switch_sm * dt
@@ -256,6 +264,7 @@ class AdaptiveIMM:
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, p0x, xpx, v1x, apx, bpx, cpx,
                x0y, p0y, xpy, v1y, apy, bpy, cpy)
         self._pri = pri if cache else None
+        self._pri_h = self._h
         return self._correct(pri, zx, zy)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
@@ -284,6 +293,33 @@ class AdaptiveIMM:
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(smx * smy / (ssx * ssy))
         mu = cs * lr / (cs * lr + cm)
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
+        # the noise estimates learn from this measurement at the next step (once per instant,
+        # however often a second camera revises it)
+        self._book = (t, zx, zy, d2m, nmx, smx, nmy, smy)
+        if self._pend is not None or self._far is not None or self._backup is not None:
+            self._pend = self._far = self._backup = None
+        # -- corrections
+        g = p0x / ssx
+        sx = x0x + g * nsx
+        g = p0y / ssy
+        sy = x0y + g * nsy
+        k0 = apx / smx
+        k1 = bpx / smx
+        k2 = apy / smy
+        k3 = bpy / smy
+        mx = xpx + k0 * nmx
+        my = xpy + k2 * nmy
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy,
+                  (1.0 - p0x / ssx) * p0x, (1.0 - p0y / ssy) * p0y,
+                  mx, my, v1x + k1 * nmx, v1y + k3 * nmy,
+                  (1.0 - k0) * apx, (1.0 - k2) * apy, (1.0 - k0) * bpx, (1.0 - k2) * bpy,
+                  cpx - k1 * bpx, cpy - k3 * bpy, ux, uy]
+        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
+
+    def _bookkeep(self, bk: tuple[float, ...], q: float, r: float, age: float, ux: float,
+                  uy: float) -> tuple[float, float, float, float, float]:
+        """The noise estimates learn from the last measurement used (``bk``)."""
+        t, zx, zy, d2m, nmx, smx, nmy, smy = bk
         # -- process noise: grows when the moving model's innovations exceed what it predicts
         # (normalised innovation squared > 1), shrinks slowly otherwise: the smallest q the data
         # agree with
@@ -314,25 +350,7 @@ class AdaptiveIMM:
             self._h = (t, zx, zy, t1, h1x, h1y)
         else:
             self._h = (t, zx, zy, *h[:3])
-        if self._pend is not None or self._far is not None or self._backup is not None:
-            self._pend = self._far = self._backup = None
-        # -- corrections
-        g = p0x / ssx
-        sx = x0x + g * nsx
-        g = p0y / ssy
-        sy = x0y + g * nsy
-        k0 = apx / smx
-        k1 = bpx / smx
-        k2 = apy / smy
-        k3 = bpy / smy
-        mx = xpx + k0 * nmx
-        my = xpy + k2 * nmy
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy,
-                  (1.0 - p0x / ssx) * p0x, (1.0 - p0y / ssy) * p0y,
-                  mx, my, v1x + k1 * nmx, v1y + k3 * nmy,
-                  (1.0 - k0) * apx, (1.0 - k2) * apy, (1.0 - k0) * bpx, (1.0 - k2) * bpy,
-                  cpx - k1 * bpx, cpy - k3 * bpy, ux, uy]
-        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
+        return q, r, age, ux, uy
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
         """The step after a jump re-initialised the track: keep the new track unless this
@@ -468,6 +486,30 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
+    def _bookkeep(self, bk: tuple[float, ...], q: float, r: float, age: float, ux: float,
+                  uy: float) -> tuple[float, float, float, float, float]:
+        t, zx, _, d2m, nm, sm, _, _ = bk
+        ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+        nis = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
+        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
+        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+        h = self._h
+        if len(h) == 6:
+            t1, h1x, _, t2, h2x, _ = h
+            if t1 > t2 and t > t1:
+                c = (t - t1) / (t1 - t2)
+                ex = zx - h1x - c * (h1x - h2x)
+                sample = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                if sample > 16.0 * r:
+                    sample = 16.0 * r
+                age += 1.0
+                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+            self._h = (t, zx, 0.0, t1, h1x, 0.0)
+        else:
+            self._h = (t, zx, 0.0, *h[:3])
+        return q, r, age, ux, uy
+
     def _step(self, t: float, zx: float, zy: float) -> Vec:
         cache = self._backup is None
         if not cache:
@@ -477,6 +519,9 @@ class AdaptiveIMM1D(AdaptiveIMM):
             return self._init(t, zx, 0.0)
         (t0, ta, ms, r, q, age, rho, sx, _, spx, _,
          mx, _, mvx, _, mpx, _, mbx, _, mcx, _, ux, _) = S
+        if self._book is not None:
+            q, r, age, ux, _ = self._bookkeep(self._book, q, r, age, ux, 0.0)
+            self._book = None
         dt = t - t0 if t > t0 else 0.0
         a = self.switch_sm * dt
         b = self.switch_ms * dt
@@ -509,6 +554,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         cp = c1 + q * dt2
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp)
         self._pri = pri if cache else None
+        self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
@@ -527,25 +573,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
         mu = cs * lr / (cs * lr + cm)
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        ux += BIAS_A * (nm / math.sqrt(sm) - ux)
-        nis = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
-        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
-        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
-        h = self._h
-        if len(h) == 6:
-            t1, h1x, _, t2, h2x, _ = h
-            if t1 > t2 and t > t1:
-                c = (t - t1) / (t1 - t2)
-                ex = zx - h1x - c * (h1x - h2x)
-                sample = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
-                if sample > 16.0 * r:
-                    sample = 16.0 * r
-                age += 1.0
-                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
-            self._h = (t, zx, 0.0, t1, h1x, 0.0)
-        else:
-            self._h = (t, zx, 0.0, *h[:3])
+        self._book = (t, zx, 0.0, d2m, nm, sm, 0.0, 1.0)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
         sx = x0 + p0 / ss * ns
