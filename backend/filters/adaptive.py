@@ -38,9 +38,10 @@ from .params import AdaptiveParams, FilterKind
 Vec = tuple[float, float]
 
 # the state list: times, model probability of "still", noise estimates, then both models
-# (still: x, y and their variances; moving: x, y, vx, vy, covariance [[p, b], [b, c]] per axis)
-# t ta mu r q age rho | sx sy spx spy | mx my mvx mvy mpx mpy mbx mby mcx mcy | ux uy
-# (ux, uy: running mean of the moving model's normalised innovations, for the bias test)
+# (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
+# of each axis: the noise is isotropic, so the axes share their covariances; only the mixing
+# spreads differ between the axes, and they are averaged), then the bias test's running means
+# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
 BIAS_A = 0.1
@@ -173,8 +174,7 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], r, r, 0.0, 0.0, pv, pv,
-                  0.0, 0.0]
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = self._book = None
         return (x, y)
@@ -190,10 +190,13 @@ class AdaptiveIMM:
             return self.update(self.S[0] if self.S else 0.0, x, y)
         t = self.S[0]
         pri = self._pri
-        self._load(self._prev)
         if pri is not None and pri[0] == t:  # the last step's predictions are still good
-            self._book, self._h = None, self._pri_h  # (the step had learnt from its book)
+            # the state before the step, except what the step did before its predictions
+            # (it had learnt from its book)
+            self.S, _, self._pend, self._far, self._backup, _ = self._prev
+            self._book, self._h = None, self._pri_h
             return self._correct(pri, x, y)
+        self._load(self._prev)
         return self._step(t, x, y)
 
     def _step(self, t: float, zx: float, zy: float) -> Vec:
@@ -203,8 +206,7 @@ class AdaptiveIMM:
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, zy)
-        (t0, ta, ms, r, q, age, rho, sx, sy, spx, spy,
-         mx, my, mvx, mvy, mpx, mpy, mbx, mby, mcx, mcy, ux, uy) = S
+        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy) = S
         if self._book is not None:
             q, r, age, ux, uy = self._bookkeep(self._book, q, r, age, ux, uy)
             self._book = None
@@ -222,47 +224,28 @@ class AdaptiveIMM:
         wm_s = a * ms / cm if cm > 1e-12 else 0.0
         ws_m = 1.0 - ws_s
         wm_m = 1.0 - wm_s
-        qs = self.q_s * dt
         dt2 = dt * dt
-        q11 = q * dt2 * dt2 * 0.25
-        q12 = q * dt2 * dt * 0.5
-        q22 = q * dt2
-        # -- x: mix, predict, innovate
+        # the still model's start (a mix of both), then its prediction (a random walk)
         x0x = ws_s * sx + ws_m * mx
-        es = sx - x0x
-        em = mx - x0x
-        p0x = ws_s * (spx + es * es) + ws_m * (mpx + em * em) + qs
-        x1 = wm_s * sx + wm_m * mx
-        v1x = wm_m * mvx
-        es = sx - x1
-        em = mx - x1
-        ev = mvx - v1x
-        a1 = wm_s * (spx + es * es) + wm_m * (mpx + em * em)
-        b1 = wm_m * (mbx + em * ev) - wm_s * es * v1x
-        c1 = wm_s * v1x * v1x + wm_m * (mcx + ev * ev)
-        xpx = x1 + v1x * dt
-        apx = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
-        bpx = b1 + dt * c1 + q12
-        cpx = c1 + q22
-        # -- y
         x0y = ws_s * sy + ws_m * my
-        es = sy - x0y
-        em = my - x0y
-        p0y = ws_s * (spy + es * es) + ws_m * (mpy + em * em) + qs
-        x1 = wm_s * sy + wm_m * my
+        ex, ey, fx, fy = sx - x0x, sy - x0y, mx - x0x, my - x0y
+        p0 = (ws_s * (sp + 0.5 * (ex * ex + ey * ey)) + ws_m * (mp + 0.5 * (fx * fx + fy * fy))
+              + self.q_s * dt)
+        # the moving model's start (still contributes v = 0, certain), then constant velocity
+        x1x = wm_s * sx + wm_m * mx
+        x1y = wm_s * sy + wm_m * my
+        v1x = wm_m * mvx
         v1y = wm_m * mvy
-        es = sy - x1
-        em = my - x1
-        ev = mvy - v1y
-        a1 = wm_s * (spy + es * es) + wm_m * (mpy + em * em)
-        b1 = wm_m * (mby + em * ev) - wm_s * es * v1y
-        c1 = wm_s * v1y * v1y + wm_m * (mcy + ev * ev)
-        xpy = x1 + v1y * dt
-        apy = a1 + 2.0 * dt * b1 + dt2 * c1 + q11
-        bpy = b1 + dt * c1 + q12
-        cpy = c1 + q22
-        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, p0x, xpx, v1x, apx, bpx, cpx,
-               x0y, p0y, xpy, v1y, apy, bpy, cpy)
+        ex, ey, fx, fy = sx - x1x, sy - x1y, mx - x1x, my - x1y
+        gx, gy = mvx - v1x, mvy - v1y
+        a1 = wm_s * (sp + 0.5 * (ex * ex + ey * ey)) + wm_m * (mp + 0.5 * (fx * fx + fy * fy))
+        b1 = (wm_m * (mb + 0.5 * (fx * gx + fy * gy))
+              - wm_s * 0.5 * (ex * v1x + ey * v1y))
+        c1 = wm_s * 0.5 * (v1x * v1x + v1y * v1y) + wm_m * (mc + 0.5 * (gx * gx + gy * gy))
+        ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
+        bp = b1 + dt * c1 + q * dt2 * dt * 0.5
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, c1 + q * dt2)
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
@@ -270,50 +253,44 @@ class AdaptiveIMM:
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
         """The measurement against both models' predictions ``pri`` (a step's second half,
         all a ``revise`` has to redo)."""
-        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, p0x, xpx, v1x, apx, bpx, cpx,
-         x0y, p0y, xpy, v1y, apy, bpy, cpy) = pri
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+         xpx, xpy, v1x, v1y, ap, bp, cp) = pri
         nsx = zx - x0x
-        nmx = zx - xpx
-        ssx = p0x + r
-        smx = apx + r
         nsy = zy - x0y
+        nmx = zx - xpx
         nmy = zy - xpy
-        ssy = p0y + r
-        smy = apy + r
-        d2s = nsx * nsx / ssx + nsy * nsy / ssy
-        d2m = nmx * nmx / smx + nmy * nmy / smy
+        ss = p0 + r
+        sm = ap + r
+        d2s = (nsx * nsx + nsy * nsy) / ss
+        d2m = (nmx * nmx + nmy * nmy) / sm
         # gate: inside the gate of a model that is not all but ruled out (a model of
         # negligible probability can be wide enough to take anything)
-        if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
+        g2 = self.gate2
+        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
             return self._rejected(t, dt, zx, zy, [
-                t, ta, cs, r, q, age, rho, x0x, x0y, p0x, p0y,
-                xpx, xpy, v1x, v1y, apx, apy, bpx, bpy, cpx, cpy, ux, uy])
-        # -- model probabilities: the Gaussian likelihood ratio still / moving
+                t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
+                ux, uy])
+        # -- model probabilities: the Gaussian likelihood ratio still / moving (2-D)
         e = 0.5 * (d2m - d2s)
-        lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(smx * smy / (ssx * ssy))
+        lr = math.exp(e if e < 700.0 else 700.0) * sm / ss
         mu = cs * lr / (cs * lr + cm)
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         # the noise estimates learn from this measurement at the next step (once per instant,
         # however often a second camera revises it)
-        self._book = (t, zx, zy, d2m, nmx, smx, nmy, smy)
+        self._book = (t, zx, zy, d2m, nmx, sm, nmy, sm)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
         # -- corrections
-        g = p0x / ssx
+        g = p0 / ss
         sx = x0x + g * nsx
-        g = p0y / ssy
         sy = x0y + g * nsy
-        k0 = apx / smx
-        k1 = bpx / smx
-        k2 = apy / smy
-        k3 = bpy / smy
+        k0 = ap / sm
+        k1 = bp / sm
         mx = xpx + k0 * nmx
-        my = xpy + k2 * nmy
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy,
-                  (1.0 - p0x / ssx) * p0x, (1.0 - p0y / ssy) * p0y,
-                  mx, my, v1x + k1 * nmx, v1y + k3 * nmy,
-                  (1.0 - k0) * apx, (1.0 - k2) * apy, (1.0 - k0) * bpx, (1.0 - k2) * bpy,
-                  cpx - k1 * bpx, cpy - k3 * bpy, ux, uy]
+        my = xpy + k0 * nmy
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy, (1.0 - g) * p0,
+                  (1.0 - k0) * ap, mx, my, v1x + k1 * nmx, v1y + k1 * nmy, (1.0 - k0) * bp,
+                  cp - k1 * bp, ux, uy]
         return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
 
     def _bookkeep(self, bk: tuple[float, ...], q: float, r: float, age: float, ux: float,
@@ -456,7 +433,11 @@ class AdaptiveIMM:
         return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
 
     def estimate(self) -> Vec | None:
-        return self.estimate_fast() if self.S else None
+        S = self.S
+        if not S:
+            return None
+        mu = S[2]
+        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
 
     def velocity(self) -> Vec:
         S = self.S
@@ -517,8 +498,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
-        (t0, ta, ms, r, q, age, rho, sx, _, spx, _,
-         mx, _, mvx, _, mpx, _, mbx, _, mcx, _, ux, _) = S
+        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _) = S
         if self._book is not None:
             q, r, age, ux, _ = self._bookkeep(self._book, q, r, age, ux, 0.0)
             self._book = None
@@ -539,20 +519,19 @@ class AdaptiveIMM1D(AdaptiveIMM):
         x0 = ws_s * sx + ws_m * mx
         es = sx - x0
         em = mx - x0
-        p0 = ws_s * (spx + es * es) + ws_m * (mpx + em * em) + self.q_s * dt
+        p0 = ws_s * (sp + es * es) + ws_m * (mp + em * em) + self.q_s * dt
         x1 = wm_s * sx + wm_m * mx
         v1 = wm_m * mvx
         es = sx - x1
         em = mx - x1
         ev = mvx - v1
-        a1 = wm_s * (spx + es * es) + wm_m * (mpx + em * em)
-        b1 = wm_m * (mbx + em * ev) - wm_s * es * v1
-        c1 = wm_s * v1 * v1 + wm_m * (mcx + ev * ev)
-        xp = x1 + v1 * dt
+        a1 = wm_s * (sp + es * es) + wm_m * (mp + em * em)
+        b1 = wm_m * (mb + em * ev) - wm_s * es * v1
+        c1 = wm_s * v1 * v1 + wm_m * (mc + ev * ev)
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
-        cp = c1 + q * dt2
-        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp)
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp,
+               c1 + q * dt2)
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
@@ -565,10 +544,10 @@ class AdaptiveIMM1D(AdaptiveIMM):
         sm = ap + r
         d2s = ns * ns / ss
         d2m = nm * nm / sm
-        if (d2s > self.gate2 or cs < 0.05) and (d2m > self.gate2 or cm < 0.05):
+        g2 = self.gate2
+        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
             return self._rejected(t, dt, zx, 0.0, [
-                t, ta, cs, r, q, age, rho, x0, 0.0, p0, 0.0,
-                xp, 0.0, v1, 0.0, ap, 0.0, bp, 0.0, cp, 0.0, ux, 0.0])
+                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0])
         e = 0.5 * (d2m - d2s)
         lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
         mu = cs * lr / (cs * lr + cm)
@@ -576,11 +555,12 @@ class AdaptiveIMM1D(AdaptiveIMM):
         self._book = (t, zx, 0.0, d2m, nm, sm, 0.0, 1.0)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
-        sx = x0 + p0 / ss * ns
+        g = p0 / ss
+        sx = x0 + g * ns
         k0 = ap / sm
         k1 = bp / sm
         mx = xp + k0 * nm
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0,
-                  (1.0 - p0 / ss) * p0, 0.0, mx, 0.0, v1 + k1 * nm, 0.0,
-                  (1.0 - k0) * ap, 0.0, (1.0 - k0) * bp, 0.0, cp - k1 * bp, 0.0, ux, 0.0]
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0, (1.0 - g) * p0,
+                  (1.0 - k0) * ap, mx, 0.0, v1 + k1 * nm, 0.0, (1.0 - k0) * bp, cp - k1 * bp,
+                  ux, 0.0]
         return (mu * sx + (1.0 - mu) * mx, 0.0)
