@@ -462,7 +462,6 @@ def write_readme(out: Path, res: dict[str, Any]) -> None:
         L.append(f"| {r['v_mm_s'] / 1000:g} | {r['filter']} | {_f(r['predicted_mm'])} | "
                  f"{_f(r['mean_mm'])} | {_f(r['max_mm'])} |")
     L.append("")
-    L += adaptive_section(res["acceptance"])
     e = res.get("e2e", {"skipped": "run with --no-e2e"})
     L += ["## (c) End to end: the real station against fieldsim's truth", ""]
     if "skipped" in e:
@@ -498,6 +497,7 @@ def write_readme(out: Path, res: dict[str, Any]) -> None:
               + ", ".join(f"{k} {r['ball_recoveries']}" for k, r in e["replay"].items())
               + "; false balls rejected inside a robot footprint: "
               + str(e["replay"]["raw"]["ball_rejected_on_robot"]) + ".", ""]
+    L += adaptive_section(res["acceptance"])
     L += ["## Discussion", "", res["discussion"], ""]
     (out / "README.md").write_text("\n".join(L))
 
