@@ -207,9 +207,42 @@ class AdaptiveIMM:
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, zy)
         (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy) = S
-        if self._book is not None:
-            q, r, age, ux, uy = self._bookkeep(self._book, q, r, age, ux, uy)
+        bk = self._book
+        if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
+            bt, bx, by, d2m, nmx, sm, nmy, _ = bk
+            # process noise: grows when the moving model's innovations exceed what it predicts
+            # (normalised innovation squared > 1) or keep one sign (an acceleration the model
+            # does not have: the running mean of the normalised innovations, squared over its
+            # variance, is ~1 when unbiased); shrinks slowly otherwise: the smallest q the data
+            # agree with
+            w = 1.0 / math.sqrt(sm)
+            ux += BIAS_A * (nmx * w - ux)
+            uy += BIAS_A * (nmy * w - uy)
+            e = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
+            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            q *= 1.0 + e + 0.5 * e * e  # ~exp(e), |e| < 1.5
+            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            # measurement noise from the second differences of the measurements used
+            # (independent of the motion model, so a wrong q does not leak into r): z_k - z_k-1
+            # - c (z_k-1 - z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is
+            # smooth (the initial value counts as one sample: a prior against a lucky first one)
+            h = self._h
+            if len(h) == 6:
+                t1, h1x, h1y, t2, h2x, h2y = h
+                if t1 > t2 and bt > t1:
+                    c = (bt - t1) / (t1 - t2)
+                    ex = bx - h1x - c * (h1x - h2x)
+                    ey = by - h1y - c * (h1y - h2y)
+                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
+                    if e > 16.0 * r:
+                        e = 16.0 * r
+                    age += 1.0
+                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                self._h = (bt, bx, by, t1, h1x, h1y)
+            else:
+                self._h = (bt, bx, by, *h[:3])
         dt = t - t0 if t > t0 else 0.0
         # Markov switching over dt, then the mixing weights (still's share of each model's start)
         a = self.switch_sm * dt
@@ -292,42 +325,6 @@ class AdaptiveIMM:
                   (1.0 - k0) * ap, mx, my, v1x + k1 * nmx, v1y + k1 * nmy, (1.0 - k0) * bp,
                   cp - k1 * bp, ux, uy]
         return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
-
-    def _bookkeep(self, bk: tuple[float, ...], q: float, r: float, age: float, ux: float,
-                  uy: float) -> tuple[float, float, float, float, float]:
-        """The noise estimates learn from the last measurement used (``bk``)."""
-        t, zx, zy, d2m, nmx, smx, nmy, smy = bk
-        # -- process noise: grows when the moving model's innovations exceed what it predicts
-        # (normalised innovation squared > 1), shrinks slowly otherwise: the smallest q the data
-        # agree with
-        # and when they keep one sign (an acceleration the model does not have): the running
-        # mean of the normalised innovations, squared over its variance, is ~1 when unbiased
-        ux += BIAS_A * (nmx / math.sqrt(smx) - ux)
-        uy += BIAS_A * (nmy / math.sqrt(smy) - uy)
-        nis = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
-        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
-        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
-        # -- measurement noise from the second differences of the measurements used (independent
-        # of the motion model, so a wrong q does not leak into r): z_k - z_k-1 - c (z_k-1 -
-        # z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is smooth
-        # (the initial value counts as one sample: a prior against a lucky first sample)
-        h = self._h
-        if len(h) == 6:
-            t1, h1x, h1y, t2, h2x, h2y = h
-            if t1 > t2 and t > t1:
-                c = (t - t1) / (t1 - t2)
-                ex = zx - h1x - c * (h1x - h2x)
-                ey = zy - h1y - c * (h1y - h2y)
-                sample = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
-                if sample > 16.0 * r:
-                    sample = 16.0 * r
-                age += 1.0
-                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
-            self._h = (t, zx, zy, t1, h1x, h1y)
-        else:
-            self._h = (t, zx, zy, *h[:3])
-        return q, r, age, ux, uy
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
         """The step after a jump re-initialised the track: keep the new track unless this
@@ -467,30 +464,6 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
-    def _bookkeep(self, bk: tuple[float, ...], q: float, r: float, age: float, ux: float,
-                  uy: float) -> tuple[float, float, float, float, float]:
-        t, zx, _, d2m, nm, sm, _, _ = bk
-        ux += BIAS_A * (nm / math.sqrt(sm) - ux)
-        nis = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
-        q *= math.exp(self.q_rate * ((nis if nis < 6.0 else 6.0) - self.q_down))
-        q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
-        h = self._h
-        if len(h) == 6:
-            t1, h1x, _, t2, h2x, _ = h
-            if t1 > t2 and t > t1:
-                c = (t - t1) / (t1 - t2)
-                ex = zx - h1x - c * (h1x - h2x)
-                sample = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
-                if sample > 16.0 * r:
-                    sample = 16.0 * r
-                age += 1.0
-                r += (sample - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
-            self._h = (t, zx, 0.0, t1, h1x, 0.0)
-        else:
-            self._h = (t, zx, 0.0, *h[:3])
-        return q, r, age, ux, uy
-
     def _step(self, t: float, zx: float, zy: float) -> Vec:
         cache = self._backup is None
         if not cache:
@@ -499,9 +472,30 @@ class AdaptiveIMM1D(AdaptiveIMM):
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
         (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _) = S
-        if self._book is not None:
-            q, r, age, ux, _ = self._bookkeep(self._book, q, r, age, ux, 0.0)
+        bk = self._book
+        if bk is not None:  # as in the 2-D step
             self._book = None
+            bt, bx, _, d2m, nm, sm, _, _ = bk
+            ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+            e = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
+            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            q *= 1.0 + e + 0.5 * e * e
+            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            h = self._h
+            if len(h) == 6:
+                t1, h1x, _, t2, h2x, _ = h
+                if t1 > t2 and bt > t1:
+                    c = (bt - t1) / (t1 - t2)
+                    ex = bx - h1x - c * (h1x - h2x)
+                    e = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                    if e > 16.0 * r:
+                        e = 16.0 * r
+                    age += 1.0
+                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                self._h = (bt, bx, 0.0, t1, h1x, 0.0)
+            else:
+                self._h = (bt, bx, 0.0, *h[:3])
         dt = t - t0 if t > t0 else 0.0
         a = self.switch_sm * dt
         b = self.switch_ms * dt
