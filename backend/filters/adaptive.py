@@ -193,7 +193,7 @@ class AdaptiveIMM:
         if pri is not None and pri[0] == t:  # the last step's predictions are still good
             # the state before the step, except what the step did before its predictions
             # (it had learnt from its book)
-            self.S, _, self._pend, self._far, self._backup, _ = self._prev
+            self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
             self._book, self._h = None, self._pri_h
             return self._correct(pri, x, y)
         self._load(self._prev)
