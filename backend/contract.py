@@ -20,8 +20,9 @@ from typing_extensions import TypedDict
 Team = Literal["blue", "yellow"]
 Side = Literal["negative-x", "positive-x"]
 ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
-#: the filter in use for an object: "raw", "median", "paper", "kalman" ("" before any)
-FilterName = Annotated[str, Field(description='"raw", "median", "paper" or "kalman"')]
+#: the filter in use for an object: "raw", "median", "paper", "kalman", "adaptive" ("" before any)
+FilterName = Annotated[str, Field(
+    description='"raw", "median", "paper", "kalman" or "adaptive"')]
 #: who set a robot's target: an operator's click, or the strategy
 TargetSource = Literal["operator", "strategy"]
 

@@ -1,5 +1,7 @@
-"""Vision filters: raw, median, the URoboRus 2022 paper filter, constant-velocity Kalman."""
+"""Vision filters: raw, median, the URoboRus 2022 paper filter, constant-velocity Kalman, and the
+default: an adaptive still/moving IMM."""
 
+from .adaptive import AdaptiveIMM
 from .core import (
     AngleFilter,
     KalmanCV,
@@ -13,6 +15,7 @@ from .core import (
 )
 from .params import (
     FILTER_KINDS,
+    AdaptiveParams,
     FilterKind,
     FilterSettings,
     KalmanParams,
@@ -22,7 +25,7 @@ from .params import (
 )
 
 __all__ = [
-    "FILTER_KINDS", "AngleFilter", "FilterKind", "FilterSettings", "KalmanCV", "KalmanParams",
-    "MedianFilter", "MedianParams", "MedianWeighted", "PaperFilter", "PaperParams",
-    "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter",
+    "FILTER_KINDS", "AdaptiveIMM", "AdaptiveParams", "AngleFilter", "FilterKind", "FilterSettings",
+    "KalmanCV", "KalmanParams", "MedianFilter", "MedianParams", "MedianWeighted", "PaperFilter",
+    "PaperParams", "PositionFilter", "RawFilter", "RawParams", "VelocityFit", "make_filter",
 ]

@@ -18,7 +18,15 @@ from typing import Protocol
 
 from domain.angles import wrap_angle
 
-from .params import FilterKind, KalmanParams, MedianParams, PaperParams, RawParams
+from .adaptive import AdaptiveIMM, AdaptiveIMM1D
+from .params import (
+    AdaptiveParams,
+    FilterKind,
+    KalmanParams,
+    MedianParams,
+    PaperParams,
+    RawParams,
+)
 
 Vec = tuple[float, float]
 
@@ -390,13 +398,16 @@ class AngleFilter:
         return None if p is None else wrap_angle(p[0])
 
 
-AnyParams = RawParams | MedianParams | PaperParams | KalmanParams
+AnyParams = RawParams | MedianParams | PaperParams | KalmanParams | AdaptiveParams
 
 
 def make_filter(kind: FilterKind, params: AnyParams | None = None,
                 angle: bool = False) -> PositionFilter:
     """A new filter of ``kind``; ``params`` must be that kind's model (None: defaults).
     ``angle=True`` picks the orientation parameters (rad) where a kind has them."""
+    if kind == "adaptive":
+        ap = params if isinstance(params, AdaptiveParams) else None
+        return AdaptiveIMM1D(ap) if angle else AdaptiveIMM(ap)
     if kind == "raw":
         return RawFilter(params if isinstance(params, RawParams) else None)
     if kind == "median":

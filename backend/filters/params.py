@@ -13,8 +13,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ..params.fields import num
 
-FilterKind = Literal["raw", "median", "paper", "kalman"]
-FILTER_KINDS: tuple[FilterKind, ...] = ("raw", "median", "paper", "kalman")
+FilterKind = Literal["raw", "median", "paper", "kalman", "adaptive"]
+FILTER_KINDS: tuple[FilterKind, ...] = ("raw", "median", "paper", "kalman", "adaptive")
 
 _CFG = ConfigDict(allow_inf_nan=False, extra="forbid", frozen=True)
 
@@ -77,6 +77,63 @@ class KalmanParams(BaseModel):
         "orientation: std of one measurement")
 
 
+class AdaptiveParams(BaseModel):
+    """The default: a still/moving IMM that estimates the measurement noise and the outlier rate
+    from the data (no tuning needed). The bounds below only limit what it may learn."""
+
+    model_config = _CFG
+    init_noise_mm: float = num(10.0, 0.1, 500.0, "mm", 1.0,
+        "measurement noise assumed before any data (then estimated)")
+    min_noise_mm: float = num(0.3, 0.01, 100.0, "mm", 0.1,
+        "lower bound of the estimated measurement noise")
+    max_noise_mm: float = num(100.0, 1.0, 1000.0, "mm", 5.0,
+        "upper bound of the estimated measurement noise")
+    noise_horizon: int = num(100, 5, 10000, "samples", 10,
+        "measurements the noise and outlier-rate estimates average over")
+    accel_init_mm_s2: float = num(30.0, 0.1, 1e6, "mm/s^2", 10.0,
+        "moving model: std of the white acceleration before any data (then estimated)")
+    accel_min_mm_s2: float = num(1.0, 0.01, 1e6, "mm/s^2", 1.0,
+        "moving model: lower bound of the estimated acceleration noise")
+    accel_max_mm_s2: float = num(2e4, 1.0, 1e7, "mm/s^2", 1000.0,
+        "moving model: upper bound of the estimated acceleration noise")
+    accel_adapt_rate: float = num(0.3, 0.0, 2.0, "", 0.05,
+        "how fast the acceleration noise follows the innovations (log step per unit of "
+        "normalised innovation squared)")
+    accel_shrink_bias: float = num(0.5, 0.0, 5.0, "", 0.1,
+        "normalised innovation squared below 1 + this shrinks the acceleration noise")
+    still_drift_mm_s: float = num(0.1, 0.0, 1000.0, "mm/s^0.5", 0.5,
+        "still model: random-walk drift of the position")
+    still_to_moving_per_s: float = num(0.03, 0.001, 30.0, "1/s", 0.1,
+        "switching rate still -> moving")
+    moving_to_still_per_s: float = num(0.03, 0.001, 30.0, "1/s", 0.1,
+        "switching rate moving -> still")
+    gate_sigma: float = num(4.5, 2.0, 20.0, "sigma", 0.5,
+        "a measurement farther than this many standard deviations is not used as is")
+    outlier_rate_trust: float = num(0.02, 0.0, 1.0, "", 0.01,
+        "below this estimated outlier rate a reachable jump is a maneuver at once (above it, "
+        "once the next measurement confirms it)")
+    max_speed_mm_s: float = num(6500.0, 100.0, 20000.0, "mm/s", 100.0,
+        "a jump farther than this speed allows is an outlier, not a maneuver")
+    gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,
+        "no measurement for longer than this: re-initialise")
+    angle_init_noise_rad: float = num(0.05, 1e-4, 1.0, "rad", 0.005,
+        "orientation: noise assumed before any data")
+    angle_min_noise_rad: float = num(0.001, 1e-5, 0.5, "rad", 0.001,
+        "orientation: lower bound of the estimated noise")
+    angle_max_noise_rad: float = num(0.5, 1e-3, 3.0, "rad", 0.01,
+        "orientation: upper bound of the estimated noise")
+    angle_accel_init_rad_s2: float = num(10.0, 0.001, 1e4, "rad/s^2", 1.0,
+        "orientation, moving model: std of the white angular acceleration before any data")
+    angle_accel_min_rad_s2: float = num(0.01, 1e-4, 1e4, "rad/s^2", 0.01,
+        "orientation: lower bound of the estimated angular acceleration noise")
+    angle_accel_max_rad_s2: float = num(1000.0, 0.01, 1e5, "rad/s^2", 10.0,
+        "orientation: upper bound of the estimated angular acceleration noise")
+    angle_still_drift_rad_s: float = num(0.002, 0.0, 10.0, "rad/s^0.5", 0.001,
+        "orientation, still model: random-walk drift")
+    angle_max_rate_rad_s: float = num(30.0, 0.1, 200.0, "rad/s", 1.0,
+        "orientation: a jump faster than this is an outlier")
+
+
 _ROBOT_KEY = re.compile(r"^(blue|yellow)/([0-9]|1[0-5])$")
 
 
@@ -84,9 +141,9 @@ class FilterSettings(BaseModel):
     """Which filter each object uses, and the parameters of every kind."""
 
     model_config = _CFG
-    ball: FilterKind = Field(default="kalman", description="filter of the ball",
+    ball: FilterKind = Field(default="adaptive", description="filter of the ball",
                              json_schema_extra={"unit": "", "step": None})
-    robot: FilterKind = Field(default="kalman",
+    robot: FilterKind = Field(default="adaptive",
                               description="filter of every robot without an override",
                               json_schema_extra={"unit": "", "step": None})
     robot_overrides: dict[str, FilterKind] = Field(
@@ -102,6 +159,9 @@ class FilterSettings(BaseModel):
     kalman: KalmanParams = Field(default=KalmanParams(),
                                  description="parameters of 'kalman'",
                                  json_schema_extra={"unit": "", "step": None})
+    adaptive: AdaptiveParams = Field(default=AdaptiveParams(),
+                                     description="parameters of 'adaptive'",
+                                     json_schema_extra={"unit": "", "step": None})
 
     @field_validator("robot_overrides")
     @classmethod
@@ -116,7 +176,10 @@ class FilterSettings(BaseModel):
     def robot_kind(self, team: str, rid: int) -> FilterKind:
         return self.robot_overrides.get(f"{team}/{rid}", self.robot)
 
-    def params_for(self, kind: FilterKind) -> RawParams | MedianParams | PaperParams | KalmanParams:
+    def params_for(self, kind: FilterKind) -> (RawParams | MedianParams | PaperParams
+                                               | KalmanParams | AdaptiveParams):
+        if kind == "adaptive":
+            return self.adaptive
         if kind == "raw":
             return self.raw
         if kind == "median":

@@ -6,7 +6,8 @@ One object per robot (team, id) and one ball. Per object:
   ``merge_window_s``) are one measurement, their mean (circular mean for the orientation); a
   detection at a new instant is a new filter step. Out-of-order older frames are ignored.
 * The measurement goes through the object's filter (``backend.filters``: raw, median, paper,
-  kalman; chosen per object class and per robot by :class:`FilterSettings`). The state carries
+  kalman, adaptive (the default); chosen per object class and per robot by
+  :class:`FilterSettings`). The state carries
   both the filtered value (``x``, ``y``, ``orientation``) and the latest merged measurement
   (``raw_x``, ``raw_y``, ``raw_orientation``), and the filter's velocity.
 * Times: a frame's capture time is checked against the relay's receive clock, per camera
@@ -206,10 +207,10 @@ class WorldModel:
         cfg = self.config
         if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
             # another camera at the same instant: one measurement, the mean
-            if tr.n == 1 and tr.ang is not None:  # a robot seen by a second camera: compare
+            pair = tr.n == 1 and tr.ang is not None  # a robot seen by a second camera: compare
+            if pair:
                 (first,) = tr.instant_cams
-                vx, vy = tr.pos.velocity()
-                self.camera_pairs.add(first, tr.sx, tr.sy, cam, x, y, math.hypot(vx, vy))
+                fx, fy = tr.sx, tr.sy
             tr.instant_cams.add(cam)
             tr.n += 1
             tr.sx += x
@@ -219,6 +220,10 @@ class WorldModel:
             mx, my = tr.sx / tr.n, tr.sy / tr.n
             mo = math.atan2(tr.ss, tr.sc)
             tr.pos.revise(mx, my)
+            if pair:  # the speed of the merged measurement (the first camera's alone may
+                # have looked like a jump to the filter)
+                vx, vy = tr.pos.velocity()
+                self.camera_pairs.add(first, fx, fy, cam, x, y, math.hypot(vx, vy))
             if tr.ang is not None:
                 tr.ang.revise(mo)
             tr.raw = _Meas(tr.raw.t, mx, my, mo)

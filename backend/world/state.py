@@ -28,7 +28,7 @@ class RobotState:
     raw_orientation: float | None = None  # rad
     predicted: bool = False  # not seen for a while: x, y, orientation extrapolated
     lost: bool = False  # not seen for too long: frozen, velocity zero, visible False
-    filter: str = ""  # filter kind in use: "raw", "median", "paper", "kalman"
+    filter: str = ""  # filter kind in use: "raw", "median", "paper", "kalman", "adaptive"
 
 
 @dataclass(slots=True)

@@ -1,4 +1,5 @@
-"""Vision filter experiment: the paper's Fig. 2, synthetic error tables, and end to end.
+"""Vision filter experiment: the paper's Fig. 2, synthetic error tables, the acceptance table of
+the adaptive default filter (``acceptance.py``), and end to end.
 
     .venv/bin/python -m experiments.filters.run --out docs/experiments/filters
 
@@ -26,6 +27,7 @@ from typing import Any
 
 from backend.filters import (
     FILTER_KINDS,
+    AdaptiveIMM,
     FilterSettings,
     KalmanCV,
     KalmanParams,
@@ -36,6 +38,7 @@ from backend.filters import (
     RawFilter,
 )
 
+from . import acceptance
 from .svgplot import Series, line_plot
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -49,6 +52,7 @@ FILTERS: list[tuple[str, FilterMaker]] = [
     ("paper: median + weighted avg (0.05/0.95)", PaperFilter),
     ("Kalman CV (defaults, no gate)", KalmanCV.from_params),
     ("Kalman CV, gate 150 mm", lambda: KalmanCV.from_params(KalmanParams(gate_mm=150.0))),
+    ("adaptive (the default)", AdaptiveIMM),
 ]
 
 
@@ -187,6 +191,7 @@ def lag_figure(out: Path, seed: int) -> None:
         ("paper, no re-init", lambda: PaperFilter(PaperParams(jump_mm=10000.0)), "#e07b39"),
         ("median", MedianFilter, "#9b59b6"),
         ("Kalman CV", KalmanCV.from_params, "#1f77b4"),
+        ("adaptive (default)", AdaptiveIMM, "#2a9d3a"),
     ]
     fs = {name: m() for name, m, _ in makers}
     for name in fs:
@@ -492,8 +497,85 @@ def write_readme(out: Path, res: dict[str, Any]) -> None:
               + ", ".join(f"{k} {r['ball_recoveries']}" for k, r in e["replay"].items())
               + "; false balls rejected inside a robot footprint: "
               + str(e["replay"]["raw"]["ball_rejected_on_robot"]) + ".", ""]
+    L += adaptive_section(res["acceptance"])
     L += ["## Discussion", "", res["discussion"], ""]
     (out / "README.md").write_text("\n".join(L))
+
+
+def adaptive_section(acc: dict[str, Any]) -> list[str]:
+    """(d): the default filter's design and its acceptance table (issue 13 section 3)."""
+    sv = acc["still_velocity"]
+    lg = acc["lag_2m_s"]
+    ne = acc["noise_estimate"]
+    L = ["## (d) One filter that fits the data: `adaptive`, the default", "",
+         "The filters above are tuned for one noise level: the Kalman filter assumes 3 mm, so "
+         "at 20 mm it follows the noise, and the paper's filter is precise on a still object "
+         "but lags a moving one. `adaptive` (`backend/filters/adaptive.py`) needs no tuning:",
+         "",
+         "- **Two motion models, mixed (IMM)**: *still* (constant position: its estimate is "
+         "the running mean, the most precise thing a still object allows, and its velocity is "
+         "exactly zero) and *moving* (constant velocity). Model probabilities follow a Markov "
+         "chain (0.03 switches/s: fewer switches, less mixing noise on a moving object) "
+         "and the likelihood of each measurement; the output is the "
+         "probability-weighted mix. Why an IMM rather than one Kalman filter with estimated "
+         "noise: no single process noise fits a resting ball and a rolling one, and the still "
+         "model is what makes a standing robot's velocity read zero instead of 50-120 mm/s.",
+         "- **Measurement noise from the data**: the variance of the second differences of "
+         "the measurements the filter used (z_k - z_k-1 - c (z_k-1 - z_k-2), variance "
+         "(1 + (1 + c)^2 + c^2) r while the motion is smooth), averaged 1/n, then over 100 "
+         "samples. Why not from the innovations (Mehra / Sage-Husa): there the model's own "
+         "error leaks into r (a decelerating ball read as 8 mm noise at 2 mm); second "
+         "differences do not depend on the motion model, so r and q can be told apart.",
+         "- **Process noise from the innovations**: the moving model's acceleration noise q "
+         "is multiplied by exp(0.3 (s - 1.5)) per step, s the mean of the normalised "
+         "innovation squared and of the squared running mean of the normalised innovations "
+         "(a bias test: a decelerating ball keeps them on one side long before their size "
+         "grows), s capped at 6, q within 1 .. 20000 mm/s^2: q grows fast when the model "
+         "falls behind and shrinks slowly to the smallest q the data agree with (on a "
+         "straight run the filter becomes a long line fit, as the tuned Kalman filter does).",
+         "- **Outliers vs maneuvers**: a measurement outside the gate (4.5 sigma) of every "
+         "model that is not ruled out is an outlier when it is farther than the object can "
+         "have travelled (6.5 m/s); a reachable one is a maneuver (kick, bounce) at once "
+         "while the estimated outlier rate is below 2 %, otherwise when the next measurement "
+         "confirms it (moving away in the same direction, or moving as the track does). "
+         "After a jump the old track is kept for one step and restored if the next "
+         "measurement fits it better (a stray spike). Three recent rejected measurements on "
+         "one line at a possible speed re-initialise there (a track started on an outlier, "
+         "the ball placed elsewhere).",
+         "- **Speed**: plain float arithmetic, the axes sharing their covariances "
+         "(isotropic noise), the state one list of floats unpacked per step; a second "
+         "camera's detection at the same instant (`revise`) redoes only the correction from "
+         "the cached predictions, and the noise estimates learn once per instant, at the "
+         "next step. Orientation uses a 1-D variant. Numbers: `bench/world_bench.py`.",
+         "- **Where it falls short** (the misses below): at 20 mm noise on a moving object "
+         "it is 10-25 % behind an oracle Kalman filter tuned to that very run (mixing with "
+         "the still model and the adapting q cost precision a fixed, perfectly chosen q "
+         "does not pay); with 20 mm noise and 20 % outliers a kick or a bounce is "
+         "sometimes confirmed late or a track re-acquired on aligned outliers, which the "
+         "RMSE over 20 runs shows. A still object at 20 mm noise: one stray 4.8-sigma "
+         "spike in 20 runs reads as a jump for one frame (the max of the velocity table).",
+         "",
+         "Acceptance (issue 13 section 3): RMSE (mm) over "
+         "the runs, 60 Hz, warm-up 0.5 s. Scenarios and filters: "
+         "`experiments/filters/acceptance.py`. *kalman tuned* is an oracle: the best of "
+         f"{len(acceptance.KALMAN_GRID_Q)} x {len(acceptance.KALMAN_GRID_GATE)} Kalman "
+         "filters (acceleration noise 10 .. 1e5 mm/s^2, gate none or 150 mm, the true "
+         "measurement noise) chosen on the very data it is scored on. Bold: the best of raw, "
+         "median, paper and tuned Kalman; criterion: adaptive <= "
+         f"{acceptance.TOLERANCE:g} x that.", ""]
+    L += acceptance.markdown(acc)
+    L += ["", "Speed read on a still object (truth 0; mm/s after the warm-up):", "",
+          "| noise | filter | RMS | p95 | max |", "|---|---|---|---|---|"]
+    for n, d in sv.items():
+        for f, v in d.items():
+            L.append(f"| {n} | {f} | {v['rms']:.2f} | {v['p95']:.2f} | {v['max']:.1f} |")
+    L += ["", "Mean lag along the motion at 2 m/s (mm; negative = ahead): "
+          + "; ".join(f"{n}: Kalman {d['kalman']:.2f}, adaptive {d['adaptive']:.2f}"
+                      for n, d in lg.items()) + ".", "",
+          "The adaptive filter's noise estimate at the end of a still run (std, mm): "
+          + "; ".join(f"{k}: " + ", ".join(f"{v:.1f}" for v in vs) for k, vs in ne.items())
+          + ".", ""]
+    return L
 
 
 def discussion(res: dict[str, Any]) -> str:
@@ -535,11 +617,12 @@ def discussion(res: dict[str, Any]) -> str:
         "world model most outliers never reach a filter: robots are identified by id, and "
         "false balls are rejected by the robot-footprint test and by association to the "
         "predicted ball before filtering.",
-        "- **Choice of defaults**: `FilterSettings()` uses `kalman` for the ball and robots "
-        "(the lowest error on moving objects end to end, and a velocity for control); the "
-        "paper filter stays selectable per object class and per robot (e.g. for a still ball "
-        "at a free kick, where it is the most precise). The median filter alone is a cheap, "
-        "lag-light (2 samples) outlier remover.",
+        "- **Choice of defaults**: `FilterSettings()` uses `adaptive` for the ball and robots "
+        "(section (d): it needs no tuning for the noise level, is as precise as the paper's "
+        "filter on a still object and does not lag a moving one, and gives a velocity that "
+        "reads zero on a still robot); `kalman`, `paper`, `median` and `raw` stay selectable "
+        "per object class and per robot. The median filter alone is a cheap, lag-light (2 "
+        "samples) outlier remover.",
     ]
     e = res.get("e2e", {})
     if "replay" in e:
@@ -548,10 +631,13 @@ def discussion(res: dict[str, Any]) -> str:
             "- **End to end**: robots: raw " + _f(rp["raw"]["robots"].get("rmse", 0)) +
             " mm RMSE, median " + _f(rp["median"]["robots"].get("rmse", 0)) + ", paper " +
             _f(rp["paper"]["robots"].get("rmse", 0)) + ", Kalman " +
-            _f(rp["kalman"]["robots"].get("rmse", 0)) + " mm; ball: raw " +
+            _f(rp["kalman"]["robots"].get("rmse", 0)) + ", adaptive " +
+            _f(rp.get("adaptive", {}).get("robots", {}).get("rmse", 0)) + " mm; ball: raw " +
             _f(rp["raw"]["ball"].get("rmse", 0)) + ", paper " +
             _f(rp["paper"]["ball"].get("rmse", 0)) + ", Kalman " +
-            _f(rp["kalman"]["ball"].get("rmse", 0)) + " mm. fieldsim's noise is only 2 mm, so "
+            _f(rp["kalman"]["ball"].get("rmse", 0)) + ", adaptive " +
+            _f(rp.get("adaptive", {}).get("ball", {}).get("rmse", 0)) +
+            " mm. fieldsim's noise is only 2 mm, so "
             "the raw robot error is already small; what matters is lag (paper) and whether "
             "false balls get through (the '> 100 mm' column). The station row is what the "
             "browser sees; it is sampled at poll time, so it includes the age of the estimate "
@@ -578,6 +664,7 @@ def main() -> int:
     res: dict[str, Any] = {"seed": a.seed, "runs": a.runs}
     res["fig2"] = fig2(out, a.seed)
     res["tables"] = tables(a.seed, a.runs)
+    res["acceptance"] = acceptance.run_all(a.seed, a.runs)
     lag_figure(out, a.seed)
     print("synthetic done", f"{time.monotonic() - t0:.1f} s", flush=True)  # noqa: T201
     if not a.no_e2e:

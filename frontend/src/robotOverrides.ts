@@ -15,6 +15,7 @@ export const FILTERS = [
   { value: "median", label: "Median" },
   { value: "paper", label: "Paper" },
   { value: "kalman", label: "Kalman" },
+  { value: "adaptive", label: "Adaptive" },
 ] as const;
 
 export function labelOf(options: readonly { value: string; label: string }[], v: string | null | undefined): string {

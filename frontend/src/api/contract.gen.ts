@@ -66,7 +66,7 @@ export interface Ball {
   predicted: boolean;
   /** not seen for long: dropped from the world soon */
   lost: boolean;
-  /** "raw", "median", "paper" or "kalman" */
+  /** "raw", "median", "paper", "kalman" or "adaptive" */
   filter: string;
   /** the kick in progress, if any */
   kick: BallKick | null;
@@ -762,7 +762,7 @@ export interface Robot {
   raw_orientation: number | null;
   predicted: boolean;
   lost: boolean;
-  /** "raw", "median", "paper" or "kalman" */
+  /** "raw", "median", "paper", "kalman" or "adaptive" */
   filter: string;
   control: RobotControl | null;
   command: RobotCommand | null;

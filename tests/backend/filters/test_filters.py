@@ -210,11 +210,11 @@ def test_angle_filter_is_continuous_through_pi(kind: str) -> None:
         t = i * DT
         truth = wrap_angle(2.5 + omega * t)
         est = f.update(t, truth)
-        if i > 5 and kind in ("raw", "kalman"):
+        if i > 5 and kind in ("raw", "kalman", "adaptive"):
             worst = max(worst, abs(wrap_angle(est - truth)))
         assert -math.pi <= est < math.pi
     assert worst < 0.05
-    if kind == "kalman":
+    if kind in ("kalman", "adaptive"):
         assert f.rate() == pytest.approx(omega, rel=0.02)
 
 

@@ -49,7 +49,10 @@ def test_replayed_world_matches_the_live_estimate(log: LogFile) -> None:
     """To record a new fixture: ``python -m launcher --isolated --record-dir DIR
     --backend-arg=--set=recording.rotate_on_stage=false``, POST /api/recording new-file,
     give STOP, FORCE_START and a target, new-file again; gzip the middle file."""
-    model = WorldModel()
+    # the fixture was recorded when the default filter was Kalman: replay with that one
+    from backend.filters.params import FilterSettings
+
+    model = WorldModel(filters=FilterSettings(robot="kalman", ball="kalman"))
     compared = 0
     worst = 0.0
     t0 = log.t_first_ns

@@ -160,7 +160,7 @@ def test_switching_filters_live_reinitialises_from_recent_measurements() -> None
                               RawRobot("yellow", 7, 0.0, 1000.0, 0.0, 0.9)],
                        [RawBall(-x, -800.0, 0.9)]))
         if i % 25 == 24:
-            kind = FILTER_KINDS[(i // 25) % 4]
+            kind = FILTER_KINDS[(i // 25) % len(FILTER_KINDS)]
             m.configure(FilterSettings(robot=kind, ball=kind,
                                        robot_overrides={"yellow/7": "median"}))
             w = m.snapshot()
@@ -170,13 +170,14 @@ def test_switching_filters_live_reinitialises_from_recent_measurements() -> None
             assert w.ball is not None and w.ball.filter == kind
             # right after the switch the new filter sits on the recent measurements
             # (paper: the replayed history already builds part of its 175 mm steady lag)
-            lag_bound = {"raw": 0.0, "kalman": 0.0, "median": 20.0, "paper": 180.0}[kind]
+            lag_bound = {"raw": 0.0, "kalman": 0.0, "adaptive": 0.0, "median": 20.0,
+                         "paper": 180.0}[kind]
             assert abs(r.x - x) <= lag_bound + 5.0
     assert m.snapshot().robot("blue", 2) is not None
 
 
 def test_unseen_robot_is_predicted_then_lost() -> None:
-    m = WorldModel()  # Kalman by default
+    m = WorldModel()  # the adaptive filter by default
     t = 30.0
     for i in range(60):
         t = 30.0 + i * DT

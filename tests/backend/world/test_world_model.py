@@ -1,5 +1,6 @@
 import math
 
+from backend.filters import FilterSettings
 from backend.world.model import WorldModel
 from backend.world.state import CameraFrame, RawBall, RawRobot
 
@@ -53,12 +54,14 @@ def test_unseen_robot_becomes_invisible_then_dropped() -> None:
 
 
 def test_ball_follows_the_detection_nearest_its_prediction() -> None:
-    m = WorldModel()
+    # Kalman with its 3 mm noise: after two detections it sits on the second (the default,
+    # adaptive filter, averages them until it has learnt the noise)
+    m = WorldModel(filters=FilterSettings(ball="kalman"))
     m.update(frame(0, 1.0, balls=[RawBall(0, 0, 0.9)]))
     # a false ball far away with higher confidence, and the real ball a little further on
     m.update(frame(0, 1.0 + 1 / 60, balls=[RawBall(3000, 2000, 1.0), RawBall(10, 0, 0.8)]))
     b = m.snapshot().ball
-    # the world model filters (default Kalman): the raw value is the detection taken, the
+    # the world model filters: the raw value is the detection taken, the
     # filtered one is near it
     assert b is not None and (b.raw_x, b.raw_y) == (10, 0)
     assert math.hypot(b.x - 10, b.y) < 1.0

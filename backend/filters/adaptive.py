@@ -1,0 +1,560 @@
+"""The default filter: a still/moving interacting multiple model that learns its noise.
+
+Why this design (docs/experiments/filters/README.md has the numbers): a Kalman filter tuned for
+one noise level is wrong at the others (3 mm assumed, 20 mm real: worse than no filter), and the
+paper's filter is precise on a still object but lags a moving one. No single (q, r) pair fits a
+resting ball and a kicked one, so this filter carries two motion models and lets the data pick:
+
+* **still**: the position is constant (a tiny random walk); its estimate is the running mean,
+  the most precise thing a still object allows, and its velocity is exactly zero;
+* **moving**: constant velocity with white acceleration (a robot driving, a rolling ball).
+
+They are mixed as an IMM (Blom & Bar-Shalom): per step the model probabilities follow a Markov
+chain, each model starts from the mix of both, and the output is the probability-weighted
+combination. Measurement noise ``r`` is estimated from the data: the innovations of accepted
+measurements, minus the model's own prediction variance, averaged over a sliding horizon (the
+Mehra / Sage-Husa estimator); the outlier rate is estimated the same way from the gate's verdicts.
+
+Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outside the gate. They
+are told apart by physics and by the data: a measurement farther than the object could have
+travelled (``max_speed``) is an outlier; a reachable one is a maneuver at once when no outliers
+have been seen lately, otherwise when the next measurement confirms it (one frame of delay, only
+in outlier-ridden data). A run of consistent far measurements (the ball placed elsewhere)
+re-initialises the filter.
+
+Plain float arithmetic per axis (no numpy): for a 2-state filter CPython's float operations are
+several times faster than small matrices, and this runs for every object in every camera frame.
+The state is one list of floats, unpacked at the start of a step and replaced by a new list at
+its end: one bytecode instead of twenty attribute reads, and the list before the step is kept
+as it is, so ``revise`` (a second camera at the same instant) costs nothing until it is used.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .params import AdaptiveParams, FilterKind
+
+Vec = tuple[float, float]
+
+# the state list: times, model probability of "still", noise estimates, then both models
+# (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
+# of each axis: the noise is isotropic, so the axes share their covariances; only the mixing
+# spreads differ between the axes, and they are averaged), then the bias test's running means
+# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy
+_MU, _R, _Q, _RHO = 2, 3, 4, 6
+#: weight of a new normalised innovation in its running mean (the bias test)
+BIAS_A = 0.1
+#: 1 / (2 x the variance of that running mean for unit white noise)
+BIAS_K = (2.0 - BIAS_A) / BIAS_A / 2.0
+
+
+class AdaptiveIMM:
+    """Still/moving IMM with estimated noise and robust gating (see the module doc), 2-D."""
+
+    __slots__ = (
+        "S",
+        "_backup",
+        "_book",
+        "_far",
+        "_h",
+        "_pend",
+        "_prev",
+        "_pri",
+        "_pri_h",
+        "gap_s",
+        "gate2",
+        "horizon",
+        "kind",
+        "max_speed",
+        "q0",
+        "q_down",
+        "q_max",
+        "q_min",
+        "q_rate",
+        "q_s",
+        "r0",
+        "r_max",
+        "r_min",
+        "rejected",
+        "rho_accept",
+        "switch_ms",
+        "switch_sm",
+    )
+
+    dims = 2
+
+    def __init__(self, params: AdaptiveParams | None = None, angle: bool = False) -> None:
+        p = params or AdaptiveParams()
+        self.kind: FilterKind = "adaptive"
+        if angle:
+            r0, rmin, rmax = p.angle_init_noise_rad, p.angle_min_noise_rad, p.angle_max_noise_rad
+            q0, qmin, qmax = (p.angle_accel_init_rad_s2, p.angle_accel_min_rad_s2,
+                              p.angle_accel_max_rad_s2)
+            self.q_s = p.angle_still_drift_rad_s ** 2
+            self.max_speed = p.angle_max_rate_rad_s
+        else:
+            r0, rmin, rmax = p.init_noise_mm, p.min_noise_mm, p.max_noise_mm
+            q0, qmin, qmax = p.accel_init_mm_s2, p.accel_min_mm_s2, p.accel_max_mm_s2
+            self.q_s = p.still_drift_mm_s ** 2
+            self.max_speed = p.max_speed_mm_s
+        self.r0 = r0 * r0
+        self.r_min, self.r_max = rmin * rmin, rmax * rmax
+        self.q0 = q0 * q0
+        self.q_min, self.q_max = qmin * qmin, qmax * qmax
+        self.q_rate = p.accel_adapt_rate
+        self.q_down = 1.0 + p.accel_shrink_bias
+        self.gate2 = p.gate_sigma ** 2
+        self.gap_s = p.gap_s
+        self.horizon = float(p.noise_horizon)
+        self.switch_sm = p.still_to_moving_per_s
+        self.switch_ms = p.moving_to_still_per_s
+        self.rho_accept = p.outlier_rate_trust
+        self.rejected = 0
+        self.S: list[float] = []  # empty: nothing measured yet
+        self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
+        self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
+        # recent rejected measurements (t, x, y), the last 0.3 s: a lost track is re-acquired
+        # on three of them that lie on one line
+        self._far: tuple[tuple[float, float, float], ...] | None = None
+        self._backup: tuple[object, ...] | None = None  # the track before a jump
+        self._prev: tuple[object, ...] | None = None  # the state before the last update
+        self._pri: tuple[float, ...] | None = None  # the last step's predictions (revise)
+        self._book: tuple[float, ...] | None = None  # the last measurement used, to learn from
+        self._pri_h: tuple[float, ...] = ()  # _h when the predictions were made
+
+    # -- state -------------------------------------------------------------------------------
+
+    @property
+    def t_last(self) -> float | None:
+        return self.S[0] if self.S else None
+
+    @property
+    def mu(self) -> float:
+        """Probability that the object is still."""
+        return self.S[_MU] if self.S else 0.5
+
+    @property
+    def r(self) -> float:
+        """Estimated measurement noise variance."""
+        return self.S[_R] if self.S else self.r0
+
+    @property
+    def q_m(self) -> float:
+        """Estimated white-acceleration variance of the moving model."""
+        return self.S[_Q] if self.S else self.q0
+
+    @property
+    def outlier_rate(self) -> float:
+        return self.S[_RHO] if self.S else 0.0
+
+    def noise(self) -> float:
+        """The estimated measurement noise (std, units of the measurement)."""
+        return math.sqrt(self.r)
+
+    def reset(self) -> None:
+        """Forget the object; the noise estimates are kept (they describe the camera)."""
+        if self.S:
+            self.r0, self.q0 = self.S[_R], self.S[_Q]
+        self.S = []
+        self._prev = self._pend = self._far = self._backup = self._pri = self._book = None
+        self._h = ()
+
+    def _save(self) -> tuple[object, ...]:
+        return (self.S, self._h, self._pend, self._far, self._backup, self._book)
+
+    def _load(self, st: tuple[object, ...]) -> None:
+        (self.S, self._h, self._pend, self._far, self._backup, self._book) = st  # type: ignore
+
+    def _init(self, t: float, x: float, y: float, v: Vec = (0.0, 0.0), mu: float = 0.5,
+              pvv: float | None = None) -> Vec:
+        S = self.S
+        if S:
+            r, q, age, rho = S[_R], S[_Q], S[5], S[_RHO]
+        else:
+            r, q, age, rho = self.r0, self.q0, 0.0, 0.0
+        pv = pvv if pvv is not None else self.max_speed ** 2 / 4
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0]
+        self._h = (t, x, y)
+        self._pend = self._far = self._backup = self._book = None
+        return (x, y)
+
+    # -- the step ----------------------------------------------------------------------------
+
+    def update(self, t_s: float, x: float, y: float) -> Vec:
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        return self._step(t_s, x, y)
+
+    def revise(self, x: float, y: float) -> Vec:
+        if self._prev is None or not self.S:
+            return self.update(self.S[0] if self.S else 0.0, x, y)
+        t = self.S[0]
+        pri = self._pri
+        if pri is not None and pri[0] == t:  # the last step's predictions are still good
+            # the state before the step, except what the step did before its predictions
+            # (it had learnt from its book)
+            self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
+            self._book, self._h = None, self._pri_h
+            return self._correct(pri, x, y)
+        self._load(self._prev)
+        return self._step(t, x, y)
+
+    def _step(self, t: float, zx: float, zy: float) -> Vec:
+        cache = self._backup is None  # (after a jump, revise takes the long way)
+        if not cache:
+            self._after_jump(t, zx, zy)
+        S = self.S
+        if not S or t - S[0] > self.gap_s:
+            return self._init(t, zx, zy)
+        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy) = S
+        bk = self._book
+        if bk is not None:  # learn from the last measurement used (once per instant)
+            self._book = None
+            bt, bx, by, d2m, nmx, sm, nmy, _ = bk
+            # process noise: grows when the moving model's innovations exceed what it predicts
+            # (normalised innovation squared > 1) or keep one sign (an acceleration the model
+            # does not have: the running mean of the normalised innovations, squared over its
+            # variance, is ~1 when unbiased); shrinks slowly otherwise: the smallest q the data
+            # agree with
+            w = 1.0 / math.sqrt(sm)
+            ux += BIAS_A * (nmx * w - ux)
+            uy += BIAS_A * (nmy * w - uy)
+            e = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
+            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            q *= 1.0 + e + 0.5 * e * e  # ~exp(e), |e| < 1.5
+            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            # measurement noise from the second differences of the measurements used
+            # (independent of the motion model, so a wrong q does not leak into r): z_k - z_k-1
+            # - c (z_k-1 - z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is
+            # smooth (the initial value counts as one sample: a prior against a lucky first one)
+            h = self._h
+            if len(h) == 6:
+                t1, h1x, h1y, t2, h2x, h2y = h
+                if t1 > t2 and bt > t1:
+                    c = (bt - t1) / (t1 - t2)
+                    ex = bx - h1x - c * (h1x - h2x)
+                    ey = by - h1y - c * (h1y - h2y)
+                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
+                    if e > 16.0 * r:
+                        e = 16.0 * r
+                    age += 1.0
+                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                self._h = (bt, bx, by, t1, h1x, h1y)
+            else:
+                self._h = (bt, bx, by, *h[:3])
+        dt = t - t0 if t > t0 else 0.0
+        # Markov switching over dt, then the mixing weights (still's share of each model's start)
+        a = self.switch_sm * dt
+        b = self.switch_ms * dt
+        if a > 0.5:
+            a = 0.5
+        if b > 0.5:
+            b = 0.5
+        cs = (1.0 - a) * ms + b * (1.0 - ms)
+        cm = 1.0 - cs
+        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+        wm_s = a * ms / cm if cm > 1e-12 else 0.0
+        ws_m = 1.0 - ws_s
+        wm_m = 1.0 - wm_s
+        dt2 = dt * dt
+        # the still model's start (a mix of both), then its prediction (a random walk)
+        x0x = ws_s * sx + ws_m * mx
+        x0y = ws_s * sy + ws_m * my
+        ex, ey, fx, fy = sx - x0x, sy - x0y, mx - x0x, my - x0y
+        p0 = (ws_s * (sp + 0.5 * (ex * ex + ey * ey)) + ws_m * (mp + 0.5 * (fx * fx + fy * fy))
+              + self.q_s * dt)
+        # the moving model's start (still contributes v = 0, certain), then constant velocity
+        x1x = wm_s * sx + wm_m * mx
+        x1y = wm_s * sy + wm_m * my
+        v1x = wm_m * mvx
+        v1y = wm_m * mvy
+        ex, ey, fx, fy = sx - x1x, sy - x1y, mx - x1x, my - x1y
+        gx, gy = mvx - v1x, mvy - v1y
+        a1 = wm_s * (sp + 0.5 * (ex * ex + ey * ey)) + wm_m * (mp + 0.5 * (fx * fx + fy * fy))
+        b1 = (wm_m * (mb + 0.5 * (fx * gx + fy * gy))
+              - wm_s * 0.5 * (ex * v1x + ey * v1y))
+        c1 = wm_s * 0.5 * (v1x * v1x + v1y * v1y) + wm_m * (mc + 0.5 * (gx * gx + gy * gy))
+        ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
+        bp = b1 + dt * c1 + q * dt2 * dt * 0.5
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, c1 + q * dt2)
+        self._pri = pri if cache else None
+        self._pri_h = self._h
+        return self._correct(pri, zx, zy)
+
+    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+        """The measurement against both models' predictions ``pri`` (a step's second half,
+        all a ``revise`` has to redo)."""
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+         xpx, xpy, v1x, v1y, ap, bp, cp) = pri
+        nsx = zx - x0x
+        nsy = zy - x0y
+        nmx = zx - xpx
+        nmy = zy - xpy
+        ss = p0 + r
+        sm = ap + r
+        d2s = (nsx * nsx + nsy * nsy) / ss
+        d2m = (nmx * nmx + nmy * nmy) / sm
+        # gate: inside the gate of a model that is not all but ruled out (a model of
+        # negligible probability can be wide enough to take anything)
+        g2 = self.gate2
+        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+            return self._rejected(t, dt, zx, zy, [
+                t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
+                ux, uy])
+        # -- model probabilities: the Gaussian likelihood ratio still / moving (2-D)
+        e = 0.5 * (d2m - d2s)
+        lr = math.exp(e if e < 700.0 else 700.0) * sm / ss
+        mu = cs * lr / (cs * lr + cm)
+        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
+        # the noise estimates learn from this measurement at the next step (once per instant,
+        # however often a second camera revises it)
+        self._book = (t, zx, zy, d2m, nmx, sm, nmy, sm)
+        if self._pend is not None or self._far is not None or self._backup is not None:
+            self._pend = self._far = self._backup = None
+        # -- corrections
+        g = p0 / ss
+        sx = x0x + g * nsx
+        sy = x0y + g * nsy
+        k0 = ap / sm
+        k1 = bp / sm
+        mx = xpx + k0 * nmx
+        my = xpy + k0 * nmy
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy, (1.0 - g) * p0,
+                  (1.0 - k0) * ap, mx, my, v1x + k1 * nmx, v1y + k1 * nmy, (1.0 - k0) * bp,
+                  cp - k1 * bp, ux, uy]
+        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
+
+    def _after_jump(self, t: float, zx: float, zy: float) -> None:
+        """The step after a jump re-initialised the track: keep the new track unless this
+        measurement fits the old track (inside its gate) and is nearer its prediction than
+        the new one's; then the jump was a stray measurement and the old track goes on."""
+        bk = self._backup
+        self._backup = None
+        assert bk is not None
+        S = self.S
+        w = 1.0 - S[2]
+        dt = t - S[0]
+        ex, ey = self.estimate_fast()
+        nx, ny = zx - ex - w * S[13] * dt, zy - ey - w * S[14] * dt
+        cur = self._save()
+        self._load(bk)
+        S = self.S
+        w = 1.0 - S[2]
+        dt = t - S[0]
+        ex, ey = self.estimate_fast()
+        ox, oy = zx - ex - w * S[13] * dt, zy - ey - w * S[14] * dt
+        o2 = ox * ox + oy * oy
+        if o2 > 2.0 * self.gate2 * S[_R] or nx * nx + ny * ny <= o2:
+            self._load(cur)  # an outlier for both, or the new track is nearer
+        self._backup = None
+
+    def _rejected(self, t: float, dt: float, zx: float, zy: float, pred: list[float]) -> Vec:
+        """A measurement outside both models' gates: an outlier, a maneuver or a new place.
+        ``pred``: the state with both models' predictions and the prior probabilities."""
+        self.rejected += 1
+        S = self.S
+        ex, ey = self.estimate_fast()
+        dx, dy = zx - ex, zy - ey
+        r = pred[_R]
+        lim0 = math.sqrt(self.gate2 * r)
+        reach = self.max_speed * (t - S[1]) + lim0
+        pend = self._pend
+        confirmed = False
+        v = (0.0, 0.0)
+        pvv = 0.0
+        if pend is not None and t > pend[0]:  # does it continue the last reachable jump?
+            px, py = zx - pend[1], zy - pend[2]
+            tp = t - pend[0]
+            lim = self.max_speed * tp + lim0
+            # a maneuver continues away from where the object was, in about the same direction;
+            # a track that drifted off sees two measurements that move as it does
+            ox, oy = pend[1] - ex, pend[2] - ey
+            along = px * ox + py * oy
+            w = 1.0 - S[2]
+            gx, gy = px - w * S[13] * tp, py - w * S[14] * tp
+            if px * px + py * py <= min(lim * lim, self.max_speed ** 2 * tp * tp * 1.44) and (
+                    (along > 0.0 and along * along >= 0.5 * (px * px + py * py)
+                     * (ox * ox + oy * oy))
+                    or gx * gx + gy * gy <= 2.0 * self.gate2 * r):
+                confirmed = True
+                v = (px / tp, py / tp)
+                pvv = 4.0 * r / (tp * tp)  # a velocity from two measurements
+        if confirmed or dx * dx + dy * dy <= reach * reach:
+            if not confirmed and dt > 0:
+                v = (dx / dt, dy / dt)
+            sp2 = v[0] * v[0] + v[1] * v[1]
+            if sp2 > self.max_speed * self.max_speed:
+                k = self.max_speed / math.sqrt(sp2)
+                v = (v[0] * k, v[1] * k)
+            if confirmed or pred[_RHO] < self.rho_accept:
+                if not confirmed:  # from one measurement: the kick may have come mid-frame
+                    pvv = v[0] * v[0] + v[1] * v[1] + r / max(dt, 1e-3) ** 2
+                self.S = pred
+                bk = self._save()
+                self._init(t, zx, zy, v, mu=1e-3, pvv=pvv)
+                self._backup = bk
+                return (zx, zy)
+            self._pend = (t, zx, zy)
+        # three recent rejected measurements on one line at a possible speed: the track is
+        # lost (started on an outlier, or a jump nobody confirmed) and that line is the object
+        far = self._far or ()
+        ms2 = self.max_speed * self.max_speed
+        tol2 = 4.0 * self.gate2 * r
+        for j in range(len(far) - 1, 0, -1):
+            tj, xj, yj = far[j]
+            d = t - tj
+            if d <= 0.0:
+                continue
+            vx, vy = (zx - xj) / d, (zy - yj) / d
+            if vx * vx + vy * vy > ms2:
+                continue
+            for i in range(j):
+                ti, xi, yi = far[i]
+                d = t - ti
+                ox, oy = xi - zx + vx * d, yi - zy + vy * d
+                if ox * ox + oy * oy <= tol2:
+                    self.S = pred
+                    return self._init(t, zx, zy, (vx, vy))
+        self._far = (*(f for f in far[-5:] if t - f[0] < 0.3), (t, zx, zy))
+        pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
+        self.S = pred
+        return self.estimate_fast()
+
+    # -- output ------------------------------------------------------------------------------
+
+    def estimate_fast(self) -> Vec:
+        S = self.S
+        mu = S[2]
+        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+
+    def estimate(self) -> Vec | None:
+        S = self.S
+        if not S:
+            return None
+        mu = S[2]
+        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+
+    def velocity(self) -> Vec:
+        S = self.S
+        if not S:
+            return (0.0, 0.0)
+        w = 1.0 - S[2]
+        return (w * S[13], w * S[14])
+
+    def predict(self, t_s: float) -> Vec | None:
+        S = self.S
+        if not S:
+            return None
+        w = 1.0 - S[2]
+        dt = t_s - S[0]
+        ex, ey = self.estimate_fast()
+        return (ex + w * S[13] * dt, ey + w * S[14] * dt)
+
+
+class AdaptiveIMM1D(AdaptiveIMM):
+    """The same filter on x alone (orientation, through :class:`AngleFilter`; y is ignored
+    and reads 0): the y arithmetic left out, since it runs for every robot in every frame."""
+
+    __slots__ = ()
+
+    dims = 1
+
+    def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
+        super().__init__(params, angle)
+
+    def _step(self, t: float, zx: float, zy: float) -> Vec:
+        cache = self._backup is None
+        if not cache:
+            self._after_jump(t, zx, 0.0)
+        S = self.S
+        if not S or t - S[0] > self.gap_s:
+            return self._init(t, zx, 0.0)
+        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _) = S
+        bk = self._book
+        if bk is not None:  # as in the 2-D step
+            self._book = None
+            bt, bx, _, d2m, nm, sm, _, _ = bk
+            ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+            e = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
+            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            q *= 1.0 + e + 0.5 * e * e
+            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            h = self._h
+            if len(h) == 6:
+                t1, h1x, _, t2, h2x, _ = h
+                if t1 > t2 and bt > t1:
+                    c = (bt - t1) / (t1 - t2)
+                    ex = bx - h1x - c * (h1x - h2x)
+                    e = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                    if e > 16.0 * r:
+                        e = 16.0 * r
+                    age += 1.0
+                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
+                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                self._h = (bt, bx, 0.0, t1, h1x, 0.0)
+            else:
+                self._h = (bt, bx, 0.0, *h[:3])
+        dt = t - t0 if t > t0 else 0.0
+        a = self.switch_sm * dt
+        b = self.switch_ms * dt
+        if a > 0.5:
+            a = 0.5
+        if b > 0.5:
+            b = 0.5
+        cs = (1.0 - a) * ms + b * (1.0 - ms)
+        cm = 1.0 - cs
+        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+        wm_s = a * ms / cm if cm > 1e-12 else 0.0
+        ws_m = 1.0 - ws_s
+        wm_m = 1.0 - wm_s
+        dt2 = dt * dt
+        x0 = ws_s * sx + ws_m * mx
+        es = sx - x0
+        em = mx - x0
+        p0 = ws_s * (sp + es * es) + ws_m * (mp + em * em) + self.q_s * dt
+        x1 = wm_s * sx + wm_m * mx
+        v1 = wm_m * mvx
+        es = sx - x1
+        em = mx - x1
+        ev = mvx - v1
+        a1 = wm_s * (sp + es * es) + wm_m * (mp + em * em)
+        b1 = wm_m * (mb + em * ev) - wm_s * es * v1
+        c1 = wm_s * v1 * v1 + wm_m * (mc + ev * ev)
+        ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
+        bp = b1 + dt * c1 + q * dt2 * dt * 0.5
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp,
+               c1 + q * dt2)
+        self._pri = pri if cache else None
+        self._pri_h = self._h
+        return self._correct(pri, zx, 0.0)
+
+    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp) = pri
+        ns = zx - x0
+        nm = zx - xp
+        ss = p0 + r
+        sm = ap + r
+        d2s = ns * ns / ss
+        d2m = nm * nm / sm
+        g2 = self.gate2
+        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+            return self._rejected(t, dt, zx, 0.0, [
+                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0])
+        e = 0.5 * (d2m - d2s)
+        lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
+        mu = cs * lr / (cs * lr + cm)
+        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
+        self._book = (t, zx, 0.0, d2m, nm, sm, 0.0, 1.0)
+        if self._pend is not None or self._far is not None or self._backup is not None:
+            self._pend = self._far = self._backup = None
+        g = p0 / ss
+        sx = x0 + g * ns
+        k0 = ap / sm
+        k1 = bp / sm
+        mx = xp + k0 * nm
+        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0, (1.0 - g) * p0,
+                  (1.0 - k0) * ap, mx, 0.0, v1 + k1 * nm, 0.0, (1.0 - k0) * bp, cp - k1 * bp,
+                  ux, 0.0]
+        return (mu * sx + (1.0 - mu) * mx, 0.0)
