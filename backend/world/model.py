@@ -128,6 +128,9 @@ class _Track:
     cam_seen: dict[int, float] = field(default_factory=dict)
     history: deque[_Meas] = field(default_factory=deque)
     raw_vel: VelocityFit = field(default_factory=lambda: VelocityFit(0.1, 16))
+    #: the robot's state as the last snapshot built it, while it holds (no measurement or
+    #: filter change since, and not predicted): eight cameras see a robot in few frames
+    snap: RobotState | None = None
 
 
 @dataclass
@@ -193,6 +196,7 @@ class WorldModel:
         if tr.key == (kind, params):
             return
         tr.kind, tr.key = kind, (kind, params)
+        tr.snap = None
         tr.pos = make_filter(kind, params)
         tr.ang = AngleFilter(make_filter(kind, params, angle=True)) if tr.ang else None
         for m in tr.history:
@@ -206,6 +210,7 @@ class WorldModel:
         """Feed one detection; False if it was ignored (older than the latest instant)."""
         cfg = self.config
         if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
+            tr.snap = None
             # another camera at the same instant: one measurement, the mean
             pair = tr.n == 1 and tr.ang is not None  # a robot seen by a second camera: compare
             if pair:
@@ -234,6 +239,7 @@ class WorldModel:
             return True
         if t <= tr.t_meas:
             return False  # older than (or a duplicate of) the latest instant
+        tr.snap = None
         tr.t_meas = t
         tr.n, tr.sx, tr.sy = 1, x, y
         tr.ss, tr.sc = math.sin(o), math.cos(o)
@@ -473,6 +479,9 @@ class WorldModel:
             if age > cfg.drop_timeout_s:
                 del self._robots[key]
                 continue
+            if tr.snap is not None and age <= cfg.predict_after_s:
+                robots.append(tr.snap)  # unchanged since the last snapshot
+                continue
             x, y, vx, vy, predicted, lost = self._where(tr, t_now)
             ang = tr.ang
             o = tr.raw.o
@@ -485,10 +494,12 @@ class WorldModel:
                 if predicted:
                     po = ang.predict(t_now)
                     o = po if po is not None else o
-            robots.append(RobotState(
+            state = RobotState(
                 key[0], key[1], x, y, o, vx, vy, omega, tr.t_meas, not lost, self._cams(tr),
                 raw_x=tr.raw.x, raw_y=tr.raw.y, raw_orientation=tr.raw.o,
-                predicted=predicted, lost=lost, filter=tr.kind))
+                predicted=predicted, lost=lost, filter=tr.kind)
+            tr.snap = None if predicted or lost else state
+            robots.append(state)
         ball = None
         if self._ball is not None:
             tr = self._ball
