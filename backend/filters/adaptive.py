@@ -416,7 +416,10 @@ class AdaptiveIMM:
                 ox, oy = xi - zx + vx * d, yi - zy + vy * d
                 if ox * ox + oy * oy <= tol2:
                     self.S = pred
-                    return self._init(t, zx, zy, (vx, vy))
+                    bk = self._save()
+                    self._init(t, zx, zy, (vx, vy))
+                    self._backup = bk  # three aligned outliers: the next measurement tells
+                    return (zx, zy)
         self._far = (*(f for f in far[-5:] if t - f[0] < 0.3), (t, zx, zy))
         pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
         self.S = pred
@@ -437,7 +440,10 @@ class AdaptiveIMM:
         return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
 
     def velocity(self) -> Vec:
-        S = self.S
+        """The velocity; after a jump not yet confirmed, the velocity before it (one noise
+        spike must not read as a 5 m/s kick: the next measurement tells)."""
+        bk = self._backup
+        S = self.S if bk is None else bk[0]
         if not S:
             return (0.0, 0.0)
         w = 1.0 - S[2]
