@@ -78,6 +78,8 @@ class AdaptiveIMM:
         "r_min",
         "rejected",
         "rho_accept",
+        "clutter",
+        "max_speed2",
         "switch_ms",
         "switch_sm",
     )
@@ -99,6 +101,7 @@ class AdaptiveIMM:
             self.q_s = p.still_drift_mm_s ** 2
             self.max_speed = p.max_speed_mm_s
         self.r0 = r0 * r0
+        self.max_speed2 = (self.max_speed * 1.2) ** 2
         self.r_min, self.r_max = rmin * rmin, rmax * rmax
         self.q0 = q0 * q0
         self.q_min, self.q_max = qmin * qmin, qmax * qmax
@@ -110,6 +113,8 @@ class AdaptiveIMM:
         self.switch_sm = p.still_to_moving_per_s
         self.switch_ms = p.moving_to_still_per_s
         self.rho_accept = p.outlier_rate_trust
+        # 2 pi x the density of false detections (per unit area, spread over a disc)
+        self.clutter = 2.0 / (p.outlier_spread_mm ** 2)
         self.rejected = 0
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
@@ -299,7 +304,20 @@ class AdaptiveIMM:
         # gate: inside the gate of a model that is not all but ruled out (a model of
         # negligible probability can be wide enough to take anything)
         g2 = self.gate2
-        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+        out = d2m > g2 or cm < 0.05
+        if rho > 1e-3 and not out:
+            # outliers seen: a measurement is the moving model's only where it is likelier
+            # from it than a false detection ((1 - rho) N(d; S) > rho / area) and where it
+            # leaves the velocity possible; right after a jump the prediction is wide, and
+            # a wide gate would catch the next false detection and run off with it
+            e = (1.0 - rho) / (rho * self.clutter * sm)
+            if e < 1e8 and d2m > 2.0 * math.log(e if e > 1.0 else 1.0):
+                out = True
+            else:
+                k1 = bp / sm
+                vx, vy = v1x + k1 * nmx, v1y + k1 * nmy
+                out = vx * vx + vy * vy > self.max_speed2
+        if (d2s > g2 or cs < 0.05) and out:
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
                 ux, uy])
