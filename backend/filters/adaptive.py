@@ -101,7 +101,9 @@ class AdaptiveIMM:
             self.q_s = p.still_drift_mm_s ** 2
             self.max_speed = p.max_speed_mm_s
         self.r0 = r0 * r0
-        self.max_speed2 = (self.max_speed * 1.2) ** 2
+        # a velocity estimate beyond this (the top speed + a margin for the estimate's own
+        # noise) is impossible: with outliers seen, the measurement that makes it is false
+        self.max_speed2 = (1.2 * self.max_speed) ** 2
         self.r_min, self.r_max = rmin * rmin, rmax * rmax
         self.q0 = q0 * q0
         self.q_min, self.q_max = qmin * qmin, qmax * qmax
