@@ -62,11 +62,13 @@ class AdaptiveIMM:
         "_prev",
         "_pri",
         "_pri_h",
+        "clutter",
         "gap_s",
         "gate2",
         "horizon",
         "kind",
         "max_speed",
+        "max_speed2",
         "q0",
         "q_down",
         "q_max",
@@ -78,8 +80,7 @@ class AdaptiveIMM:
         "r_min",
         "rejected",
         "rho_accept",
-        "clutter",
-        "max_speed2",
+        "rho_keep",
         "switch_ms",
         "switch_sm",
     )
@@ -112,6 +113,7 @@ class AdaptiveIMM:
         self.gate2 = p.gate_sigma ** 2
         self.gap_s = p.gap_s
         self.horizon = float(p.noise_horizon)
+        self.rho_keep = 1.0 - 1.0 / self.horizon  # the outlier rate's decay per accepted one
         self.switch_sm = p.still_to_moving_per_s
         self.switch_ms = p.moving_to_still_per_s
         self.rho_accept = p.outlier_rate_trust
@@ -217,13 +219,12 @@ class AdaptiveIMM:
         bk = self._book
         if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
-            bt, bx, by, d2m, nmx, sm, nmy, _ = bk
+            bt, bx, by, d2m, nmx, nmy, w = bk
             # process noise: grows when the moving model's innovations exceed what it predicts
             # (normalised innovation squared > 1) or keep one sign (an acceleration the model
             # does not have: the running mean of the normalised innovations, squared over its
             # variance, is ~1 when unbiased); shrinks slowly otherwise: the smallest q the data
             # agree with
-            w = 1.0 / math.sqrt(sm)
             ux += BIAS_A * (nmx * w - ux)
             uy += BIAS_A * (nmy * w - uy)
             e = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
@@ -284,66 +285,81 @@ class AdaptiveIMM:
         c1 = wm_s * 0.5 * (v1x * v1x + v1y * v1y) + wm_m * (mc + 0.5 * (gx * gx + gy * gy))
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
+        cp = c1 + q * dt2
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
-               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, c1 + q * dt2)
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
+               *self._gains(cs, cm, r, rho, p0, ap, bp, cp))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
 
-    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
-        """The measurement against both models' predictions ``pri`` (a step's second half,
-        all a ``revise`` has to redo)."""
-        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
-         xpx, xpy, v1x, v1y, ap, bp, cp) = pri
-        nsx = zx - x0x
-        nsy = zy - x0y
-        nmx = zx - xpx
-        nmy = zy - xpy
+    def _gains(self, cs: float, cm: float, r: float, rho: float, p0: float, ap: float,
+               bp: float, cp: float) -> tuple[float, ...]:
+        """What the correction needs that does not depend on the measurement (computed once
+        per instant: a second camera's ``revise`` only redoes the rest): inverse innovation
+        variances, gains, corrected covariances, both gates, the prior odds, the next outlier
+        rate, the weight of a normalised innovation."""
         ss = p0 + r
         sm = ap + r
-        d2s = (nsx * nsx + nsy * nsy) / ss
-        d2m = (nmx * nmx + nmy * nmy) / sm
+        iss = 1.0 / ss
+        ism = 1.0 / sm
+        g2 = self.gate2
         # gate: inside the gate of a model that is not all but ruled out (a model of
         # negligible probability can be wide enough to take anything)
-        g2 = self.gate2
-        out = d2m > g2 or cm < 0.05
-        if rho > 1e-3 and not out:
+        gs2 = g2 if cs >= 0.05 else -1.0
+        gm2 = g2 if cm >= 0.05 else -1.0
+        vchk = 0.0
+        if rho > 1e-3 and gm2 > 0.0:
             # outliers seen: a measurement is the moving model's only where it is likelier
             # from it than a false detection ((1 - rho) N(d; S) > rho / area) and where it
             # leaves the velocity possible; right after a jump the prediction is wide, and
             # a wide gate would catch the next false detection and run off with it
             e = (1.0 - rho) / (rho * self.clutter * sm)
-            if e < 1e8 and d2m > 2.0 * math.log(e if e > 1.0 else 1.0):
-                out = True
-            else:
-                k1 = bp / sm
-                vx, vy = v1x + k1 * nmx, v1y + k1 * nmy
-                out = vx * vx + vy * vy > self.max_speed2
-        if (d2s > g2 or cs < 0.05) and out:
+            if e < 1e8:
+                e = 2.0 * math.log(e) if e > 1.0 else 0.0
+                if e < gm2:
+                    gm2 = e
+            vchk = 1.0
+        k0 = ap * ism
+        k1 = bp * ism
+        g = p0 * iss
+        # prior odds moving / still, times the ratio of the Gaussians' normalisations (2-D)
+        cr = cm * ss / (cs * sm) if cs > 1e-300 else 1e300
+        return (iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
+                (1.0 - k0) * bp, cp - k1 * bp, cr, rho * self.rho_keep, math.sqrt(ism))
+
+    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+        """The measurement against both models' predictions ``pri`` (a step's second half,
+        all a ``revise`` has to redo)."""
+        (t, ta, dt, cs, _cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
+         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
+        nsx = zx - x0x
+        nsy = zy - x0y
+        nmx = zx - xpx
+        nmy = zy - xpy
+        d2s = (nsx * nsx + nsy * nsy) * iss
+        d2m = (nmx * nmx + nmy * nmy) * ism
+        vx = v1x + k1 * nmx
+        vy = v1y + k1 * nmy
+        if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
                 ux, uy])
-        # -- model probabilities: the Gaussian likelihood ratio still / moving (2-D)
-        e = 0.5 * (d2m - d2s)
-        lr = math.exp(e if e < 700.0 else 700.0) * sm / ss
-        mu = cs * lr / (cs * lr + cm)
+        # -- model probabilities: the Gaussian likelihood ratio still / moving
+        e = 0.5 * (d2s - d2m)
+        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         # the noise estimates learn from this measurement at the next step (once per instant,
         # however often a second camera revises it)
-        self._book = (t, zx, zy, d2m, nmx, sm, nmy, sm)
+        self._book = (t, zx, zy, d2m, nmx, nmy, w)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
         # -- corrections
-        g = p0 / ss
         sx = x0x + g * nsx
         sy = x0y + g * nsy
-        k0 = ap / sm
-        k1 = bp / sm
         mx = xpx + k0 * nmx
         my = xpy + k0 * nmy
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy, (1.0 - g) * p0,
-                  (1.0 - k0) * ap, mx, my, v1x + k1 * nmx, v1y + k1 * nmy, (1.0 - k0) * bp,
-                  cp - k1 * bp, ux, uy]
+        self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy]
         return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
@@ -501,8 +517,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         bk = self._book
         if bk is not None:  # as in the 2-D step
             self._book = None
-            bt, bx, _, d2m, nm, sm, _, _ = bk
-            ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+            bt, bx, _, d2m, nm, _, w = bk
+            ux += BIAS_A * (nm * w - ux)
             e = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
             e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
             q *= 1.0 + e + 0.5 * e * e
@@ -550,37 +566,43 @@ class AdaptiveIMM1D(AdaptiveIMM):
         c1 = wm_s * v1 * v1 + wm_m * (mc + ev * ev)
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
-        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp,
-               c1 + q * dt2)
+        cp = c1 + q * dt2
+        # what the correction needs that does not depend on the measurement (as in 2-D)
+        ss = p0 + r
+        sm = ap + r
+        iss = 1.0 / ss
+        ism = 1.0 / sm
+        g2 = self.gate2
+        k0 = ap * ism
+        k1 = bp * ism
+        g = p0 * iss
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
+               iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
+               (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
+               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * self.rho_keep,
+               math.sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
-        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp) = pri
+        (t, ta, dt, cs, _cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
+         g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
         nm = zx - xp
-        ss = p0 + r
-        sm = ap + r
-        d2s = ns * ns / ss
-        d2m = nm * nm / sm
-        g2 = self.gate2
-        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+        d2s = ns * ns * iss
+        d2m = nm * nm * ism
+        if d2s > gs2 and d2m > gm2:
             return self._rejected(t, dt, zx, 0.0, [
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0])
-        e = 0.5 * (d2m - d2s)
-        lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
-        mu = cs * lr / (cs * lr + cm)
+        e = 0.5 * (d2s - d2m)
+        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        self._book = (t, zx, 0.0, d2m, nm, sm, 0.0, 1.0)
+        self._book = (t, zx, 0.0, d2m, nm, 0.0, w)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
-        g = p0 / ss
         sx = x0 + g * ns
-        k0 = ap / sm
-        k1 = bp / sm
         mx = xp + k0 * nm
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0, (1.0 - g) * p0,
-                  (1.0 - k0) * ap, mx, 0.0, v1 + k1 * nm, 0.0, (1.0 - k0) * bp, cp - k1 * bp,
-                  ux, 0.0]
+        self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
+                  cp1, ux, 0.0]
         return (mu * sx + (1.0 - mu) * mx, 0.0)
