@@ -40,8 +40,9 @@ Vec = tuple[float, float]
 # the state list: times, model probability of "still", noise estimates, then both models
 # (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
 # of each axis: the noise is isotropic, so the axes share their covariances; only the mixing
-# spreads differ between the axes, and they are averaged), then the bias test's running means
-# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy
+# spreads differ between the axes, and they are averaged), then the bias test's running means,
+# then the output (the mix of both models, kept: it is read far more often than it changes)
+# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy | ex ey
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
 BIAS_A = 0.1
@@ -183,7 +184,7 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0]
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0, x, y]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = self._book = None
         return (x, y)
@@ -215,7 +216,7 @@ class AdaptiveIMM:
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, zy)
-        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy) = S
+        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _) = S
         bk = self._book
         if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
@@ -331,7 +332,7 @@ class AdaptiveIMM:
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
         """The measurement against both models' predictions ``pri`` (a step's second half,
         all a ``revise`` has to redo)."""
-        (t, ta, dt, cs, _cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
          cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         nsx = zx - x0x
         nsy = zy - x0y
@@ -344,7 +345,7 @@ class AdaptiveIMM:
         if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
-                ux, uy])
+                ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2s - d2m)
         mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
@@ -359,8 +360,11 @@ class AdaptiveIMM:
         sy = x0y + g * nsy
         mx = xpx + k0 * nmx
         my = xpy + k0 * nmy
-        self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy]
-        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
+        ex = mu * sx + (1.0 - mu) * mx
+        ey = mu * sy + (1.0 - mu) * my
+        self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
+                  ex, ey]
+        return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
         """The step after a jump re-initialised the track: keep the new track unless this
@@ -465,15 +469,11 @@ class AdaptiveIMM:
 
     def estimate_fast(self) -> Vec:
         S = self.S
-        mu = S[2]
-        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+        return (S[19], S[20])
 
     def estimate(self) -> Vec | None:
         S = self.S
-        if not S:
-            return None
-        mu = S[2]
-        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+        return (S[19], S[20]) if S else None
 
     def velocity(self) -> Vec:
         """The velocity; after a jump not yet confirmed, the velocity before it (one noise
@@ -513,7 +513,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         S = self.S
         if not S or t - S[0] > self.gap_s:
             return self._init(t, zx, 0.0)
-        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _) = S
+        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _, _, _) = S
         bk = self._book
         if bk is not None:  # as in the 2-D step
             self._book = None
@@ -586,7 +586,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         return self._correct(pri, zx, 0.0)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
-        (t, ta, dt, cs, _cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
          g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
         nm = zx - xp
@@ -594,7 +594,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         d2m = nm * nm * ism
         if d2s > gs2 and d2m > gm2:
             return self._rejected(t, dt, zx, 0.0, [
-                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0])
+                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
+                cs * x0 + cm * xp, 0.0])
         e = 0.5 * (d2s - d2m)
         mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
@@ -603,6 +604,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
             self._pend = self._far = self._backup = None
         sx = x0 + g * ns
         mx = xp + k0 * nm
+        ex = mu * sx + (1.0 - mu) * mx
         self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
-                  cp1, ux, 0.0]
-        return (mu * sx + (1.0 - mu) * mx, 0.0)
+                  cp1, ux, 0.0, ex, 0.0]
+        return (ex, 0.0)
