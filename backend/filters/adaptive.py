@@ -287,19 +287,10 @@ class AdaptiveIMM:
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
-        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
-               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
-               *self._gains(cs, cm, r, rho, p0, ap, bp, cp))
-        self._pri = pri if cache else None
-        self._pri_h = self._h
-        return self._correct(pri, zx, zy)
-
-    def _gains(self, cs: float, cm: float, r: float, rho: float, p0: float, ap: float,
-               bp: float, cp: float) -> tuple[float, ...]:
-        """What the correction needs that does not depend on the measurement (computed once
-        per instant: a second camera's ``revise`` only redoes the rest): inverse innovation
-        variances, gains, corrected covariances, both gates, the prior odds, the next outlier
-        rate, the weight of a normalised innovation."""
+        # what the correction needs that does not depend on the measurement (once per
+        # instant: a second camera's revise only redoes the rest): inverse innovation
+        # variances, both gates, gains, corrected covariances, the prior odds, the next
+        # outlier rate, the weight of a normalised innovation
         ss = p0 + r
         sm = ap + r
         iss = 1.0 / ss
@@ -324,10 +315,16 @@ class AdaptiveIMM:
         k0 = ap * ism
         k1 = bp * ism
         g = p0 * iss
-        # prior odds moving / still, times the ratio of the Gaussians' normalisations (2-D)
-        cr = cm * ss / (cs * sm) if cs > 1e-300 else 1e300
-        return (iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
-                (1.0 - k0) * bp, cp - k1 * bp, cr, rho * self.rho_keep, math.sqrt(ism))
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
+               iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
+               (1.0 - k0) * bp, cp - k1 * bp,
+               # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
+               cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * self.rho_keep,
+               math.sqrt(ism))
+        self._pri = pri if cache else None
+        self._pri_h = self._h
+        return self._correct(pri, zx, zy)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
         """The measurement against both models' predictions ``pri`` (a step's second half,
