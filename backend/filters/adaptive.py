@@ -267,23 +267,25 @@ class AdaptiveIMM:
         ws_m = 1.0 - ws_s
         wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        # the still model's start (a mix of both), then its prediction (a random walk)
-        x0x = ws_s * sx + ws_m * mx
-        x0y = ws_s * sy + ws_m * my
-        ex, ey, fx, fy = sx - x0x, sy - x0y, mx - x0x, my - x0y
-        p0 = (ws_s * (sp + 0.5 * (ex * ex + ey * ey)) + ws_m * (mp + 0.5 * (fx * fx + fy * fy))
-              + self.q_s * dt)
-        # the moving model's start (still contributes v = 0, certain), then constant velocity
-        x1x = wm_s * sx + wm_m * mx
-        x1y = wm_s * sy + wm_m * my
+        # each model's start is the mix of both (the spread of the means adds to the
+        # covariance; the axes' spreads are averaged, the noise being isotropic); the still
+        # model's velocity is 0, certain. In terms of the models' difference d = s - m:
+        dx = sx - mx
+        dy = sy - my
+        d2 = dx * dx + dy * dy
+        # the still model's start, then its prediction (a random walk)
+        x0x = mx + ws_s * dx
+        x0y = my + ws_s * dy
+        p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + self.q_s * dt
+        # the moving model's start, then constant velocity
+        k = 0.5 * wm_s * wm_m
+        x1x = mx + wm_s * dx
+        x1y = my + wm_s * dy
         v1x = wm_m * mvx
         v1y = wm_m * mvy
-        ex, ey, fx, fy = sx - x1x, sy - x1y, mx - x1x, my - x1y
-        gx, gy = mvx - v1x, mvy - v1y
-        a1 = wm_s * (sp + 0.5 * (ex * ex + ey * ey)) + wm_m * (mp + 0.5 * (fx * fx + fy * fy))
-        b1 = (wm_m * (mb + 0.5 * (fx * gx + fy * gy))
-              - wm_s * 0.5 * (ex * v1x + ey * v1y))
-        c1 = wm_s * 0.5 * (v1x * v1x + v1y * v1y) + wm_m * (mc + 0.5 * (gx * gx + gy * gy))
+        a1 = wm_s * sp + wm_m * mp + k * d2
+        b1 = wm_m * mb - k * (dx * mvx + dy * mvy)
+        c1 = wm_m * mc + k * (mvx * mvx + mvy * mvy)
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
@@ -549,18 +551,15 @@ class AdaptiveIMM1D(AdaptiveIMM):
         ws_m = 1.0 - ws_s
         wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        x0 = ws_s * sx + ws_m * mx
-        es = sx - x0
-        em = mx - x0
-        p0 = ws_s * (sp + es * es) + ws_m * (mp + em * em) + self.q_s * dt
-        x1 = wm_s * sx + wm_m * mx
+        d = sx - mx
+        x0 = mx + ws_s * d
+        p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + self.q_s * dt
+        k = wm_s * wm_m
+        x1 = mx + wm_s * d
         v1 = wm_m * mvx
-        es = sx - x1
-        em = mx - x1
-        ev = mvx - v1
-        a1 = wm_s * (sp + es * es) + wm_m * (mp + em * em)
-        b1 = wm_m * (mb + em * ev) - wm_s * es * v1
-        c1 = wm_s * v1 * v1 + wm_m * (mc + ev * ev)
+        a1 = wm_s * sp + wm_m * mp + k * d * d
+        b1 = wm_m * mb - k * d * mvx
+        c1 = wm_m * mc + k * mvx * mvx
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
