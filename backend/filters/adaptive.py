@@ -191,10 +191,6 @@ class AdaptiveIMM:
 
     # -- the step ----------------------------------------------------------------------------
 
-    def update(self, t_s: float, x: float, y: float) -> Vec:
-        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
-        return self._step(t_s, x, y)
-
     def revise(self, x: float, y: float) -> Vec:
         if self._prev is None or not self.S:
             return self.update(self.S[0] if self.S else 0.0, x, y)
@@ -206,10 +202,11 @@ class AdaptiveIMM:
             self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
             self._book, self._h = None, self._pri_h
             return self._correct(pri, x, y)
-        self._load(self._prev)
-        return self._step(t, x, y)
+        self._load(self._prev)  # (the step keeps it as it is)
+        return self.update(t, x, y)
 
-    def _step(self, t: float, zx: float, zy: float) -> Vec:
+    def update(self, t: float, zx: float, zy: float) -> Vec:
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         cache = self._backup is None  # (after a jump, revise takes the long way)
         if not cache:
             self._after_jump(t, zx, zy)
@@ -505,7 +502,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
-    def _step(self, t: float, zx: float, zy: float) -> Vec:
+    def update(self, t: float, zx: float, zy: float) -> Vec:
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         cache = self._backup is None
         if not cache:
             self._after_jump(t, zx, 0.0)
