@@ -475,7 +475,7 @@ class AdaptiveIMM:
         """The velocity; after a jump not yet confirmed, the velocity before it (one noise
         spike must not read as a 5 m/s kick: the next measurement tells)."""
         bk = self._backup
-        S = self.S if bk is None else bk[0]
+        S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
         if not S:
             return (0.0, 0.0)
         w = 1.0 - S[2]
