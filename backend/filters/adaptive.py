@@ -59,6 +59,7 @@ class AdaptiveIMM:
         "_book",
         "_far",
         "_h",
+        "_k",
         "_pend",
         "_prev",
         "_pri",
@@ -121,6 +122,10 @@ class AdaptiveIMM:
         # 2 pi x the density of false detections (per unit area, spread over a disc)
         self.clutter = 2.0 / (p.outlier_spread_mm ** 2)
         self.rejected = 0
+        # the constants a step reads, in one tuple (one attribute read instead of fourteen)
+        self._k = (self.gap_s, self.q_rate, self.q_down, self.q_min, self.q_max, self.horizon,
+                   self.r_min, self.r_max, self.switch_sm, self.switch_ms, self.q_s, self.gate2,
+                   self.clutter, self.rho_keep)
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
@@ -192,26 +197,28 @@ class AdaptiveIMM:
     # -- the step ----------------------------------------------------------------------------
 
     def revise(self, x: float, y: float) -> Vec:
-        if self._prev is None or not self.S:
-            return self.update(self.S[0] if self.S else 0.0, x, y)
-        t = self.S[0]
         pri = self._pri
-        if pri is not None and pri[0] == t:  # the last step's predictions are still good
+        if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
             # the state before the step, except what the step did before its predictions
             # (it had learnt from its book)
             self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
             self._book, self._h = None, self._pri_h
             return self._correct(pri, x, y)
+        if self._prev is None or not self.S:
+            return self.update(self.S[0] if self.S else 0.0, x, y)
+        t = self.S[0]
         self._load(self._prev)  # (the step keeps it as it is)
         return self.update(t, x, y)
 
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
+         gate2, clutter, rho_keep) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
         if not cache:
             self._after_jump(t, zx, zy)
         S = self.S
-        if not S or t - S[0] > self.gap_s:
+        if not S or t - S[0] > gap_s:
             return self._init(t, zx, zy)
         (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _) = S
         bk = self._book
@@ -226,9 +233,9 @@ class AdaptiveIMM:
             ux += BIAS_A * (nmx * w - ux)
             uy += BIAS_A * (nmy * w - uy)
             e = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
-            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            e = q_rate * ((e if e < 6.0 else 6.0) - q_down)
             q *= 1.0 + e + 0.5 * e * e  # ~exp(e), |e| < 1.5
-            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            q = q_min if q < q_min else (q_max if q > q_max else q)
             # measurement noise from the second differences of the measurements used
             # (independent of the motion model, so a wrong q does not leak into r): z_k - z_k-1
             # - c (z_k-1 - z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is
@@ -240,19 +247,19 @@ class AdaptiveIMM:
                     c = (bt - t1) / (t1 - t2)
                     ex = bx - h1x - c * (h1x - h2x)
                     ey = by - h1y - c * (h1y - h2y)
-                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
+                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) * (1.0 + c) + c * c)
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
+                    r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, by, t1, h1x, h1y)
             else:
                 self._h = (bt, bx, by, *h[:3])
         dt = t - t0 if t > t0 else 0.0
         # Markov switching over dt, then the mixing weights (still's share of each model's start)
-        a = self.switch_sm * dt
-        b = self.switch_ms * dt
+        a = switch_sm * dt
+        b = switch_ms * dt
         if a > 0.5:
             a = 0.5
         if b > 0.5:
@@ -273,7 +280,7 @@ class AdaptiveIMM:
         # the still model's start, then its prediction (a random walk)
         x0x = mx + ws_s * dx
         x0y = my + ws_s * dy
-        p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + self.q_s * dt
+        p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + q_s * dt
         # the moving model's start, then constant velocity
         k = 0.5 * wm_s * wm_m
         x1x = mx + wm_s * dx
@@ -294,7 +301,7 @@ class AdaptiveIMM:
         sm = ap + r
         iss = 1.0 / ss
         ism = 1.0 / sm
-        g2 = self.gate2
+        g2 = gate2
         # gate: inside the gate of a model that is not all but ruled out (a model of
         # negligible probability can be wide enough to take anything)
         gs2 = g2 if cs >= 0.05 else -1.0
@@ -305,7 +312,7 @@ class AdaptiveIMM:
             # from it than a false detection ((1 - rho) N(d; S) > rho / area) and where it
             # leaves the velocity possible; right after a jump the prediction is wide, and
             # a wide gate would catch the next false detection and run off with it
-            e = (1.0 - rho) / (rho * self.clutter * sm)
+            e = (1.0 - rho) / (rho * clutter * sm)
             if e < 1e8:
                 e = 2.0 * math.log(e) if e > 1.0 else 0.0
                 if e < gm2:
@@ -319,7 +326,7 @@ class AdaptiveIMM:
                iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
                (1.0 - k0) * bp, cp - k1 * bp,
                # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
-               cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * self.rho_keep,
+               cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
                math.sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
@@ -504,11 +511,13 @@ class AdaptiveIMM1D(AdaptiveIMM):
 
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
+         gate2, _, rho_keep) = self._k
         cache = self._backup is None
         if not cache:
             self._after_jump(t, zx, 0.0)
         S = self.S
-        if not S or t - S[0] > self.gap_s:
+        if not S or t - S[0] > gap_s:
             return self._init(t, zx, 0.0)
         (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _, _, _) = S
         bk = self._book
@@ -517,27 +526,27 @@ class AdaptiveIMM1D(AdaptiveIMM):
             bt, bx, _, d2m, nm, _, w = bk
             ux += BIAS_A * (nm * w - ux)
             e = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
-            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            e = q_rate * ((e if e < 6.0 else 6.0) - q_down)
             q *= 1.0 + e + 0.5 * e * e
-            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            q = q_min if q < q_min else (q_max if q > q_max else q)
             h = self._h
             if len(h) == 6:
                 t1, h1x, _, t2, h2x, _ = h
                 if t1 > t2 and bt > t1:
                     c = (bt - t1) / (t1 - t2)
                     ex = bx - h1x - c * (h1x - h2x)
-                    e = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                    e = ex * ex / (1.0 + (1.0 + c) * (1.0 + c) + c * c)
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
+                    r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, 0.0, t1, h1x, 0.0)
             else:
                 self._h = (bt, bx, 0.0, *h[:3])
         dt = t - t0 if t > t0 else 0.0
-        a = self.switch_sm * dt
-        b = self.switch_ms * dt
+        a = switch_sm * dt
+        b = switch_ms * dt
         if a > 0.5:
             a = 0.5
         if b > 0.5:
@@ -551,7 +560,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         dt2 = dt * dt
         d = sx - mx
         x0 = mx + ws_s * d
-        p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + self.q_s * dt
+        p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + q_s * dt
         k = wm_s * wm_m
         x1 = mx + wm_s * d
         v1 = wm_m * mvx
@@ -566,14 +575,14 @@ class AdaptiveIMM1D(AdaptiveIMM):
         sm = ap + r
         iss = 1.0 / ss
         ism = 1.0 / sm
-        g2 = self.gate2
+        g2 = gate2
         k0 = ap * ism
         k1 = bp * ism
         g = p0 * iss
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
                iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
                (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
-               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * self.rho_keep,
+               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
                math.sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
