@@ -266,30 +266,38 @@ class AdaptiveIMM:
             b = 0.5
         cs = (1.0 - a) * ms + b * (1.0 - ms)
         cm = 1.0 - cs
-        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
-        wm_s = a * ms / cm if cm > 1e-12 else 0.0
-        ws_m = 1.0 - ws_s
-        wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        # each model's start is the mix of both (the spread of the means adds to the
-        # covariance; the axes' spreads are averaged, the noise being isotropic); the still
-        # model's velocity is 0, certain. In terms of the models' difference d = s - m:
-        dx = sx - mx
-        dy = sy - my
-        d2 = dx * dx + dy * dy
-        # the still model's start, then its prediction (a random walk)
-        x0x = mx + ws_s * dx
-        x0y = my + ws_s * dy
-        p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + q_s * dt
-        # the moving model's start, then constant velocity
-        k = 0.5 * wm_s * wm_m
-        x1x = mx + wm_s * dx
-        x1y = my + wm_s * dy
-        v1x = wm_m * mvx
-        v1y = wm_m * mvy
-        a1 = wm_s * sp + wm_m * mp + k * d2
-        b1 = wm_m * mb - k * (dx * mvx + dy * mvy)
-        c1 = wm_m * mc + k * (mvx * mvx + mvy * mvy)
+        if ms < 2e-6:
+            # moving for sure (the probability at its floor): the moving model keeps its
+            # state (still's share in its start is below 1e-8) and the still one restarts
+            # where it is (still's own share, below 0.5 %, left out): the mixing costs nothing
+            x0x, x0y, p0 = mx, my, mp + q_s * dt
+            x1x, x1y, v1x, v1y, a1, b1, c1 = mx, my, mvx, mvy, mp, mb, mc
+        else:
+            ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+            wm_s = a * ms / cm if cm > 1e-12 else 0.0
+            ws_m = 1.0 - ws_s
+            wm_m = 1.0 - wm_s
+            # each model's start is the mix of both (the spread of the means adds to the
+            # covariance; the axes' spreads are averaged, the noise being isotropic); the
+            # still model's velocity is 0, certain. In terms of the models' difference
+            # d = s - m:
+            dx = sx - mx
+            dy = sy - my
+            d2 = dx * dx + dy * dy
+            # the still model's start, then its prediction (a random walk)
+            x0x = mx + ws_s * dx
+            x0y = my + ws_s * dy
+            p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + q_s * dt
+            # the moving model's start, then constant velocity
+            k = 0.5 * wm_s * wm_m
+            x1x = mx + wm_s * dx
+            x1y = my + wm_s * dy
+            v1x = wm_m * mvx
+            v1y = wm_m * mvy
+            a1 = wm_s * sp + wm_m * mp + k * d2
+            b1 = wm_m * mb - k * (dx * mvx + dy * mvy)
+            c1 = wm_m * mc + k * (mvx * mvx + mvy * mvy)
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
@@ -553,20 +561,23 @@ class AdaptiveIMM1D(AdaptiveIMM):
             b = 0.5
         cs = (1.0 - a) * ms + b * (1.0 - ms)
         cm = 1.0 - cs
-        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
-        wm_s = a * ms / cm if cm > 1e-12 else 0.0
-        ws_m = 1.0 - ws_s
-        wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        d = sx - mx
-        x0 = mx + ws_s * d
-        p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + q_s * dt
-        k = wm_s * wm_m
-        x1 = mx + wm_s * d
-        v1 = wm_m * mvx
-        a1 = wm_s * sp + wm_m * mp + k * d * d
-        b1 = wm_m * mb - k * d * mvx
-        c1 = wm_m * mc + k * mvx * mvx
+        if ms < 2e-6:  # moving for sure (as in 2-D)
+            x0, p0, x1, v1, a1, b1, c1 = mx, mp + q_s * dt, mx, mvx, mp, mb, mc
+        else:
+            ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+            wm_s = a * ms / cm if cm > 1e-12 else 0.0
+            ws_m = 1.0 - ws_s
+            wm_m = 1.0 - wm_s
+            d = sx - mx
+            x0 = mx + ws_s * d
+            p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + q_s * dt
+            k = wm_s * wm_m
+            x1 = mx + wm_s * d
+            v1 = wm_m * mvx
+            a1 = wm_s * sp + wm_m * mp + k * d * d
+            b1 = wm_m * mb - k * d * mvx
+            c1 = wm_m * mc + k * mvx * mvx
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
         cp = c1 + q * dt2
