@@ -500,10 +500,8 @@ class AdaptiveIMM:
         S = self.S
         if not S:
             return None
-        w = 1.0 - S[2]
-        dt = t_s - S[0]
-        ex, ey = self.estimate_fast()
-        return (ex + w * S[13] * dt, ey + w * S[14] * dt)
+        w = (1.0 - S[2]) * (t_s - S[0])
+        return (S[19] + w * S[13], S[20] + w * S[14])
 
 
 class AdaptiveIMM1D(AdaptiveIMM):
