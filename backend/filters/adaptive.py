@@ -40,8 +40,9 @@ Vec = tuple[float, float]
 # the state list: times, model probability of "still", noise estimates, then both models
 # (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
 # of each axis: the noise is isotropic, so the axes share their covariances; only the mixing
-# spreads differ between the axes, and they are averaged), then the bias test's running means
-# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy
+# spreads differ between the axes, and they are averaged), then the bias test's running means,
+# then the output (the mix of both models, kept: it is read far more often than it changes)
+# t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy | ex ey
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
 BIAS_A = 0.1
@@ -58,15 +59,18 @@ class AdaptiveIMM:
         "_book",
         "_far",
         "_h",
+        "_k",
         "_pend",
         "_prev",
         "_pri",
         "_pri_h",
+        "clutter",
         "gap_s",
         "gate2",
         "horizon",
         "kind",
         "max_speed",
+        "max_speed2",
         "q0",
         "q_down",
         "q_max",
@@ -78,6 +82,7 @@ class AdaptiveIMM:
         "r_min",
         "rejected",
         "rho_accept",
+        "rho_keep",
         "switch_ms",
         "switch_sm",
     )
@@ -99,6 +104,9 @@ class AdaptiveIMM:
             self.q_s = p.still_drift_mm_s ** 2
             self.max_speed = p.max_speed_mm_s
         self.r0 = r0 * r0
+        # a velocity estimate beyond this (the top speed + a margin for the estimate's own
+        # noise) is impossible: with outliers seen, the measurement that makes it is false
+        self.max_speed2 = (1.2 * self.max_speed) ** 2
         self.r_min, self.r_max = rmin * rmin, rmax * rmax
         self.q0 = q0 * q0
         self.q_min, self.q_max = qmin * qmin, qmax * qmax
@@ -107,10 +115,17 @@ class AdaptiveIMM:
         self.gate2 = p.gate_sigma ** 2
         self.gap_s = p.gap_s
         self.horizon = float(p.noise_horizon)
+        self.rho_keep = 1.0 - 1.0 / self.horizon  # the outlier rate's decay per accepted one
         self.switch_sm = p.still_to_moving_per_s
         self.switch_ms = p.moving_to_still_per_s
         self.rho_accept = p.outlier_rate_trust
+        # 2 pi x the density of false detections (per unit area, spread over a disc)
+        self.clutter = 2.0 / (p.outlier_spread_mm ** 2)
         self.rejected = 0
+        # the constants a step reads, in one tuple (one attribute read instead of fourteen)
+        self._k = (self.gap_s, self.q_rate, self.q_down, self.q_min, self.q_max, self.horizon,
+                   self.r_min, self.r_max, self.switch_sm, self.switch_ms, self.q_s, self.gate2,
+                   self.clutter, self.rho_keep)
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
@@ -174,55 +189,53 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0]
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0, x, y]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = self._book = None
         return (x, y)
 
     # -- the step ----------------------------------------------------------------------------
 
-    def update(self, t_s: float, x: float, y: float) -> Vec:
-        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
-        return self._step(t_s, x, y)
-
     def revise(self, x: float, y: float) -> Vec:
-        if self._prev is None or not self.S:
-            return self.update(self.S[0] if self.S else 0.0, x, y)
-        t = self.S[0]
         pri = self._pri
-        if pri is not None and pri[0] == t:  # the last step's predictions are still good
+        if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
             # the state before the step, except what the step did before its predictions
             # (it had learnt from its book)
             self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
             self._book, self._h = None, self._pri_h
             return self._correct(pri, x, y)
-        self._load(self._prev)
-        return self._step(t, x, y)
+        if self._prev is None or not self.S:
+            return self.update(self.S[0] if self.S else 0.0, x, y)
+        t = self.S[0]
+        self._load(self._prev)  # (the step keeps it as it is)
+        return self.update(t, x, y)
 
-    def _step(self, t: float, zx: float, zy: float) -> Vec:
+    def update(self, t: float, zx: float, zy: float) -> Vec:
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
+         gate2, clutter, rho_keep) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
         if not cache:
             self._after_jump(t, zx, zy)
         S = self.S
-        if not S or t - S[0] > self.gap_s:
+        if not S or t - S[0] > gap_s:
             return self._init(t, zx, zy)
-        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy) = S
+        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _) = S
         bk = self._book
         if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
-            bt, bx, by, d2m, nmx, sm, nmy, _ = bk
+            bt, bx, by, d2m, nmx, nmy, w = bk
             # process noise: grows when the moving model's innovations exceed what it predicts
             # (normalised innovation squared > 1) or keep one sign (an acceleration the model
             # does not have: the running mean of the normalised innovations, squared over its
             # variance, is ~1 when unbiased); shrinks slowly otherwise: the smallest q the data
             # agree with
-            w = 1.0 / math.sqrt(sm)
             ux += BIAS_A * (nmx * w - ux)
             uy += BIAS_A * (nmy * w - uy)
             e = 0.5 * (0.5 * d2m + (ux * ux + uy * uy) * BIAS_K)
-            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            e = q_rate * ((e if e < 6.0 else 6.0) - q_down)
             q *= 1.0 + e + 0.5 * e * e  # ~exp(e), |e| < 1.5
-            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            q = q_min if q < q_min else (q_max if q > q_max else q)
             # measurement noise from the second differences of the measurements used
             # (independent of the motion model, so a wrong q does not leak into r): z_k - z_k-1
             # - c (z_k-1 - z_k-2) has variance (1 + (1 + c)^2 + c^2) r while the motion is
@@ -234,51 +247,95 @@ class AdaptiveIMM:
                     c = (bt - t1) / (t1 - t2)
                     ex = bx - h1x - c * (h1x - h2x)
                     ey = by - h1y - c * (h1y - h2y)
-                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) ** 2 + c * c)
+                    e = 0.5 * (ex * ex + ey * ey) / (1.0 + (1.0 + c) * (1.0 + c) + c * c)
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
+                    r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, by, t1, h1x, h1y)
             else:
                 self._h = (bt, bx, by, *h[:3])
         dt = t - t0 if t > t0 else 0.0
         # Markov switching over dt, then the mixing weights (still's share of each model's start)
-        a = self.switch_sm * dt
-        b = self.switch_ms * dt
+        a = switch_sm * dt
+        b = switch_ms * dt
         if a > 0.5:
             a = 0.5
         if b > 0.5:
             b = 0.5
         cs = (1.0 - a) * ms + b * (1.0 - ms)
         cm = 1.0 - cs
-        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
-        wm_s = a * ms / cm if cm > 1e-12 else 0.0
-        ws_m = 1.0 - ws_s
-        wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        # the still model's start (a mix of both), then its prediction (a random walk)
-        x0x = ws_s * sx + ws_m * mx
-        x0y = ws_s * sy + ws_m * my
-        ex, ey, fx, fy = sx - x0x, sy - x0y, mx - x0x, my - x0y
-        p0 = (ws_s * (sp + 0.5 * (ex * ex + ey * ey)) + ws_m * (mp + 0.5 * (fx * fx + fy * fy))
-              + self.q_s * dt)
-        # the moving model's start (still contributes v = 0, certain), then constant velocity
-        x1x = wm_s * sx + wm_m * mx
-        x1y = wm_s * sy + wm_m * my
-        v1x = wm_m * mvx
-        v1y = wm_m * mvy
-        ex, ey, fx, fy = sx - x1x, sy - x1y, mx - x1x, my - x1y
-        gx, gy = mvx - v1x, mvy - v1y
-        a1 = wm_s * (sp + 0.5 * (ex * ex + ey * ey)) + wm_m * (mp + 0.5 * (fx * fx + fy * fy))
-        b1 = (wm_m * (mb + 0.5 * (fx * gx + fy * gy))
-              - wm_s * 0.5 * (ex * v1x + ey * v1y))
-        c1 = wm_s * 0.5 * (v1x * v1x + v1y * v1y) + wm_m * (mc + 0.5 * (gx * gx + gy * gy))
+        if ms < 2e-6:
+            # moving for sure (the probability at its floor): the moving model keeps its
+            # state (still's share in its start is below 1e-8) and the still one restarts
+            # where it is (still's own share, below 0.5 %, left out): the mixing costs nothing
+            x0x, x0y, p0 = mx, my, mp + q_s * dt
+            x1x, x1y, v1x, v1y, a1, b1, c1 = mx, my, mvx, mvy, mp, mb, mc
+        else:
+            ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+            wm_s = a * ms / cm if cm > 1e-12 else 0.0
+            ws_m = 1.0 - ws_s
+            wm_m = 1.0 - wm_s
+            # each model's start is the mix of both (the spread of the means adds to the
+            # covariance; the axes' spreads are averaged, the noise being isotropic); the
+            # still model's velocity is 0, certain. In terms of the models' difference
+            # d = s - m:
+            dx = sx - mx
+            dy = sy - my
+            d2 = dx * dx + dy * dy
+            # the still model's start, then its prediction (a random walk)
+            x0x = mx + ws_s * dx
+            x0y = my + ws_s * dy
+            p0 = ws_s * sp + ws_m * mp + 0.5 * ws_s * ws_m * d2 + q_s * dt
+            # the moving model's start, then constant velocity
+            k = 0.5 * wm_s * wm_m
+            x1x = mx + wm_s * dx
+            x1y = my + wm_s * dy
+            v1x = wm_m * mvx
+            v1y = wm_m * mvy
+            a1 = wm_s * sp + wm_m * mp + k * d2
+            b1 = wm_m * mb - k * (dx * mvx + dy * mvy)
+            c1 = wm_m * mc + k * (mvx * mvx + mvy * mvy)
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
+        cp = c1 + q * dt2
+        # what the correction needs that does not depend on the measurement (once per
+        # instant: a second camera's revise only redoes the rest): inverse innovation
+        # variances, both gates, gains, corrected covariances, the prior odds, the next
+        # outlier rate, the weight of a normalised innovation
+        ss = p0 + r
+        sm = ap + r
+        iss = 1.0 / ss
+        ism = 1.0 / sm
+        g2 = gate2
+        # gate: inside the gate of a model that is not all but ruled out (a model of
+        # negligible probability can be wide enough to take anything)
+        gs2 = g2 if cs >= 0.05 else -1.0
+        gm2 = g2 if cm >= 0.05 else -1.0
+        vchk = 0.0
+        if rho > 1e-3 and gm2 > 0.0:
+            # outliers seen: a measurement is the moving model's only where it is likelier
+            # from it than a false detection ((1 - rho) N(d; S) > rho / area) and where it
+            # leaves the velocity possible; right after a jump the prediction is wide, and
+            # a wide gate would catch the next false detection and run off with it
+            e = (1.0 - rho) / (rho * clutter * sm)
+            if e < 1e8:
+                e = 2.0 * math.log(e) if e > 1.0 else 0.0
+                if e < gm2:
+                    gm2 = e
+            vchk = 1.0
+        k0 = ap * ism
+        k1 = bp * ism
+        g = p0 * iss
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
-               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, c1 + q * dt2)
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
+               iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
+               (1.0 - k0) * bp, cp - k1 * bp,
+               # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
+               cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
+               math.sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
@@ -286,45 +343,39 @@ class AdaptiveIMM:
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
         """The measurement against both models' predictions ``pri`` (a step's second half,
         all a ``revise`` has to redo)."""
-        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
-         xpx, xpy, v1x, v1y, ap, bp, cp) = pri
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
+         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         nsx = zx - x0x
         nsy = zy - x0y
         nmx = zx - xpx
         nmy = zy - xpy
-        ss = p0 + r
-        sm = ap + r
-        d2s = (nsx * nsx + nsy * nsy) / ss
-        d2m = (nmx * nmx + nmy * nmy) / sm
-        # gate: inside the gate of a model that is not all but ruled out (a model of
-        # negligible probability can be wide enough to take anything)
-        g2 = self.gate2
-        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+        d2s = (nsx * nsx + nsy * nsy) * iss
+        d2m = (nmx * nmx + nmy * nmy) * ism
+        vx = v1x + k1 * nmx
+        vy = v1y + k1 * nmy
+        if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
-                ux, uy])
-        # -- model probabilities: the Gaussian likelihood ratio still / moving (2-D)
-        e = 0.5 * (d2m - d2s)
-        lr = math.exp(e if e < 700.0 else 700.0) * sm / ss
-        mu = cs * lr / (cs * lr + cm)
+                ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy])
+        # -- model probabilities: the Gaussian likelihood ratio still / moving
+        e = 0.5 * (d2s - d2m)
+        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         # the noise estimates learn from this measurement at the next step (once per instant,
         # however often a second camera revises it)
-        self._book = (t, zx, zy, d2m, nmx, sm, nmy, sm)
+        self._book = (t, zx, zy, d2m, nmx, nmy, w)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
         # -- corrections
-        g = p0 / ss
         sx = x0x + g * nsx
         sy = x0y + g * nsy
-        k0 = ap / sm
-        k1 = bp / sm
         mx = xpx + k0 * nmx
         my = xpy + k0 * nmy
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, sy, (1.0 - g) * p0,
-                  (1.0 - k0) * ap, mx, my, v1x + k1 * nmx, v1y + k1 * nmy, (1.0 - k0) * bp,
-                  cp - k1 * bp, ux, uy]
-        return (mu * sx + (1.0 - mu) * mx, mu * sy + (1.0 - mu) * my)
+        ex = mu * sx + (1.0 - mu) * mx
+        ey = mu * sy + (1.0 - mu) * my
+        self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
+                  ex, ey]
+        return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
         """The step after a jump re-initialised the track: keep the new track unless this
@@ -416,7 +467,10 @@ class AdaptiveIMM:
                 ox, oy = xi - zx + vx * d, yi - zy + vy * d
                 if ox * ox + oy * oy <= tol2:
                     self.S = pred
-                    return self._init(t, zx, zy, (vx, vy))
+                    bk = self._save()
+                    self._init(t, zx, zy, (vx, vy))
+                    self._backup = bk  # three aligned outliers: the next measurement tells
+                    return (zx, zy)
         self._far = (*(f for f in far[-5:] if t - f[0] < 0.3), (t, zx, zy))
         pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
         self.S = pred
@@ -426,18 +480,17 @@ class AdaptiveIMM:
 
     def estimate_fast(self) -> Vec:
         S = self.S
-        mu = S[2]
-        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+        return (S[19], S[20])
 
     def estimate(self) -> Vec | None:
         S = self.S
-        if not S:
-            return None
-        mu = S[2]
-        return (mu * S[7] + (1.0 - mu) * S[11], mu * S[8] + (1.0 - mu) * S[12])
+        return (S[19], S[20]) if S else None
 
     def velocity(self) -> Vec:
-        S = self.S
+        """The velocity; after a jump not yet confirmed, the velocity before it (one noise
+        spike must not read as a 5 m/s kick: the next measurement tells)."""
+        bk = self._backup
+        S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
         if not S:
             return (0.0, 0.0)
         w = 1.0 - S[2]
@@ -447,10 +500,8 @@ class AdaptiveIMM:
         S = self.S
         if not S:
             return None
-        w = 1.0 - S[2]
-        dt = t_s - S[0]
-        ex, ey = self.estimate_fast()
-        return (ex + w * S[13] * dt, ey + w * S[14] * dt)
+        w = (1.0 - S[2]) * (t_s - S[0])
+        return (S[19] + w * S[13], S[20] + w * S[14])
 
 
 class AdaptiveIMM1D(AdaptiveIMM):
@@ -464,97 +515,108 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
-    def _step(self, t: float, zx: float, zy: float) -> Vec:
+    def update(self, t: float, zx: float, zy: float) -> Vec:
+        self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
+         gate2, _, rho_keep) = self._k
         cache = self._backup is None
         if not cache:
             self._after_jump(t, zx, 0.0)
         S = self.S
-        if not S or t - S[0] > self.gap_s:
+        if not S or t - S[0] > gap_s:
             return self._init(t, zx, 0.0)
-        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _) = S
+        (t0, ta, ms, r, q, age, rho, sx, _, sp, mp, mx, _, mvx, _, mb, mc, ux, _, _, _) = S
         bk = self._book
         if bk is not None:  # as in the 2-D step
             self._book = None
-            bt, bx, _, d2m, nm, sm, _, _ = bk
-            ux += BIAS_A * (nm / math.sqrt(sm) - ux)
+            bt, bx, _, d2m, nm, _, w = bk
+            ux += BIAS_A * (nm * w - ux)
             e = 0.5 * (d2m + ux * ux * 2.0 * BIAS_K)
-            e = self.q_rate * ((e if e < 6.0 else 6.0) - self.q_down)
+            e = q_rate * ((e if e < 6.0 else 6.0) - q_down)
             q *= 1.0 + e + 0.5 * e * e
-            q = self.q_min if q < self.q_min else (self.q_max if q > self.q_max else q)
+            q = q_min if q < q_min else (q_max if q > q_max else q)
             h = self._h
             if len(h) == 6:
                 t1, h1x, _, t2, h2x, _ = h
                 if t1 > t2 and bt > t1:
                     c = (bt - t1) / (t1 - t2)
                     ex = bx - h1x - c * (h1x - h2x)
-                    e = ex * ex / (1.0 + (1.0 + c) ** 2 + c * c)
+                    e = ex * ex / (1.0 + (1.0 + c) * (1.0 + c) + c * c)
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < self.horizon else self.horizon)
-                    r = self.r_min if r < self.r_min else (self.r_max if r > self.r_max else r)
+                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
+                    r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, 0.0, t1, h1x, 0.0)
             else:
                 self._h = (bt, bx, 0.0, *h[:3])
         dt = t - t0 if t > t0 else 0.0
-        a = self.switch_sm * dt
-        b = self.switch_ms * dt
+        a = switch_sm * dt
+        b = switch_ms * dt
         if a > 0.5:
             a = 0.5
         if b > 0.5:
             b = 0.5
         cs = (1.0 - a) * ms + b * (1.0 - ms)
         cm = 1.0 - cs
-        ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
-        wm_s = a * ms / cm if cm > 1e-12 else 0.0
-        ws_m = 1.0 - ws_s
-        wm_m = 1.0 - wm_s
         dt2 = dt * dt
-        x0 = ws_s * sx + ws_m * mx
-        es = sx - x0
-        em = mx - x0
-        p0 = ws_s * (sp + es * es) + ws_m * (mp + em * em) + self.q_s * dt
-        x1 = wm_s * sx + wm_m * mx
-        v1 = wm_m * mvx
-        es = sx - x1
-        em = mx - x1
-        ev = mvx - v1
-        a1 = wm_s * (sp + es * es) + wm_m * (mp + em * em)
-        b1 = wm_m * (mb + em * ev) - wm_s * es * v1
-        c1 = wm_s * v1 * v1 + wm_m * (mc + ev * ev)
+        if ms < 2e-6:  # moving for sure (as in 2-D)
+            x0, p0, x1, v1, a1, b1, c1 = mx, mp + q_s * dt, mx, mvx, mp, mb, mc
+        else:
+            ws_s = (1.0 - a) * ms / cs if cs > 1e-12 else 0.0
+            wm_s = a * ms / cm if cm > 1e-12 else 0.0
+            ws_m = 1.0 - ws_s
+            wm_m = 1.0 - wm_s
+            d = sx - mx
+            x0 = mx + ws_s * d
+            p0 = ws_s * sp + ws_m * mp + ws_s * ws_m * d * d + q_s * dt
+            k = wm_s * wm_m
+            x1 = mx + wm_s * d
+            v1 = wm_m * mvx
+            a1 = wm_s * sp + wm_m * mp + k * d * d
+            b1 = wm_m * mb - k * d * mvx
+            c1 = wm_m * mc + k * mvx * mvx
         ap = a1 + 2.0 * dt * b1 + dt2 * c1 + q * dt2 * dt2 * 0.25
         bp = b1 + dt * c1 + q * dt2 * dt * 0.5
-        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp,
-               c1 + q * dt2)
+        cp = c1 + q * dt2
+        # what the correction needs that does not depend on the measurement (as in 2-D)
+        ss = p0 + r
+        sm = ap + r
+        iss = 1.0 / ss
+        ism = 1.0 / sm
+        g2 = gate2
+        k0 = ap * ism
+        k1 = bp * ism
+        g = p0 * iss
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
+               iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
+               (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
+               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
+               math.sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
 
     def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
-        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp) = pri
+        (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
+         g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
         nm = zx - xp
-        ss = p0 + r
-        sm = ap + r
-        d2s = ns * ns / ss
-        d2m = nm * nm / sm
-        g2 = self.gate2
-        if (d2s > g2 or cs < 0.05) and (d2m > g2 or cm < 0.05):
+        d2s = ns * ns * iss
+        d2m = nm * nm * ism
+        if d2s > gs2 and d2m > gm2:
             return self._rejected(t, dt, zx, 0.0, [
-                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0])
-        e = 0.5 * (d2m - d2s)
-        lr = math.exp(e if e < 700.0 else 700.0) * math.sqrt(sm / ss)
-        mu = cs * lr / (cs * lr + cm)
+                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
+                cs * x0 + cm * xp, 0.0])
+        e = 0.5 * (d2s - d2m)
+        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        self._book = (t, zx, 0.0, d2m, nm, sm, 0.0, 1.0)
+        self._book = (t, zx, 0.0, d2m, nm, 0.0, w)
         if self._pend is not None or self._far is not None or self._backup is not None:
             self._pend = self._far = self._backup = None
-        g = p0 / ss
         sx = x0 + g * ns
-        k0 = ap / sm
-        k1 = bp / sm
         mx = xp + k0 * nm
-        self.S = [t, t, mu, r, q, age, rho - rho / self.horizon, sx, 0.0, (1.0 - g) * p0,
-                  (1.0 - k0) * ap, mx, 0.0, v1 + k1 * nm, 0.0, (1.0 - k0) * bp, cp - k1 * bp,
-                  ux, 0.0]
-        return (mu * sx + (1.0 - mu) * mx, 0.0)
+        ex = mu * sx + (1.0 - mu) * mx
+        self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
+                  cp1, ux, 0.0, ex, 0.0]
+        return (ex, 0.0)

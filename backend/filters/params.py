@@ -112,6 +112,10 @@ class AdaptiveParams(BaseModel):
     outlier_rate_trust: float = num(0.02, 0.0, 1.0, "", 0.01,
         "below this estimated outlier rate a reachable jump is a maneuver at once (above it, "
         "once the next measurement confirms it)")
+    outlier_spread_mm: float = num(1000.0, 10.0, 20000.0, "mm", 100.0,
+        "false detections lie within about this distance of the object (a ball seen on a "
+        "robot nearby): with outliers seen, a measurement is used only where it is likelier "
+        "the object's than a false one's")
     max_speed_mm_s: float = num(6500.0, 100.0, 20000.0, "mm/s", 100.0,
         "a jump farther than this speed allows is an outlier, not a maneuver")
     gap_s: float = num(1.0, 0.01, 10.0, "s", 0.05,

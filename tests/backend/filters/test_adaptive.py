@@ -53,19 +53,23 @@ def test_orientation_noise_estimate_converges() -> None:
     assert f.velocity()[0] == pytest.approx(2.0, abs=0.05)
 
 
-#: cells that miss 1.1 x the best on this test's sample (seed 2022, 4 runs), with the ratio
-#: they must stay under (measured + about 0.1); the experiment's 20-run table, in
-#: docs/experiments/filters/README.md, lists its own misses
+#: cells that miss 1.1 x the best on this test's sample (seed 2022, 4 runs: the first 4 of the
+#: experiment's 20), with the ratio they must stay under (measured + about 0.08); the
+#: experiment's 20-run table, in docs/experiments/filters/README.md, lists its own misses.
+#: Round 2 tightened every ceiling (round 1 in the comments). Bounced with outliers at 2 mm
+#: stays high on these 4 runs: the bounce is confirmed one frame late (a reachable jump is a
+#: maneuver only once the next measurement agrees, when outliers are about), 60-120 mm for
+#: two frames against an oracle tuned on the data (on 20 runs: 0.21 x the best).
 KNOWN_MISSES: dict[tuple[str, float, float], float] = {
-    ("bounced (3 -> 0.9 m/s)", 2.0, 0.0): 1.3,
-    ("moving 2 m/s", 2.0, 0.2): 1.25,
-    ("moving 3 m/s", 2.0, 0.2): 1.3,
-    ("bounced (3 -> 0.9 m/s)", 2.0, 0.2): 3.0,
-    ("moving 0.5 m/s", 20.0, 0.0): 1.4,
-    ("moving 1 m/s", 20.0, 0.0): 1.4,
-    ("moving 3 m/s", 20.0, 0.0): 1.6,
-    ("moving 0.5 m/s", 20.0, 0.2): 1.25,
-    ("moving 1 m/s", 20.0, 0.2): 1.35,
+    ("bounced (3 -> 0.9 m/s)", 2.0, 0.0): 1.3,  # 1.3
+    ("moving 2 m/s", 2.0, 0.2): 1.2,  # 1.25
+    ("moving 3 m/s", 2.0, 0.2): 1.25,  # 1.3
+    ("bounced (3 -> 0.9 m/s)", 2.0, 0.2): 3.0,  # 3.0
+    ("moving 0.5 m/s", 20.0, 0.0): 1.35,  # 1.4
+    ("moving 1 m/s", 20.0, 0.0): 1.35,  # 1.4
+    ("moving 3 m/s", 20.0, 0.0): 1.55,  # 1.6
+    ("moving 0.5 m/s", 20.0, 0.2): 1.2,  # 1.25
+    ("moving 1 m/s", 20.0, 0.2): 1.3,  # 1.35
 }
 
 
@@ -90,9 +94,49 @@ def test_acceptance_table_on_seeded_data() -> None:
 @pytest.mark.parametrize("noise", [2.0, 20.0])
 def test_a_still_robot_reads_no_velocity(noise: float) -> None:
     v = acc.still_velocity(seed=3, runs=2, noise=noise)
+    assert v["adaptive"]["rms"] <= 10.0 < v["kalman"]["rms"]
     assert v["adaptive"]["p95"] <= 10.0
-    if noise == 2.0:
-        assert v["adaptive"]["rms"] <= 10.0 < v["kalman"]["rms"]
+
+
+def test_one_noise_spike_does_not_move_the_velocity() -> None:
+    """A 6-sigma spike on a still object, no outliers seen before: the filter may take it
+    for a kick (the position follows for a frame), but the velocity waits for the next
+    measurement to confirm it, and the track comes back."""
+    rng = random.Random(4)
+    f = AdaptiveIMM()
+    speeds = []
+    for i in range(240):
+        x, y = 1000.0 + rng.gauss(0, 20.0), 500.0 + rng.gauss(0, 20.0)
+        if i == 150:
+            x += 6 * 20.0 * math.sqrt(2.0)
+        f.update(i * DT, x, y)
+        if i >= 150:
+            speeds.append(math.hypot(*f.velocity()))
+    assert max(speeds) <= 10.0
+    e = f.estimate()
+    assert e is not None and math.hypot(e[0] - 1000.0, e[1] - 500.0) <= 10.0
+
+
+def test_aligned_outliers_do_not_take_a_tracked_object() -> None:
+    """Three false detections on one line re-acquire the track there only until the next
+    true measurement: it fits the old track better, which goes on."""
+    f = AdaptiveIMM()
+    rng = random.Random(8)
+    i = 0
+    for i in range(120):  # outliers seen: the filter knows they happen
+        x, y = 500.0 * i * DT + rng.gauss(0, 2.0), rng.gauss(0, 2.0)
+        if i % 10 == 5:
+            x += 400.0
+        f.update(i * DT, x, y)
+    errs = []
+    for i in range(120, 180):
+        x, y = 500.0 * i * DT + rng.gauss(0, 2.0), rng.gauss(0, 2.0)
+        if i in (130, 131, 132):  # a line of false detections 300 mm to the side
+            y += 300.0 + 20.0 * (i - 130)
+        ex, ey = f.update(i * DT, x, y)
+        if i >= 133:
+            errs.append(math.hypot(ex - 500.0 * i * DT, ey))
+    assert max(errs) <= 10.0
 
 
 @pytest.mark.parametrize("noise", [2.0, 20.0])
