@@ -119,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     a("--no-tracker-out", action="store_true",
       help="send no tracked vision at all, not even on loopback")
     a("--log-level", default="INFO")
+    a("--profile", default=None, metavar="FILE",
+      help="run under cProfile and write its stats to FILE on exit (for bench/ and issue 11: "
+           "a profile before and after every change to the hot path)")
     return p
 
 
@@ -191,6 +194,16 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         logging.getLogger("larcmacs_relay").error("bad configuration: %s", exc)
         return 2
+    if args.profile:
+        import cProfile
+
+        prof = cProfile.Profile()
+        try:
+            with contextlib.suppress(KeyboardInterrupt):
+                prof.runcall(asyncio.run, _main(cfg))
+        finally:
+            prof.dump_stats(args.profile)
+        return 0
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(_main(cfg))
     return 0
