@@ -71,6 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="robot box address (robot-box mode)",
     )
     a("--rate", type=float, default=d.output_rate_hz, help="output rate, Hz (>= 100)")
+    a("--min-gap", type=float, default=d.min_output_gap_s, metavar="SECONDS",
+      help="least time between two output cycles: a new command set waits at most this "
+           "(default: half an output period)")
     a("--max-datagram", type=int, default=d.max_datagram_bytes,
       help="input datagrams larger than this many bytes are dropped as oversized")
     a(
@@ -145,6 +148,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         robot_box_host=args.robot_box[0],
         robot_box_port=args.robot_box[1],
         output_rate_hz=args.rate,
+        min_output_gap_s=args.min_gap,
         max_datagram_bytes=args.max_datagram,
         command_timeout_s=args.command_timeout,
         hold_time_s=args.hold_time,
