@@ -86,7 +86,7 @@ class Relay:
         self._sequences = {"vision": 0, "referee": 0, "tracker": 0, "feedback": 0}
         #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
         #: with every answer (the backend's round trip and losses)
-        self._sent: dict[tuple[int, int], tuple[int, int]] = {}
+        self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
         #: grsim output: the bound Robots_Status ports {"blue": port, "yellow": port}
         self.grsim_status_ports: dict[str, int] = {}
         self._referee_mapper = RefereeMapper(config.our_team)
@@ -761,8 +761,9 @@ class Relay:
                 if sent:
                     sent_ns = time.time_ns()
                     for c in cmds:
-                        n, _ = self._sent.get((team, c.id), (0, 0))
-                        self._sent[(team, c.id)] = (n + 1, sent_ns)
+                        sent_team = self._sent[team]
+                        n, _ = sent_team.get(c.id, (0, 0))
+                        sent_team[c.id] = (n + 1, sent_ns)
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
@@ -866,7 +867,7 @@ class Relay:
             source=f"{addr[0]}:{addr[1]}",
             payload=data,
             sent=[touchline_pb2.RobotSent(id=rid, commands_sent=n, last_sent_time_ns=t)
-                  for (tm, rid), (n, t) in sorted(self._sent.items()) if tm == team],
+                  for rid, (n, t) in sorted(self._sent.get(team, {}).items())],
         )
         self._publish(self._pub, [b"feedback", env.SerializeToString()])
 
