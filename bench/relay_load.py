@@ -127,8 +127,8 @@ def main() -> None:
     ap.add_argument("--variant", action="append", default=[], metavar="NAME=ARGS",
                     help="relay arguments of a variant (the default variant has none)")
     a = ap.parse_args()
-    variants: list[tuple[str, list[str]]] = [("default", [])] + [(v.split("=", 1)[0], shlex.split(v.split("=", 1)[1]))
-                                    for v in a.variant]
+    variants: list[tuple[str, list[str]]] = [("default", [])]
+    variants += [(v.split("=", 1)[0], shlex.split(v.split("=", 1)[1])) for v in a.variant]
     results: dict[str, list[dict[str, float]]] = {name: [] for name, _ in variants}
     for _ in range(a.rounds):
         for name, extra in variants:
