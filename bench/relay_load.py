@@ -66,7 +66,7 @@ def backend(pub_ep: str, sub_ep: str, stop: threading.Event, stats: list[tl.Rela
         ctx.destroy(linger=0)
 
 
-def run(a: argparse.Namespace, extra: list[str]) -> dict[str, float]:
+def run(a: argparse.Namespace, extra: list[str], root: Path = ROOT) -> dict[str, float]:
     p = Ports.isolated(None)
     pub_ep, sub_ep = f"tcp://127.0.0.1:{p.http + 1}", f"tcp://127.0.0.1:{p.http + 2}"
     sim = subprocess.Popen(
@@ -82,7 +82,7 @@ def run(a: argparse.Namespace, extra: list[str]) -> dict[str, float]:
          "--sim-control-port", str(p.sim_control), "--sim-blue-port", str(p.sim_blue),
          "--sim-yellow-port", str(p.sim_yellow), "--grsim-port", str(p.grsim),
          "--no-tracker-out", "--log-level", "WARNING", *extra],
-        cwd=ROOT)
+        cwd=root, env=dict(os.environ, PYTHONPATH=str(ROOT)))
     stop = threading.Event()
     stats: list[tl.RelayStats] = []
     th = threading.Thread(target=backend, args=(pub_ep, sub_ep, stop, stats), daemon=True)
@@ -126,13 +126,19 @@ def main() -> None:
     ap.add_argument("--hz", type=float, default=75.0)
     ap.add_argument("--variant", action="append", default=[], metavar="NAME=ARGS",
                     help="relay arguments of a variant (the default variant has none)")
+    ap.add_argument("--before", type=Path, default=None, metavar="DIR",
+                    help="a variant 'before': the larcmacs_relay package in DIR (e.g. from "
+                         "git archive OLD larcmacs_relay | tar -x -C DIR), the rest from here")
     a = ap.parse_args()
     variants: list[tuple[str, list[str]]] = [("default", [])]
     variants += [(v.split("=", 1)[0], shlex.split(v.split("=", 1)[1])) for v in a.variant]
+    if a.before is not None:
+        variants.insert(0, ("before", []))
     results: dict[str, list[dict[str, float]]] = {name: [] for name, _ in variants}
     for _ in range(a.rounds):
         for name, extra in variants:
-            results[name].append(run(a, extra))
+            root = a.before.resolve() if name == "before" and a.before is not None else ROOT
+            results[name].append(run(a, extra, root))
     print(f"relay alone, {a.cameras} cameras x {a.hz:g} Hz, 11 v 11, a stand-in backend "
           f"answering every frame; {a.seconds:g} s x {a.rounds} rounds (medians)")
     print("| variant | relay CPU % | vision Hz | output cycles/s | arrival -> command p50 | "
