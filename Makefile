@@ -11,7 +11,7 @@ LOG ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
-        test-e2e bench experiments clean match fuzz
+        test-e2e bench soak experiments clean match fuzz
 
 run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") $(RUN_ARGS)
@@ -82,7 +82,13 @@ fuzz: setup multicast
 	$(PY) scripts/fuzz_station.py --count $(FUZZ_COUNT) $(FUZZ_ARGS)
 
 bench: setup multicast
-	for b in bench/*.py; do echo "== $$b"; PYTHONPATH=. $(PY) $$b || exit 1; done
+	for b in bench/*.py; do [ $$b = bench/soak.py ] && continue; echo "== $$b"; \
+	  PYTHONPATH=. $(PY) $$b || exit 1; done
+
+# The station at full load for SOAK_MINUTES (issue 11: no loss over 10, memory flat over 30).
+SOAK_MINUTES ?= 10
+soak: setup multicast
+	PYTHONPATH=. $(PY) bench/soak.py --minutes $(SOAK_MINUTES)
 
 # The paper's experiments (filters, speed controllers), regenerated with fixed seeds.
 experiments: setup multicast

@@ -87,7 +87,8 @@ def floor(a: argparse.Namespace) -> dict[str, Any]:
 def touchline(a: argparse.Namespace) -> dict[str, Any]:
     args = [PY, "-m", "launcher", "--isolated",
             *(f"--sim-arg={x}" for x in sim_args(a)),
-            "--backend-arg=--set", "--backend-arg=strategy.play=match"]
+            "--backend-arg=--set", "--backend-arg=strategy.play=match",
+            *(f"--relay-arg={x}" for x in a.relay_arg)]
     proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                             text=True)
     assert proc.stdout is not None
@@ -129,9 +130,17 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=5.0)
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
+    ap.add_argument("--relay-arg", action="append", default=[],
+                    help="an argument for Touchline's relay (repeat it), e.g. --min-gap=0")
+    ap.add_argument("--no-floor", action="store_true", help="Touchline's row only")
     a = ap.parse_args()
-    f = floor(a)
     t = touchline(a)
+    if a.no_floor:
+        print(f"Touchline: relay {t['relay']:.1f} % backend {t['backend']:.1f} % "
+              f"simulator {t['sim']:.1f} %, arrival -> command p50 {t['p50_ms']:.2f} ms "
+              f"p99 {t['p99_ms']:.2f} ms (worst 1 s p99 {t['p99_worst_ms']:.2f} ms)")
+        return
+    f = floor(a)
     print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz, division A, 11 v 11, "
           f"{a.seconds:g} s (CPU in % of one core)")
     print("| | relay | backend | relay + backend | arrival -> command p50 | p99 | simulator |")

@@ -1,13 +1,23 @@
-"""Benchmark: websocket fan-out to 20 clients at 60 Hz and its effect on the control loop.
+"""Benchmark: websocket fan-out to N clients (default 25) at 60 Hz and its effect on the control
+loop (issue 11: 25 clients add <= 10 % of a core and never move the loop's numbers).
 
-Starts the real station (launcher --isolated), measures the control processor's rate and the
-vision-to-command latency with 0 clients, with 20 reading clients, and with 20 clients of
-which 2 stop reading. Prints numbers; not a test."""
+Starts the real station (launcher --isolated) at full load (8 cameras x 75 Hz, division A,
+11 v 11, the "match" play) and measures, in phases of ``--seconds`` each: 0 clients, N reading
+clients, N clients of which ``--stalled`` stop reading. Per phase: CPU of every process (% of
+one core, /proc), world messages/s per reading client, the control processor's rate, the
+backend's vision -> command latency and the relay's arrival -> command p50 / p99. Prints
+numbers; not a test.
+
+    PYTHONPATH=. .venv/bin/python bench/ws_fanout.py [--clients 25] [--stalled 2] [--seconds 10]
+"""
 
 from __future__ import annotations
 
+import argparse
 import asyncio
 import json
+import os
+import statistics
 import subprocess
 import sys
 import time
@@ -18,16 +28,29 @@ import httpx
 from websockets.asyncio.client import connect
 
 ROOT = Path(__file__).resolve().parent.parent
+TICKS = os.sysconf("SC_CLK_TCK")
 
 
-def start_station() -> tuple[subprocess.Popen[str], str]:
-    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated"], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+def cpu_s(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICKS
+
+
+def start_station(a: argparse.Namespace) -> tuple[subprocess.Popen[str], str, dict[str, int]]:
+    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
+           "--camera-hz", str(a.hz)]
+    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated",
+                             *(f"--sim-arg={x}" for x in sim),
+                             "--backend-arg=--set", "--backend-arg=strategy.play=match"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
+    pids: dict[str, int] = {}
     deadline = time.monotonic() + 60
     for line in proc.stdout:
+        if line.startswith("TOUCHLINE_PIDS "):
+            pids = json.loads(line.split(" ", 1)[1])
         if line.startswith("TOUCHLINE_READY "):
-            return proc, line.split()[1]
+            return proc, line.split()[1], pids
         if time.monotonic() > deadline:
             break
     proc.kill()
@@ -39,13 +62,38 @@ def health(url: str) -> dict[str, Any]:
     return h
 
 
-def control_numbers(url: str) -> str:
-    h = health(url)
-    ctrl = next(p for p in h["processors"] if p["name"] == "control")
-    lat = h["latency"]
-    return (f"control {ctrl['measured_hz']:.0f} Hz (tick mean {ctrl['tick_mean_ms']:.2f} ms), "
-            f"vision->command p50 {lat['p50_ms']:.2f} ms p99 {lat['p99_ms']:.2f} ms, "
-            f"clients {h['websocket_clients']}")
+class Sampler:
+    """CPU per process over a phase, and the loop's latency figures sampled once a second."""
+
+    def __init__(self, url: str, pids: dict[str, int]) -> None:
+        self.url, self.pids = url, pids
+        self.rows: list[dict[str, float]] = []
+
+    def start(self) -> None:
+        self.c0 = {k: cpu_s(p) for k, p in self.pids.items()}
+        self.t0 = time.monotonic()
+        self.rows = []
+
+    def sample(self) -> None:
+        h = health(self.url)
+        ctrl = next(p for p in h["processors"] if p["name"] == "control")
+        relay = h["relay"] or {}
+        self.rows.append({
+            "control_hz": ctrl["measured_hz"], "backend_p50": h["latency"]["p50_ms"],
+            "backend_p99": h["latency"]["p99_ms"],
+            "relay_p50": relay.get("command_latency_p50_ms", -1),
+            "relay_p99": relay.get("command_latency_p99_ms", -1),
+            "clients": h["websocket_clients"],
+        })
+
+    def result(self) -> dict[str, float]:
+        dt = time.monotonic() - self.t0
+        out = {f"cpu_{k}": (cpu_s(p) - self.c0[k]) / dt * 100 for k, p in self.pids.items()}
+        for k in ("control_hz", "backend_p50", "backend_p99", "relay_p50", "relay_p99",
+                  "clients"):
+            vals = [r[k] for r in self.rows if r[k] >= 0]
+            out[k] = statistics.median(vals) if vals else -1.0
+        return out
 
 
 async def reader(url: str, counts: list[int], i: int, stop: asyncio.Event,
@@ -61,33 +109,61 @@ async def reader(url: str, counts: list[int], i: int, stop: asyncio.Event,
                 counts[i] += 1
 
 
-async def phase(url: str, n: int, stalled: int, seconds: float) -> None:
+async def phase(s: Sampler, n: int, stalled: int, seconds: float) -> dict[str, float]:
     counts = [0] * n
     stop = asyncio.Event()
-    tasks = [asyncio.create_task(reader(url, counts, i, stop, i < stalled)) for i in range(n)]
+    tasks = [asyncio.create_task(reader(s.url, counts, i, stop, i < stalled)) for i in range(n)]
     await asyncio.sleep(2.0)  # let buffers of stalled clients fill
     base = list(counts)
-    await asyncio.sleep(seconds)
+    s.start()
+    t_end = time.monotonic() + seconds
+    while time.monotonic() < t_end:
+        await asyncio.sleep(1.0)
+        await asyncio.to_thread(s.sample)
+    r = s.result()
     rates = [(c - b) / seconds for c, b in zip(counts, base, strict=True)][stalled:]
-    numbers = await asyncio.to_thread(control_numbers, url)
     stop.set()
     for t in tasks:
         t.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)
-    print(f"{n} clients ({stalled} stalled): world msgs/s per reading client "
-          f"min {min(rates):.1f} mean {sum(rates) / len(rates):.1f}; {numbers}")
+    r["msgs_min"] = min(rates) if rates else 0.0
+    r["msgs_mean"] = sum(rates) / len(rates) if rates else 0.0
+    return r
 
 
 def main() -> None:
-    proc, url = start_station()
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--clients", type=int, default=25)
+    ap.add_argument("--stalled", type=int, default=2)
+    ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--cameras", type=int, default=8)
+    ap.add_argument("--hz", type=float, default=75.0)
+    a = ap.parse_args()
+    proc, url, pids = start_station(a)
     try:
-        time.sleep(3)
-        print("0 clients:", control_numbers(url))
-        asyncio.run(phase(url, 20, 0, 5.0))
-        asyncio.run(phase(url, 20, 2, 5.0))
+        time.sleep(5)
+        s = Sampler(url, pids)
+        phases = [("0 clients", 0, 0), (f"{a.clients} reading", a.clients, 0),
+                  (f"{a.clients} ({a.stalled} stalled)", a.clients, a.stalled)]
+        results = [(name, asyncio.run(phase(s, n, st, a.seconds))) for name, n, st in phases]
     finally:
         proc.terminate()
         proc.wait(timeout=15)
+    print(f"websocket fan-out, {a.cameras} cameras x {a.hz:g} Hz, 11 v 11, match play, "
+          f"{a.seconds:g} s per phase (CPU in % of one core; latencies: medians of 1 s figures)")
+    print("| phase | world msgs/s per reader (min / mean) | backend CPU | relay CPU | "
+          "control Hz | backend vision->command p50 / p99 | relay arrival->command p50 / p99 |")
+    print("|---|---|---|---|---|---|---|")
+    for name, r in results:
+        print(f"| {name} | {r['msgs_min']:.1f} / {r['msgs_mean']:.1f} | "
+              f"{r['cpu_backend']:.1f} | {r['cpu_relay']:.1f} | {r['control_hz']:.0f} | "
+              f"{r['backend_p50']:.2f} / {r['backend_p99']:.2f} ms | "
+              f"{r['relay_p50']:.2f} / {r['relay_p99']:.2f} ms |")
+    base = results[0][1]
+    for name, r in results[1:]:
+        added = r["cpu_backend"] + r["cpu_relay"] - base["cpu_backend"] - base["cpu_relay"]
+        print(f"{name}: adds {added:+.1f} % of a core to relay + backend")
 
 
 if __name__ == "__main__":

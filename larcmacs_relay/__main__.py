@@ -9,6 +9,7 @@ import dataclasses
 import logging
 import signal
 import sys
+from collections.abc import Callable
 
 from larcmacs_relay.config import RelayConfig
 from larcmacs_relay.relay import run_relay
@@ -71,6 +72,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="robot box address (robot-box mode)",
     )
     a("--rate", type=float, default=d.output_rate_hz, help="output rate, Hz (>= 100)")
+    a("--min-gap", type=float, default=d.min_output_gap_s, metavar="SECONDS",
+      help="least time between two output cycles: a new command set waits at most this "
+           "(default: half an output period)")
     a("--max-datagram", type=int, default=d.max_datagram_bytes,
       help="input datagrams larger than this many bytes are dropped as oversized")
     a(
@@ -119,6 +123,12 @@ def build_parser() -> argparse.ArgumentParser:
     a("--no-tracker-out", action="store_true",
       help="send no tracked vision at all, not even on loopback")
     a("--log-level", default="INFO")
+    a("--event-loop", choices=["auto", "asyncio", "uvloop"], default="asyncio",
+      help="uvloop needs the package (not a dependency: bench/relay_load.py measured no clear "
+           "gain); auto: uvloop when it is installed")
+    a("--profile", default=None, metavar="FILE",
+      help="run under cProfile and write its stats to FILE on exit (for bench/ and issue 11: "
+           "a profile before and after every change to the hot path)")
     return p
 
 
@@ -142,6 +152,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         robot_box_host=args.robot_box[0],
         robot_box_port=args.robot_box[1],
         output_rate_hz=args.rate,
+        min_output_gap_s=args.min_gap,
         max_datagram_bytes=args.max_datagram,
         command_timeout_s=args.command_timeout,
         hold_time_s=args.hold_time,
@@ -191,9 +202,44 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         logging.getLogger("larcmacs_relay").error("bad configuration: %s", exc)
         return 2
+    try:
+        factory = _loop_factory(args.event_loop)
+    except ImportError as exc:
+        logging.getLogger("larcmacs_relay").error("--event-loop uvloop: %s", exc)
+        return 2
+
+    def run() -> None:
+        with asyncio.Runner(loop_factory=factory) as runner:
+            runner.run(_main(cfg))
+
+    if args.profile:
+        import cProfile
+
+        prof = cProfile.Profile()
+        try:
+            with contextlib.suppress(KeyboardInterrupt):
+                prof.runcall(run)
+        finally:
+            prof.dump_stats(args.profile)
+        return 0
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_main(cfg))
+        run()
     return 0
+
+
+def _loop_factory(kind: str) -> Callable[[], asyncio.AbstractEventLoop] | None:
+    """The event loop to run on: None is asyncio's default."""
+    if kind == "asyncio":
+        return None
+    try:
+        import uvloop  # type: ignore[import-not-found,unused-ignore]
+    except ImportError:
+        if kind == "uvloop":
+            raise
+        return None
+    logging.getLogger("larcmacs_relay").info("event loop: uvloop %s", uvloop.__version__)
+    factory: Callable[[], asyncio.AbstractEventLoop] = uvloop.new_event_loop
+    return factory
 
 
 if __name__ == "__main__":

@@ -157,27 +157,17 @@ def command_from_proto(cmd: touchline_pb2.RobotCommand) -> Command:
         raise CommandError(f"robot command with team {cmd.team} (must be blue or yellow)")
     if cmd.id > MAX_ROBOT_ID:
         raise CommandError(f"robot command for id {cmd.id} (must be 0..{MAX_ROBOT_ID})")
-    values = (
-        cmd.forward_mps,
-        cmd.left_mps,
-        cmd.angular_radps,
-        cmd.kick_speed_mps,
-        cmd.dribbler_rpm,
-    )
-    if not all(math.isfinite(v) for v in values):
+    # each field read once (a protobuf attribute read is not free: 600 sets x 11 robots a
+    # second at 8 cameras x 75 Hz)
+    fwd, left, ang = cmd.forward_mps, cmd.left_mps, cmd.angular_radps
+    kick, drib = cmd.kick_speed_mps, cmd.dribbler_rpm
+    isfinite = math.isfinite
+    if not (isfinite(fwd) and isfinite(left) and isfinite(ang) and isfinite(kick)
+            and isfinite(drib)):
         raise CommandError(f"robot command {team_name(cmd.team)} {cmd.id} has a non-finite value")
-    if cmd.kick_speed_mps < 0:
+    if kick < 0:
         raise CommandError(f"robot command {team_name(cmd.team)} {cmd.id} has a negative kick")
-    return Command(
-        team=cmd.team,
-        id=cmd.id,
-        forward_mps=cmd.forward_mps,
-        left_mps=cmd.left_mps,
-        angular_radps=cmd.angular_radps,
-        kick_speed_mps=cmd.kick_speed_mps,
-        chip=cmd.chip,
-        dribbler_rpm=cmd.dribbler_rpm,
-    )
+    return Command(cmd.team, cmd.id, fwd, left, ang, kick, cmd.chip, drib)
 
 
 # --------------------------------------------------------------------------- power scale

@@ -44,6 +44,10 @@ class RelayConfig:
     robot_box_host: str = "127.0.0.1"
     robot_box_port: int = defaults.ROBOT_BOX_PORT
     output_rate_hz: float = 120.0
+    # a new command set goes out at once, unless the previous cycle was less than this ago
+    # (then as soon as it is): the cap on the datagram rate whatever the backend sends.
+    # None: half an output period (the rate per robot stays <= twice output_rate_hz)
+    min_output_gap_s: float | None = None
     command_timeout_s: float = 0.100
     hold_time_s: float = 1.0
 
@@ -98,6 +102,13 @@ class RelayConfig:
         return self.tracker_out_interface.startswith("127.")
 
     @property
+    def min_gap_s(self) -> float:
+        """The least time between two output cycles (``min_output_gap_s`` or half a period)."""
+        if self.min_output_gap_s is None:
+            return 0.5 / self.output_rate_hz
+        return self.min_output_gap_s
+
+    @property
     def referee_out_enabled(self) -> bool:
         if self.referee_out is None:
             return self.interface.startswith("127.")
@@ -109,6 +120,9 @@ class RelayConfig:
             raise ValueError(f"unknown output mode {self.output!r}")
         if self.output_rate_hz < 100.0:
             raise ValueError("output_rate_hz must be >= 100 (simulators need >= 100 Hz)")
+        if self.min_output_gap_s is not None and \
+                not 0.0 <= self.min_output_gap_s <= 1.0 / self.output_rate_hz:
+            raise ValueError("min_output_gap_s must be in [0, 1/output_rate_hz] s")
         if not 0.0 < self.command_timeout_s <= 1.0:
             raise ValueError("command_timeout_s must be in (0, 1] s")
         if self.hold_time_s < 0.0:

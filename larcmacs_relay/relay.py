@@ -35,6 +35,14 @@ log = logging.getLogger("larcmacs_relay")
 
 MAX_DATAGRAM = 65536
 MAX_BATCH = 512
+# ZeroMQ flags as plain ints: pyzmq's IntFlag arithmetic costs more than the send it flags
+_NOBLOCK = int(zmq.NOBLOCK)
+_SNDMORE_NOBLOCK = int(zmq.SNDMORE | zmq.NOBLOCK)
+_STREAM_IDS = {
+    "vision": touchline_pb2.STREAM_VISION,
+    "referee": touchline_pb2.STREAM_REFEREE,
+    "tracker": touchline_pb2.STREAM_TRACKER,
+}
 
 
 def stream_proto(c: StreamCounter, now: float) -> touchline_pb2.StreamStats:
@@ -78,7 +86,7 @@ class Relay:
         self._sequences = {"vision": 0, "referee": 0, "tracker": 0, "feedback": 0}
         #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
         #: with every answer (the backend's round trip and losses)
-        self._sent: dict[tuple[int, int], tuple[int, int]] = {}
+        self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
         #: grsim output: the bound Robots_Status ports {"blue": port, "yellow": port}
         self.grsim_status_ports: dict[str, int] = {}
         self._referee_mapper = RefereeMapper(config.our_team)
@@ -96,7 +104,14 @@ class Relay:
         self._own_tracker_uuids: set[str] = set()
         #: own tracked frames heard back on the tracker input (not forwarded, not errors)
         self.own_tracker_echoes = 0
-        self._wake: asyncio.Future[None] | None = None
+        #: the output schedule (see _kick_output): the last cycle, the next one due (inf: every
+        #: robot idle, nothing to send, no wake-up), and the one timer armed for it
+        self._last_cycle = -math.inf
+        self._next_cycle = math.inf
+        self._timer: asyncio.TimerHandle | None = None
+        self._commands_changed = False
+        #: "host:port" of each datagram source seen (bounded): one string, not one per datagram
+        self._sources: dict[tuple[str, int], str] = {}
         self._sim_host = config.sim_host
         self._box_host = config.robot_box_host
         #: the emergency stop, latched until an explicit release (EmergencyStop on "estop")
@@ -126,6 +141,7 @@ class Relay:
         zsockets: list[zmq.Socket[bytes] | zmq.asyncio.Socket] = []
         udp: list[socket.socket] = []
         tasks: list[asyncio.Task[None]] = []
+        sub_fd: int | None = None
 
         def zsock(c: zmq.Context[zmq.Socket[bytes]], kind: int) -> zmq.Socket[bytes]:
             s = c.socket(kind)
@@ -145,7 +161,9 @@ class Relay:
             pub.bind(cfg.pub_endpoint)
             self.pub_address = _endpoint(pub)
             self._pub = pub
-            sub = asock(zmq.SUB)
+            # a plain socket drained from the loop's reader on its FD: zmq.asyncio would cost
+            # a future and a poller round per command set
+            sub = zsock(sync_ctx, zmq.SUB)
             sub.setsockopt(zmq.SUBSCRIBE, b"commands")
             sub.setsockopt(zmq.SUBSCRIBE, b"sim")
             sub.setsockopt(zmq.SUBSCRIBE, b"referee-out")
@@ -217,10 +235,12 @@ class Relay:
                          " (loopback only: --tracker-out to publish on --interface)"
                          if cfg.tracker_out_on_loopback else " (the venue network)")
 
-            tasks.append(asyncio.create_task(self._command_loop(sub)))
+            fd = sub.getsockopt(zmq.FD)
+            assert isinstance(fd, int)
+            sub_fd = fd
+            loop.add_reader(fd, self._drain_commands, sub)
             if compat_sub is not None:
                 tasks.append(asyncio.create_task(self._compat_loop(compat_sub)))
-            tasks.append(asyncio.create_task(self._output_loop()))
             tasks.append(asyncio.create_task(self._stats_loop()))
             log.info(
                 "relay up: pub %s, sub %s, output %s at %.0f Hz",
@@ -237,6 +257,12 @@ class Relay:
                 if t is not stop_wait and not t.cancelled() and t.exception() is not None:
                     raise t.exception()  # type: ignore[misc]
         finally:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            if sub_fd is not None:
+                with contextlib.suppress(Exception):
+                    loop.remove_reader(sub_fd)
             for t in tasks:
                 t.cancel()
             for t in tasks:
@@ -267,67 +293,79 @@ class Relay:
     ) -> None:
         """Read every datagram waiting on ``sock`` (never just one per wakeup); after
         MAX_BATCH in a row it yields to the loop (the reader is level-triggered and comes back
-        at once), so a flood cannot starve the command output."""
+        at once), so a flood cannot starve the command output. Vision and referee are not
+        decoded here (the backend decodes them once): per datagram only the size and
+        emptiness checks, one Envelope and one ZeroMQ message."""
         counter = self.streams[name]
         topic = name.encode()
-        stream = {
-            "vision": touchline_pb2.STREAM_VISION,
-            "referee": touchline_pb2.STREAM_REFEREE,
-            "tracker": touchline_pb2.STREAM_TRACKER,
-        }[name]
-        for _ in range(MAX_BATCH):
-            try:
-                data, addr = sock.recvfrom(MAX_DATAGRAM)
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError as exc:
-                counter.error("receive failed", str(exc))
-                self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
-                return
-            receive_ns = time.time_ns()
-            if name == "tracker" and self._own_tracker_uuids and self._own_echo(data):
-                self.own_tracker_echoes += 1
-                continue
-            if len(data) > self.config.max_datagram_bytes:
-                reason: str | None = (f"{len(data)} bytes, more than "
-                                      f"{self.config.max_datagram_bytes}")
-                kind = streams.OVERSIZED
-            else:
+        stream = _STREAM_IDS[name]
+        pub = self._pub
+        max_bytes = self.config.max_datagram_bytes
+        sources = self._sources
+        seq = self._sequences[name]
+        try:
+            for _ in range(MAX_BATCH):
                 try:
-                    reason = validate(data)
-                except Exception as exc:  # a decoder surprise must not kill the reader
-                    reason = f"validation failed: {exc!r}"
-                kind = codecs.classify(reason, data) if reason is not None else ""
-            if reason is not None:
-                counter.error(kind, reason)
-                self._ratelog.warning(
-                    f"{name}-bad",
-                    "dropped malformed %s datagram from %s:%d: %s",
-                    name,
-                    addr[0],
-                    addr[1],
-                    reason,
-                )
-                continue
-            counter.packet(len(data))
-            self._sequences[name] += 1
-            env = touchline_pb2.Envelope(
-                stream=stream,
-                receive_time_ns=receive_ns,
-                sequence=self._sequences[name],
-                source=f"{addr[0]}:{addr[1]}",
-                payload=data,
-            )
-            self._publish(self._pub, [topic, env.SerializeToString()])
-            if name == "vision" and self._compat_vision is not None:
-                self._publish(self._compat_vision, [data])
-            elif name == "referee" and self._compat_referee is not None:
-                ref, why = codecs.parse_referee(data)
-                if ref is not None:
-                    self._publish(self._compat_referee, [self._referee_mapper.encode(ref)])
+                    data, addr = sock.recvfrom(MAX_DATAGRAM)
+                except (BlockingIOError, InterruptedError):
+                    return
+                except OSError as exc:
+                    counter.error("receive failed", str(exc))
+                    self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
+                    return
+                receive_ns = time.time_ns()
+                if name == "tracker" and self._own_tracker_uuids and self._own_echo(data):
+                    self.own_tracker_echoes += 1
+                    continue
+                if len(data) > max_bytes:
+                    reason: str | None = f"{len(data)} bytes, more than {max_bytes}"
+                    kind = streams.OVERSIZED
                 else:
-                    self._ratelog.warning("compat-referee", "Referee from %s:%d not re-encoded "
-                                          "for the compat output: %s", addr[0], addr[1], why)
+                    try:
+                        reason = validate(data)
+                    except Exception as exc:  # a decoder surprise must not kill the reader
+                        reason = f"validation failed: {exc!r}"
+                    kind = codecs.classify(reason, data) if reason is not None else ""
+                if reason is not None:
+                    counter.error(kind, reason)
+                    self._ratelog.warning(
+                        f"{name}-bad",
+                        "dropped malformed %s datagram from %s:%d: %s",
+                        name,
+                        addr[0],
+                        addr[1],
+                        reason,
+                    )
+                    continue
+                counter.packet(len(data))
+                seq += 1
+                source = sources.get(addr)
+                if source is None:
+                    source = f"{addr[0]}:{addr[1]}"
+                    if len(sources) < 256:  # a spoofing flood cannot grow it
+                        sources[addr] = source
+                env = touchline_pb2.Envelope(
+                    stream=stream,
+                    receive_time_ns=receive_ns,
+                    sequence=seq,
+                    source=source,
+                    payload=data,
+                )
+                self._publish2(pub, topic, env.SerializeToString())
+                if name == "vision" and self._compat_vision is not None:
+                    self._publish(self._compat_vision, [data])
+                elif name == "referee" and self._compat_referee is not None:
+                    self._compat_referee_out(data, addr)
+        finally:
+            self._sequences[name] = seq
+
+    def _compat_referee_out(self, data: bytes, addr: tuple[str, int]) -> None:
+        ref, why = codecs.parse_referee(data)
+        if ref is not None:
+            self._publish(self._compat_referee, [self._referee_mapper.encode(ref)])
+        else:
+            self._ratelog.warning("compat-referee", "Referee from %s:%d not re-encoded "
+                                  "for the compat output: %s", addr[0], addr[1], why)
 
     def _own_echo(self, data: bytes) -> bool:
         """True if ``data`` is tracked vision this relay sent (heard back on loopback)."""
@@ -338,20 +376,47 @@ class Relay:
         if sock is None:
             return
         try:
-            sock.send_multipart(frames, flags=zmq.NOBLOCK)
+            sock.send_multipart(frames, flags=_NOBLOCK)
+        except zmq.Again:
+            self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
+
+    def _publish2(self, sock: zmq.Socket[bytes] | None, topic: bytes, body: bytes) -> None:
+        """``_publish(sock, [topic, body])`` without send_multipart's list and flag
+        arithmetic (the vision path's once-per-datagram call). A PUB socket queues a
+        multipart message whole or not at all, so the topic frame cannot go out alone."""
+        if sock is None:
+            return
+        try:
+            sock.send(topic, _SNDMORE_NOBLOCK)
+            sock.send(body, _NOBLOCK)
         except zmq.Again:
             self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
 
     # ------------------------------------------------------------------ commands
 
-    async def _command_loop(self, sub: zmq.asyncio.Socket) -> None:
-        while True:
-            frames = await sub.recv_multipart()
-            try:
-                self._handle_native(frames)
-            except Exception as exc:  # never fatal: a bad message is an error, not a crash
-                self.streams["commands"].error("internal error", str(exc))
-                log.exception("command handling failed")
+    def _drain_commands(self, sub: zmq.Socket[bytes]) -> None:
+        """Every message waiting on the command SUB, then one output decision for all of them
+        (a burst of command sets is one cycle, not one each). The socket's FD is edge-
+        triggered: it is drained until EAGAIN, and after MAX_BATCH the rest is left for a
+        call_soon (its FD would not signal again)."""
+        self._commands_changed = False
+        try:
+            for _ in range(MAX_BATCH):
+                try:
+                    frames = sub.recv_multipart(_NOBLOCK)
+                except zmq.Again:
+                    break
+                try:
+                    self._handle_native(frames)
+                except Exception as exc:  # never fatal: a bad message is an error, not a crash
+                    self.streams["commands"].error("internal error", str(exc))
+                    log.exception("command handling failed")
+            else:
+                asyncio.get_running_loop().call_soon(self._drain_commands, sub)
+        except zmq.ZMQError as exc:  # the socket closed under us (shutdown)
+            self._ratelog.warning("commands-recv", "command receive failed: %s", exc)
+        if self._commands_changed:
+            self._kick_output()
 
     def _handle_native(self, frames: list[bytes]) -> None:
         now = time.monotonic()
@@ -417,13 +482,13 @@ class Relay:
             for c in accepted:
                 self.table.update(c.zero(), now)
             self.table.stop_all(now)
-            self._wake_output()
+            self._commands_changed = True
             log.warning("stop_all received: every known robot zeroed")
             return
         for c in accepted:
             self.table.update(c, now)
         if accepted:
-            self._wake_output()
+            self._commands_changed = True
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
 
@@ -444,7 +509,7 @@ class Relay:
                 log.warning("disarmed by the emergency stop")
             self.armed = not self.arming_required  # the e-stop disarms
             self.table.stop_all(now)
-            self._wake_output()
+            self._commands_changed = True
         elif msg.action == touchline_pb2.EmergencyStop.RELEASE:
             if self.estop_latched:
                 log.warning("emergency stop released (by %s)", msg.by or "?")
@@ -477,7 +542,7 @@ class Relay:
         log.warning("disarmed (by %s): only stops go to the robots", msg.by or "?")
         self.armed, self.armed_by = False, msg.by
         self.table.stop_all(now)
-        self._wake_output()
+        self._commands_changed = True
 
     def _command_error(self, stream: str, reason: str, kind: str = "rejected") -> None:
         self.streams[stream].error(kind, reason)
@@ -583,47 +648,76 @@ class Relay:
             for c in result.commands:
                 self.table.update(c, now)
             if result.commands:
-                self._wake_output()
+                self._kick_output()
 
     # ------------------------------------------------------------------ output
 
-    async def _output_loop(self) -> None:
-        """Cycles at the configured rate; a new command set triggers a cycle at once (so the
-        command is not delayed by up to a period), but never sooner than half a period after
-        the previous cycle, and the schedule is re-phased from there."""
+    def _kick_output(self) -> None:
+        """New commands (or a stop): a cycle at once, unless the last one was less than
+        ``min_output_gap_s`` ago; then one as soon as that gap has passed. Either way the
+        repeat schedule is re-phased from that cycle."""
+        now = time.monotonic()
+        earliest = self._last_cycle + self.config.min_gap_s
+        if now >= earliest:
+            self._run_cycle(now)
+        elif earliest < self._next_cycle:
+            self._arm(earliest)
+
+    def _arm(self, t: float) -> None:
+        """The next cycle is due at monotonic ``t``. One timer at most: a timer armed for a
+        later time is moved; one armed earlier stays and re-arms itself when it fires."""
+        self._next_cycle = t
+        timer = self._timer
+        if timer is not None:
+            if timer.when() <= self._loop_time(t):
+                return
+            timer.cancel()
         loop = asyncio.get_running_loop()
+        self._timer = loop.call_at(self._loop_time(t), self._on_timer)
+
+    @staticmethod
+    def _loop_time(t: float) -> float:
+        """Monotonic ``t`` on the loop's clock (asyncio's is time.monotonic, uvloop's not)."""
+        loop = asyncio.get_running_loop()
+        return loop.time() + (t - time.monotonic())
+
+    def _on_timer(self) -> None:
+        self._timer = None
+        now = time.monotonic()
+        if now + 0.0005 < self._next_cycle:  # a cycle ran since: not due yet
+            self._arm(self._next_cycle)
+            return
+        self._run_cycle(now)
+
+    def _run_cycle(self, now: float) -> None:
+        """One cycle and the next one's time: a period later, on the old schedule while it
+        keeps up (no drift), and no wake-up at all when nothing was due (every robot idle:
+        the next command kicks the output again)."""
+        try:
+            sent = self.output_cycle(now)
+        except Exception as exc:  # the schedule must survive a bad cycle: stops depend on it
+            sent = True
+            self.streams["output"].error("internal error", str(exc))
+            log.exception("output cycle failed")
+        self._last_cycle = now
+        if not sent:
+            self._next_cycle = math.inf
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            return
         period = 1.0 / self.config.output_rate_hz
-        min_gap = period / 2.0
-        last = -math.inf
-        next_t = time.monotonic()
-        while True:
-            now = time.monotonic()
-            if now < next_t:
-                fut: asyncio.Future[None] = loop.create_future()
-                self._wake = fut
-                await asyncio.wait([fut], timeout=next_t - now)
-                self._wake = None
-                now = time.monotonic()
-                if now < next_t:  # woken early by a new command
-                    if now - last < min_gap:
-                        next_t = last + min_gap
-                        continue
-                    next_t = now
-            self.output_cycle(now)
-            last = now
-            next_t = next_t + period if now - next_t < period else now + period
+        due_at = self._next_cycle
+        on_schedule = now + 0.0005 >= due_at and now - due_at < period
+        self._arm(due_at + period if on_schedule else now + period)
 
-    def _wake_output(self) -> None:
-        fut = self._wake
-        if fut is not None and not fut.done():
-            fut.set_result(None)
-
-    def output_cycle(self, now: float) -> None:
-        """One output cycle: send every due command (public for tests and benchmarks)."""
-        self.cycles.add(now)
+    def output_cycle(self, now: float) -> bool:
+        """One output cycle: send every due command (public for tests and benchmarks).
+        False when nothing was due (every robot idle or none known)."""
         due = self.table.due(now)
         if not due:
-            return
+            return False
+        self.cycles.add(now)
         if self.estop_latched or not self.armed:
             # the latch and the arming are enforced here, where every command path meets:
             # only zeros leave (the stops of robots commanded before, for the hold time)
@@ -634,6 +728,7 @@ class Relay:
             for src in self._pending_latency_ns:
                 self._latencies.append((now, (sent_ns - src) / 1e6))
             self._pending_latency_ns.clear()
+        return True
 
     def _send_commands(self, due: list[Command]) -> None:
         """Encode and send ``due`` on the configured output."""
@@ -666,8 +761,9 @@ class Relay:
                 if sent:
                     sent_ns = time.time_ns()
                     for c in cmds:
-                        n, _ = self._sent.get((team, c.id), (0, 0))
-                        self._sent[(team, c.id)] = (n + 1, sent_ns)
+                        sent_team = self._sent[team]
+                        n, _ = sent_team.get(c.id, (0, 0))
+                        sent_team[c.id] = (n + 1, sent_ns)
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
@@ -771,7 +867,7 @@ class Relay:
             source=f"{addr[0]}:{addr[1]}",
             payload=data,
             sent=[touchline_pb2.RobotSent(id=rid, commands_sent=n, last_sent_time_ns=t)
-                  for (tm, rid), (n, t) in sorted(self._sent.items()) if tm == team],
+                  for rid, (n, t) in sorted(self._sent.get(team, {}).items())],
         )
         self._publish(self._pub, [b"feedback", env.SerializeToString()])
 

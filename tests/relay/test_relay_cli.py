@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+import pstats
 import signal
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import zmq
@@ -26,6 +28,51 @@ def test_flags_build_config() -> None:
     assert cfg.output_rate_hz == 150 and cfg.compat and cfg.our_team == "yellow"
     with pytest.raises(ValueError):
         config_from_args(build_parser().parse_args(["--rate", "50"])).validate()
+
+
+def test_min_gap_flag() -> None:
+    default = config_from_args(build_parser().parse_args(["--rate", "125"]))
+    assert default.min_gap_s == pytest.approx(0.004)  # half a period
+    cfg = config_from_args(build_parser().parse_args(["--min-gap", "0"]))
+    cfg.validate()
+    assert cfg.min_gap_s == 0.0
+    for bad in ("-0.001", "0.05"):  # negative, or longer than a period (120 Hz)
+        with pytest.raises(ValueError, match="min_output_gap_s"):
+            config_from_args(build_parser().parse_args(["--min-gap", bad])).validate()
+
+
+def test_profile_written_on_stop(tmp_path: Path) -> None:
+    """--profile FILE: the cProfile stats are there after a normal stop (bench/ reads them)."""
+    out = tmp_path / "relay.prof"
+    pub = f"tcp://127.0.0.1:{free_udp_port()}"
+    cmd = [
+        sys.executable, "-m", "larcmacs_relay", "--profile", str(out),
+        "--vision", f"224.5.23.2:{random_multicast_port()}",
+        "--referee", f"224.5.23.1:{random_multicast_port()}",
+        "--pub", pub, "--sub", f"tcp://127.0.0.1:{free_udp_port()}",
+        "--sim-blue-port", str(free_udp_port()), "--sim-yellow-port", str(free_udp_port()),
+        "--sim-control-port", str(free_udp_port()),
+    ]  # fmt: skip
+    proc = subprocess.Popen(cmd, env=dict(os.environ, PYTHONPATH=os.getcwd()),
+                            stderr=subprocess.PIPE, text=True)
+    ctx = zmq.Context()
+    try:
+        sub = ctx.socket(zmq.SUB)
+        sub.setsockopt(zmq.LINGER, 0)
+        sub.setsockopt(zmq.SUBSCRIBE, b"stats")
+        sub.connect(pub)
+        assert sub.poll(10_000), "no stats from the relay process"
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=10)
+        assert proc.returncode == 0, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        ctx.destroy(linger=0)
+    stats = pstats.Stats(str(out))
+    profiled = stats.stats  # type: ignore[attr-defined]
+    assert any(f.endswith("relay.py") and fn == "_stats_loop" for (f, _, fn) in profiled)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])

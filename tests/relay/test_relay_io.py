@@ -10,6 +10,7 @@ import pytest
 import zmq
 
 from larcmacs_relay import RelayConfig
+from larcmacs_relay.commands import RobotState
 from sslnet.multicast import open_multicast_receiver
 from sslpb import (
     grsim_packet_pb2,
@@ -133,13 +134,16 @@ async def test_undecodable_datagrams_forwarded_for_the_backend_to_count() -> Non
 
 
 async def test_stats_published() -> None:
-    async with running_relay() as h:
+    # one command, then its zeros for the hold time: cycles at the output rate throughout
+    async with running_relay(hold_time_s=30.0) as h:
         sub = h.subscriber(b"stats")
         topic, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
         st = touchline_pb2.RelayStats.FromString(body)
         assert topic == b"stats" and st.output_mode == "sim"
         names = {s.name for s in st.streams}
         assert {"vision", "referee", "tracker", "commands", "output", "sim_responses"} <= names
+        pub = await connect_commands(h)
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=1)))
         # wait for a stats message with a full second of cycles behind it (bounded: a slow
         # machine fails here with the rate it reached instead of hanging CI)
         deadline = time.monotonic() + 10.0
@@ -149,6 +153,25 @@ async def test_stats_published() -> None:
             _, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
             st = touchline_pb2.RelayStats.FromString(body)
         assert st.output_rate_hz < 140
+
+
+async def test_idle_relay_sends_nothing_and_wakes_on_a_command() -> None:
+    """No robot known (or every one idle): no output cycle at all, not even empty ones; the
+    next command set goes out at once."""
+    async with running_relay(hold_time_s=0.05) as h:
+        pub = await connect_commands(h)  # empty command sets: nothing to send
+        cycles = h.relay.cycles
+        await asyncio.sleep(0.2)  # lets cycles happen, if the relay wrongly cycled idle
+        assert cycles.total == 0 and drain_udp(h.sim_blue) == 0
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
+        data, _ = await recv_udp(h.sim_blue)
+        assert [r.id for r in decode_rc(data).robot_commands] == [4]
+        # command timeout (0.1 s) then zeros for the hold time (0.05 s), then idle: silent
+        await wait_for(lambda: h.relay.table.count(RobotState.IDLE) == 1, what="robot idle")
+        drain_udp(h.sim_blue)
+        total = cycles.total
+        await asyncio.sleep(0.2)
+        assert cycles.total == total and drain_udp(h.sim_blue) == 0
 
 
 # ----------------------------------------------------------------- commands, sim mode
