@@ -52,6 +52,7 @@ class StationLoop:
                     raise
                 self.loop = loop
                 _schedule_profile(loop)
+                _schedule_memory_diff(loop)
                 ready.set()
                 await stop_event.wait()
                 await self._stop()
@@ -146,3 +147,36 @@ def _schedule_profile(loop: asyncio.AbstractEventLoop) -> None:
         loop.call_later(span, stop)
 
     loop.call_later(after, start)
+
+
+MEMORY_ENV = "TOUCHLINE_MEMORY_DIFF"
+
+
+def _schedule_memory_diff(loop: asyncio.AbstractEventLoop) -> None:
+    """With ``TOUCHLINE_MEMORY_DIFF=FILE`` (a memory-growth hunt, bench/soak.py) tracemalloc
+    runs from the start; a snapshot at ``..._AFTER`` s (default 30) and one ``..._FOR`` s later
+    (default 120) are compared and the 25 biggest growths written to FILE."""
+    out = os.environ.get(MEMORY_ENV)
+    if not out:
+        return
+    import tracemalloc
+
+    after = float(os.environ.get(MEMORY_ENV + "_AFTER", "30"))
+    span = float(os.environ.get(MEMORY_ENV + "_FOR", "120"))
+    tracemalloc.start(12)
+    first: list[tracemalloc.Snapshot] = []
+
+    def second() -> None:
+        snap = tracemalloc.take_snapshot()
+        stats = snap.compare_to(first[0], "traceback")
+        with open(out, "w") as f:
+            for st in stats[:25]:
+                f.write(f"{st.size_diff / 1024:.1f} KiB in {st.count_diff} blocks\n")
+                f.write("\n".join(st.traceback.format()[-12:]) + "\n\n")
+        log.info("memory growth over %.0f s written to %s", span, out)
+
+    def first_snapshot() -> None:
+        first.append(tracemalloc.take_snapshot())
+        loop.call_later(span, second)
+
+    loop.call_later(after, first_snapshot)

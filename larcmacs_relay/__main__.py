@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     a("--rate", type=float, default=d.output_rate_hz, help="output rate, Hz (>= 100)")
     a("--min-gap", type=float, default=d.min_output_gap_s, metavar="SECONDS",
       help="least time between two output cycles: a new command set waits at most this "
-           "(default: half an output period)")
+           "(default: none for a simulator, half an output period for robot-box)")
     a("--max-datagram", type=int, default=d.max_datagram_bytes,
       help="input datagrams larger than this many bytes are dropped as oversized")
     a(

@@ -103,9 +103,11 @@ class RelayConfig:
 
     @property
     def min_gap_s(self) -> float:
-        """The least time between two output cycles (``min_output_gap_s`` or half a period)."""
+        """The least time between two output cycles: ``min_output_gap_s``, else none for a
+        simulator (every command set goes out at once: latency first) and half a period for
+        real robots (robot-box: a radio link takes about one datagram per period)."""
         if self.min_output_gap_s is None:
-            return 0.5 / self.output_rate_hz
+            return 0.5 / self.output_rate_hz if self.output == "robot-box" else 0.0
         return self.min_output_gap_s
 
     @property

@@ -31,8 +31,11 @@ def test_flags_build_config() -> None:
 
 
 def test_min_gap_flag() -> None:
-    default = config_from_args(build_parser().parse_args(["--rate", "125"]))
-    assert default.min_gap_s == pytest.approx(0.004)  # half a period
+    sim = config_from_args(build_parser().parse_args(["--rate", "125"]))
+    assert sim.output == "sim" and sim.min_gap_s == 0.0  # a simulator: every set at once
+    box = config_from_args(build_parser().parse_args(["--rate", "125", "--output",
+                                                      "robot-box"]))
+    assert box.min_gap_s == pytest.approx(0.004)  # real robots: half a period
     cfg = config_from_args(build_parser().parse_args(["--min-gap", "0"]))
     cfg.validate()
     assert cfg.min_gap_s == 0.0
