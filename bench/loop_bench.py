@@ -13,6 +13,7 @@ relay's own p50/p99 of each second, the median of them; floor: every frame), and
 Machines are noisy: the ratios of one run are the figures that count.
 
     PYTHONPATH=. .venv/bin/python bench/loop_bench.py [--seconds 20] [--cameras 8] [--hz 75]
+        [--browser]
 """
 
 from __future__ import annotations
@@ -84,7 +85,9 @@ def floor(a: argparse.Namespace) -> dict[str, Any]:
     return {**cpu, "p50_ms": lat["p50_ms"], "p99_ms": lat["p99_ms"]}
 
 
-def touchline(a: argparse.Namespace) -> dict[str, Any]:
+def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
+    """Touchline's row; ``browser``: with headless Chromium showing the page meanwhile (its
+    own CPU apart: only the relay's and the backend's count)."""
     args = [PY, "-m", "launcher", "--isolated",
             *(f"--sim-arg={x}" for x in sim_args(a)),
             "--backend-arg=--set", "--backend-arg=strategy.play=match",
@@ -100,7 +103,16 @@ def touchline(a: argparse.Namespace) -> dict[str, Any]:
         if line.startswith("TOUCHLINE_READY "):
             url = line.split()[1]
             break
+    page: subprocess.Popen[str] | None = None
     try:
+        if browser:
+            page = subprocess.Popen(
+                ["node", "bench/open_page.mjs", url, str(a.warmup + a.seconds + 30)], cwd=ROOT,
+                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+            assert page.stdout is not None
+            for line in page.stdout:  # the page shows the field (bounded: the script's own
+                if line.startswith("PAGE_OPEN"):  # 30 s timeout ends it otherwise)
+                    break
         time.sleep(a.warmup)
         client = httpx.Client(timeout=5)
         p50s: list[float] = []
@@ -117,6 +129,9 @@ def touchline(a: argparse.Namespace) -> dict[str, Any]:
         cpu = {("sim" if k == "fieldsim" else k): (cpu_s(v) - c0[k]) / dt * 100
                for k, v in pids.items()}
     finally:
+        if page is not None:
+            page.terminate()
+            page.wait(timeout=20)
         proc.terminate()
         proc.wait(timeout=20)
     return {**cpu, "p50_ms": statistics.median(p50s) if p50s else -1,
@@ -133,6 +148,9 @@ def main() -> None:
     ap.add_argument("--relay-arg", action="append", default=[],
                     help="an argument for Touchline's relay (repeat it), e.g. --min-gap=0")
     ap.add_argument("--no-floor", action="store_true", help="Touchline's row only")
+    ap.add_argument("--browser", action="store_true",
+                    help="also a row with headless Chromium rendering the page (node, "
+                         "/usr/bin/chromium)")
     a = ap.parse_args()
     t = touchline(a)
     if a.no_floor:
@@ -141,11 +159,14 @@ def main() -> None:
               f"p99 {t['p99_ms']:.2f} ms (worst 1 s p99 {t['p99_worst_ms']:.2f} ms)")
         return
     f = floor(a)
+    rows = [("floor", f), ("Touchline", t)]
+    if a.browser:
+        rows.append(("Touchline, one browser", touchline(a, browser=True)))
     print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz, division A, 11 v 11, "
           f"{a.seconds:g} s (CPU in % of one core)")
     print("| | relay | backend | relay + backend | arrival -> command p50 | p99 | simulator |")
     print("|---|---|---|---|---|---|---|")
-    for name, r in (("floor", f), ("Touchline", t)):
+    for name, r in rows:
         print(f"| {name} | {r['relay']:.1f} | {r['backend']:.1f} | "
               f"{r['relay'] + r['backend']:.1f} | {r['p50_ms']:.2f} ms | {r['p99_ms']:.2f} ms | "
               f"{r['sim']:.1f} |")
