@@ -251,8 +251,18 @@ class AdaptiveIMM:
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
-                    r = r_min if r < r_min else (r_max if r > r_max else r)
+                    e = r + (e - r) / (age + 1.0 if age < horizon else horizon)
+                    e = r_min if e < r_min else (r_max if e > r_max else e)
+                    # the models' covariances are in units of r (while the data dominate
+                    # them, as at the start, exactly): a revised r revises them too, or a
+                    # track begun with r too small keeps a too small covariance, reads its
+                    # own start as large innovations and raises q (round 2's slow q walk)
+                    f = e / r
+                    r = e
+                    sp *= f
+                    mp *= f
+                    mb *= f
+                    mc *= f
                 self._h = (bt, bx, by, t1, h1x, h1y)
             else:
                 self._h = (bt, bx, by, *h[:3])
@@ -545,8 +555,18 @@ class AdaptiveIMM1D(AdaptiveIMM):
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
-                    r = r_min if r < r_min else (r_max if r > r_max else r)
+                    e = r + (e - r) / (age + 1.0 if age < horizon else horizon)
+                    e = r_min if e < r_min else (r_max if e > r_max else e)
+                    # the models' covariances are in units of r (while the data dominate
+                    # them, as at the start, exactly): a revised r revises them too, or a
+                    # track begun with r too small keeps a too small covariance, reads its
+                    # own start as large innovations and raises q (round 2's slow q walk)
+                    f = e / r
+                    r = e
+                    sp *= f
+                    mp *= f
+                    mb *= f
+                    mc *= f
                 self._h = (bt, bx, 0.0, t1, h1x, 0.0)
             else:
                 self._h = (bt, bx, 0.0, *h[:3])
