@@ -253,18 +253,24 @@ class AdaptiveIMM:
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    e = r + (e - r) / (age + 1.0 if age < horizon else horizon)
-                    e = r_min if e < r_min else (r_max if e > r_max else e)
-                    # the models' covariances are in units of r (while the data dominate
-                    # them, as at the start, exactly): a revised r revises them too, or a
-                    # track begun with r too small keeps a too small covariance, reads its
-                    # own start as large innovations and raises q (round 2's slow q walk)
-                    f = e / r
-                    r = e
-                    sp *= f
-                    mp *= f
-                    mb *= f
-                    mc *= f
+                    if age < horizon:
+                        e = r + (e - r) / (age + 1.0)
+                        e = r_min if e < r_min else (r_max if e > r_max else e)
+                        # the models' covariances are in units of r (while the data
+                        # dominate them, as at the start, exactly): a revised r revises them
+                        # too, or a track begun with r too small keeps a too small
+                        # covariance, reads its own start as large innovations and raises q
+                        # (round 2's slow q walk); past the horizon r moves by ~1 % a step
+                        # and this is left out (it runs for every object in every frame)
+                        f = e / r
+                        r = e
+                        sp *= f
+                        mp *= f
+                        mb *= f
+                        mc *= f
+                    else:
+                        r += (e - r) / horizon
+                        r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, by, t1, h1x, h1y)
             else:
                 self._h = (bt, bx, by, *h[:3])
@@ -596,18 +602,24 @@ class AdaptiveIMM1D(AdaptiveIMM):
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    e = r + (e - r) / (age + 1.0 if age < horizon else horizon)
-                    e = r_min if e < r_min else (r_max if e > r_max else e)
-                    # the models' covariances are in units of r (while the data dominate
-                    # them, as at the start, exactly): a revised r revises them too, or a
-                    # track begun with r too small keeps a too small covariance, reads its
-                    # own start as large innovations and raises q (round 2's slow q walk)
-                    f = e / r
-                    r = e
-                    sp *= f
-                    mp *= f
-                    mb *= f
-                    mc *= f
+                    if age < horizon:
+                        e = r + (e - r) / (age + 1.0)
+                        e = r_min if e < r_min else (r_max if e > r_max else e)
+                        # the models' covariances are in units of r (while the data
+                        # dominate them, as at the start, exactly): a revised r revises them
+                        # too, or a track begun with r too small keeps a too small
+                        # covariance, reads its own start as large innovations and raises q
+                        # (round 2's slow q walk); past the horizon r moves by ~1 % a step
+                        # and this is left out (it runs for every object in every frame)
+                        f = e / r
+                        r = e
+                        sp *= f
+                        mp *= f
+                        mb *= f
+                        mc *= f
+                    else:
+                        r += (e - r) / horizon
+                        r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, 0.0, t1, h1x, 0.0)
             else:
                 self._h = (bt, bx, 0.0, *h[:3])
