@@ -19,8 +19,10 @@ Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outs
 are told apart by physics and by the data: a measurement farther than the object could have
 travelled (``max_speed``) is an outlier; a reachable one is a maneuver at once when no outliers
 have been seen lately, otherwise when the next measurement confirms it (one frame of delay, only
-in outlier-ridden data). A run of consistent far measurements (the ball placed elsewhere)
-re-initialises the filter.
+in outlier-ridden data). A measurement only a little outside the gate, with no outliers about,
+is neither: the motion changed more than q allows (a ball slowing down), and q is raised and the
+step redone rather than the track restarted. A run of consistent far measurements (the ball
+placed elsewhere) re-initialises the filter.
 
 Plain float arithmetic per axis (no numpy): for a 2-state filter CPython's float operations are
 several times faster than small matrices, and this runs for every object in every camera frame.
@@ -36,6 +38,8 @@ import math
 from .params import AdaptiveParams, FilterKind
 
 Vec = tuple[float, float]
+#: (module globals: one lookup fewer than ``math.exp`` in the per-frame path)
+_exp, _sqrt, _log = math.exp, math.sqrt, math.log
 
 # the state list: times, model probability of "still", noise estimates, then both models
 # (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
@@ -340,7 +344,7 @@ class AdaptiveIMM:
             # a wide gate would catch the next false detection and run off with it
             e = (1.0 - rho) / (rho * clutter * sm)
             if e < 1e8:
-                e = 2.0 * math.log(e) if e > 1.0 else 0.0
+                e = 2.0 * _log(e) if e > 1.0 else 0.0
                 if e < gm2:
                     gm2 = e
             vchk = 1.0
@@ -353,7 +357,7 @@ class AdaptiveIMM:
                (1.0 - k0) * bp, cp - k1 * bp,
                # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
                cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
-               math.sqrt(ism))
+               _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
@@ -377,7 +381,7 @@ class AdaptiveIMM:
                 ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
+        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         # the noise estimates learn from this measurement at the next step (once per instant,
         # however often a second camera revises it)
@@ -664,8 +668,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
                iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
                (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
-               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
-               math.sqrt(ism))
+               cm * _sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
+               _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
@@ -682,7 +686,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
                 cs * x0 + cm * xp, 0.0])
         e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
+        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         self._book = (t, zx, 0.0, d2m, nm, 0.0, w)
         if self._pend is not None or self._far is not None or self._backup is not None:
