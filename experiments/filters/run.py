@@ -580,7 +580,9 @@ def adaptive_section(acc: dict[str, Any]) -> list[str]:
          "still at its floor); the step's constants are one tuple. The noise estimates "
          "learn once per instant, at the next step. Orientation uses a 1-D variant. "
          "`bench/world_bench.py` (CPU time, 22 robots + ball in every frame from 8 cameras): "
-         "round 1 106 vs Kalman 95 us per frame; round 2 92 vs 92; round 3 BENCH.",
+         "round 1 106 vs Kalman 95 us per frame; round 2 92 vs 92; round 3 90 vs 89 (best "
+         "of 7 interleaved; run to run the pair moves by 1-2 us: round 2's code read 92 vs "
+         "90 in the same session).",
          "- **How close it is** (round 1 missed 8 cells, round 2 5, round 3 none): the "
          "margins are thin where the oracle is strongest: constant speed at 20 mm noise "
          "(1.04-1.10: the oracle has the true noise and q from the first frame; ours learns "
