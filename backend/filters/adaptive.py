@@ -19,8 +19,10 @@ Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outs
 are told apart by physics and by the data: a measurement farther than the object could have
 travelled (``max_speed``) is an outlier; a reachable one is a maneuver at once when no outliers
 have been seen lately, otherwise when the next measurement confirms it (one frame of delay, only
-in outlier-ridden data). A run of consistent far measurements (the ball placed elsewhere)
-re-initialises the filter.
+in outlier-ridden data). A measurement only a little outside the gate, with no outliers about,
+is neither: the motion changed more than q allows (a ball slowing down), and q is raised and the
+step redone rather than the track restarted. A run of consistent far measurements (the ball
+placed elsewhere) re-initialises the filter.
 
 Plain float arithmetic per axis (no numpy): for a 2-state filter CPython's float operations are
 several times faster than small matrices, and this runs for every object in every camera frame.
@@ -36,6 +38,8 @@ import math
 from .params import AdaptiveParams, FilterKind
 
 Vec = tuple[float, float]
+#: (module globals: one lookup fewer than ``math.exp`` in the per-frame path)
+_exp, _sqrt, _log = math.exp, math.sqrt, math.log
 
 # the state list: times, model probability of "still", noise estimates, then both models
 # (still: x, y and the variance of each; moving: x, y, vx, vy and the covariance [[p, b], [b, c]]
@@ -45,7 +49,9 @@ Vec = tuple[float, float]
 # t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy | ex ey
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
-BIAS_A = 0.1
+#: (0.15, about 7 steps: round 3, from 0.1; with a lag past the gate now raising q at once, the
+#: test's job is the lag building up before it, and a shorter window sees it sooner)
+BIAS_A = 0.15
 #: 1 / (2 x the variance of that running mean for unit white noise)
 BIAS_K = (2.0 - BIAS_A) / BIAS_A / 2.0
 
@@ -251,8 +257,24 @@ class AdaptiveIMM:
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
-                    r = r_min if r < r_min else (r_max if r > r_max else r)
+                    if age < horizon:
+                        e = r + (e - r) / (age + 1.0)
+                        e = r_min if e < r_min else (r_max if e > r_max else e)
+                        # the models' covariances are in units of r (while the data
+                        # dominate them, as at the start, exactly): a revised r revises them
+                        # too, or a track begun with r too small keeps a too small
+                        # covariance, reads its own start as large innovations and raises q
+                        # (round 2's slow q walk); past the horizon r moves by ~1 % a step
+                        # and this is left out (it runs for every object in every frame)
+                        f = e / r
+                        r = e
+                        sp *= f
+                        mp *= f
+                        mb *= f
+                        mc *= f
+                    else:
+                        r += (e - r) / horizon
+                        r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, by, t1, h1x, h1y)
             else:
                 self._h = (bt, bx, by, *h[:3])
@@ -322,7 +344,7 @@ class AdaptiveIMM:
             # a wide gate would catch the next false detection and run off with it
             e = (1.0 - rho) / (rho * clutter * sm)
             if e < 1e8:
-                e = 2.0 * math.log(e) if e > 1.0 else 0.0
+                e = 2.0 * _log(e) if e > 1.0 else 0.0
                 if e < gm2:
                     gm2 = e
             vchk = 1.0
@@ -335,7 +357,7 @@ class AdaptiveIMM:
                (1.0 - k0) * bp, cp - k1 * bp,
                # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
                cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
-               math.sqrt(ism))
+               _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
@@ -359,7 +381,7 @@ class AdaptiveIMM:
                 ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
+        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         # the noise estimates learn from this measurement at the next step (once per instant,
         # however often a second camera revises it)
@@ -433,6 +455,10 @@ class AdaptiveIMM:
                 v = (px / tp, py / tp)
                 pvv = 4.0 * r / (tp * tp)  # a velocity from two measurements
         if confirmed or dx * dx + dy * dy <= reach * reach:
+            if not confirmed and dt > 0.0 and pred[_RHO] < self.rho_accept:
+                out = self._speed_up(t, dt, zx, zy, pred)
+                if out is not None:
+                    return out
             if not confirmed and dt > 0:
                 v = (dx / dt, dy / dt)
             sp2 = v[0] * v[0] + v[1] * v[1]
@@ -475,6 +501,41 @@ class AdaptiveIMM:
         pred[_RHO] += (1.0 - pred[_RHO]) / self.horizon
         self.S = pred
         return self.estimate_fast()
+
+    def _speed_up(self, t: float, dt: float, zx: float, zy: float,
+                  pred: list[float]) -> Vec | None:
+        """A measurement a little outside the gate with no outliers about: the motion changed
+        more than q allows (a ball slowing down, a robot turning) and a jump would throw the
+        velocity away. If raising q (at most to its bound) makes it a 3-sigma innovation, redo
+        the step with that q (q then shrinks again as the data allow) and return the estimate;
+        else None: a jump. Why: under constant deceleration q shrank to its floor, the lag grew
+        past the gate and every such frame restarted the track from one measurement's velocity
+        (the bounced ball at 2 mm noise, 1.2 x the oracle in round 2)."""
+        nx, ny = zx - pred[11], zy - pred[12]
+        ap, r, q = pred[10], pred[_R], pred[_Q]
+        d4 = 0.25 * dt * dt * dt * dt
+        qn = q + ((nx * nx + ny * ny) / 9.0 - r - ap) / d4
+        q_max = self._k[4]
+        if qn > q_max:
+            qn = q_max
+        if qn < 1.5 * q or (nx * nx + ny * ny) > self.gate2 * (ap + (qn - q) * d4 + r):
+            return None
+        # the state before the step with what it learnt from its book (noise estimates, bias
+        # means, covariances rescaled with r), q raised; then the step again (it has nothing
+        # left to learn: the book is spent)
+        S = self.S.copy()
+        f = r / S[_R]
+        S[_R], S[_Q], S[5], S[17], S[18] = r, qn, pred[5], pred[17], pred[18]
+        S[9] *= f
+        S[10] *= f
+        S[15] *= f
+        S[16] *= f
+        prev = self._prev
+        self.S = S
+        self.rejected -= 1  # (counted again if the redone step rejects it too)
+        out = self.update(t, zx, zy)
+        self._prev = prev
+        return out
 
     # -- output ------------------------------------------------------------------------------
 
@@ -545,8 +606,24 @@ class AdaptiveIMM1D(AdaptiveIMM):
                     if e > 16.0 * r:
                         e = 16.0 * r
                     age += 1.0
-                    r += (e - r) / (age + 1.0 if age < horizon else horizon)
-                    r = r_min if r < r_min else (r_max if r > r_max else r)
+                    if age < horizon:
+                        e = r + (e - r) / (age + 1.0)
+                        e = r_min if e < r_min else (r_max if e > r_max else e)
+                        # the models' covariances are in units of r (while the data
+                        # dominate them, as at the start, exactly): a revised r revises them
+                        # too, or a track begun with r too small keeps a too small
+                        # covariance, reads its own start as large innovations and raises q
+                        # (round 2's slow q walk); past the horizon r moves by ~1 % a step
+                        # and this is left out (it runs for every object in every frame)
+                        f = e / r
+                        r = e
+                        sp *= f
+                        mp *= f
+                        mb *= f
+                        mc *= f
+                    else:
+                        r += (e - r) / horizon
+                        r = r_min if r < r_min else (r_max if r > r_max else r)
                 self._h = (bt, bx, 0.0, t1, h1x, 0.0)
             else:
                 self._h = (bt, bx, 0.0, *h[:3])
@@ -591,8 +668,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
                iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
                (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
-               cm * math.sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
-               math.sqrt(ism))
+               cm * _sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
+               _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
@@ -609,7 +686,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
                 cs * x0 + cm * xp, 0.0])
         e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * math.exp(e if e < 700.0 else 700.0))
+        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
         mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
         self._book = (t, zx, 0.0, d2m, nm, 0.0, w)
         if self._pend is not None or self._far is not None or self._backup is not None:

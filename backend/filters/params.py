@@ -109,9 +109,12 @@ class AdaptiveParams(BaseModel):
         "switching rate moving -> still")
     gate_sigma: float = num(4.5, 2.0, 20.0, "sigma", 0.5,
         "a measurement farther than this many standard deviations is not used as is")
-    outlier_rate_trust: float = num(0.02, 0.0, 1.0, "", 0.01,
+    outlier_rate_trust: float = num(0.005, 0.0, 1.0, "", 0.005,
         "below this estimated outlier rate a reachable jump is a maneuver at once (above it, "
-        "once the next measurement confirms it)")
+        "once the next measurement confirms it); one outlier raises the rate to "
+        "1 / noise_horizon, which decays below 0.005 in about 70 measurements: one false "
+        "detection seen in the last second is enough to make the next jump wait for its "
+        "confirmation")
     outlier_spread_mm: float = num(1000.0, 10.0, 20000.0, "mm", 100.0,
         "false detections lie within about this distance of the object (a ball seen on a "
         "robot nearby): with outliers seen, a measurement is used only where it is likelier "

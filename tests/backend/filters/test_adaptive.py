@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import random
+import statistics
 
 import pytest
 
@@ -53,37 +54,16 @@ def test_orientation_noise_estimate_converges() -> None:
     assert f.velocity()[0] == pytest.approx(2.0, abs=0.05)
 
 
-#: cells that miss 1.1 x the best on this test's sample (seed 2022, 4 runs: the first 4 of the
-#: experiment's 20), with the ratio they must stay under (measured + about 0.08); the
-#: experiment's 20-run table, in docs/experiments/filters/README.md, lists its own misses.
-#: Round 2 tightened every ceiling (round 1 in the comments). Bounced with outliers at 2 mm
-#: stays high on these 4 runs: the bounce is confirmed one frame late (a reachable jump is a
-#: maneuver only once the next measurement agrees, when outliers are about), 60-120 mm for
-#: two frames against an oracle tuned on the data (on 20 runs: 0.21 x the best).
-KNOWN_MISSES: dict[tuple[str, float, float], float] = {
-    ("bounced (3 -> 0.9 m/s)", 2.0, 0.0): 1.3,  # 1.3
-    ("moving 2 m/s", 2.0, 0.2): 1.2,  # 1.25
-    ("moving 3 m/s", 2.0, 0.2): 1.25,  # 1.3
-    ("bounced (3 -> 0.9 m/s)", 2.0, 0.2): 3.0,  # 3.0
-    ("moving 0.5 m/s", 20.0, 0.0): 1.35,  # 1.4
-    ("moving 1 m/s", 20.0, 0.0): 1.35,  # 1.4
-    ("moving 3 m/s", 20.0, 0.0): 1.55,  # 1.6
-    ("moving 0.5 m/s", 20.0, 0.2): 1.2,  # 1.25
-    ("moving 1 m/s", 20.0, 0.2): 1.3,  # 1.35
-}
-
-
 def test_acceptance_table_on_seeded_data() -> None:
-    """Every cell within 1.1 x the best of raw / median / paper / tuned Kalman, except the
-    known misses, which must not get worse; the resting ball with 20 mm noise and outliers
-    p = 0.2 at most 5 mm."""
-    rows = acc.table(seed=2022, runs=4)
+    """Every cell within 1.1 x the best of raw / median / paper / tuned Kalman (round 3: no
+    known misses left); the resting ball with 20 mm noise and outliers p = 0.2 at most 5 mm.
+    The experiment's own data (seed 2022, 20 runs, a few seconds): on 4 runs the oracle,
+    chosen on the very data it is scored on, fits the few runs' noise, and 4 cells read
+    1.13-2.9 there while all are within 1.1 on 20 (docs/experiments/filters/README.md)."""
+    rows = acc.table(seed=2022, runs=20)
     assert len(rows) == 28
-    bad = {}
-    for r in rows:
-        key = (r["scenario"], r["noise_mm"], r["p_out"])
-        if r["ratio"] > KNOWN_MISSES.get(key, acc.TOLERANCE):
-            bad[key] = round(r["ratio"], 2)
+    bad = {(r["scenario"], r["noise_mm"], r["p_out"]): round(r["ratio"], 3)
+           for r in rows if r["ratio"] > acc.TOLERANCE}
     assert not bad, bad
     still = next(r for r in rows
                  if r["scenario"] == "still" and r["noise_mm"] == 20.0 and r["p_out"] == 0.2)
@@ -176,3 +156,44 @@ def test_bad_measurements_do_not_break_it() -> None:
         e = f.update(i * DT, 1.0, 1.0)
     assert all(math.isfinite(v) for v in (*e, *f.velocity()))
     assert e == pytest.approx((1.0, 1.0), abs=1.0)
+
+
+def test_a_track_begun_with_too_small_a_noise_guess_learns_q_down() -> None:
+    """20 mm noise, the filter's guess before any data 10 mm: the noise estimate rescales the
+    models' covariances as it grows, so the start's innovations do not read as model error and
+    q falls on a straight run within the first second (round 2: median 74 mm/s^2 at 1 s, the
+    oracle's 10 reached only later; now about 3.5)."""
+    qs = []
+    for seed in range(20):
+        rng = random.Random(seed)
+        f = AdaptiveIMM()
+        for t, _x, _y, zx, zy in acc.measure(acc.moving(2000.0), 1.0, 20.0, 0.0, rng):
+            f.update(t, zx, zy)
+        qs.append(math.sqrt(f.q_m))
+    assert statistics.median(qs) <= 10.0
+
+
+def test_constant_deceleration_does_not_restart_the_track() -> None:
+    """A ball rolling out at 3 m/s, -0.4 m/s^2, 2 mm noise: when the lag passes the gate, q is
+    raised and the step redone; no restart from one measurement (round 2: 7 of 20 runs
+    restarted, 1-4 times each, in the first second)."""
+    for seed in range(20):
+        rng = random.Random(100 + seed)
+        f = AdaptiveIMM()
+        for t, _x, _y, zx, zy in acc.measure(acc.bounced, 0.95, 2.0, 0.0, rng):
+            f.update(t, zx, zy)
+        assert f.rejected == 0, seed
+
+
+def test_a_far_measurement_still_restarts_the_track() -> None:
+    """The q raise is for a lag a little past the gate: a kick (5 m/s from rest, 2 mm noise)
+    is still a jump, taken at once without outliers about."""
+    rng = random.Random(5)
+    f = AdaptiveIMM()
+    run = acc.measure(acc.kicked, 1.1, 2.0, 0.0, rng)
+    for t, _x, _y, zx, zy in run:
+        ex, ey = f.update(t, zx, zy)
+    _t, x, y, _zx, _zy = run[-1]
+    assert f.rejected >= 1
+    assert math.hypot(ex - x, ey - y) < 10.0
+    assert math.hypot(*f.velocity()) > 3000.0
