@@ -180,8 +180,12 @@ class TrackerParams(Group):
     through the relay: on loopback unless the relay is started with --tracker-out)."""
 
     publish: bool = Field(default=True, description="send the world estimate to the relay as "
-                          "tracked vision, one frame per world tick (the relay puts it on "
-                          "loopback only, unless started with --tracker-out)")
+                          "tracked vision, one frame per world tick up to max_hz (the relay "
+                          "puts it on loopback only, unless started with --tracker-out)")
+    max_hz: float = num(100.0, 10.0, 1000.0, "Hz", 10.0,
+                        "at most this many tracked frames a second (eight cameras update the "
+                        "world hundreds of times a second; the game controller and the "
+                        "autorefs need no more)")
     publish_in_replay: bool = Field(default=False, description="publish it while a log is "
                                     "replayed too (off: a replay is never mistaken for the "
                                     "live field)")

@@ -5,6 +5,7 @@ started with --tracker-out: the game controller adopts the first tracker it hear
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -22,7 +23,8 @@ TOPIC = b"tracker-out"
 
 
 class TrackerPublisher(SocketProcessor):
-    """One TrackerWrapperPacket per world written: ``uuid`` constant for the run,
+    """One TrackerWrapperPacket per world written, at most ``tracker.max_hz`` by the capture
+    clock (the newest world then): ``uuid`` constant for the run,
     ``source_name`` "Touchline", ``frame_number`` increasing by one per packet. Sent while
     ``tracker.publish`` is on, and in replay only with ``tracker.publish_in_replay``;
     recorded in live sessions whatever the parameters say."""
@@ -43,10 +45,13 @@ class TrackerPublisher(SocketProcessor):
         #: every packet of a live session (the session recorder: time_ns, type, bytes)
         self.record: Callable[[int, int, bytes], None] = lambda t, k, b: None
         self.sent = RateCounter()
+        self.min_period_s = 0.01  # tracker.max_hz
+        self._last_t = -math.inf  # capture time of the last frame published
 
     def configure(self, params: StationParams) -> None:
         self.publish = params.tracker.publish
         self.publish_in_replay = params.tracker.publish_in_replay
+        self.min_period_s = 1.0 / params.tracker.max_hz
 
     def sending(self) -> bool:
         """Whether tracked vision goes to the relay now."""
@@ -60,11 +65,14 @@ class TrackerPublisher(SocketProcessor):
         send = self.attached and self.publish and (self.publish_in_replay or not replay)
         if replay and not send:
             return  # nothing recorded in replay, nothing sent
-        for w in worlds:
-            self.frame_number += 1
-            pkt = tracked_packet(w, self.uuid, self.frame_number, self.source_name)
-            if not replay:
-                self.record(w.receive_time_ns or time.time_ns(), TYPE_TRACKER_2020, pkt)
-            if send:
-                self.send([TOPIC, pkt])
-                self.sent.add()
+        w = worlds[-1]  # the newest estimate, at most max_hz (by the capture clock)
+        if w.t_capture < self._last_t + self.min_period_s and w.t_capture >= self._last_t:
+            return
+        self._last_t = w.t_capture
+        self.frame_number += 1
+        pkt = tracked_packet(w, self.uuid, self.frame_number, self.source_name)
+        if not replay:
+            self.record(w.receive_time_ns or time.time_ns(), TYPE_TRACKER_2020, pkt)
+        if send:
+            self.send([TOPIC, pkt])
+            self.sent.add()

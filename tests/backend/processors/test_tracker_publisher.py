@@ -53,23 +53,38 @@ def params(**tracker: Any) -> StationParams:
     return StationParams.model_validate({"tracker": tracker})
 
 
-async def test_one_packet_per_world_uuid_constant_frames_increasing() -> None:
+async def test_the_newest_world_at_most_max_hz_uuid_constant_frames_increasing() -> None:
     tp, bus, sock, recorded = setup()
-    tp.configure(StationParams())
+    tp.configure(StationParams())  # tracker.max_hz 100: 10 ms of capture time apart
     w = bus.of(topics.WORLD)
     w.write(world(1.0))
-    w.write(world(1.01, 200.0))  # two worlds before one tick: two packets
+    w.write(world(1.004, 200.0))  # two worlds before one tick: the newest
     await tp.tick()
-    w.write(world(1.02, 300.0))
+    w.write(world(1.009, 250.0))  # 5 ms later: not yet
+    await tp.tick()
+    w.write(world(1.0145, 300.0))  # 10.5 ms after the last one sent
     await tp.tick()
     await tp.tick()  # nothing new: nothing sent
     ps = packets(sock)
-    assert [p.tracked_frame.frame_number for p in ps] == [1, 2, 3]
+    assert [p.tracked_frame.frame_number for p in ps] == [1, 2]
     assert {p.uuid for p in ps} == {"run-uuid"}
     assert {p.source_name for p in ps} == {"Touchline"}
-    assert [p.tracked_frame.robots[0].pos.x for p in ps] == pytest.approx([0.1, 0.2, 0.3])
+    assert [p.tracked_frame.robots[0].pos.x for p in ps] == pytest.approx([0.2, 0.3])
     assert [b for _, _, b in recorded] == [f[1] for f in sock.sent]  # the same bytes
     assert {k for _, k, _ in recorded} == {TYPE_TRACKER_2020}
+    w.write(world(0.5, 400.0))  # time went back (a replay seeked): published at once
+    await tp.tick()
+    assert len(packets(sock)) == 3
+
+
+async def test_max_hz_is_a_parameter() -> None:
+    tp, bus, sock, _ = setup()
+    tp.configure(params(max_hz=1000.0))
+    w = bus.of(topics.WORLD)
+    for i in range(5):
+        w.write(world(1.0 + 0.002 * i, 100.0 * i))
+        await tp.tick()
+    assert len(packets(sock)) == 5
 
 
 async def test_switched_off_it_only_records() -> None:
