@@ -44,10 +44,13 @@ class RelayIngest(SocketProcessor):
         await self.sock.poll()
 
     async def tick(self) -> None:
-        # drain what is there through the plain socket (no future per message), bounded so
-        # other tasks get a turn; the pass after this tick takes the lot through the pipeline
+        # drain what is there through the plain socket (no future per message), at most what
+        # the smallest ingest topic holds: the pass after this tick takes the lot through the
+        # pipeline before the next drain, so a burst is never overwritten on the bus unread
         recv = self._out.recv_multipart
-        for _ in range(1000):
+        limit = min(self.vision_packets.capacity, self.referee_packets.capacity,
+                    self.feedback_packets.capacity)
+        for _ in range(limit):
             try:
                 frames = recv(zmq.NOBLOCK)
             except zmq.Again:
