@@ -148,9 +148,12 @@ class FilterSettings(BaseModel):
     """Which filter each object uses, and the parameters of every kind."""
 
     model_config = _CFG
-    ball: FilterKind = Field(default="adaptive", description="filter of the ball",
+    # kalman stays the default until the adaptive filter is tried in closed loop: with it,
+    # fieldsim's substituted robots did not come to rest at the halfway line in 2 of 3 runs
+    # (tests/integration/test_strategy_sim.py), with kalman in all (docs/experiments/filters)
+    ball: FilterKind = Field(default="kalman", description="filter of the ball",
                              json_schema_extra={"unit": "", "step": None})
-    robot: FilterKind = Field(default="adaptive",
+    robot: FilterKind = Field(default="kalman",
                               description="filter of every robot without an override",
                               json_schema_extra={"unit": "", "step": None})
     robot_overrides: dict[str, FilterKind] = Field(

@@ -52,7 +52,7 @@ FILTERS: list[tuple[str, FilterMaker]] = [
     ("paper: median + weighted avg (0.05/0.95)", PaperFilter),
     ("Kalman CV (defaults, no gate)", KalmanCV.from_params),
     ("Kalman CV, gate 150 mm", lambda: KalmanCV.from_params(KalmanParams(gate_mm=150.0))),
-    ("adaptive (the default)", AdaptiveIMM),
+    ("adaptive", AdaptiveIMM),
 ]
 
 
@@ -503,11 +503,17 @@ def write_readme(out: Path, res: dict[str, Any]) -> None:
 
 
 def adaptive_section(acc: dict[str, Any]) -> list[str]:
-    """(d): the default filter's design and its acceptance table (issue 13 section 3)."""
+    """(d): the adaptive filter's design and its acceptance table (issue 13 section 3)."""
     sv = acc["still_velocity"]
     lg = acc["lag_2m_s"]
     ne = acc["noise_estimate"]
-    L = ["## (d) One filter that fits the data: `adaptive`, the default", "",
+    L = ["## (d) One filter that fits the data: `adaptive`", "",
+         "Not the default yet: it meets the table below on synthetic data, but in closed "
+         "loop on fieldsim the substituted robots of "
+         "`tests/integration/test_strategy_sim.py` did not come to rest at the halfway line "
+         "in 2 of 3 runs with it (all 3 with `kalman`); a robot's gain C is estimated from the "
+         "filtered positions, and the still model's running mean lags a robot that starts "
+         "creeping (suspected, not proven). Select it per class or per robot.", "",
          "The filters above are tuned for one noise level: the Kalman filter assumes 3 mm, so "
          "at 20 mm it follows the noise, and the paper's filter is precise on a still object "
          "but lags a moving one. `adaptive` (`backend/filters/adaptive.py`) needs no tuning:",

@@ -1,4 +1,4 @@
-"""The adaptive (default) filter: its noise estimate converges on data of known noise, and the
+"""The adaptive filter: its noise estimate converges on data of known noise, and the
 acceptance table of issue 13 section 3 holds on seeded synthetic data (a property of the
 algorithm, not a timing)."""
 
@@ -137,8 +137,8 @@ def test_kicked_ball_is_followed_within_two_frames_despite_outliers() -> None:
     assert late[int(0.95 * (len(late) - 1))] < 10.0
 
 
-def test_is_the_default_and_builds_from_its_params() -> None:
-    s = FilterSettings()
+def test_is_selectable_and_builds_from_its_params() -> None:
+    s = FilterSettings.model_validate({"robot": "adaptive", "ball": "adaptive"})
     assert s.robot == "adaptive" and s.ball == "adaptive"
     f = make_filter("adaptive", AdaptiveParams(init_noise_mm=50.0))
     assert isinstance(f, AdaptiveIMM) and f.noise() == pytest.approx(50.0)
