@@ -149,8 +149,8 @@ class FilterSettings(BaseModel):
 
     model_config = _CFG
     # kalman stays the default until the adaptive filter is tried in closed loop: with it,
-    # fieldsim's substituted robots did not come to rest at the halfway line in 2 of 3 runs
-    # (tests/integration/test_strategy_sim.py), with kalman in all (docs/experiments/filters)
+    # fieldsim's substituted robots did not come to rest at the halfway line in 2 of 5 runs
+    # (tests/integration/test_strategy_sim.py), 0 of 3 with kalman (docs/experiments/filters)
     ball: FilterKind = Field(default="kalman", description="filter of the ball",
                              json_schema_extra={"unit": "", "step": None})
     robot: FilterKind = Field(default="kalman",

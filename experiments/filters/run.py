@@ -511,9 +511,10 @@ def adaptive_section(acc: dict[str, Any]) -> list[str]:
          "Not the default yet: it meets the table below on synthetic data, but in closed "
          "loop on fieldsim the substituted robots of "
          "`tests/integration/test_strategy_sim.py` did not come to rest at the halfway line "
-         "in 2 of 3 runs with it (all 3 with `kalman`); a robot's gain C is estimated from the "
-         "filtered positions, and the still model's running mean lags a robot that starts "
-         "creeping (suspected, not proven). Select it per class or per robot.", "",
+         "in 2 of 5 runs of the module with it (0 of 3 with `kalman`); a robot's gain C is "
+         "estimated from the filtered positions, and the still model's running mean lags a "
+         "robot that starts creeping (suspected, not proven). Select it per class or per "
+         "robot.", "",
          "The filters above are tuned for one noise level: the Kalman filter assumes 3 mm, so "
          "at 20 mm it follows the noise, and the paper's filter is precise on a still object "
          "but lags a moving one. `adaptive` (`backend/filters/adaptive.py`) needs no tuning:",
