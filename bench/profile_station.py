@@ -1,11 +1,18 @@
-"""Profile of the station thread (the backend's control loop) at full scale (figures, not a test).
+"""Profiles of the station at full scale (figures, not a test): issue 11 wants a profile before
+and after every change to the hot path.
 
-Starts the launcher like bench/loop_bench.py (built-in simulator at 8 cameras x 75 Hz, division
-A, 11 v 11, the "match" play) with ``TOUCHLINE_PROFILE`` set, profiles ``--seconds`` after a
-5 s warm-up, stops it and prints the top of the station thread's cProfile by own time and
-by cumulative time.
+Starts the launcher's station (built-in simulator at 8 cameras x 75 Hz, division A, 11 v 11,
+the "match" play) and profiles one part under cProfile for ``--seconds``:
 
-    PYTHONPATH=. .venv/bin/python bench/profile_station.py [--seconds 20] [--out /tmp/st.prof]
+- ``--part backend`` (default): the station thread, through ``TOUCHLINE_PROFILE`` (from 5 s
+  after the start; the backend writes the file itself, backend/station_loop.py);
+- ``--part relay``: the relay, through its ``--profile`` (written on its normal stop).
+
+Prints the top by own time and by cumulative time. cProfile slows the part down: read the
+shares, and take CPU figures from bench/loop_bench.py.
+
+    PYTHONPATH=. .venv/bin/python bench/profile_station.py [--part backend|relay]
+        [--seconds 20] [--out FILE]
 """
 
 from __future__ import annotations
@@ -21,36 +28,50 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def wait_for_file(path: Path, timeout_s: float) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not (path.exists() and path.stat().st_size > 0) and time.monotonic() < deadline:
+        time.sleep(0.1)  # polled: the process writes it in one go
+    time.sleep(0.5)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--part", choices=["backend", "relay"], default="backend")
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
-    ap.add_argument("--out", default="/tmp/touchline-station.prof")
+    ap.add_argument("--out", default=None, help="default /tmp/touchline-<part>.prof")
     ap.add_argument("--top", type=int, default=30)
     a = ap.parse_args()
-    out = Path(a.out)
+    out = Path(a.out or f"/tmp/touchline-{a.part}.prof")
     out.unlink(missing_ok=True)
     sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
            "--camera-hz", str(a.hz)]
-    env = {**os.environ, "TOUCHLINE_PROFILE": str(out), "TOUCHLINE_PROFILE_AFTER": "5",
-           "TOUCHLINE_PROFILE_FOR": str(a.seconds)}
-    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated",
-                             *(f"--sim-arg={x}" for x in sim),
-                             "--backend-arg=--set", "--backend-arg=strategy.play=match"],
-                            cwd=ROOT, env=env, stdout=subprocess.PIPE,
+    args = [sys.executable, "-m", "launcher", "--isolated", *(f"--sim-arg={x}" for x in sim),
+            "--backend-arg=--set", "--backend-arg=strategy.play=match"]
+    env = dict(os.environ)
+    if a.part == "backend":
+        env.update(TOUCHLINE_PROFILE=str(out), TOUCHLINE_PROFILE_AFTER="5",
+                   TOUCHLINE_PROFILE_FOR=str(a.seconds))
+    else:
+        args.append(f"--relay-arg=--profile={out}")
+    proc = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
     for line in proc.stdout:
         if line.startswith("TOUCHLINE_READY "):
             break
-    for _ in range(int((a.seconds + 30) * 10)):  # bounded: the station writes it after 5+N s
-        if out.exists() and out.stat().st_size > 0:
-            break
-        time.sleep(0.1)
-    time.sleep(0.5)  # the file is written in one go; let the write finish
+    else:
+        raise SystemExit("station did not start")
+    if a.part == "backend":  # the backend writes it 5 + N s after its start, still running
+        wait_for_file(out, a.seconds + 30)
+    else:
+        time.sleep(a.seconds)
     proc.terminate()
     proc.wait(timeout=30)
+    if a.part == "relay":  # the relay writes it as it stops
+        wait_for_file(out, 10)
     st = pstats.Stats(str(out))
     st.sort_stats("tottime").print_stats(a.top)
     st.sort_stats("cumulative").print_stats(a.top)
