@@ -1,12 +1,12 @@
-import { spawn, type ChildProcess } from "node:child_process";
+import type { ChildProcess } from "node:child_process";
 import { expect, test } from "@playwright/test";
+import { startTokenStation, stopStation } from "./helpers";
 
 // The operator token on a station that requires it (docs/security.md): a station of its own,
 // started with --require-token (no simulator), beside the one the config starts. A browser
 // that opened the printed login URL works as on loopback (the cookie goes with every request
 // and the websocket); a second browser without it is told how to log in when it tries a change.
 
-const root = new URL("../..", import.meta.url).pathname;
 const port = Number(process.env.E2E_PORT ?? "18000") + 7;
 const base = `http://127.0.0.1:${port}`;
 let station: ChildProcess | null = null;
@@ -14,41 +14,11 @@ let loginUrl = "";
 
 test.beforeAll(async () => {
   test.setTimeout(90_000);
-  const proc = spawn(`${root}.venv/bin/python`, ["-m", "launcher", "--isolated", "--port", String(port), "--sim", "none", "--require-token"], {
-    cwd: root,
-    env: { ...process.env, PYTHONUNBUFFERED: "1" },
-    stdio: ["ignore", "pipe", "pipe"],
-  });
-  station = proc;
-  loginUrl = await new Promise<string>((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error("the station printed no login URL")), 80_000);
-    let url = "";
-    let buf = "";
-    proc.stdout?.on("data", (chunk: Buffer) => {
-      buf += chunk.toString();
-      for (const line of buf.split("\n")) {
-        if (line.startsWith("TOUCHLINE_LOGIN ")) {
-          const info = JSON.parse(line.slice("TOUCHLINE_LOGIN ".length)) as { role: string; url: string };
-          if (info.role === "operator") url = info.url;
-        }
-        if (line.startsWith("TOUCHLINE_READY ") && url) {
-          clearTimeout(timer);
-          resolve(url);
-        }
-      }
-    });
-    proc.stderr?.resume();
-    proc.on("exit", (code) => reject(new Error(`the station exited (${code})`)));
-  });
+  ({ proc: station, loginUrl } = await startTokenStation(port, ["--sim", "none"]));
 });
 
 test.afterAll(async () => {
-  const proc = station;
-  if (!proc || proc.exitCode !== null) return;
-  const gone = new Promise((resolve) => proc.on("exit", resolve));
-  proc.kill("SIGTERM");
-  await Promise.race([gone, new Promise((resolve) => setTimeout(resolve, 15_000))]);
-  if (proc.exitCode === null) proc.kill("SIGKILL");
+  await stopStation(station);
 });
 
 test("the login URL makes an operator; a browser without it is told how to log in", async ({ browser }) => {

@@ -1,5 +1,6 @@
 // Helpers shared by the end-to-end specs: the world as /api/world reports it, opening the
 // page once the station streams, and the page's test hooks (window.__touchline).
+import { spawn, type ChildProcess } from "node:child_process";
 import { expect, type Page } from "@playwright/test";
 
 export interface Control { algorithm: string; phase: string; c_estimate: number }
@@ -70,3 +71,47 @@ export const stats = (page: Page) =>
 /** Roles of our robots in the latest world the page holds (our team from the world's strategy). */
 export const ourRoles = (page: Page) =>
   page.evaluate(() => (window as unknown as { __touchline: Hooks }).__touchline.roles(true).map((r) => r.role));
+
+/** A station of a spec's own (launcher --isolated on ``port`` with ``args``), started with
+ * --require-token: resolves with the process and the operator's login URL it printed. */
+export async function startTokenStation(
+  port: number,
+  args: string[],
+): Promise<{ proc: ChildProcess; loginUrl: string }> {
+  const root = new URL("../..", import.meta.url).pathname;
+  const proc = spawn(
+    `${root}.venv/bin/python`,
+    ["-m", "launcher", "--isolated", "--port", String(port), "--require-token", ...args],
+    { cwd: root, env: { ...process.env, PYTHONUNBUFFERED: "1" }, stdio: ["ignore", "pipe", "pipe"] },
+  );
+  const loginUrl = await new Promise<string>((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error("the station printed no login URL")), 80_000);
+    let url = "";
+    let buf = "";
+    proc.stdout?.on("data", (chunk: Buffer) => {
+      buf += chunk.toString();
+      for (const line of buf.split("\n")) {
+        if (line.startsWith("TOUCHLINE_LOGIN ")) {
+          const info = JSON.parse(line.slice("TOUCHLINE_LOGIN ".length)) as { role: string; url: string };
+          if (info.role === "operator") url = info.url;
+        }
+        if (line.startsWith("TOUCHLINE_READY ") && url) {
+          clearTimeout(timer);
+          resolve(url);
+        }
+      }
+    });
+    proc.stderr?.resume();
+    proc.on("exit", (code) => reject(new Error(`the station exited (${code})`)));
+  });
+  return { proc, loginUrl };
+}
+
+/** Stops a station started by ``startTokenStation`` (SIGTERM, SIGKILL after 15 s). */
+export async function stopStation(proc: ChildProcess | null): Promise<void> {
+  if (!proc || proc.exitCode !== null) return;
+  const gone = new Promise((resolve) => proc.on("exit", resolve));
+  proc.kill("SIGTERM");
+  await Promise.race([gone, new Promise((resolve) => setTimeout(resolve, 15_000))]);
+  if (proc.exitCode === null) proc.kill("SIGKILL");
+}

@@ -1,6 +1,6 @@
-import { spawn, type ChildProcess } from "node:child_process";
+import type { ChildProcess } from "node:child_process";
 import { expect, test, type Page } from "@playwright/test";
-import type { World } from "./helpers";
+import { startTokenStation, stopStation, type World } from "./helpers";
 
 // Several operators (issue 12, docs/security.md): a station of its own with --require-token
 // and a relay that sends nothing until armed (--require-arming), beside the one the config
@@ -8,7 +8,6 @@ import type { World } from "./helpers";
 // after confirming; arming and disarming; the simulator's ball contact in the robot table; the
 // operator action list says who did what.
 
-const root = new URL("../..", import.meta.url).pathname;
 const port = Number(process.env.E2E_PORT ?? "18000") + 8;
 const base = `http://127.0.0.1:${port}`;
 let station: ChildProcess | null = null;
@@ -16,41 +15,11 @@ let loginUrl = "";
 
 test.beforeAll(async () => {
   test.setTimeout(90_000);
-  const proc = spawn(
-    `${root}.venv/bin/python`,
-    ["-m", "launcher", "--isolated", "--port", String(port), "--require-token", "--relay-arg=--require-arming"],
-    { cwd: root, env: { ...process.env, PYTHONUNBUFFERED: "1" }, stdio: ["ignore", "pipe", "pipe"] },
-  );
-  station = proc;
-  loginUrl = await new Promise<string>((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error("the station printed no login URL")), 80_000);
-    let url = "";
-    let buf = "";
-    proc.stdout?.on("data", (chunk: Buffer) => {
-      buf += chunk.toString();
-      for (const line of buf.split("\n")) {
-        if (line.startsWith("TOUCHLINE_LOGIN ")) {
-          const info = JSON.parse(line.slice("TOUCHLINE_LOGIN ".length)) as { role: string; url: string };
-          if (info.role === "operator") url = info.url;
-        }
-        if (line.startsWith("TOUCHLINE_READY ") && url) {
-          clearTimeout(timer);
-          resolve(url);
-        }
-      }
-    });
-    proc.stderr?.resume();
-    proc.on("exit", (code) => reject(new Error(`the station exited (${code})`)));
-  });
+  ({ proc: station, loginUrl } = await startTokenStation(port, ["--relay-arg=--require-arming"]));
 });
 
 test.afterAll(async () => {
-  const proc = station;
-  if (!proc || proc.exitCode !== null) return;
-  const gone = new Promise((resolve) => proc.on("exit", resolve));
-  proc.kill("SIGTERM");
-  await Promise.race([gone, new Promise((resolve) => setTimeout(resolve, 15_000))]);
-  if (proc.exitCode === null) proc.kill("SIGKILL");
+  await stopStation(station);
 });
 
 const world = async (page: Page) => (await (await page.request.get("/api/world")).json()) as World;
