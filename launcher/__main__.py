@@ -17,18 +17,35 @@ import tempfile
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
 from backend.access import is_loopback
 from sslnet import defaults
-from sslnet.multicast import loopback_multicast_ok
+from sslnet.multicast import interface_multicast_flag, loopback_multicast_ok
 
 from .supervisor import ROOT, Ports, StationConfig, Supervisor, command_lines
 
 ROOT_VAR = ROOT / "var"  # the backend's default state folder
 
 log = logging.getLogger("touchline.launcher")
+
+
+LO_FLAG_WARNING = (
+    "lo has no MULTICAST flag: the station works without it, but the league's tools "
+    "(ssl-vision-client, ssl-game-controller) skip interfaces without it: on a machine "
+    "whose only interface is lo they hear nothing of this station. As root run:\n"
+    "  ip link set lo multicast on\n(make run does this for you when run as root)")
+
+
+def lo_flag_warning(
+    interface: str, flag: Callable[[str], bool | None] = interface_multicast_flag
+) -> str | None:
+    """The warning for a station on loopback whose lo lacks the MULTICAST flag, else None."""
+    if is_loopback(interface) and flag("lo") is False:
+        return LO_FLAG_WARNING
+    return None
 
 
 def wait_http(url: str, timeout_s: float) -> bool:
@@ -99,6 +116,8 @@ def main() -> int:
                   "  ip route replace 224.0.0.0/4 dev lo src 127.0.0.1\n"
                   "(make run does this for you when run as root)")
         return 2
+    if (warning := lo_flag_warning(a.interface)) is not None:
+        log.warning(warning)
 
     replay_args: list[str] = []
     if a.log is not None:

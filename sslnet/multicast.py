@@ -7,6 +7,7 @@ controller) listen at once. Senders set IP_MULTICAST_IF, IP_MULTICAST_LOOP and a
 
 from __future__ import annotations
 
+import os
 import socket
 import struct
 
@@ -64,9 +65,28 @@ def open_udp_server(host: str, port: int) -> socket.socket:
     return sock
 
 
+IFF_MULTICAST = 0x1000  # linux/if.h
+
+
+def interface_multicast_flag(name: str = "lo", *, sysfs: str = "/sys/class/net") -> bool | None:
+    """Whether interface ``name`` has the MULTICAST flag (``ip link``: ``<LOOPBACK,MULTICAST,UP>``);
+    None when that cannot be read (not Linux, no such interface).
+
+    Our own sockets do not need it on lo (they join with the interface address and send with
+    IP_MULTICAST_IF, so ``loopback_multicast_ok`` passes without it), but the league's Go
+    tools (ssl-vision-client, ssl-game-controller: ssl-go-tools' sslnet) listen only on
+    interfaces that have it. A lo without it (a fresh container or network namespace) is
+    skipped, and on a machine whose only multicast traffic is on lo they hear nothing.
+    """
+    try:
+        with open(os.path.join(sysfs, name, "flags"), encoding="ascii") as f:
+            return bool(int(f.read().strip(), 16) & IFF_MULTICAST)
+    except (OSError, ValueError):
+        return None
+
+
 def loopback_multicast_ok() -> bool:
     """True if a multicast datagram sent on 127.0.0.1 comes back to a receiver on lo."""
-    import os
     import select
 
     group = "239.255.77.77"
