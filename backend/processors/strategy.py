@@ -23,6 +23,10 @@ from .common import badlog
 #: an engine answer older than this is not used (the built-in code is, as a fallback)
 ENGINE_MAX_AGE_S = 0.25
 DRIBBLER_RPM = 3000.0
+#: a robot's word on ball contact counts for this long after its answer (the simulation
+#: protocol answers every command; grSim's status comes at its own rate)
+CONTACT_MAX_AGE_S = 0.2
+
 
 class StrategyProcessor(Processor):
     """Decides targets: operator targets first, the selected play for the rest of our team
@@ -61,6 +65,17 @@ class StrategyProcessor(Processor):
         fb = views.get((team, rid))
         return bool(fb is not None and fb.ball_contact)
 
+    def contacts(self, team: Team) -> dict[int, bool]:
+        """Ball contact of each of ``team``'s robots that reports it now (answered within
+        ``CONTACT_MAX_AGE_S``); the others are judged from the positions."""
+        out: dict[int, bool] = {}
+        for (t, rid), fb in (self.feedback.latest_value() or {}).items():
+            if t == team:
+                c = fb.contact(CONTACT_MAX_AGE_S)
+                if c is not None:
+                    out[rid] = c
+        return out
+
     def configure(self, params: StationParams) -> None:
         t = params.team
         self.our_team = t.our_team
@@ -84,7 +99,7 @@ class StrategyProcessor(Processor):
             now = time.monotonic() - self._t0
             prep = self.core.prepare(world, self.geometry.latest_value(), self.referee_source(),
                                      self.params, self.our_team, self.our_side_negative,
-                                     self.side_from_referee, now)
+                                     self.side_from_referee, now, self.contacts(self.our_team))
             keeper = await self._engine_keeper(prep)
             team = self.our_team
             # roles and paths in a worker thread: a slow decision never holds up a control

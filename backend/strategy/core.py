@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -59,7 +60,9 @@ class StrategyCore:
 
     def prepare(self, world: WorldState, geometry: dict[str, float] | None,
                 referee: RefereeState | None, params: StrategyParams, our_team: Team,
-                our_side_negative: bool, side_from_referee: bool, now: float) -> Prepared:
+                our_side_negative: bool, side_from_referee: bool, now: float,
+                contacts: Mapping[int, bool] | None = None) -> Prepared:
+        """``contacts``: the ball contact our robots report (by id; absent: not said)."""
         fs = Field.from_geometry(geometry)
         negative = our_side_negative
         self.side_from_referee = False
@@ -80,8 +83,11 @@ class StrategyCore:
                 continue
             x, y = frame.point(r.x, r.y)
             vx, vy = frame.point(r.vx, r.vy)
-            b = Bot(r.id, x, y, frame.angle(r.orientation), vx, vy)
-            (ours if r.team == our_team else theirs).append(b)
+            if r.team == our_team:
+                contact = contacts.get(r.id) if contacts else None
+                ours.append(Bot(r.id, x, y, frame.angle(r.orientation), vx, vy, contact))
+            else:
+                theirs.append(Bot(r.id, x, y, frame.angle(r.orientation), vx, vy))
         ball: Ball | None = None
         ball_field: tuple[float, float] | None = None
         vel_field = (0.0, 0.0)

@@ -52,6 +52,9 @@ class Bot:
     orientation: float
     vx: float = 0.0
     vy: float = 0.0
+    #: the robot's own word on the ball at its dribbler (its feedback: simulation protocol's
+    #: dribbler_ball_contact, grSim's infrared); None when it says nothing (then geometry)
+    contact: bool | None = None
 
     @property
     def xy(self) -> tuple[float, float]:

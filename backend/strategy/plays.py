@@ -585,7 +585,14 @@ def _pull_pose(bot: Bot, ball: Ball, dp: tuple[float, float]) -> tuple[float, fl
 
 
 def _pull_hold(bot: Bot, ball: Ball, dp: tuple[float, float]) -> bool:
+    """Whether the placer holds the ball for pulling: at the ball from the mark's side, facing
+    it, and (for a robot that reports it) with the ball at its dribbler. Backing up before the
+    dribbler has the ball leaves the ball behind, and the placer comes back for it: seen as a
+    robot oscillating 40-60 mm in front of the ball for the whole 30 s, more often when the
+    filtered position lags a little. With no word from the robot, the positions decide."""
     along, across, heading_err = _pull_pose(bot, ball, dp)
+    if bot.contact is not None:
+        return bot.contact and 0.0 < along < CONTACT_MM + 120.0 and heading_err < 0.5
     return 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25
 
 

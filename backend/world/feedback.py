@@ -109,6 +109,8 @@ class RobotFeedbackState:
     id: int
     transport: Transport
     ball_contact: bool = False
+    #: whether its answers carry ball contact at all (robot-box answers may not)
+    reports_contact: bool = False
     last_answer: float | None = None
     last_kick: KickKind | None = None
     last_kick_time: float | None = None
@@ -137,6 +139,16 @@ class RobotFeedbackView:
     loss: float | None  # 1 - answers / commands sent
     battery_v: float | None
     kicker_v: float | None
+    #: its answers carry ball contact (else ``ball_contact`` False means "not said")
+    reports_contact: bool = False
+
+    def contact(self, max_age_s: float) -> bool | None:
+        """Ball contact as the robot reports it now; None when it does not say (no contact
+        in its answers, no answer lately): the strategy then judges from the positions."""
+        if not self.reports_contact or self.no_answer or self.age_s is None \
+                or self.age_s > max_age_s:
+            return None
+        return self.ball_contact
 
 
 class FeedbackTracker:
@@ -175,6 +187,7 @@ class FeedbackTracker:
             st.last_answer = now
             if a.ball_contact is not None:
                 st.ball_contact = a.ball_contact
+                st.reports_contact = True
             if a.kick is not None:
                 st.last_kick, st.last_kick_time = a.kick, now
             if a.battery_v is not None:
@@ -225,6 +238,7 @@ class FeedbackTracker:
             loss=loss,
             battery_v=st.battery_v,
             kicker_v=st.kicker_v,
+            reports_contact=st.reports_contact,
         )
 
     def views(self, now: float) -> dict[tuple[Team, int], RobotFeedbackView]:

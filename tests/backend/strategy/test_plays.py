@@ -234,6 +234,35 @@ def test_placement_from_against_the_wall_pulls_the_ball() -> None:
     assert pull.orientation == pytest.approx(0.0)
 
 
+def test_a_pulling_placer_that_reports_no_contact_rolls_on_instead_of_backing_up() -> None:
+    """The robot's own word on the ball decides when it reports it: 50 mm short of the
+    ball, within the geometric hold band, a robot saying "no ball" goes on rolling onto it
+    (backing up then left the ball behind, again and again); saying "ball" it pulls."""
+    ball = Ball(FS.half_length - 40.0, -150.0)  # on their goal line: no room behind it
+    dp = (FS.half_length - 2200.0, 0.0)
+    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
+    ours = team(6, x_range=(-4000.0, -3000.0))
+    u = (dp[0] - ball.x, dp[1] - ball.y)
+    n = math.hypot(*u)
+    u = (u[0] / n, u[1] / n)
+    face = math.atan2(-u[1], -u[0])
+    gap = 111.5 + 50.0
+    pulls_to = (dp[0] + u[0] * 111.5, dp[1] + u[1] * 111.5)
+
+    def placer(contact: bool | None) -> Intent:
+        ours[3] = Bot(3, ball.x + u[0] * gap, ball.y + u[1] * gap, face, contact=contact)
+        out, _ = decide(sit, ball=ball, ours=ours)
+        assert out[3].role == "placer" and out[3].dribbler
+        return out[3]
+
+    no_ball = placer(False)
+    assert math.dist((no_ball.x, no_ball.y), ball.xy) < 111.5  # onto the ball
+    has_ball = placer(True)
+    assert math.dist((has_ball.x, has_ball.y), pulls_to) < 1.0  # back to the mark with it
+    silent = placer(None)  # no word: the positions say it holds the ball
+    assert math.dist((silent.x, silent.y), pulls_to) < 1.0
+
+
 def test_a_ball_held_for_pulling_is_pulled_to_the_mark_with_room_behind_it() -> None:
     """Once pulled off the line there is room behind the ball: the placer keeps pulling
     rather than going round the ball to push it (which cost the 30 s in a test)."""

@@ -132,3 +132,17 @@ def test_grsim_kicks_and_contact_no_answer_never_marked() -> None:
     assert not v.ball_contact and v.last_kick == "chip" and v.last_kick_age_s == 8.0
     assert v.round_trip_ms is None and v.loss is None and v.commands_sent is None
     assert tr.view("yellow", 2, 10.0) is None
+
+
+def test_contact_is_said_only_by_robots_whose_answers_carry_it_and_only_while_fresh() -> None:
+    tr = FeedbackTracker()
+    payload = ld(2, sim_feedback(1, True)) + ld(2, sim_feedback(2, None))
+    e = env(tl.FEEDBACK_SIM_RESPONSE, BLUE, payload)
+    tr.update(e, decode(e), 10.0)
+    says = tr.view("blue", 1, 10.05)
+    silent = tr.view("blue", 2, 10.05)
+    assert says is not None and silent is not None
+    assert says.contact(0.2) is True
+    assert silent.contact(0.2) is None  # its answers never carry contact: not "no ball"
+    old = tr.view("blue", 1, 10.5)
+    assert old is not None and old.contact(0.2) is None  # no answer lately: not said now
