@@ -148,12 +148,11 @@ class FilterSettings(BaseModel):
     """Which filter each object uses, and the parameters of every kind."""
 
     model_config = _CFG
-    # kalman stays the default until the adaptive filter is tried in closed loop: with it,
-    # fieldsim's substituted robots did not come to rest at the halfway line in 2 of 5 runs
-    # (tests/integration/test_strategy_sim.py), 0 of 3 with kalman (docs/experiments/filters)
-    ball: FilterKind = Field(default="kalman", description="filter of the ball",
+    # adaptive: no tuning for the noise level (docs/experiments/filters, section (d), with the
+    # closed-loop runs behind the choice); the others stay selectable per class and per robot
+    ball: FilterKind = Field(default="adaptive", description="filter of the ball",
                              json_schema_extra={"unit": "", "step": None})
-    robot: FilterKind = Field(default="kalman",
+    robot: FilterKind = Field(default="adaptive",
                               description="filter of every robot without an override",
                               json_schema_extra={"unit": "", "step": None})
     robot_overrides: dict[str, FilterKind] = Field(

@@ -244,7 +244,7 @@ def test_per_robot_algorithm1_drives_to_a_point_and_reports_its_gain(
 
 
 def test_filter_switched_live_per_robot(station: StationHandle) -> None:
-    assert _robot(station, "yellow", 1)["filter"] == "kalman"
+    assert _robot(station, "yellow", 1)["filter"] == "adaptive"  # the default
     r = httpx.patch(station.url + "/api/params",
                     json={"filters": {"robot_overrides": {"yellow/1": "paper"}}})
     assert r.status_code == 200, r.text
