@@ -233,7 +233,10 @@ def test_the_keeper_runs_on_the_compute_engine_and_its_health_shows(sim: Sim, ki
         e = wait_until(engine, 40, what=f"{kind} engine answering the keeper's calls")
         assert e["kind"] == kind and e["function"] == "goalkeeper"
         assert e["calls_per_s"] > 5 and e["errors"] == 0 and e["crashes"] == 0
-        assert e["fallbacks"] <= 3, e  # the first calls may be late while the engine warms
+        # the engine, not the built-in code, places the keeper: the first calls may be late
+        # while the engine warms, and a few more on a loaded machine (an answer older than
+        # 0.25 s is not used), never most of them
+        assert e["fallbacks"] <= max(3, e["ok"] // 4), e
         # the keeper still guards the goal
         sim.until(lambda t: any(r["id"] == 0 and r["x"] < -HL + 300 for r in blue(t)), 10,
                   "keeper in front of our goal")

@@ -15,6 +15,7 @@ from typing import Any
 
 import httpx
 
+from domain.angles import wrap_angle
 from sslnet.multicast import open_multicast_receiver
 from sslpb.ssl_gc_common_pb2 import BLUE, YELLOW
 from sslpb.ssl_vision_detection_tracked_pb2 import (
@@ -129,7 +130,8 @@ def test_tracked_vision_on_loopback_and_silent_in_replay() -> None:
             for r in w["robots"]:
                 t = tracked[(r["team"], r["id"])]
                 assert abs(t.pos.x * 1000 - r["x"]) < 20 and abs(t.pos.y * 1000 - r["y"]) < 20
-                assert abs(t.orientation - r["orientation"]) < 0.01
+                # the same heading, whichever side of +-pi each is written on
+                assert abs(wrap_angle(t.orientation - r["orientation"])) < 0.01
             if w["ball"] is not None:
                 b = p.tracked_frame.balls[0]
                 assert abs(b.pos.x * 1000 - w["ball"]["x"]) < 20
