@@ -82,6 +82,7 @@ class AdaptiveIMM:
         "q_max",
         "q_min",
         "q_rate",
+        "q_c",
         "q_s",
         "r0",
         "r_max",
@@ -89,6 +90,7 @@ class AdaptiveIMM:
         "rejected",
         "rho_accept",
         "rho_keep",
+        "switch_c",
         "switch_ms",
         "switch_sm",
     )
@@ -125,13 +127,15 @@ class AdaptiveIMM:
         self.switch_sm = p.still_to_moving_per_s
         self.switch_ms = p.moving_to_still_per_s
         self.rho_accept = p.outlier_rate_trust
+        self.q_c = p.cruise_accel_mm_s2 ** 2  # (the 1-D filter has no cruise model)
+        self.switch_c = p.cruise_switch_per_s
         # 2 pi x the density of false detections (per unit area, spread over a disc)
         self.clutter = 2.0 / (p.outlier_spread_mm ** 2)
         self.rejected = 0
         # the constants a step reads, in one tuple (one attribute read instead of fourteen)
         self._k = (self.gap_s, self.q_rate, self.q_down, self.q_min, self.q_max, self.horizon,
                    self.r_min, self.r_max, self.switch_sm, self.switch_ms, self.q_s, self.gate2,
-                   self.clutter, self.rho_keep)
+                   self.clutter, self.rho_keep, self.q_c, self.switch_c)
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
@@ -195,7 +199,9 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0, x, y]
+        w = 1.0 - mu
+        self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0, x, y,
+                  x, y, v[0], v[1], r, 0.0, pv, 0.5, w * v[0], w * v[1]]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = self._book = None
         return (x, y)
@@ -219,14 +225,15 @@ class AdaptiveIMM:
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
-         gate2, clutter, rho_keep) = self._k
+         gate2, clutter, rho_keep, q_c, switch_c) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
         if not cache:
             self._after_jump(t, zx, zy)
         S = self.S
         if not S or t - S[0] > gap_s:
             return self._init(t, zx, zy)
-        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _) = S
+        (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _,
+         cx, cy, cvx, cvy, ca, cb, cc, lam, _, _) = S
         bk = self._book
         if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
@@ -272,6 +279,9 @@ class AdaptiveIMM:
                         mp *= f
                         mb *= f
                         mc *= f
+                        ca *= f
+                        cb *= f
+                        cc *= f
                     else:
                         r += (e - r) / horizon
                         r = r_min if r < r_min else (r_max if r > r_max else r)
@@ -351,13 +361,28 @@ class AdaptiveIMM:
         k0 = ap * ism
         k1 = bp * ism
         g = p0 * iss
+        # the cruise model: constant velocity with a small fixed q, beside the moving one
+        # (not mixed with it: restarted from it when ruled out, see _correct)
+        qd = q_c * dt2
+        cap = ca + 2.0 * dt * cb + dt2 * cc + qd * dt2 * 0.25
+        cbp = cb + dt * cc + qd * dt * 0.5
+        ccp = cc + qd
+        isc = 1.0 / (cap + r)
+        kc0 = cap * isc
+        kc1 = cbp * isc
+        e = switch_c * dt
+        lp = lam + e * (1.0 - 2.0 * lam) if e < 0.5 else 0.5
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
                x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
                iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
                (1.0 - k0) * bp, cp - k1 * bp,
                # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
                cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
-               _sqrt(ism))
+               _sqrt(ism),
+               cx + cvx * dt, cy + cvy * dt, cvx, cvy, cap, cbp, ccp, isc, kc0, kc1,
+               (1.0 - kc0) * cap, (1.0 - kc0) * cbp, ccp - kc1 * cbp, lp,
+               # prior odds moving / cruise x the normalisations' ratio
+               (1.0 - lp) * (cap + r) * ism / lp)
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
@@ -366,7 +391,8 @@ class AdaptiveIMM:
         """The measurement against both models' predictions ``pri`` (a step's second half,
         all a ``revise`` has to redo)."""
         (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
-         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
+         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w,
+         cpx, cpy, cvx, cvy, cap, cbp, ccp, isc, kc0, kc1, ca1, cb1, cc1, lp, crc) = pri
         nsx = zx - x0x
         nsy = zy - x0y
         nmx = zx - xpx
@@ -376,9 +402,13 @@ class AdaptiveIMM:
         vx = v1x + k1 * nmx
         vy = v1y + k1 * nmy
         if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
+            mox = lp * cpx + (1.0 - lp) * xpx
+            moy = lp * cpy + (1.0 - lp) * xpy
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
-                ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy])
+                ux, uy, cs * x0x + cm * mox, cs * x0y + cm * moy,
+                cpx, cpy, cvx, cvy, cap, cbp, ccp, lp,
+                cm * (lp * cvx + (1.0 - lp) * v1x), cm * (lp * cvy + (1.0 - lp) * v1y)])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2s - d2m)
         mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
@@ -393,10 +423,27 @@ class AdaptiveIMM:
         sy = x0y + g * nsy
         mx = xpx + k0 * nmx
         my = xpy + k0 * nmy
-        ex = mu * sx + (1.0 - mu) * mx
-        ey = mu * sy + (1.0 - mu) * my
+        # cruise / moving: the likelihood ratio; a cruise model all but ruled out (a maneuver)
+        # restarts from the moving one (what an IMM's mixing would do, for less)
+        ncx = zx - cpx
+        ncy = zy - cpy
+        e = 0.5 * ((ncx * ncx + ncy * ncy) * isc - d2m)
+        lam = 1.0 / (1.0 + crc * _exp(e if e < 700.0 else 700.0))
+        if lam > 1e-3:
+            if lam > 0.999:
+                lam = 0.999
+            cx = cpx + kc0 * ncx
+            cy = cpy + kc0 * ncy
+            cvx += kc1 * ncx
+            cvy += kc1 * ncy
+        else:
+            lam, cx, cy, cvx, cvy, ca1, cb1, cc1 = 1e-3, mx, my, vx, vy, ap1, bp1, cp1
+        ex = mu * sx + (1.0 - mu) * (lam * cx + (1.0 - lam) * mx)
+        ey = mu * sy + (1.0 - mu) * (lam * cy + (1.0 - lam) * my)
         self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
-                  ex, ey]
+                  ex, ey, cx, cy, cvx, cvy, ca1, cb1, cc1, lam,
+                  (1.0 - mu) * (lam * cvx + (1.0 - lam) * vx),
+                  (1.0 - mu) * (lam * cvy + (1.0 - lam) * vy)]
         return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> None:
@@ -530,6 +577,10 @@ class AdaptiveIMM:
         S[10] *= f
         S[15] *= f
         S[16] *= f
+        if len(S) > 21:
+            S[25] *= f
+            S[26] *= f
+            S[27] *= f
         prev = self._prev
         self.S = S
         self.rejected -= 1  # (counted again if the redone step rejects it too)
@@ -554,15 +605,14 @@ class AdaptiveIMM:
         S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
         if not S:
             return (0.0, 0.0)
-        w = 1.0 - S[2]
-        return (w * S[13], w * S[14])
+        return (S[29], S[30])
 
     def predict(self, t_s: float) -> Vec | None:
         S = self.S
         if not S:
             return None
-        w = (1.0 - S[2]) * (t_s - S[0])
-        return (S[19] + w * S[13], S[20] + w * S[14])
+        d = t_s - S[0]
+        return (S[19] + d * S[29], S[20] + d * S[30])
 
 
 class AdaptiveIMM1D(AdaptiveIMM):
@@ -576,10 +626,30 @@ class AdaptiveIMM1D(AdaptiveIMM):
     def __init__(self, params: AdaptiveParams | None = None, angle: bool = True) -> None:
         super().__init__(params, angle)
 
+    def _init(self, t: float, x: float, y: float, v: Vec = (0.0, 0.0), mu: float = 0.5,
+              pvv: float | None = None) -> Vec:
+        # the still/moving pair alone (no cruise model): the state without its 2-D tail
+        out = super()._init(t, x, y, v, mu, pvv)
+        del self.S[21:]
+        return out
+
+    def velocity(self) -> Vec:
+        bk = self._backup
+        S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
+        if not S:
+            return (0.0, 0.0)
+        return ((1.0 - S[2]) * S[13], 0.0)
+
+    def predict(self, t_s: float) -> Vec | None:
+        S = self.S
+        if not S:
+            return None
+        return (S[19] + (1.0 - S[2]) * (t_s - S[0]) * S[13], 0.0)
+
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
-         gate2, _, rho_keep) = self._k
+         gate2, _, rho_keep, _, _) = self._k
         cache = self._backup is None
         if not cache:
             self._after_jump(t, zx, 0.0)
