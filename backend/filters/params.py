@@ -104,7 +104,7 @@ class AdaptiveParams(BaseModel):
     cruise_accel_mm_s2: float = num(10.0, 0.01, 1e5, "mm/s^2", 1.0,
         "cruise model (beside the moving one): std of its fixed white acceleration, the "
         "straight run's; the data weigh it against the moving model's estimated one")
-    cruise_switch_per_s: float = num(1.0, 0.001, 30.0, "1/s", 0.1,
+    cruise_switch_per_s: float = num(5.0, 0.001, 30.0, "1/s", 0.1,
         "switching rate between the cruise and the moving model")
     still_drift_mm_s: float = num(0.1, 0.0, 1000.0, "mm/s^0.5", 0.5,
         "still model: random-walk drift of the position")
