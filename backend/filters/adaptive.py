@@ -15,6 +15,21 @@ combination. Measurement noise ``r`` is estimated from the data: the innovations
 measurements, minus the model's own prediction variance, averaged over a sliding horizon (the
 Mehra / Sage-Husa estimator); the outlier rate is estimated the same way from the gate's verdicts.
 
+Beside the moving model (2-D only) runs a **cruise** model: constant velocity with a small *fixed*
+q (``cruise_accel_mm_s2``, the straight run's). Why: the moving model's q is estimated, and an
+estimate raised by a maneuver, or by a noise sequence that looks like one (one 4-sigma
+measurement at 20 mm noise sets q to its bound; the start of a track with r not yet learnt drives
+it up for a second), decays only over a second or so; on a straight run the estimate meanwhile
+follows the noise (the constant-speed cells at 20 mm, 1.10-1.125 x the oracle on seeds 7, 11,
+2022 with 40 runs). The two are weighed by their likelihood ratio (a two-state Markov chain,
+``cruise_switch_per_s``): on a straight run the cruise model's narrower prediction wins and the
+estimate keeps its low-q smoothness whatever q does; at a bounce its innovations explode, it is
+ruled out within a frame or two and the adaptive q carries the estimate. It is not mixed with
+the moving model (a three-model IMM's mixing would cost more than the model); once all but ruled out
+(probability 1e-3) it restarts from the moving model's state, which is what the mixing would do
+then. The moving model's q learns from its own innovations as before. Cost: about 1 % of the
+world model's frame (bench/world_bench.py).
+
 Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outside the gate. They
 are told apart by physics and by the data: a measurement farther than the object could have
 travelled (``max_speed``) is an outlier; a reachable one is a maneuver at once when no outliers
@@ -47,6 +62,8 @@ _exp, _sqrt, _log = math.exp, math.sqrt, math.log
 # spreads differ between the axes, and they are averaged), then the bias test's running means,
 # then the output (the mix of both models, kept: it is read far more often than it changes)
 # t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy | ex ey
+# then (2-D only) the cruise model and the output velocity:
+# cx cy cvx cvy ca cb cc | lam (probability of cruise against moving) | vox voy
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
 #: (0.15, about 7 steps: round 3, from 0.1; with a lag past the gate now raising q at once, the
@@ -78,11 +95,11 @@ class AdaptiveIMM:
         "max_speed",
         "max_speed2",
         "q0",
+        "q_c",
         "q_down",
         "q_max",
         "q_min",
         "q_rate",
-        "q_c",
         "q_s",
         "r0",
         "r_max",
