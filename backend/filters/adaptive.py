@@ -49,6 +49,7 @@ as it is, so ``revise`` (a second camera at the same instant) costs nothing unti
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from .params import AdaptiveParams, FilterKind
 
@@ -63,7 +64,7 @@ _exp, _sqrt, _log = math.exp, math.sqrt, math.log
 # then the output (the mix of both models, kept: it is read far more often than it changes)
 # t ta mu r q age rho | sx sy sp | mp mx my mvx mvy mb mc | ux uy | ex ey
 # then (2-D only) the cruise model and the output velocity:
-# cx cy cvx cvy ca cb cc | lam (probability of cruise against moving) | vox voy
+# cx cy cvx cvy ca cb cc | lam (probability of cruise against moving; < 0: it rests until -lam)
 _MU, _R, _Q, _RHO = 2, 3, 4, 6
 #: weight of a new normalised innovation in its running mean (the bias test)
 #: (0.15, about 7 steps: round 3, from 0.1; with a lag past the gate now raising q at once, the
@@ -71,6 +72,18 @@ _MU, _R, _Q, _RHO = 2, 3, 4, 6
 BIAS_A = 0.15
 #: 1 / (2 x the variance of that running mean for unit white noise)
 BIAS_K = (2.0 - BIAS_A) / BIAS_A / 2.0
+#: below this probability the cruise model is ruled out (it rests, then restarts)
+_C_FLOOR = 1e-3
+
+
+def _velocity(S: list[float]) -> Vec:
+    """The output velocity of a 2-D state: the moving models' mix, times P(not still)."""
+    w = 1.0 - S[2]
+    lam = S[28]
+    if lam <= 0.0:  # the cruise model rests
+        return (w * S[13], w * S[14])
+    lm = 1.0 - lam
+    return (w * (lam * S[23] + lm * S[13]), w * (lam * S[24] + lm * S[14]))
 
 
 class AdaptiveIMM:
@@ -87,6 +100,7 @@ class AdaptiveIMM:
         "_prev",
         "_pri",
         "_pri_h",
+        "c_rest",
         "clutter",
         "gap_s",
         "gate2",
@@ -146,6 +160,7 @@ class AdaptiveIMM:
         self.rho_accept = p.outlier_rate_trust
         self.q_c = p.cruise_accel_mm_s2 ** 2  # (the 1-D filter has no cruise model)
         self.switch_c = p.cruise_switch_per_s
+        self.c_rest = p.cruise_rest_s
         # 2 pi x the density of false detections (per unit area, spread over a disc)
         self.clutter = 2.0 / (p.outlier_spread_mm ** 2)
         self.rejected = 0
@@ -161,7 +176,7 @@ class AdaptiveIMM:
         self._far: tuple[tuple[float, float, float], ...] | None = None
         self._backup: tuple[object, ...] | None = None  # the track before a jump
         self._prev: tuple[object, ...] | None = None  # the state before the last update
-        self._pri: tuple[float, ...] | None = None  # the last step's predictions (revise)
+        self._pri: tuple[Any, ...] | None = None  # the last step's predictions (revise)
         self._book: tuple[float, ...] | None = None  # the last measurement used, to learn from
         self._pri_h: tuple[float, ...] = ()  # _h when the predictions were made
 
@@ -216,9 +231,8 @@ class AdaptiveIMM:
         else:
             r, q, age, rho = self.r0, self.q0, 0.0, 0.0
         pv = pvv if pvv is not None else self.max_speed ** 2 / 4
-        w = 1.0 - mu
         self.S = [t, t, mu, r, q, age, rho, x, y, r, r, x, y, v[0], v[1], 0.0, pv, 0.0, 0.0, x, y,
-                  x, y, v[0], v[1], r, 0.0, pv, 0.5, w * v[0], w * v[1]]
+                  x, y, v[0], v[1], r, 0.0, pv, 0.5]
         self._h = (t, x, y)
         self._pend = self._far = self._backup = self._book = None
         return (x, y)
@@ -251,7 +265,7 @@ class AdaptiveIMM:
         if not S or t - S[0] > gap_s:
             return self._init(t, zx, zy)
         (t0, ta, ms, r, q, age, rho, sx, sy, sp, mp, mx, my, mvx, mvy, mb, mc, ux, uy, _, _,
-         cx, cy, cvx, cvy, ca, cb, cc, lam, _, _) = S
+         cx, cy, cvx, cvy, ca, cb, cc, lam) = S
         bk = self._book
         if bk is not None:  # learn from the last measurement used (once per instant)
             self._book = None
@@ -380,37 +394,45 @@ class AdaptiveIMM:
         k1 = bp * ism
         g = p0 * iss
         # the cruise model: constant velocity with a small fixed q, beside the moving one
-        # (not mixed with it: restarted from it when ruled out, see _correct)
-        qd = q_c * dt2
-        cap = ca + 2.0 * dt * cb + dt2 * cc + qd * dt2 * 0.25
-        cbp = cb + dt * cc + qd * dt * 0.5
-        ccp = cc + qd
-        isc = 1.0 / (cap + r)
-        kc0 = cap * isc
-        kc1 = cbp * isc
-        e = switch_c * dt
-        lp = lam + e * (1.0 - 2.0 * lam) if e < 0.5 else 0.5
+        # (not mixed with it: restarted from it, see _correct); lam < 0: it rests (ruled
+        # out by a maneuver: the moving model alone) until the time -lam
+        if lam >= 0.0 or t >= -lam:
+            if lam < 0.0:  # it wakes where the moving model is
+                cx, cy, cvx, cvy, ca, cb, cc, lam = mx, my, mvx, mvy, mp, mb, mc, 1e-3
+            qd = q_c * dt2
+            cap = ca + 2.0 * dt * cb + dt2 * cc + qd * dt2 * 0.25
+            cbp = cb + dt * cc + qd * dt * 0.5
+            ccp = cc + qd
+            isc = 1.0 / (cap + r)
+            kc0 = cap * isc
+            kc1 = cbp * isc
+            e = switch_c * dt
+            lp = lam + e * (1.0 - 2.0 * lam) if e < 0.5 else 0.5
+            # its prediction, gains, corrected covariance, the prior odds moving / cruise x
+            # the normalisations' ratio
+            cpri: tuple[float, ...] | None = (
+                cx + cvx * dt, cy + cvy * dt, cvx, cvy, cap, cbp, ccp, isc, kc0, kc1,
+                (1.0 - kc0) * cap, (1.0 - kc0) * cbp, ccp - kc1 * cbp, lp,
+                (1.0 - lp) * (cap + r) * ism / lp)
+        else:
+            cpri = None
         pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
                x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
                iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
                (1.0 - k0) * bp, cp - k1 * bp,
                # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
                cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
-               _sqrt(ism),
-               cx + cvx * dt, cy + cvy * dt, cvx, cvy, cap, cbp, ccp, isc, kc0, kc1,
-               (1.0 - kc0) * cap, (1.0 - kc0) * cbp, ccp - kc1 * cbp, lp,
-               # prior odds moving / cruise x the normalisations' ratio
-               (1.0 - lp) * (cap + r) * ism / lp)
+               _sqrt(ism), cpri, lam)
         self._pri = pri if cache else None
         self._pri_h = self._h
         return self._correct(pri, zx, zy)
 
-    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
         """The measurement against both models' predictions ``pri`` (a step's second half,
         all a ``revise`` has to redo)."""
         (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
-         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w,
-         cpx, cpy, cvx, cvy, cap, cbp, ccp, isc, kc0, kc1, ca1, cb1, cc1, lp, crc) = pri
+         cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w, cpri,
+         lam) = pri
         nsx = zx - x0x
         nsy = zy - x0y
         nmx = zx - xpx
@@ -420,13 +442,18 @@ class AdaptiveIMM:
         vx = v1x + k1 * nmx
         vy = v1y + k1 * nmy
         if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
+            if cpri is None:
+                return self._rejected(t, dt, zx, zy, [
+                    t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
+                    ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy,
+                    xpx, xpy, v1x, v1y, ap, bp, cp, lam])
+            cpx, cpy, cvx, cvy, cap, cbp, ccp, _, _, _, _, _, _, lp, _ = cpri
             mox = lp * cpx + (1.0 - lp) * xpx
             moy = lp * cpy + (1.0 - lp) * xpy
             return self._rejected(t, dt, zx, zy, [
                 t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
                 ux, uy, cs * x0x + cm * mox, cs * x0y + cm * moy,
-                cpx, cpy, cvx, cvy, cap, cbp, ccp, lp,
-                cm * (lp * cvx + (1.0 - lp) * v1x), cm * (lp * cvy + (1.0 - lp) * v1y)])
+                cpx, cpy, cvx, cvy, cap, cbp, ccp, lp])
         # -- model probabilities: the Gaussian likelihood ratio still / moving
         e = 0.5 * (d2s - d2m)
         mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
@@ -442,26 +469,31 @@ class AdaptiveIMM:
         mx = xpx + k0 * nmx
         my = xpy + k0 * nmy
         # cruise / moving: the likelihood ratio; a cruise model all but ruled out (a maneuver)
-        # restarts from the moving one (what an IMM's mixing would do, for less)
-        ncx = zx - cpx
-        ncy = zy - cpy
-        e = 0.5 * ((ncx * ncx + ncy * ncy) * isc - d2m)
-        lam = 1.0 / (1.0 + crc * _exp(e if e < 700.0 else 700.0))
-        if lam > 1e-3:
-            if lam > 0.999:
-                lam = 0.999
-            cx = cpx + kc0 * ncx
-            cy = cpy + kc0 * ncy
-            cvx += kc1 * ncx
-            cvy += kc1 * ncy
-        else:
-            lam, cx, cy, cvx, cvy, ca1, cb1, cc1 = 1e-3, mx, my, vx, vy, ap1, bp1, cp1
-        ex = mu * sx + (1.0 - mu) * (lam * cx + (1.0 - lam) * mx)
-        ey = mu * sy + (1.0 - mu) * (lam * cy + (1.0 - lam) * my)
+        # rests, then restarts from the moving one (what an IMM's mixing would do, for less)
+        if cpri is not None:
+            cpx, cpy, cvx, cvy, _, _, _, isc, kc0, kc1, ca1, cb1, cc1, lp, crc = cpri
+            ncx = zx - cpx
+            ncy = zy - cpy
+            e = 0.5 * ((ncx * ncx + ncy * ncy) * isc - d2m)
+            lam = 1.0 / (1.0 + crc * _exp(e if e < 700.0 else 700.0))
+            if lam > _C_FLOOR:
+                if lam > 0.999:
+                    lam = 0.999
+                cx = cpx + kc0 * ncx
+                cy = cpy + kc0 * ncy
+                w = 1.0 - mu
+                ex = mu * sx + w * (lam * cx + (1.0 - lam) * mx)
+                ey = mu * sy + w * (lam * cy + (1.0 - lam) * my)
+                self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1,
+                          ux, uy, ex, ey, cx, cy, cvx + kc1 * ncx, cvy + kc1 * ncy, ca1, cb1,
+                          cc1, lam]
+                return (ex, ey)
+            lam = -(t + self.c_rest)
+        w = 1.0 - mu
+        ex = mu * sx + w * mx
+        ey = mu * sy + w * my
         self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
-                  ex, ey, cx, cy, cvx, cvy, ca1, cb1, cc1, lam,
-                  (1.0 - mu) * (lam * cvx + (1.0 - lam) * vx),
-                  (1.0 - mu) * (lam * cvy + (1.0 - lam) * vy)]
+                  ex, ey, mx, my, vx, vy, ap1, bp1, cp1, lam]
         return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> bool:
@@ -495,7 +527,7 @@ class AdaptiveIMM:
         n2 = nx * nx + ny * ny
         if o2 > far or n2 <= o2:
             self._load(cur)  # far from the old track, or the new track is nearer
-            if o2 > far and n2 > gn and t - S[0] < 0.1:
+            if o2 > 4.0 * far and n2 > 4.0 * gn and t - S[0] < 0.1:
                 self._backup = bk  # far from both: the next measurement decides
                 return True
         self._backup = None
@@ -575,14 +607,15 @@ class AdaptiveIMM:
                     self._init(t, zx, zy, (vx, vy))
                     self._backup = bk  # three aligned outliers: the next measurement tells
                     d = S[1] - t  # the line and the old track at its last measurement used
+                    ovx, ovy = _velocity(S)
                     if len(pred) > 21 and (
-                            (zx + vx * d - ex + S[29] * (S[0] - S[1])) ** 2
-                            + (zy + vy * d - ey + S[30] * (S[0] - S[1])) ** 2 > tol2):
+                            (zx + vx * d - ex + ovx * (S[0] - S[1])) ** 2
+                            + (zy + vy * d - ey + ovy * (S[0] - S[1])) ** 2 > tol2):
                         # a line that does not start where the object was (false detections
                         # in a line, or a lost track): until the next measurement tells, the
                         # output stays on the old track (a lost track waited three frames)
                         S = self.S
-                        S[19], S[20], S[29], S[30] = pred[19], pred[20], pred[29], pred[30]
+                        S[19], S[20] = pred[19], pred[20]  # (predict reads: held)
                         return (pred[19], pred[20])
                     return (zx, zy)
         self._far = (*(f for f in far[-5:] if t - f[0] < 0.3), (t, zx, zy))
@@ -646,14 +679,17 @@ class AdaptiveIMM:
         S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
         if not S:
             return (0.0, 0.0)
-        return (S[29], S[30])
+        return _velocity(S)
 
     def predict(self, t_s: float) -> Vec | None:
         S = self.S
         if not S:
             return None
+        bk = self._backup
+        # held on the old track (a line not yet confirmed, see _rejected): its velocity
+        vx, vy = _velocity(bk[0] if bk is not None and S[19] != S[11] else S)  # type: ignore
         d = t_s - S[0]
-        return (S[19] + d * S[29], S[20] + d * S[30])
+        return (S[19] + d * vx, S[20] + d * vy)
 
 
 class AdaptiveIMM1D(AdaptiveIMM):
@@ -786,7 +822,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
         self._pri_h = self._h
         return self._correct(pri, zx, 0.0)
 
-    def _correct(self, pri: tuple[float, ...], zx: float, zy: float) -> Vec:
+    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
         (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
          g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
