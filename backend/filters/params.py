@@ -101,6 +101,13 @@ class AdaptiveParams(BaseModel):
         "normalised innovation squared)")
     accel_shrink_bias: float = num(0.5, 0.0, 5.0, "", 0.1,
         "normalised innovation squared below 1 + this shrinks the acceleration noise")
+    cruise_accel_mm_s2: float = num(10.0, 0.01, 1e5, "mm/s^2", 1.0,
+        "cruise model (beside the moving one): std of its fixed white acceleration, the "
+        "straight run's; the data weigh it against the moving model's estimated one")
+    cruise_switch_per_s: float = num(5.0, 0.001, 30.0, "1/s", 0.1,
+        "switching rate between the cruise and the moving model")
+    cruise_rest_s: float = num(0.1, 0.0, 5.0, "s", 0.05,
+        "the cruise model, ruled out by a maneuver, rests this long (the moving model alone)")
     still_drift_mm_s: float = num(0.1, 0.0, 1000.0, "mm/s^0.5", 0.5,
         "still model: random-walk drift of the position")
     still_to_moving_per_s: float = num(0.03, 0.001, 30.0, "1/s", 0.1,
