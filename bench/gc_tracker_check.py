@@ -47,11 +47,17 @@ PLACEMENT_TOLERANCE_M = 0.15  # the GC's ball-placement-tolerance
 class Seen:
     match: dict[str, Any] = field(default_factory=dict)
     gc: dict[str, Any] = field(default_factory=dict)
-    changes: dict[int, dict[str, Any]] = field(default_factory=dict)
+    changes: set[str] = field(default_factory=set)  # ids restart at a match reset
+    events: list[str] = field(default_factory=list)  # game event types as they were filed
     tracked: tuple[float, float, float, float] | None = None  # x, y m, speed m/s, at (monotonic)
     tracked_robots: list[tuple[str, int, float, float]] = field(default_factory=list)
     truth: tuple[float, float] | None = None  # m
-    truth_robots: list[tuple[str, int, float, float]] = field(default_factory=list)
+    truth_robots: list[tuple[str, int, float, float, float]] = field(default_factory=list)
+    truth_ball_speed: float = 0.0  # m/s
+    truth_touch: Any = None  # fieldsim's last_touch
+    truth_kicks: dict[tuple[str, int], Any] = field(default_factory=dict)
+    unsteady: int = 0  # tracked frames over the GC's 0.2 m/s "steady" while the truth rests
+    unsteady_max: float = 0.0
     t0: float = field(default_factory=time.monotonic)
 
     def t(self) -> float:
@@ -65,9 +71,6 @@ class Seen:
     def placement_pos(self) -> tuple[float, float] | None:
         p = self.match.get("placementPos")
         return (p.get("x", 0.0), p.get("y", 0.0)) if p else None
-
-    def event_types(self) -> list[str]:
-        return [e.get("type", "?") for e in self.match.get("gameEvents") or []]
 
     def actions(self) -> str:
         out = []
@@ -105,12 +108,13 @@ async def gc_reader(ws: Any, seen: Seen) -> None:
             if seen.actions() != before:
                 print(f"{seen.t():6.2f} GC continue: {seen.actions()}")
         for entry in (out.get("protocol") or {}).get("entry") or []:
-            cid = entry.get("id")
-            if cid in seen.changes:
+            key = json.dumps(entry.get("change"), sort_keys=True)
+            if key in seen.changes:
                 continue
-            seen.changes[cid] = entry
+            seen.changes.add(key)
             ge = (entry.get("change") or {}).get("addGameEventChange")
             if ge and seen.match:
+                seen.events.append(ge["gameEvent"].get("type", "?"))
                 print(f"{seen.t():6.2f} GC game event {json.dumps(ge['gameEvent'])}; "
                       f"{seen.balls()}")
 
@@ -127,6 +131,12 @@ async def tracked_reader(seen: Seen, group: str, port: int) -> None:
             if f.balls:
                 b = f.balls[0]
                 seen.tracked = (b.pos.x, b.pos.y, math.hypot(b.vel.x, b.vel.y), time.monotonic())
+                if seen.tracked[2] >= 0.2 and seen.truth_ball_speed < 0.01:
+                    seen.unsteady += 1
+                    seen.unsteady_max = max(seen.unsteady_max, seen.tracked[2])
+                    print(f"{seen.t():6.2f} tracked ball at {seen.tracked[2]:.2f} m/s while "
+                          f"the true ball rests ({seen.truth_ball_speed:.3f} m/s); "
+                          f"{seen.balls()}")
             seen.tracked_robots = [
                 ("blue" if r.robot_id.team == 2 else "yellow", r.robot_id.id, r.pos.x, r.pos.y)
                 for r in f.robots]
@@ -144,8 +154,11 @@ async def truth_reader(seen: Seen, endpoint: str) -> None:
             _, body = await sock.recv_multipart()
             t = json.loads(body)
             seen.truth = (t["ball"]["x"] / 1000.0, t["ball"]["y"] / 1000.0)
-            seen.truth_robots = [(r["team"], r["id"], r["x"] / 1000.0, r["y"] / 1000.0)
-                                 for r in t["robots"]]
+            seen.truth_ball_speed = math.hypot(t["ball"]["vx"], t["ball"]["vy"]) / 1000.0
+            seen.truth_touch = t.get("last_touch")
+            seen.truth_kicks = {(r["team"], r["id"]): r.get("kicks") for r in t["robots"]}
+            seen.truth_robots = [(r["team"], r["id"], r["x"] / 1000.0, r["y"] / 1000.0,
+                                  math.hypot(r["vx"], r["vy"]) / 1000.0) for r in t["robots"]]
     finally:
         sock.close(linger=0)
         ctx.term()
@@ -190,6 +203,7 @@ class Check:
         events, the placement position and the next command."""
         await self.send({"reset_match": True})
         await asyncio.sleep(0.5)
+        self.seen.events.clear()
         await self.send({"change": {"updateConfigChange": {"division": "DIV_B",
                                                            "matchType": "FRIENDLY"}}})
         await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
@@ -235,8 +249,8 @@ class Check:
     async def placement_timeout(self) -> None:
         await self.setup()
         await self.ball_out()
-        await self.sample(40, 2.0, lambda: "PLACEMENT_FAILED" in self.seen.event_types())
-        await self.until(lambda: "PLACEMENT_FAILED" in self.seen.event_types(), 5,
+        await self.sample(40, 2.0, lambda: "PLACEMENT_FAILED" in self.seen.events)
+        await self.until(lambda: "PLACEMENT_FAILED" in self.seen.events, 5,
                          "PLACEMENT_FAILED")
         await self.sample(10, 1.0, lambda: self.seen.command().startswith("DIRECT"))
         await self.sample(3, 1.0)
@@ -256,36 +270,60 @@ class Check:
         print(f"{self.seen.t():6.2f} operator: BALL_PLACEMENT_COMPLETE; {self.seen.balls()}")
         await self.send({"continueAction": {"type": "BALL_PLACEMENT_COMPLETE",
                                             "forTeam": "BLUE"}})
-        await self.until(lambda: "PLACEMENT_SUCCEEDED" in self.seen.event_types(), 5,
+        await self.until(lambda: "PLACEMENT_SUCCEEDED" in self.seen.events, 5,
                          "PLACEMENT_SUCCEEDED")
         await self.sample(12, 0.5, lambda: self.seen.command().startswith("DIRECT"))
         await self.sample(3, 1.0)
 
-    def nearest_blue(self) -> tuple[int, float, float]:
-        blues = [(r[1], r[2], r[3]) for r in self.seen.truth_robots if r[0] == "blue"]
-        return min(blues, key=lambda r: math.hypot(r[1], r[2]))  # the one nearest the centre
+    def blues(self) -> list[tuple[str, int, float, float, float]]:
+        return [r for r in self.seen.truth_robots if r[0] == "blue"]
 
     async def stop_ready(self) -> None:
         await self.setup()
-        rid, x, y = self.nearest_blue()
-        bx, by = x + 0.15, y  # beside the robot, inside its 0.5 m + radius
-        await self.ball(bx, by)
-        print(f"{self.seen.t():6.2f} ball put 0.15 m from blue {rid} at ({x:.2f}, {y:.2f})")
+        await self.until(lambda: all(r[4] < 0.05 for r in self.blues()), 10,
+                         "blue robots at rest in STOP")
+        await asyncio.sleep(0.5)
+        # the blue robot nearest the centre; the ball 0.15 m from its centre, towards the centre
+        _, rid, x, y, _ = min(self.blues(), key=lambda r: math.hypot(r[2], r[3]))
+        d = math.hypot(x, y) or 1.0
+        await self.ball(x - 0.15 * x / d, y - 0.15 * y / d)
+        seen_by_gc = next(((r[2], r[3]) for r in self.seen.tracked_robots
+                           if r[0] == "blue" and r[1] == rid), None)
+        print(f"{self.seen.t():6.2f} ball put 0.15 m from blue {rid} at ({x:.3f}, {y:.3f}) "
+              f"(tracked {seen_by_gc}), robots at rest")
         t_put = time.monotonic()
+        fastest = 0.0
+        touch, kicks = self.seen.truth_touch, dict(self.seen.truth_kicks)
 
-        def too_close() -> bool:
-            return any("too close" in i for a in self.seen.gc.get("continueActions") or []
+        def too_close() -> bool:  # this robot named (the attacker may be named already)
+            return any("too close" in i and f"{rid} BLUE" in i
+                       for a in self.seen.gc.get("continueActions") or []
                        for i in a.get("continuationIssues") or [])
-        await self.until(too_close, 3, "GC reports robots too close")
+        await self.until(too_close, 3, f"GC reports blue {rid} too close")
         t_seen = time.monotonic()
+        async def watch_ball() -> None:
+            nonlocal fastest
+            await asyncio.sleep(0.3)  # the teleport itself
+            while True:
+                fastest = max(fastest, self.seen.truth_ball_speed)
+                await asyncio.sleep(0.02)
+        watcher = asyncio.create_task(watch_ball())
         await self.until(lambda: not too_close(), 15, "GC clears robots too close")
         t_clear = time.monotonic()
-        near = min((math.dist(self.seen.truth or (0, 0), r[2:]) for r in self.seen.truth_robots),
-                   default=float("nan"))
-        print(f"{self.seen.t():6.2f} 'too close' seen {t_seen - t_put:.2f} s after the "
-              f"teleport, cleared {t_clear - t_put:.2f} s after it; nearest robot centre to "
-              f"the ball (truth) {near:.3f} m (GC: 0.5 + 0.09 - 0.05 = 0.54 m)")
-        await self.sample(2, 1.0)
+        ball = self.seen.truth or (0.0, 0.0)
+        near = {team: min((math.dist(ball, r[2:4]) for r in self.seen.truth_robots
+                           if r[0] == team), default=float("nan"))
+                for team in ("blue", "yellow")}
+        print(f"{self.seen.t():6.2f} 'too close' for blue {rid} seen {t_seen - t_put:.2f} s "
+              f"after the teleport, cleared {t_clear - t_put:.2f} s after it; nearest robot "
+              f"centre to the ball (truth): blue {near['blue']:.3f} m, yellow "
+              f"{near['yellow']:.3f} m (the GC's limit: 0.5 + 0.09 - 0.05 = 0.54 m)")
+        await self.sample(3, 1.0)
+        watcher.cancel()
+        kicked = {k: v for k, v in self.seen.truth_kicks.items() if kicks.get(k) != v}
+        print(f"{self.seen.t():6.2f} fastest ball (truth) after the teleport: {fastest:.3f} m/s;"
+              f" fieldsim's last touch {touch} before, {self.seen.truth_touch} after; kick "
+              f"counts changed: {kicked or 'none'}")
 
     async def no_progress(self) -> None:
         await self.setup()
@@ -295,10 +333,10 @@ class Check:
             await asyncio.sleep(1.0)
             await self.command("FORCE_START")
             t = time.monotonic()
-            await self.until(lambda: "NO_PROGRESS_IN_GAME" in self.seen.event_types()
+            await self.until(lambda: "NO_PROGRESS_IN_GAME" in self.seen.events
                              or self.seen.command() == "STOP", 20, "NO_PROGRESS_IN_GAME")
             print(f"{self.seen.t():6.2f} {time.monotonic() - t:.1f} s after FORCE_START: "
-                  f"events {self.seen.event_types()}; {self.seen.balls()}")
+                  f"events {self.seen.events}; {self.seen.balls()}")
             await self.sample(3, 1.0)
         finally:
             await self.play("match")
