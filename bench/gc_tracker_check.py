@@ -58,6 +58,8 @@ class Seen:
     truth_kicks: dict[tuple[str, int], Any] = field(default_factory=dict)
     unsteady: int = 0  # tracked frames over the GC's 0.2 m/s "steady" while the truth rests
     unsteady_max: float = 0.0
+    frames: int = 0  # tracked frames with a ball
+    quiet: bool = False  # no line per unsteady frame (the rest scenario counts them)
     t0: float = field(default_factory=time.monotonic)
 
     def t(self) -> float:
@@ -131,12 +133,14 @@ async def tracked_reader(seen: Seen, group: str, port: int) -> None:
             if f.balls:
                 b = f.balls[0]
                 seen.tracked = (b.pos.x, b.pos.y, math.hypot(b.vel.x, b.vel.y), time.monotonic())
+                seen.frames += 1
                 if seen.tracked[2] >= 0.2 and seen.truth_ball_speed < 0.01:
                     seen.unsteady += 1
                     seen.unsteady_max = max(seen.unsteady_max, seen.tracked[2])
-                    print(f"{seen.t():6.2f} tracked ball at {seen.tracked[2]:.2f} m/s while "
-                          f"the true ball rests ({seen.truth_ball_speed:.3f} m/s); "
-                          f"{seen.balls()}")
+                    if not seen.quiet:
+                            print(f"{seen.t():6.2f} tracked ball at {seen.tracked[2]:.2f} m/s "
+                              f"while the true ball rests ({seen.truth_ball_speed:.3f} m/s); "
+                              f"{seen.balls()}")
             seen.tracked_robots = [
                 ("blue" if r.robot_id.team == 2 else "yellow", r.robot_id.id, r.pos.x, r.pos.y)
                 for r in f.robots]
@@ -341,6 +345,29 @@ class Check:
         finally:
             await self.play("match")
 
+    async def rest(self) -> None:
+        """HALT (nothing moves), the ball at rest at each spot for --rest-s: how often the
+        tracked ball the GC gets is over its 0.2 m/s "steady" threshold, which its placement
+        and STOP checks read ("Ball position is not steady"; a placement is required)."""
+        await self.command("HALT")
+        for x, y in self.a.rest_spots:
+            await self.ball(x, y)
+            await asyncio.sleep(1.0)
+            near = min(math.dist((x, y), r[2:4]) for r in self.seen.truth_robots)
+            self.seen.quiet = True
+            u0, f0, self.seen.unsteady_max = self.seen.unsteady, self.seen.frames, 0.0
+            errs: list[float] = []
+            end = time.monotonic() + self.a.rest_s
+            while time.monotonic() < end:
+                if self.seen.tracked and self.seen.truth:
+                    errs.append(math.dist(self.seen.tracked[:2], self.seen.truth))
+                await asyncio.sleep(0.05)
+            self.seen.quiet = False
+            n, u = self.seen.frames - f0, self.seen.unsteady - u0
+            print(f"{self.seen.t():6.2f} ball at rest at ({x}, {y}), nearest robot {near:.2f} m:"
+                  f" {u} of {n} tracked frames at >= 0.2 m/s (max {self.seen.unsteady_max:.2f})"
+                  f"; tracked-truth distance max {max(errs) * 1000:.1f} mm")
+
 
 async def run(a: argparse.Namespace) -> None:
     seen = Seen()
@@ -376,10 +403,16 @@ def main() -> None:
     p.add_argument("--out-y", type=float, default=3.15, help="beyond the touch line at 3 m")
     p.add_argument("--settle", type=float, default=1.0,
                    help="seconds between the ball resting at the mark and 'complete'")
+    p.add_argument("--rest-s", type=float, default=30.0, help="seconds per spot in 'rest'")
+    p.add_argument("--rest-spot", dest="rest_spots", action="append",
+                   type=lambda v: tuple(float(c) for c in v.split(",")),
+                   help="X,Y (m) for 'rest' (repeatable; default 1.5,0 -2,-2.2 0,1)")
     p.add_argument("--no-auto-continue", dest="auto_continue", action="store_false")
     p.add_argument("scenario", nargs="+", choices=["placement-timeout", "placement-complete",
-                                                   "stop-ready", "no-progress"])
-    asyncio.run(run(p.parse_args()))
+                                                   "stop-ready", "no-progress", "rest"])
+    a = p.parse_args()
+    a.rest_spots = a.rest_spots or [(1.5, 0.0), (-2.0, -2.2), (0.0, 1.0)]
+    asyncio.run(run(a))
 
 
 if __name__ == "__main__":
