@@ -19,6 +19,8 @@ The GC and the station are not started here; docs/tracker.md has the commands. S
   to ball" issue lasts while Touchline's robots clear the ball.
 - ``no-progress``: FORCE_START with the ball left alone (the station's "idle" play for the
   time); the GC's NO_PROGRESS_IN_GAME and the location it reports.
+- ``rest``: HALT, the ball at rest at a few spots: how many tracked frames carry a speed over
+  the GC's 0.2 m/s "steady" threshold (single-frame spikes in camera overlaps).
 """
 
 from __future__ import annotations
