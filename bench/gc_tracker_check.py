@@ -1,0 +1,421 @@
+"""By-hand check of the official ssl-game-controller's checks that use a tracker, with Touchline
+as its only tracker source (docs/tracker.md, "The game controller's tracker checks").
+
+The GC judges placements, readiness and progress from the tracked ball and robots it receives
+(its engine's ``trackerStateGc``); it never shows them. This script drives the GC through its
+UI websocket (``/api/control``, protojson ``Input``), watches what it decides (commands, game
+events, continue actions and their issues) and prints beside it the tracked ball the GC was
+sent (Touchline's multicast, the same frames) and fieldsim's ground truth (``--truth-pub``).
+
+The GC and the station are not started here; docs/tracker.md has the commands. Scenarios:
+
+- ``placement-timeout``: the ball put outside a touch line, a BALL_LEFT_FIELD_TOUCH_LINE event
+  by yellow; the GC asks blue (Touchline, "match" play) to place; nobody says the placement
+  succeeded, so after its placement time the GC itself files PLACEMENT_FAILED with the
+  remaining distance from its tracker; then what it offers in STOP.
+- ``placement-complete``: the same, but the operator presses "placement complete" once the
+  tracked ball rests at the mark; then what the GC offers (its ready checks in STOP).
+- ``stop-ready``: STOP with the ball next to a blue robot; how long the GC's "robots too close
+  to ball" issue lasts while Touchline's robots clear the ball.
+- ``no-progress``: FORCE_START with the ball left alone (the station's "idle" play for the
+  time); the GC's NO_PROGRESS_IN_GAME and the location it reports.
+- ``rest``: HALT, the ball at rest at a few spots: how many tracked frames carry a speed over
+  the GC's 0.2 m/s "steady" threshold (single-frame spikes in camera overlaps).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import httpx
+import websockets
+import zmq
+import zmq.asyncio
+
+from sslnet.multicast import open_multicast_receiver
+from sslpb import ssl_vision_wrapper_tracked_pb2 as wrapper_pb
+
+CLOSE_TIMEOUT_S = 0.2
+PLACEMENT_TOLERANCE_M = 0.15  # the GC's ball-placement-tolerance
+
+
+@dataclass
+class Seen:
+    match: dict[str, Any] = field(default_factory=dict)
+    gc: dict[str, Any] = field(default_factory=dict)
+    changes: set[str] = field(default_factory=set)  # ids restart at a match reset
+    events: list[str] = field(default_factory=list)  # game event types as they were filed
+    tracked: tuple[float, float, float, float] | None = None  # x, y m, speed m/s, at (monotonic)
+    tracked_robots: list[tuple[str, int, float, float]] = field(default_factory=list)
+    truth: tuple[float, float] | None = None  # m
+    truth_robots: list[tuple[str, int, float, float, float]] = field(default_factory=list)
+    truth_ball_speed: float = 0.0  # m/s
+    truth_touch: Any = None  # fieldsim's last_touch
+    truth_kicks: dict[tuple[str, int], Any] = field(default_factory=dict)
+    unsteady: int = 0  # tracked frames over the GC's 0.2 m/s "steady" while the truth rests
+    unsteady_max: float = 0.0
+    frames: int = 0  # tracked frames with a ball
+    quiet: bool = False  # no line per unsteady frame (the rest scenario counts them)
+    t0: float = field(default_factory=time.monotonic)
+
+    def t(self) -> float:
+        return time.monotonic() - self.t0
+
+    def command(self) -> str:
+        c = self.match.get("command") or {}
+        team = c.get("forTeam", "UNKNOWN")
+        return f"{c.get('type')}{'' if team == 'UNKNOWN' else ' ' + team}"
+
+    def placement_pos(self) -> tuple[float, float] | None:
+        p = self.match.get("placementPos")
+        return (p.get("x", 0.0), p.get("y", 0.0)) if p else None
+
+    def actions(self) -> str:
+        out = []
+        for a in self.gc.get("continueActions") or []:
+            team = a.get("forTeam", "UNKNOWN")
+            issues = "; ".join(a.get("continuationIssues") or [])
+            out.append(f"{a.get('type')}{'' if team == 'UNKNOWN' else ' ' + team} "
+                       f"[{a.get('state')}]{' (' + issues + ')' if issues else ''}")
+        hints = [h.get("message", "") for h in self.gc.get("continueHints") or []]
+        return " | ".join(out + [f"hint: {h}" for h in hints])
+
+    def balls(self) -> str:
+        tr = f"({self.tracked[0]:.3f}, {self.tracked[1]:.3f}) v {self.tracked[2]:.2f}" \
+            if self.tracked else "none"
+        th = f"({self.truth[0]:.3f}, {self.truth[1]:.3f})" if self.truth else "none"
+        s = f"tracked {tr}, truth {th}"
+        pos = self.placement_pos()
+        if pos and self.tracked and self.truth:
+            s += (f"; to mark: tracked {math.dist(pos, self.tracked[:2]):.3f} m, "
+                  f"truth {math.dist(pos, self.truth):.3f} m")
+        return s
+
+
+async def gc_reader(ws: Any, seen: Seen) -> None:
+    async for raw in ws:
+        out = json.loads(raw)
+        if out.get("matchState"):
+            before = seen.command()
+            seen.match = out["matchState"]
+            if seen.command() != before:
+                print(f"{seen.t():6.2f} GC command {seen.command()}; {seen.balls()}")
+        if out.get("gcState"):
+            before = seen.actions()
+            seen.gc = out["gcState"]
+            if seen.actions() != before:
+                print(f"{seen.t():6.2f} GC continue: {seen.actions()}")
+        for entry in (out.get("protocol") or {}).get("entry") or []:
+            key = json.dumps(entry.get("change"), sort_keys=True)
+            if key in seen.changes:
+                continue
+            seen.changes.add(key)
+            ge = (entry.get("change") or {}).get("addGameEventChange")
+            if ge and seen.match:
+                seen.events.append(ge["gameEvent"].get("type", "?"))
+                print(f"{seen.t():6.2f} GC game event {json.dumps(ge['gameEvent'])}; "
+                      f"{seen.balls()}")
+
+
+async def tracked_reader(seen: Seen, group: str, port: int) -> None:
+    sock = open_multicast_receiver(group, port)
+    loop = asyncio.get_running_loop()
+    try:
+        while True:
+            data = await loop.sock_recv(sock, 65536)
+            packet = wrapper_pb.TrackerWrapperPacket()
+            packet.ParseFromString(data)
+            f = packet.tracked_frame
+            if f.balls:
+                b = f.balls[0]
+                seen.tracked = (b.pos.x, b.pos.y, math.hypot(b.vel.x, b.vel.y), time.monotonic())
+                seen.frames += 1
+                if seen.tracked[2] >= 0.2 and seen.truth_ball_speed < 0.01:
+                    seen.unsteady += 1
+                    seen.unsteady_max = max(seen.unsteady_max, seen.tracked[2])
+                    if not seen.quiet:
+                            print(f"{seen.t():6.2f} tracked ball at {seen.tracked[2]:.2f} m/s "
+                              f"while the true ball rests ({seen.truth_ball_speed:.3f} m/s); "
+                              f"{seen.balls()}")
+            seen.tracked_robots = [
+                ("blue" if r.robot_id.team == 2 else "yellow", r.robot_id.id, r.pos.x, r.pos.y)
+                for r in f.robots]
+    finally:
+        sock.close()
+
+
+async def truth_reader(seen: Seen, endpoint: str) -> None:
+    ctx = zmq.asyncio.Context()
+    sock = ctx.socket(zmq.SUB)
+    sock.setsockopt(zmq.SUBSCRIBE, b"truth")
+    sock.connect(endpoint)
+    try:
+        while True:
+            _, body = await sock.recv_multipart()
+            t = json.loads(body)
+            seen.truth = (t["ball"]["x"] / 1000.0, t["ball"]["y"] / 1000.0)
+            seen.truth_ball_speed = math.hypot(t["ball"]["vx"], t["ball"]["vy"]) / 1000.0
+            seen.truth_touch = t.get("last_touch")
+            seen.truth_kicks = {(r["team"], r["id"]): r.get("kicks") for r in t["robots"]}
+            seen.truth_robots = [(r["team"], r["id"], r["x"] / 1000.0, r["y"] / 1000.0,
+                                  math.hypot(r["vx"], r["vy"]) / 1000.0) for r in t["robots"]]
+    finally:
+        sock.close(linger=0)
+        ctx.term()
+
+
+class Check:
+    def __init__(self, a: argparse.Namespace, ws: Any, seen: Seen) -> None:
+        self.a, self.ws, self.seen = a, ws, seen
+        self.http = httpx.AsyncClient(base_url=f"http://{a.station}", timeout=5.0)
+
+    async def send(self, message: dict[str, Any]) -> None:
+        await self.ws.send(json.dumps(message))
+
+    async def command(self, kind: str, team: str = "UNKNOWN") -> None:
+        await self.send({"change": {"newCommandChange": {"command": {"type": kind,
+                                                                     "forTeam": team}}}})
+        await self.until(lambda: self.seen.command() == (kind if team == "UNKNOWN"
+                                                         else f"{kind} {team}"),
+                         5, f"GC command {kind}")
+
+    async def ball(self, x: float, y: float) -> None:
+        r = await self.http.post("/api/sim/ball", json={"x": x * 1000.0, "y": y * 1000.0})
+        r.raise_for_status()
+
+    async def play(self, name: str) -> None:
+        r = await self.http.patch("/api/params", json={"strategy": {"play": name}})
+        r.raise_for_status()
+
+    async def until(self, cond: Any, timeout_s: float, what: str) -> bool:
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            if cond():
+                return True
+            await asyncio.sleep(0.05)
+        print(f"{self.seen.t():6.2f} (not within {timeout_s} s: {what})")
+        return False
+
+    async def setup(self) -> None:
+        """DIV_B (fieldsim's 9 m x 6 m field), a friendly, auto continue on, from a clean
+        match; STOP, FORCE_START, STOP: the first running command ends the pre-stage, whose
+        next command (the kick-off) would rule out any placement, and clears the game
+        events, the placement position and the next command."""
+        await self.send({"reset_match": True})
+        await asyncio.sleep(0.5)
+        self.seen.events.clear()
+        await self.send({"change": {"updateConfigChange": {"division": "DIV_B",
+                                                           "matchType": "FRIENDLY"}}})
+        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+        await self.play("match")
+        await self.command("STOP")
+        await self.command("FORCE_START")
+        await asyncio.sleep(0.5)
+        await self.command("STOP")
+
+    async def referee_source(self) -> None:
+        r = (await self.http.get("/api/referee")).json()
+        active = r.get("active") or {}
+        print(f"station referee: active source {active.get('source')} "
+              f"({active.get('source_identifier')}), command {active.get('command')}; internal "
+              f"enabled {r['internal']['enabled']}, foreign {r['internal']['foreign_source']}")
+
+    async def ball_out(self) -> tuple[float, float]:
+        """The ball beyond the +y touch line, then the event an autoref would send."""
+        x, y = self.a.out_x, self.a.out_y
+        await self.ball(x, y)
+        await self.until(lambda: self.seen.truth is not None
+                         and math.dist(self.seen.truth, (x, y)) < 0.01, 3, "ball teleported")
+        await asyncio.sleep(0.5)
+        await self.send({"change": {"addGameEventChange": {"gameEvent": {
+            "type": "BALL_LEFT_FIELD_TOUCH_LINE",
+            "ballLeftFieldTouchLine": {"byTeam": "YELLOW", "location": {"x": x, "y": 3.0}}}}}})
+        ok = await self.until(lambda: self.seen.command() == "BALL_PLACEMENT BLUE", 10,
+                              "GC command BALL_PLACEMENT BLUE")
+        pos = self.seen.placement_pos()
+        print(f"{self.seen.t():6.2f} placement pos {pos}, next command "
+              f"{self.seen.match.get('nextCommand')}, started {ok}")
+        assert pos is not None
+        return pos
+
+    async def sample(self, seconds: float, every: float, stop: Any = None) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end and not (stop and stop()):
+            left = self.seen.match.get("currentActionTimeRemaining")
+            print(f"{self.seen.t():6.2f} {self.seen.command()}, action time left {left}; "
+                  f"{self.seen.balls()}")
+            await asyncio.sleep(every)
+
+    async def placement_timeout(self) -> None:
+        await self.setup()
+        await self.ball_out()
+        await self.sample(40, 2.0, lambda: "PLACEMENT_FAILED" in self.seen.events)
+        await self.until(lambda: "PLACEMENT_FAILED" in self.seen.events, 5,
+                         "PLACEMENT_FAILED")
+        await self.sample(10, 1.0, lambda: self.seen.command().startswith("DIRECT"))
+        await self.sample(3, 1.0)
+
+    async def placement_complete(self) -> None:
+        await self.setup()
+        pos = await self.ball_out()
+
+        def resting_at_mark() -> bool:
+            tr = self.seen.tracked
+            return tr is not None and tr[2] < 0.05 and math.dist(pos, tr[:2]) < 0.05
+        start = time.monotonic()
+        await self.until(resting_at_mark, 28, "tracked ball resting within 5 cm of the mark")
+        print(f"{self.seen.t():6.2f} ball at the mark {time.monotonic() - start:.1f} s after "
+              f"the command; {self.seen.balls()}")
+        await asyncio.sleep(self.a.settle)
+        print(f"{self.seen.t():6.2f} operator: BALL_PLACEMENT_COMPLETE; {self.seen.balls()}")
+        await self.send({"continueAction": {"type": "BALL_PLACEMENT_COMPLETE",
+                                            "forTeam": "BLUE"}})
+        await self.until(lambda: "PLACEMENT_SUCCEEDED" in self.seen.events, 5,
+                         "PLACEMENT_SUCCEEDED")
+        await self.sample(12, 0.5, lambda: self.seen.command().startswith("DIRECT"))
+        await self.sample(3, 1.0)
+
+    def blues(self) -> list[tuple[str, int, float, float, float]]:
+        return [r for r in self.seen.truth_robots if r[0] == "blue"]
+
+    async def stop_ready(self) -> None:
+        await self.setup()
+        await self.until(lambda: all(r[4] < 0.05 for r in self.blues()), 10,
+                         "blue robots at rest in STOP")
+        await asyncio.sleep(0.5)
+        # the blue robot nearest the centre; the ball 0.15 m from its centre, towards the centre
+        _, rid, x, y, _ = min(self.blues(), key=lambda r: math.hypot(r[2], r[3]))
+        d = math.hypot(x, y) or 1.0
+        await self.ball(x - 0.15 * x / d, y - 0.15 * y / d)
+        seen_by_gc = next(((r[2], r[3]) for r in self.seen.tracked_robots
+                           if r[0] == "blue" and r[1] == rid), None)
+        print(f"{self.seen.t():6.2f} ball put 0.15 m from blue {rid} at ({x:.3f}, {y:.3f}) "
+              f"(tracked {seen_by_gc}), robots at rest")
+        t_put = time.monotonic()
+        fastest = 0.0
+        touch, kicks = self.seen.truth_touch, dict(self.seen.truth_kicks)
+
+        def too_close() -> bool:  # this robot named (the attacker may be named already)
+            return any("too close" in i and f"{rid} BLUE" in i
+                       for a in self.seen.gc.get("continueActions") or []
+                       for i in a.get("continuationIssues") or [])
+        await self.until(too_close, 3, f"GC reports blue {rid} too close")
+        t_seen = time.monotonic()
+        async def watch_ball() -> None:
+            nonlocal fastest
+            await asyncio.sleep(0.3)  # the teleport itself
+            while True:
+                fastest = max(fastest, self.seen.truth_ball_speed)
+                await asyncio.sleep(0.02)
+        watcher = asyncio.create_task(watch_ball())
+        await self.until(lambda: not too_close(), 15, "GC clears robots too close")
+        t_clear = time.monotonic()
+        ball = self.seen.truth or (0.0, 0.0)
+        near = {team: min((math.dist(ball, r[2:4]) for r in self.seen.truth_robots
+                           if r[0] == team), default=float("nan"))
+                for team in ("blue", "yellow")}
+        print(f"{self.seen.t():6.2f} 'too close' for blue {rid} seen {t_seen - t_put:.2f} s "
+              f"after the teleport, cleared {t_clear - t_put:.2f} s after it; nearest robot "
+              f"centre to the ball (truth): blue {near['blue']:.3f} m, yellow "
+              f"{near['yellow']:.3f} m (the GC's limit: 0.5 + 0.09 - 0.05 = 0.54 m)")
+        await self.sample(3, 1.0)
+        watcher.cancel()
+        kicked = {k: v for k, v in self.seen.truth_kicks.items() if kicks.get(k) != v}
+        print(f"{self.seen.t():6.2f} fastest ball (truth) after the teleport: {fastest:.3f} m/s;"
+              f" fieldsim's last touch {touch} before, {self.seen.truth_touch} after; kick "
+              f"counts changed: {kicked or 'none'}")
+
+    async def no_progress(self) -> None:
+        await self.setup()
+        await self.play("idle")
+        try:
+            await self.ball(self.a.out_x, 0.0)
+            await asyncio.sleep(1.0)
+            await self.command("FORCE_START")
+            t = time.monotonic()
+            await self.until(lambda: "NO_PROGRESS_IN_GAME" in self.seen.events
+                             or self.seen.command() == "STOP", 20, "NO_PROGRESS_IN_GAME")
+            print(f"{self.seen.t():6.2f} {time.monotonic() - t:.1f} s after FORCE_START: "
+                  f"events {self.seen.events}; {self.seen.balls()}")
+            await self.sample(3, 1.0)
+        finally:
+            await self.play("match")
+
+    async def rest(self) -> None:
+        """HALT (nothing moves), the ball at rest at each spot for --rest-s: how often the
+        tracked ball the GC gets is over its 0.2 m/s "steady" threshold, which its placement
+        and STOP checks read ("Ball position is not steady"; a placement is required)."""
+        await self.command("HALT")
+        for x, y in self.a.rest_spots:
+            await self.ball(x, y)
+            await asyncio.sleep(1.0)
+            near = min(math.dist((x, y), r[2:4]) for r in self.seen.truth_robots)
+            self.seen.quiet = True
+            u0, f0, self.seen.unsteady_max = self.seen.unsteady, self.seen.frames, 0.0
+            errs: list[float] = []
+            end = time.monotonic() + self.a.rest_s
+            while time.monotonic() < end:
+                if self.seen.tracked and self.seen.truth:
+                    errs.append(math.dist(self.seen.tracked[:2], self.seen.truth))
+                await asyncio.sleep(0.05)
+            self.seen.quiet = False
+            n, u = self.seen.frames - f0, self.seen.unsteady - u0
+            print(f"{self.seen.t():6.2f} ball at rest at ({x}, {y}), nearest robot {near:.2f} m:"
+                  f" {u} of {n} tracked frames at >= 0.2 m/s (max {self.seen.unsteady_max:.2f})"
+                  f"; tracked-truth distance max {max(errs) * 1000:.1f} mm")
+
+
+async def run(a: argparse.Namespace) -> None:
+    seen = Seen()
+    tasks = [asyncio.create_task(tracked_reader(seen, a.group, a.tracker_port)),
+             asyncio.create_task(truth_reader(seen, a.truth))]
+    async with websockets.connect(f"ws://{a.gc}/api/control",
+                                  close_timeout=CLOSE_TIMEOUT_S) as ws:
+        tasks.append(asyncio.create_task(gc_reader(ws, seen)))
+        check = Check(a, ws, seen)
+        await check.until(lambda: bool(seen.match) and seen.tracked is not None
+                          and seen.truth is not None, 5, "GC state, tracked frames, truth")
+        trackers = seen.gc.get("trackers")
+        print(f"GC trackers {trackers}")
+        await check.referee_source()
+        for name in a.scenario:
+            print(f"--- {name}")
+            await getattr(check, name.replace("-", "_"))()
+        await check.send({"change": {"newCommandChange": {"command": {"type": "HALT",
+                                                                      "forTeam": "UNKNOWN"}}}})
+        await check.http.aclose()
+    for task in tasks:
+        task.cancel()
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--gc", required=True, help="the game controller's HOST:PORT")
+    p.add_argument("--station", required=True, help="the station's HOST:PORT")
+    p.add_argument("--group", default="224.5.23.2")
+    p.add_argument("--tracker-port", type=int, required=True)
+    p.add_argument("--truth", required=True, help="fieldsim's --truth-pub endpoint")
+    p.add_argument("--out-x", type=float, default=1.5, help="where the ball goes out (m)")
+    p.add_argument("--out-y", type=float, default=3.15, help="beyond the touch line at 3 m")
+    p.add_argument("--settle", type=float, default=1.0,
+                   help="seconds between the ball resting at the mark and 'complete'")
+    p.add_argument("--rest-s", type=float, default=30.0, help="seconds per spot in 'rest'")
+    p.add_argument("--rest-spot", dest="rest_spots", action="append",
+                   type=lambda v: tuple(float(c) for c in v.split(",")),
+                   help="X,Y (m) for 'rest' (repeatable; default 1.5,0 -2,-2.2 0,1)")
+    p.add_argument("--no-auto-continue", dest="auto_continue", action="store_false")
+    p.add_argument("scenario", nargs="+", choices=["placement-timeout", "placement-complete",
+                                                   "stop-ready", "no-progress", "rest"])
+    a = p.parse_args()
+    a.rest_spots = a.rest_spots or [(1.5, 0.0), (-2.0, -2.2), (0.0, 1.0)]
+    asyncio.run(run(a))
+
+
+if __name__ == "__main__":
+    main()
