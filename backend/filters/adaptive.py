@@ -102,6 +102,7 @@ class AdaptiveIMM:
         "_prev",
         "_pri",
         "_pri_h",
+        "_vheld",
         "c_rest",
         "clutter",
         "gap_s",
@@ -173,6 +174,8 @@ class AdaptiveIMM:
         self.S: list[float] = []  # empty: nothing measured yet
         self._h: tuple[float, ...] = ()  # the last two measurements used (t, x, y, t, x, y)
         self._pend: tuple[float, float, float] | None = None  # a reachable jump (t, x, y)
+        #: the velocity reported instead of the state's for one step (see _speed_up)
+        self._vheld: Vec | None = None
         # recent rejected measurements (t, x, y), the last 0.3 s: a lost track is re-acquired
         # on three of them that lie on one line
         self._far: tuple[tuple[float, float, float], ...] | None = None
@@ -217,6 +220,7 @@ class AdaptiveIMM:
             self.r0, self.q0 = self.S[_R], self.S[_Q]
         self.S = []
         self._prev = self._pend = self._far = self._backup = self._pri = self._book = None
+        self._vheld = None
         self._h = ()
 
     def _save(self) -> tuple[object, ...]:
@@ -242,6 +246,7 @@ class AdaptiveIMM:
     # -- the step ----------------------------------------------------------------------------
 
     def revise(self, x: float, y: float) -> Vec:
+        self._vheld = None
         pri = self._pri
         if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
             # the state before the step, except what the step did before its predictions
@@ -257,6 +262,7 @@ class AdaptiveIMM:
 
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        self._vheld = None
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
          gate2, clutter, rho_keep, q_c, switch_c) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
@@ -658,10 +664,16 @@ class AdaptiveIMM:
             S[26] *= f
             S[27] *= f
         prev = self._prev
+        held = _velocity(self.S) if pred[_MU] > 0.5 else None
         self.S = S
         self.rejected -= 1  # (counted again if the redone step rejects it too)
         out = self.update(t, zx, zy)
         self._prev = prev
+        # from rest, one measurement a little outside the gate moves the estimate a few mm but
+        # must not report its velocity (0.5 m/s from a 4.5-sigma noise sample, about one frame
+        # in 10^4 at 2 mm: the game controller reads a ball "not steady", docs/tracker.md);
+        # the velocity before the step stands until the next measurement
+        self._vheld = held
         return out
 
     # -- output ------------------------------------------------------------------------------
@@ -677,6 +689,8 @@ class AdaptiveIMM:
     def velocity(self) -> Vec:
         """The velocity; after a jump not yet confirmed, the velocity before it (one noise
         spike must not read as a 5 m/s kick: the next measurement tells)."""
+        if self._vheld is not None:
+            return self._vheld
         bk = self._backup
         S: list[float] = self.S if bk is None else bk[0]  # type: ignore[assignment]
         if not S:
