@@ -191,9 +191,9 @@ class FeedbackTracker:
         window_start = now - LOSS_WINDOW_S
         for s in env.sent:
             rid = s.id
-            st = robots.get((team, rid))
-            if st is None or st.transport != "sim":
-                st = self._state(team, rid, "sim")
+            got = robots.get((team, rid))
+            st = got if got is not None and got.transport == "sim" else \
+                self._state(team, rid, "sim")
             st.sent_total = s.commands_sent
             if rid in answered:
                 st.answers_total += 1
