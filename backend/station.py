@@ -314,7 +314,11 @@ class Station:
         return None
 
     def drives_other_team(self) -> bool:
-        """The control loop may command the other team (a simulator, and the operator said)."""
+        """The control loop may command the other team (a simulator, and the operator said).
+        Asked in every control tick: the operator's switch first (off: no refusal message
+        is built), then ``other_team_refusal``."""
+        if not self.params.current.safety.other_team_in_simulator:
+            return False
         other: Team = "yellow" if self.params.current.team.our_team == "blue" else "blue"
         return self.other_team_refusal(other, 0) is None
 

@@ -12,7 +12,7 @@ Prints the top by own time and by cumulative time. cProfile slows the part down:
 shares, and take CPU figures from bench/loop_bench.py.
 
     PYTHONPATH=. .venv/bin/python bench/profile_station.py [--part backend|relay]
-        [--seconds 20] [--out FILE]
+        [--seconds 20] [--out FILE] [--clock wall|cpu]
 """
 
 from __future__ import annotations
@@ -43,6 +43,9 @@ def main() -> None:
     ap.add_argument("--hz", type=float, default=75.0)
     ap.add_argument("--out", default=None, help="default /tmp/touchline-<part>.prof")
     ap.add_argument("--top", type=int, default=30)
+    ap.add_argument("--clock", choices=["wall", "cpu"], default="wall",
+                    help="cpu counts the profiled thread's CPU time, not the wall "
+                    "clock (epoll waits and preemption after a send then cost nothing)")
     a = ap.parse_args()
     out = Path(a.out or f"/tmp/touchline-{a.part}.prof")
     out.unlink(missing_ok=True)
@@ -50,7 +53,7 @@ def main() -> None:
            "--camera-hz", str(a.hz)]
     args = [sys.executable, "-m", "launcher", "--isolated", *(f"--sim-arg={x}" for x in sim),
             "--backend-arg=--set", "--backend-arg=strategy.play=match"]
-    env = dict(os.environ)
+    env = dict(os.environ, TOUCHLINE_PROFILE_CLOCK=a.clock)
     if a.part == "backend":
         env.update(TOUCHLINE_PROFILE=str(out), TOUCHLINE_PROFILE_AFTER="5",
                    TOUCHLINE_PROFILE_FOR=str(a.seconds))

@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import os
 import signal
 import sys
 from collections.abc import Callable
@@ -214,8 +215,12 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.profile:
         import cProfile
+        import time
 
-        prof = cProfile.Profile()
+        # TOUCHLINE_PROFILE_CLOCK=cpu (bench/profile_station.py --clock cpu): CPU time, not
+        # the wall clock (epoll waits and preemption after a send then cost nothing)
+        cpu = os.environ.get("TOUCHLINE_PROFILE_CLOCK", "wall") == "cpu"
+        prof = cProfile.Profile(time.thread_time) if cpu else cProfile.Profile()
         try:
             with contextlib.suppress(KeyboardInterrupt):
                 prof.runcall(run)

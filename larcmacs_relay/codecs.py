@@ -232,6 +232,13 @@ def encode_sim_robot_control(commands: list[Command], chip_angle_deg: float) -> 
     return msg.SerializeToString()
 
 
+def encode_sim_robot_command(command: Command, chip_angle_deg: float) -> bytes:
+    """One robot's part of ``encode_sim_robot_control``: RobotControl has the one repeated
+    field, so the parts of several robots, joined, are the message of all of them (byte for
+    byte). The relay keeps each robot's part while its command stays the same."""
+    return encode_sim_robot_control([command], chip_angle_deg)
+
+
 def count_response_errors(data: bytes) -> tuple[int, str]:
     """Errors in a RobotControlResponse / SimulatorResponse (both carry errors as field 1).
 

@@ -38,9 +38,19 @@ class CommandTable:
     hold_time_s: float = 1.0
     stale_stops: int = 0
     _entries: dict[tuple[int, int], _Entry] = field(default_factory=dict)
+    #: the entries' keys sorted, made again only when a robot is new (``due`` runs in every
+    #: output cycle, several hundred a second)
+    _order: list[tuple[int, int]] = field(default_factory=list)
 
     def update(self, command: Command, now: float) -> None:
-        self._entries[(command.team, command.id)] = _Entry(command, now)
+        key = (command.team, command.id)
+        entry = self._entries.get(key)
+        if entry is None:
+            self._entries[key] = _Entry(command, now)
+            self._order = sorted(self._entries)
+            return
+        entry.command, entry.arrival = command, now
+        entry.state, entry.zero_since = RobotState.ACTIVE, 0.0
 
     def stop_all(self, now: float) -> None:
         for entry in self._entries.values():
@@ -51,8 +61,9 @@ class CommandTable:
     def due(self, now: float) -> list[Command]:
         """Commands to send this cycle, sorted by (team, id)."""
         out: list[Command] = []
-        for key in sorted(self._entries):
-            entry = self._entries[key]
+        entries = self._entries
+        for key in self._order:
+            entry = entries[key]
             if entry.state is RobotState.ACTIVE and now - entry.arrival > self.timeout_s:
                 entry.state = RobotState.STALE
                 entry.zero_since = now
@@ -70,7 +81,7 @@ class CommandTable:
 
     def all_zero(self) -> list[Command]:
         """A zero command for every robot ever commanded (the relay's last word)."""
-        return [self._entries[k].command.zero() for k in sorted(self._entries)]
+        return [self._entries[k].command.zero() for k in self._order]
 
     def count(self, state: RobotState) -> int:
         return sum(1 for e in self._entries.values() if e.state is state)

@@ -87,6 +87,8 @@ class Relay:
         #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
         #: with every answer (the backend's round trip and losses)
         self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
+        #: each robot's last command and its encoded part of the sim output (_sim_part)
+        self._sim_parts: dict[tuple[int, int], tuple[Command, bytes]] = {}
         #: grsim output: the bound Robots_Status ports {"blue": port, "yellow": port}
         self.grsim_status_ports: dict[str, int] = {}
         self._referee_mapper = RefereeMapper(config.our_team)
@@ -751,7 +753,7 @@ class Relay:
                     continue
                 if cfg.output == "sim":
                     port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
-                    data = codecs.encode_sim_robot_control(cmds, cfg.chip_angle_deg)
+                    data = b"".join([self._sim_part(c) for c in cmds])
                     sent = self._send(data, (self._sim_host, port))
                 else:
                     data = codecs.encode_grsim_commands(
@@ -764,6 +766,18 @@ class Relay:
                         sent_team = self._sent[team]
                         n, _ = sent_team.get(c.id, (0, 0))
                         sent_team[c.id] = (n + 1, sent_ns)
+
+    def _sim_part(self, c: Command) -> bytes:
+        """Robot ``c``'s encoded part of the simulation protocol's RobotControl, kept while
+        its command stays the same (the same object, or an equal one: a stop is made anew
+        in every cycle)."""
+        key = (c.team, c.id)
+        got = self._sim_parts.get(key)
+        if got is not None and (got[0] is c or got[0] == c):
+            return got[1]
+        data = codecs.encode_sim_robot_command(c, self.config.chip_angle_deg)
+        self._sim_parts[key] = (c, data)
+        return data
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,

@@ -19,8 +19,13 @@ class RateCounter:
         t = time.monotonic() if now is None else now
         self.total += 1
         self.last_time = t
-        self._times.append(t)
-        self._trim(t)
+        times = self._times
+        times.append(t)
+        # trimmed in bulk once the oldest is a window older than the window (at most two
+        # windows of times are kept): an event is counted hundreds of times a second per
+        # stream, and ``rate_hz`` trims exactly when read
+        if times[0] < t - 2.0 * self.window_s:
+            self._trim(t)
 
     def _trim(self, now: float) -> None:
         cutoff = now - self.window_s

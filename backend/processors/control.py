@@ -20,7 +20,7 @@ from ..messages import Command, CommandSet, TargetEntry
 from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.referee import RefereeState
-from ..world.state import Team
+from ..world.state import RobotState, Team, WorldState
 from .internal_referee import InternalRefereeProcessor
 
 
@@ -28,7 +28,12 @@ class ControlProcessor(Processor):
     """Turns targets into robot commands on every world update with each robot's chosen
     controller (the paper's Algorithm 1 or 2, or the proportional baseline), then the safety
     rules: emergency stop and HALT zero every robot; a stale world zeroes every robot, a robot
-    not seen gets zero; STOP and the other team's ball placement cap the speed."""
+    not seen gets zero; STOP and the other team's ball placement cap the speed.
+
+    A command set carries the robots with something new (a camera saw the robot, its target
+    or the referee command changed, or ``refresh_s`` passed): one camera of eight sees a few
+    robots, and the relay keeps and repeats every robot's latest command. Every stop above
+    still zeroes every robot in one set, and a robot not seen is zeroed in every tick."""
 
     name = "control"
 
@@ -47,7 +52,19 @@ class ControlProcessor(Processor):
         self.our_team: Team = "blue"
         self.motion = MotionBank(settings or ControlSettings())
         self.last_commands: dict[tuple[Team, int], Command] = {}
-        self.telemetry: dict[str, dict[str, Any]] = {}
+        self._telemetry_cache: dict[str, dict[str, Any]] | None = {}
+        #: a robot is stepped again when its world state (the world model reuses a robot's
+        #: state object until a camera sees it again) or its target changed, when the
+        #: referee command changed, or after ``refresh_s`` without a step; in between the
+        #: relay repeats its last command. Per robot: the (state, target) of its last command
+        #: and the monotonic time of its last step (its controller's dt)
+        self.refresh_s = 0.02
+        self._basis: dict[tuple[Team, int], tuple[RobotState, TargetEntry]] = {}
+        self._step_t: dict[tuple[Team, int], float] = {}
+        self._command: str | None = None
+        self._keys: list[tuple[Team, int]] = []
+        self._indexed: WorldState | None = None
+        self._robots: dict[tuple[Team, int], RobotState] = {}
         self.internal: InternalRefereeProcessor | None = None
         #: whether commands for the other team may go out (the station says: a simulator
         #: output and the operator's safety.other_team_in_simulator); else they never do
@@ -86,6 +103,7 @@ class ControlProcessor(Processor):
     def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
         self.motion.apply_settings(settings)
         self.our_team = our_team
+        self._basis.clear()  # every robot's command again under the new settings
 
     def configure(self, params: StationParams) -> None:
         self.apply_settings(params.control, params.team.our_team)
@@ -95,11 +113,12 @@ class ControlProcessor(Processor):
         self.strategy_stale_s = max(safety.strategy_stale_s,
                                     2.5 / params.processors.strategy_hz)
         self.stop_speed_mps = safety.stop_speed_mps
+        self._basis.clear()
         self.trigger = OnTopic(self.world, max_wait_s=params.processors.control_max_wait_s)
 
     async def tick(self) -> None:
         now = time.monotonic()
-        dt = min(0.1, now - self._last_tick)
+        tick_dt = min(0.1, now - self._last_tick)
         self._last_tick = now
         rec = self.world.latest()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets.latest_value() or {}
@@ -108,7 +127,7 @@ class ControlProcessor(Processor):
         created = time.time_ns()
         if estop:
             self.halt_reason = "emergency stop"
-            self.motion.reset_all()
+            self._reset()
             self.commands.write(CommandSet(created, 0, (), stop_all=True))
             self.last_commands = {}
             return
@@ -124,37 +143,81 @@ class ControlProcessor(Processor):
                                 "no vision" if vision_age == math.inf else
                                 f"no vision for {vision_age:.1f} s" if blind
                                 else f"strategy stalled ({targets_age:.1f} s)")
-            self.motion.reset_all()
+            self._reset()
             cmds = tuple(Command(t, i, zero) for t, i in keys)
             self.commands.write(CommandSet(created, 0, cmds))
             self.last_commands = {(c.team, c.id): c for c in cmds}
             return
         self.halt_reason = ""
         world = rec.value
-        out: list[Command] = []
         command = ref.command if ref is not None else None
+        if command != self._command:  # speed caps and kicks change for every robot
+            self._command = command
+            self._basis.clear()
+        if world is not self._indexed:
+            self._indexed = world
+            self._robots = {(r.team, r.id): r for r in world.robots}
+        robots, basis, step_t = self._robots, self._basis, self._step_t
+        kick_ok = kick_allowed(command)
+        refresh_s = self.refresh_s
+        out: list[Command] = []
         for key in keys:
-            robot = world.robot(*key)
+            robot = robots.get(key)
+            entry = targets[key]
+            last_t = step_t.get(key)
+            seen = robot is not None and robot.visible
+            if seen and last_t is not None and now - last_t < refresh_s:
+                b = basis.get(key)
+                if b is not None and b[0] is robot and (b[1] is entry or b[1] == entry):
+                    continue  # nothing new for this robot: the relay repeats its command
+            dt = tick_dt if last_t is None else min(0.1, now - last_t)
+            step_t[key] = now
             m = self.motion.get(key[0], key[1])
             if robot is None or not robot.visible:
-                m.step(_UNSEEN, targets[key].target, dt)  # zero, and restart when seen again
+                m.step(_UNSEEN, entry.target, dt)  # zero, and restart when seen again
+                basis.pop(key, None)  # commanded zero again in every tick while not seen
                 out.append(Command(key[0], key[1], zero))
                 continue
-            entry = targets[key]
+            basis[key] = (robot, entry)
             vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
                          next_waypoint(entry, robot.x, robot.y), dt)
             vel = referee_limits(
                 vel, command, our_team=self.our_team, stop_speed_mps=self.stop_speed_mps,
                 max_speed_mps=math.inf if entry.max_speed_mps is None else entry.max_speed_mps)
-            kick_ok = kick_allowed(command)
             out.append(Command(key[0], key[1], vel,
                                kick_speed_mps=entry.kick_speed_mps if kick_ok else 0.0,
                                chip=entry.chip and kick_ok,
                                dribbler_rpm=entry.dribbler_rpm))
-        cmds = tuple(out)
-        self.last_commands = {(c.team, c.id): c for c in cmds}
-        self.telemetry = self._telemetry()
-        self.commands.write(CommandSet(created, world.receive_time_ns, cmds))
+        if keys != self._keys:  # robots no longer commanded leave the table
+            self._keys = keys
+            kept = set(keys)
+            for key in [k for k in step_t if k not in kept]:
+                del step_t[key]
+                basis.pop(key, None)
+            self.last_commands = {k: c for k, c in self.last_commands.items() if k in kept}
+        if not out:
+            return  # no robot has anything new: no command set
+        last = dict(self.last_commands)  # a new dict: the views may hold the old one
+        for c in out:
+            last[(c.team, c.id)] = c
+        self.last_commands = last
+        self._telemetry_cache = None
+        self.commands.write(CommandSet(created, world.receive_time_ns, tuple(out)))
+
+    def _reset(self) -> None:
+        """Every controller back to its start (a stop): the next commands are computed afresh
+        for every robot."""
+        self.motion.reset_all()
+        self._basis.clear()
+        self._step_t.clear()
+
+    @property
+    def telemetry(self) -> dict[str, dict[str, Any]]:
+        """Each robot's controller telemetry, built when read (the page reads it at its own
+        rate, not once per camera frame)."""
+        if self._telemetry_cache is None:
+            self._telemetry_cache = self._telemetry()
+        return self._telemetry_cache
 
     def _telemetry(self) -> dict[str, dict[str, Any]]:
         out: dict[str, dict[str, Any]] = {}

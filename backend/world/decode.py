@@ -17,25 +17,36 @@ def _finite(*vals: float) -> bool:
 
 
 def decode_detection(frame: SSL_DetectionFrame, receive_time_ns: int) -> CameraFrame:
-    """Plain copy of a detection frame. Robots without an id and non-finite values are dropped."""
+    """Plain copy of a detection frame. Robots without an id and non-finite values are dropped.
+
+    Each protobuf field is read once (an attribute read of a message is a call into the
+    protobuf runtime: 600 frames a second at 8 cameras x 75 Hz)."""
     robots: list[RawRobot] = []
+    isfinite = math.isfinite
     team: Team
     for team, dets in (("yellow", frame.robots_yellow), ("blue", frame.robots_blue)):
         for d in dets:
-            if not d.HasField("robot_id") or d.robot_id > 15 or not _finite(d.x, d.y):
+            if not d.HasField("robot_id"):
+                continue
+            rid, x, y = d.robot_id, d.x, d.y
+            if rid > 15 or not (isfinite(x) and isfinite(y)):
                 continue
             ori = d.orientation if d.HasField("orientation") else 0.0
-            if not math.isfinite(ori):
+            if not isfinite(ori):
                 ori = 0.0
-            robots.append(RawRobot(team, d.robot_id, d.x, d.y, ori, d.confidence))
-    balls = tuple(RawBall(b.x, b.y, b.confidence) for b in frame.balls if _finite(b.x, b.y))
+            robots.append(RawRobot(team, rid, x, y, ori, d.confidence))
+    balls: list[RawBall] = []
+    for b in frame.balls:
+        x, y = b.x, b.y
+        if isfinite(x) and isfinite(y):
+            balls.append(RawBall(x, y, b.confidence))
     return CameraFrame(
         camera_id=frame.camera_id,
         frame_number=frame.frame_number,
         t_capture=frame.t_capture,
         t_sent=frame.t_sent,
         receive_time_ns=receive_time_ns,
-        balls=balls,
+        balls=tuple(balls),
         robots=tuple(robots),
     )
 

@@ -197,16 +197,26 @@ class FeedbackTracker:
         if dec.transport != "sim":
             return
         self.answering.add(team)
+        # every robot sent to, in every answer (several hundred a second): each protobuf
+        # field read once, the window's start computed once
+        robots = self.robots
+        received = env.receive_time_ns
+        window_start = now - LOSS_WINDOW_S
         for s in env.sent:
-            st = self._state(team, s.id, "sim")
+            rid = s.id
+            got = robots.get((team, rid))
+            st = got if got is not None and got.transport == "sim" else \
+                self._state(team, rid, "sim")
             st.sent_total = s.commands_sent
-            if s.id in answered:
+            if rid in answered:
                 st.answers_total += 1
-                if s.last_sent_time_ns > 0 and env.receive_time_ns >= s.last_sent_time_ns:
-                    st.round_trips_ms.append((env.receive_time_ns - s.last_sent_time_ns) / 1e6)
-            st.counts.append((now, st.sent_total, st.answers_total))
-            while len(st.counts) > 1 and st.counts[1][0] <= now - LOSS_WINDOW_S:
-                st.counts.popleft()
+                last_sent = s.last_sent_time_ns
+                if last_sent > 0 and received >= last_sent:
+                    st.round_trips_ms.append((received - last_sent) / 1e6)
+            counts = st.counts
+            counts.append((now, st.sent_total, st.answers_total))
+            while len(counts) > 1 and counts[1][0] <= window_start:
+                counts.popleft()
 
     def view(self, team: Team, rid: int, now: float) -> RobotFeedbackView | None:
         st = self.robots.get((team, rid))

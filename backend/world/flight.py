@@ -272,7 +272,8 @@ class FlightTracker:
         obs = self._obs
         if not obs:
             return None
-        recent = [o for o in obs if t_now - o[0] <= cfg.recognise_within_s]
+        within = cfg.recognise_within_s  # (once: this runs on every new ball detection)
+        recent = [o for o in obs if t_now - o[0] <= within]
         if len(recent) < cfg.min_samples:
             return None
         x0, y0 = recent[0][2], recent[0][3]

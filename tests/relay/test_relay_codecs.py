@@ -100,6 +100,15 @@ def test_sim_robot_control_matches_hand_built_wire_bytes() -> None:
     assert got == expected
 
 
+def test_sim_robot_parts_joined_are_the_whole_message() -> None:
+    """The relay keeps each robot's encoded part and joins them: byte for byte the message
+    of all of them."""
+    cmds = [Command(BLUE, 1, 1.0, 0.5, -0.2, 3.0, True, 500.0), Command(BLUE, 4),
+            Command(BLUE, 9, -1.5, 0.0, 2.0)]
+    joined = b"".join(codecs.encode_sim_robot_command(c, 45.0) for c in cmds)
+    assert joined == codecs.encode_sim_robot_control(cmds, 45.0)
+
+
 def test_sim_robot_control_straight_kick_angle_zero() -> None:
     got = codecs.encode_sim_robot_control([Command(YELLOW, 15, kick_speed_mps=3.0)], 45.0)
     msg = ssl_simulation_robot_control_pb2.RobotControl.FromString(got)

@@ -40,3 +40,17 @@ def test_the_counter_keeps_every_reason_not_only_the_last() -> None:
     assert d["errors"] == 5 and d["packets"] == 1
     assert d["errors_by_reason"] == {"time out of range": 3, "truncated": 2}
     assert d["last_error"] == "time out of range: camera 0"
+
+
+def test_rate_counter_is_exact_when_read_and_keeps_at_most_two_windows() -> None:
+    """``add`` trims in bulk (it runs hundreds of times a second per stream); the rate read
+    still counts exactly the events of the last window, and memory stays bounded."""
+    from sslnet.rate import RateCounter
+
+    rc = RateCounter(window_s=1.0)
+    for k in range(3000):  # 1000 events a second for 3 s
+        rc.add(k / 1000.0)
+        assert len(rc._times) <= 2001
+    assert rc.total == 3000
+    assert rc.rate_hz(2.9995) == 1000.0  # the events at 2.000 .. 2.999 s
+    assert rc.rate_hz(3.5) == 500.0

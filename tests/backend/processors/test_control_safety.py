@@ -54,7 +54,9 @@ async def test_no_kick_under_stop_but_kicks_in_play_and_speed_caps_hold() -> Non
     c, bus = setup(entry)
     c.strategy_stale_s = 10.0
     bus.of(topics.REFEREE).write(referee("FORCE_START"))
-    for _ in range(30):  # let the controller ramp up to its cap
+    for _ in range(30):  # let the controller ramp up to its cap (a camera sees it each time)
+        seen = RobotState("blue", 1, 0.0, 0.0, 0.0)
+        bus.of(topics.WORLD).write(WorldState(0.0, 0, None, (seen,)))
         cs = await last(c, bus)
     cmd = cs.commands[0]
     assert cmd.kick_speed_mps == 5.0
@@ -134,4 +136,6 @@ async def test_control_never_commands_the_other_team_unless_the_station_allows_i
     assert [(k.team, k.id) for k in cs.commands] == [("blue", 3)]
     c.may_drive_other_team = lambda: True
     cs = await last(c, bus)
-    assert [(k.team, k.id) for k in cs.commands] == [("blue", 3), ("yellow", 3)]
+    # the newly allowed robot is commanded; blue 3 has nothing new and keeps its command
+    assert [(k.team, k.id) for k in cs.commands] == [("yellow", 3)]
+    assert sorted(c.last_commands) == [("blue", 3), ("yellow", 3)]

@@ -74,3 +74,18 @@ def test_ball_seen_by_two_cameras_at_once_is_averaged() -> None:
     b = m.snapshot().ball
     assert b is not None and (b.x, b.y) == (105, 5)
     assert b.cameras == (0, 1)
+
+
+def test_robots_stay_sorted_when_one_is_dropped_and_another_comes() -> None:
+    """The snapshot keeps its sorted order of robots between arrivals and departures (it is
+    sorted again only then), also when one goes and another comes in the same snapshot."""
+    m = WorldModel()
+    m.update(frame(0, 1.0, [RawRobot("blue", 1, 0, 0, 0, 1), RawRobot("blue", 2, 500, 0, 0, 1)]))
+    assert [r.id for r in m.snapshot().robots] == [1, 2]
+    m.update(frame(0, 4.5, [RawRobot("blue", 2, 500, 0, 0, 1)]))  # 1 not seen for 3.5 s
+    assert [r.id for r in m.snapshot().robots] == [2]
+    m.update(frame(0, 8.0, [RawRobot("yellow", 0, 0, 0, 0, 1)]))  # 2 goes as yellow 0 comes
+    assert [(r.team, r.id) for r in m.snapshot().robots] == [("yellow", 0)]
+    m.update(frame(0, 8.1, [RawRobot("blue", 9, 0, 0, 0, 1), RawRobot("blue", 3, 9, 0, 0, 1)]))
+    assert [(r.team, r.id) for r in m.snapshot().robots] == [("blue", 3), ("blue", 9),
+                                                             ("yellow", 0)]
