@@ -664,7 +664,7 @@ class AdaptiveIMM:
             S[26] *= f
             S[27] *= f
         prev = self._prev
-        held = _velocity(self.S) if pred[_MU] > 0.5 else None
+        held = _velocity(self.S) if pred[_MU] > 0.5 and self.dims == 2 else None
         self.S = S
         self.rejected -= 1  # (counted again if the redone step rejects it too)
         out = self.update(t, zx, zy)

@@ -281,3 +281,15 @@ def test_a_resting_object_never_reports_a_velocity_from_one_noise_sample() -> No
         x = 1000.0 + (1000.0 * (t - 1.0) if t > 1.0 else 0.0)
         f.update(t, x + rng.gauss(0.0, 2.0), 500.0 + rng.gauss(0.0, 2.0))
     assert abs(f.velocity()[0] - 1000.0) < 100.0
+
+
+def test_the_orientation_filter_takes_a_sample_just_outside_its_gate_from_rest() -> None:
+    """The 1-D variant shares the step: one heading 5.5 sigma off after 15 s at rest raised
+    an IndexError (the held velocity read the 2-D state) and the world model lost the frame."""
+    for seed in range(20):
+        rng = random.Random(seed)
+        f = AdaptiveIMM1D()
+        for i in range(1800):
+            x = 0.5 + rng.gauss(0.0, 0.01) + (0.055 if i == 900 else 0.0)
+            f.update(i / 60.0, x, 0.0)
+        assert abs(f.estimate_fast()[0] - 0.5) < 0.01
