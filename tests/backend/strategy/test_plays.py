@@ -234,17 +234,23 @@ def test_placement_from_against_the_wall_pulls_the_ball() -> None:
     assert pull.orientation == pytest.approx(0.0)
 
 
+def _placing_blue(ball: Ball, dp: tuple[float, float]
+                  ) -> tuple[Situation, list[Bot], tuple[float, float]]:
+    """Our ball placement to ``dp``: the situation, our team far away, the unit vector from
+    the ball to the mark."""
+    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
+    d = (dp[0] - ball.x, dp[1] - ball.y)
+    n = math.hypot(*d)
+    return sit, team(6, x_range=(-4000.0, -3000.0)), (d[0] / n, d[1] / n)
+
+
 def test_a_pulling_placer_that_reports_no_contact_rolls_on_instead_of_backing_up() -> None:
     """The robot's own word on the ball decides when it reports it: 50 mm short of the
     ball, within the geometric hold band, a robot saying "no ball" goes on rolling onto it
     (backing up then left the ball behind, again and again); saying "ball" it pulls."""
     ball = Ball(FS.half_length - 40.0, -150.0)  # on their goal line: no room behind it
     dp = (FS.half_length - 2200.0, 0.0)
-    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
-    ours = team(6, x_range=(-4000.0, -3000.0))
-    u = (dp[0] - ball.x, dp[1] - ball.y)
-    n = math.hypot(*u)
-    u = (u[0] / n, u[1] / n)
+    sit, ours, u = _placing_blue(ball, dp)
     face = math.atan2(-u[1], -u[0])
     gap = 111.5 + 50.0
     pulls_to = (dp[0] + u[0] * 111.5, dp[1] + u[1] * 111.5)
@@ -268,11 +274,7 @@ def test_a_ball_held_for_pulling_is_pulled_to_the_mark_with_room_behind_it() -> 
     rather than going round the ball to push it (which cost the 30 s in a test)."""
     ball = Ball(FS.half_length - 900.0, -100.0)  # in the field, plenty of room behind
     dp = (FS.half_length - 2200.0, 0.0)
-    sit = Situation("placement", True, "BALL_PLACEMENT_BLUE", designated=dp)
-    ours = team(6, x_range=(-4000.0, -3000.0))
-    d = (dp[0] - ball.x, dp[1] - ball.y)
-    n = math.hypot(*d)
-    u = (d[0] / n, d[1] / n)
+    sit, ours, u = _placing_blue(ball, dp)
     # holding it from the mark's side, facing the ball
     ours[3] = Bot(3, ball.x + u[0] * 111.5, ball.y + u[1] * 111.5, math.atan2(-u[1], -u[0]))
     out, _ = decide(sit, ball=ball, ours=ours)
