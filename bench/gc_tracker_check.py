@@ -21,6 +21,22 @@ The GC and the station are not started here; docs/tracker.md has the commands. S
   time); the GC's NO_PROGRESS_IN_GAME and the location it reports.
 - ``rest``: HALT, the ball at rest at a few spots: how many tracked frames carry a speed over
   the GC's 0.2 m/s "steady" threshold (single-frame spikes in camera overlaps).
+
+The next scenarios need ``--sim-control-port`` (fieldsim's SimulatorCommand port: the other
+team, which nobody drives, is put in place by teleports, and robots are taken off). They read
+the station's colour from ``/api/params`` (``team.our_team``), so they also run with
+``launcher --our-team yellow``; auto continue is off while they run (the GC stays in the
+prepare command and only says whether it would continue):
+
+- ``kickoff``: for each team, the ball at the centre, KICKOFF: when the GC's NORMAL_START has no
+  issue left; then one robot of the other team (nobody drives it) teleported into the wrong
+  half (the GC must name it and keep naming it), and one of ours (Touchline must bring it back).
+- ``penalty``: for each team, the ball on the penalty mark, the other team placed by teleport
+  (its keeper on its goal line, the rest 1 m behind the ball), PENALTY: when it is ready; then
+  one of ours put in front of the ball, and when we defend our keeper taken out of the goal.
+- ``robot-count``: STOP, a yellow card for each team in turn: the GC's "too many robots" while
+  the team has more robots on the field than it is allowed; the excess robot (ours: the one
+  Touchline sends to the halfway line; theirs: any) taken off fieldsim: when the issue clears.
 """
 
 from __future__ import annotations
@@ -29,6 +45,7 @@ import argparse
 import asyncio
 import json
 import math
+import socket
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,10 +56,13 @@ import zmq
 import zmq.asyncio
 
 from sslnet.multicast import open_multicast_receiver
+from sslpb import ssl_gc_common_pb2 as gc_common_pb
+from sslpb import ssl_simulation_control_pb2 as control_pb
 from sslpb import ssl_vision_wrapper_tracked_pb2 as wrapper_pb
 
 CLOSE_TIMEOUT_S = 0.2
 PLACEMENT_TOLERANCE_M = 0.15  # the GC's ball-placement-tolerance
+PREPARATION = "s left for preparation"  # the GC's own waiting issue, not a readiness issue
 
 
 @dataclass
@@ -174,6 +194,7 @@ class Check:
     def __init__(self, a: argparse.Namespace, ws: Any, seen: Seen) -> None:
         self.a, self.ws, self.seen = a, ws, seen
         self.http = httpx.AsyncClient(base_url=f"http://{a.station}", timeout=5.0)
+        self.sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
 
     async def send(self, message: dict[str, Any]) -> None:
         await self.ws.send(json.dumps(message))
@@ -370,6 +391,227 @@ class Check:
                   f" {u} of {n} tracked frames at >= 0.2 m/s (max {self.seen.unsteady_max:.2f})"
                   f"; tracked-truth distance max {max(errs) * 1000:.1f} mm")
 
+    # --- the scenarios that place the other team (--sim-control-port) ---------------------
+
+    def teleport(self, team: str, rid: int, x: float | None = None, y: float | None = None,
+                 orientation: float | None = None, present: bool | None = None) -> None:
+        """One robot through fieldsim's SimulatorCommand port (m, rad); present=False takes
+        it off the field, present=True puts it (back) on."""
+        if self.a.sim_control_port is None:
+            raise SystemExit("this scenario needs --sim-control-port")
+        cmd = control_pb.SimulatorCommand()
+        t = cmd.control.teleport_robot.add()
+        t.id.id = rid
+        t.id.team = gc_common_pb.Team.BLUE if team == "blue" else gc_common_pb.Team.YELLOW
+        for name, value in (("x", x), ("y", y), ("orientation", orientation),
+                            ("present", present)):
+            if value is not None:
+                setattr(t, name, value)
+        self.sim.sendto(cmd.SerializeToString(), ("127.0.0.1", self.a.sim_control_port))
+
+    async def our_team(self) -> str:
+        r = (await self.http.get("/api/params")).json()
+        return str(r["values"]["team"]["our_team"])
+
+    def team_state(self, team: str) -> dict[str, Any]:
+        return dict((self.seen.match.get("teamState") or {}).get(team.upper()) or {})
+
+    def robots_of(self, team: str) -> list[tuple[str, int, float, float, float]]:
+        return [r for r in self.seen.truth_robots if r[0] == team]
+
+    def action(self, kind: str) -> tuple[str | None, list[str]]:
+        """State and readiness issues (the preparation countdown left out) of an action."""
+        for a in self.seen.gc.get("continueActions") or []:
+            if a.get("type") == kind:
+                return a.get("state"), [i for i in a.get("continuationIssues") or []
+                                        if PREPARATION not in i]
+        return None, []
+
+    def ready(self, kind: str = "NORMAL_START") -> bool:
+        state, issues = self.action(kind)
+        return state in ("WAITING", "READY_AUTO", "READY_MANUAL") and not issues
+
+    def issue_with(self, text: str, kind: str = "NORMAL_START") -> bool:
+        return any(text in i for i in self.action(kind)[1])
+
+    async def prepare(self, kind: str, team: str, ball: tuple[float, float]) -> None:
+        """From STOP (auto continue off): the ball at ``ball``, then the prepare command; how
+        long until the GC has no readiness issue left and until it would continue."""
+        await self.ball(*ball)
+        await self.until(lambda: self.seen.truth is not None
+                         and math.dist(self.seen.truth, ball) < 0.01, 3, "ball teleported")
+        await asyncio.sleep(0.5)
+        t = time.monotonic()
+        await self.command(kind, team.upper())
+        ok = await self.until(self.ready, 20, f"{kind} {team}: no readiness issue")
+        t_ready = time.monotonic() - t
+        await self.until(lambda: self.action("NORMAL_START")[0] == "READY_AUTO", 5,
+                         "NORMAL_START READY_AUTO")
+        print(f"{self.seen.t():6.2f} {kind} {team}: no readiness issue {t_ready:.2f} s after "
+              f"the command ({'ready' if ok else 'NOT ready'}), NORMAL_START "
+              f"{self.action('NORMAL_START')[0]} {time.monotonic() - t:.2f} s after it")
+        if not ok:
+            print(f"        issues left: {self.action('NORMAL_START')[1]}")
+
+    async def misplace(self, team: str, rid: int, to: tuple[float, float],
+                       back: tuple[float, float] | None, text: str) -> None:
+        """Robot ``rid`` of ``team`` teleported to ``to``: how soon the GC names it (``text``
+        in an issue), and how soon that is gone: ours come back by themselves, the other
+        team's robot is teleported to ``back`` after 3 s."""
+        self.teleport(team, rid, *to)
+        t = time.monotonic()
+        seen = await self.until(lambda: self.issue_with(text), 3, f"GC: {text}")
+        t_seen = time.monotonic() - t
+        print(f"{self.seen.t():6.2f} {team} {rid} put at {to}: GC "
+              f"{'says ' + repr(text) if seen else 'says nothing'} {t_seen:.2f} s later; "
+              f"issues {self.action('NORMAL_START')[1]}")
+        if back is not None:
+            await asyncio.sleep(3.0)
+            still = self.issue_with(text)
+            self.teleport(team, rid, *back)
+            t = time.monotonic()
+            print(f"{self.seen.t():6.2f} still named after 3 s: {still}; put back at {back}")
+        cleared = await self.until(lambda: not self.issue_with(text), 15, f"GC clears {text}")
+        ready = await self.until(self.ready, 10, "no readiness issue")
+        now = next(((round(r[2], 3), round(r[3], 3)) for r in self.robots_of(team)
+                    if r[1] == rid), None)
+        print(f"{self.seen.t():6.2f} cleared {time.monotonic() - t:.2f} s after "
+              f"{'the put back' if back else 'the teleport'} ({cleared}), ready {ready}; "
+              f"{team} {rid} (truth) at {now}")
+
+    async def manual(self) -> None:
+        await self.setup()
+        await self.send({"configDelta": {"autoContinue": False}})
+        await asyncio.sleep(0.3)
+
+    async def kickoff(self) -> None:
+        for team in self.a.teams:
+            await self.kickoff_for(team)
+        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+
+    async def kickoff_for(self, team: str) -> None:
+        ours = await self.our_team()
+        theirs = "yellow" if ours == "blue" else "blue"
+        print(f"- kick-off for {team} (Touchline plays {ours})")
+        await self.manual()
+        await self.until(lambda: bool(self.team_state(ours)), 3, "team state")
+        ours_pos = 1.0 if self.team_state(ours).get("onPositiveHalf") else -1.0
+        await self.prepare("KICKOFF", team, (0.0, 0.0))
+        # the other team's robot nearest the halfway line, into our half, outside the circle
+        rid, x, y = min(((r[1], r[2], r[3]) for r in self.robots_of(theirs)),
+                        key=lambda r: abs(r[1]))
+        await self.misplace(theirs, rid, (ours_pos * 0.6, 0.9 if y >= 0 else -0.9),
+                            (x, y), f"{rid} {theirs.upper()} is not in its own half")
+        # ours: the one nearest the halfway line, just over it
+        rid, _, y = min(((r[1], r[2], r[3]) for r in self.robots_of(ours)),
+                        key=lambda r: abs(r[1]))
+        await self.misplace(ours, rid, (-ours_pos * 0.6, 0.9 if y >= 0 else -0.9), None,
+                            f"{rid} {ours.upper()} is not in its own half")
+
+    async def penalty(self) -> None:
+        for team in self.a.teams:
+            await self.penalty_for(team)
+        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+
+    async def penalty_for(self, team: str) -> None:
+        ours = await self.our_team()
+        theirs = "yellow" if ours == "blue" else "blue"
+        print(f"- penalty for {team} (Touchline plays {ours})")
+        await self.manual()
+        defending = "yellow" if team == "blue" else "blue"
+        await self.until(lambda: bool(self.team_state(defending)), 3, "team state")
+        side = 1.0 if self.team_state(defending).get("onPositiveHalf") else -1.0
+        mark = (side * (self.a.half_length - self.a.penalty_mark_distance), 0.0)
+        keeper = int(self.team_state(defending).get("goalkeeper", 0))
+        others = sorted(r[1] for r in self.robots_of(theirs))
+        behind = -side  # away from the goal attacked
+        if theirs == defending:  # their keeper on its goal line, the rest 1 m behind
+            self.teleport(theirs, keeper, side * (self.a.half_length - 0.05), 0.0,
+                          math.pi if side > 0 else 0.0)
+            rest = [r for r in others if r != keeper]
+            x = mark[0] + behind * 1.8
+        else:  # their kicker behind the ball, the rest 1 m behind it
+            kicker, *rest = others
+            self.teleport(theirs, kicker, mark[0] + behind * 0.2, 0.0,
+                          0.0 if side > 0 else math.pi)
+            x = mark[0] + behind * 1.8
+        for k, rid in enumerate(rest):
+            self.teleport(theirs, rid, x, (k - (len(rest) - 1) / 2) * 1.0)
+        print(f"{self.seen.t():6.2f} mark {mark}, {defending} defends (keeper {keeper}); "
+              f"{theirs} placed by teleport")
+        await self.prepare("PENALTY", team, mark)
+        if ours != defending:  # one of ours (not the kicker) in front of the ball
+            rid = max((r for r in self.robots_of(ours)
+                       if math.dist(r[2:4], mark) > 0.4),
+                      key=lambda r: side * r[2])[1]
+            await self.misplace(ours, rid, (mark[0] + side * 0.6, 1.2), None,
+                                f"{rid} {ours.upper()} does not keep required distance")
+        else:  # our keeper out of the goal, then a robot of ours in front of the ball
+            await self.misplace(ours, keeper, (side * (self.a.half_length - 0.6), 0.4), None,
+                                "Keeper is not inside goal")
+            rid = next(r[1] for r in self.robots_of(ours) if r[1] != keeper)
+            await self.misplace(ours, rid, (mark[0] + side * 0.6, 1.2), None,
+                                f"{rid} {ours.upper()} does not keep required distance")
+
+    async def robot_count(self) -> None:
+        for team in self.a.teams:
+            await self.card_for(team)
+        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+
+    async def card_for(self, team: str) -> None:
+        ours = await self.our_team()
+        print(f"- yellow card for {team} (Touchline plays {ours})")
+        await self.manual()
+        await self.ball(1.0 if team == "blue" else -1.0, 0.0)
+        await asyncio.sleep(1.0)
+        n0 = len(self.robots_of(team))
+        tracked0 = sum(1 for r in self.seen.tracked_robots if r[0] == team)
+        allowed0 = self.team_state(team).get("maxAllowedBots")
+        text = f"{team.capitalize()} team has too many robots"
+        kind = "FORCE_START"
+        print(f"{self.seen.t():6.2f} {team}: {n0} robots (truth), {tracked0} tracked, "
+              f"allowed {allowed0}; issues {self.action(kind)[1]}")
+        t = time.monotonic()
+        await self.send({"change": {"addYellowCardChange": {"forTeam": team.upper()}}})
+        await self.until(lambda: self.team_state(team).get("maxAllowedBots") != allowed0,
+                         3, "max allowed robots down")
+        flagged = await self.until(lambda: self.issue_with(text, kind), 3, text)
+        allowed = self.team_state(team).get("maxAllowedBots")
+        print(f"{self.seen.t():6.2f} card: allowed {allowed}, GC "
+              f"{'flags' if flagged else 'does NOT flag'} {text!r} "
+              f"{time.monotonic() - t:.2f} s after the card")
+        if team == ours:  # the robot Touchline sends off: near the halfway line, at rest
+            def parked() -> list[tuple[str, int, float, float, float]]:
+                return [r for r in self.robots_of(team) if abs(r[2]) < 1.0
+                        and abs(r[3]) > self.a.half_width - 0.6 and r[4] < 0.05]
+            await self.until(lambda: bool(parked()), 20, "a robot parked for the handler")
+            t_parked = time.monotonic() - t
+            rid = parked()[0][1] if parked() else max(self.robots_of(team),
+                                                       key=lambda r: abs(r[3]))[1]
+            still = self.issue_with(text, kind)
+            print(f"{self.seen.t():6.2f} {team} {rid} parked at the halfway line "
+                  f"{t_parked:.2f} s after the card; GC still flags it: {still}")
+        else:
+            rid = max(r[1] for r in self.robots_of(team))
+        self.teleport(team, rid, present=False)
+        t = time.monotonic()
+        gone = await self.until(lambda: all(r[1] != rid or r[0] != team
+                                            for r in self.seen.tracked_robots), 5,
+                                "robot gone from the tracked frames")
+        t_gone = time.monotonic() - t
+        cleared = await self.until(lambda: not self.issue_with(text, kind), 5,
+                                   f"GC clears {text}")
+        print(f"{self.seen.t():6.2f} {team} {rid} taken off fieldsim: gone from the tracked "
+              f"frames {t_gone:.2f} s later ({gone}), the GC's issue gone "
+              f"{time.monotonic() - t:.2f} s later ({cleared}); issues "
+              f"{self.action(kind)[1]}")
+        self.teleport(team, rid, -1.0 if team == "blue" else 1.0,
+                      -(self.a.half_width - 0.3), present=True)
+        t = time.monotonic()
+        back = await self.until(lambda: self.issue_with(text, kind), 5, text)
+        print(f"{self.seen.t():6.2f} {team} {rid} back on the field: flagged again "
+              f"{time.monotonic() - t:.2f} s later ({back})")
+
 
 async def run(a: argparse.Namespace) -> None:
     seen = Seen()
@@ -390,6 +632,7 @@ async def run(a: argparse.Namespace) -> None:
         await check.send({"change": {"newCommandChange": {"command": {"type": "HALT",
                                                                       "forTeam": "UNKNOWN"}}}})
         await check.http.aclose()
+        check.sim.close()
     for task in tasks:
         task.cancel()
 
@@ -410,10 +653,20 @@ def main() -> None:
                    type=lambda v: tuple(float(c) for c in v.split(",")),
                    help="X,Y (m) for 'rest' (repeatable; default 1.5,0 -2,-2.2 0,1)")
     p.add_argument("--no-auto-continue", dest="auto_continue", action="store_false")
+    p.add_argument("--sim-control-port", type=int, default=None,
+                   help="fieldsim's simulation control port (kickoff, penalty, robot-count)")
+    p.add_argument("--team", dest="teams", action="append", choices=["blue", "yellow"],
+                   help="whose kick-off / penalty / card (repeatable; default both)")
+    p.add_argument("--half-length", type=float, default=4.5, help="m (DIV_B)")
+    p.add_argument("--half-width", type=float, default=3.0, help="m (DIV_B)")
+    p.add_argument("--penalty-mark-distance", type=float, default=6.0,
+                   help="from the goal centre, m (the GC's DIV_B default)")
     p.add_argument("scenario", nargs="+", choices=["placement-timeout", "placement-complete",
-                                                   "stop-ready", "no-progress", "rest"])
+                                                   "stop-ready", "no-progress", "rest",
+                                                   "kickoff", "penalty", "robot-count"])
     a = p.parse_args()
     a.rest_spots = a.rest_spots or [(1.5, 0.0), (-2.0, -2.2), (0.0, 1.0)]
+    a.teams = a.teams or ["blue", "yellow"]
     asyncio.run(run(a))
 
 

@@ -52,6 +52,9 @@ def field_size_message(g: FieldGeometry) -> geom_pb.SSL_GeometryFieldSize:
     fs.penalty_area_depth = round(g.penalty_area_depth)
     fs.penalty_area_width = round(g.penalty_area_width)
     fs.center_circle_radius = round(g.center_circle_radius)
+    # the game controller takes its penalty mark from here; without it, it keeps the default
+    # of the division it started in (8 m in A: the mark 3.5 m into the wrong half of B)
+    fs.goal_center_to_penalty_mark = round(g.penalty_mark_distance)
     fs.line_thickness = round(g.line_thickness)
     fs.goal_height = round(g.goal_height)
     fs.ball_radius = g.ball_radius

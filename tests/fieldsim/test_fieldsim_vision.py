@@ -144,9 +144,11 @@ def test_geometry_packet(division: str) -> None:
     if division == "B":
         assert (f.field_length, f.field_width, f.goal_width) == (9000, 6000, 1000)
         assert (f.penalty_area_depth, f.penalty_area_width) == (1000, 2000)
+        assert f.goal_center_to_penalty_mark == 6000  # the ssl-game-controller's DIV_B mark
     else:
         assert (f.field_length, f.field_width, f.goal_width) == (12000, 9000, 1800)
         assert (f.penalty_area_depth, f.penalty_area_width) == (1800, 3600)
+        assert f.goal_center_to_penalty_mark == 8000
     assert (f.goal_depth, f.boundary_width, f.center_circle_radius) == (180, 300, 500)
     names = {line.name for line in f.field_lines}
     assert {"TopTouchLine", "BottomTouchLine", "LeftGoalLine", "RightGoalLine", "HalfwayLine",
