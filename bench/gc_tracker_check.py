@@ -452,6 +452,9 @@ class Check:
               f"{self.action('NORMAL_START')[0]} {time.monotonic() - t:.2f} s after it")
         if not ok:
             print(f"        issues left: {self.action('NORMAL_START')[1]}")
+        moved = math.dist(ball, self.seen.truth) if self.seen.truth else float("nan")
+        print(f"        the ball (truth) {moved:.3f} m from where it was put; fieldsim's last "
+              f"touch {self.seen.truth_touch}")
 
     async def misplace(self, team: str, rid: int, to: tuple[float, float],
                        back: tuple[float, float] | None, text: str) -> None:

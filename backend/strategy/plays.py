@@ -434,6 +434,13 @@ class Strategy:
                     and it.role != "kicker" and ball is not None:
                 # only the kicker may touch the ball: everyone else plans around it
                 it = replace(it, avoid_ball_mm=max(it.avoid_ball_mm, 400.0))
+            if sit.kind in ("kickoff-prepare", "penalty-prepare") and it.role == "kicker" \
+                    and ball is not None:
+                # the kicker goes round the ball to its spot behind it: from the far side it
+                # drove through the ball and pushed it off the mark (the GC's division B
+                # penalty mark is in our half, among our robots; the GC then refused)
+                it = replace(it, avoid_ball_mm=max(it.avoid_ball_mm, CONTACT_MM + 60.0),
+                             plan=True)
             if sit.kind == "stop":
                 it = replace(it, kick_speed_mps=0.0,
                              max_speed_mps=min(1.2, it.max_speed_mps or 1.2))

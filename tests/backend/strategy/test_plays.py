@@ -373,3 +373,38 @@ def test_penalty_line_spots_avoid_the_other_team_standing_on_that_line(ours_pen:
         assert abs(it.y) <= FS.half_width - R
     ys = sorted(it.y for it in moved)
     assert all(b - a >= 2 * R + 100.0 for a, b in itertools.pairwise(ys))
+
+
+def _seg_dist(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    ax, ay = a
+    dx, dy = b[0] - ax, b[1] - ay
+    L2 = dx * dx + dy * dy
+    t = 0.0 if L2 == 0.0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / L2))
+    return math.dist(p, (ax + t * dx, ay + t * dy))
+
+
+@pytest.mark.parametrize("kind,ball", [
+    ("penalty-prepare", Ball(-1500.0, 0.0)),  # the GC's division B mark: 6 m from their goal
+    ("kickoff-prepare", Ball(0.0, 0.0)),
+])
+def test_our_kicker_goes_round_the_ball_to_its_spot_behind_it(kind: str, ball: Ball) -> None:
+    """Our robots all in front of the ball: the kicker's path to its spot behind the ball
+    keeps its body off the ball (driving through it pushed the ball 1-2 m off the penalty
+    mark under the ssl-game-controller, which then refused the penalty)."""
+    from backend.strategy.model import Frame
+    from backend.strategy.navigate import navigate
+    from backend.strategy.roles import CONTACT_MM
+    ours = [Bot(i, ball.x + 500.0 + 150.0 * i, (-1) ** i * 40.0 * i, math.pi)
+            for i in range(6)]
+    s = Strategy()
+    inp = StrategyInput(t=0.0, ours=ours, theirs=[], ball=ball, fs=FS,
+                        situation=Situation(kind, True, "PREPARE_X"), play="match",
+                        tuning=TU)
+    out = s.decide(inp)
+    (kid,) = [rid for rid, it in out.items() if it.role == "kicker"]
+    moves = navigate(out, ours, [], ball, FS, Frame(1), 60.0, 120.0)
+    pts = [ours[kid].xy, *moves[kid].path]
+    assert math.dist(pts[-1], ball.xy) >= CONTACT_MM  # its spot is behind the ball
+    assert pts[-1][0] < ball.x
+    closest = min(_seg_dist(ball.xy, a, b) for a, b in itertools.pairwise(pts))
+    assert closest >= CONTACT_MM, closest
