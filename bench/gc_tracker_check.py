@@ -55,6 +55,8 @@ import websockets
 import zmq
 import zmq.asyncio
 
+from fieldsim.bodies import formation
+from fieldsim.geometry import division_geometry
 from sslnet.multicast import open_multicast_receiver
 from sslpb import ssl_gc_common_pb2 as gc_common_pb
 from sslpb import ssl_simulation_control_pb2 as control_pb
@@ -458,8 +460,9 @@ class Check:
 
     async def misplace(self, team: str, rid: int, to: tuple[float, float],
                        back: tuple[float, float] | None, text: str) -> None:
-        """Robot ``rid`` of ``team`` teleported to ``to``: how soon the GC names it (``text``
-        in an issue), and how soon that is gone: ours come back by themselves, the other
+        """Robot ``rid`` of ``team`` teleported to ``to``: how soon the GC says ``text`` (at a
+        penalty it names the second robot of the attackers in front of the ball, which need
+        not be this one), and how soon that is gone: ours come back by themselves, the other
         team's robot is teleported to ``back`` after 3 s."""
         self.teleport(team, rid, *to)
         t = time.monotonic()
@@ -471,21 +474,38 @@ class Check:
         if back is not None:
             await asyncio.sleep(3.0)
             still = self.issue_with(text)
+            print(f"{self.seen.t():6.2f} still named after 3 s: {still} ({team} {rid} tracked "
+                  f"at {self.tracked_at(team, rid)}, truth {self.truth_at(team, rid)}); put "
+                  f"back at {back}")
             self.teleport(team, rid, *back)
             t = time.monotonic()
-            print(f"{self.seen.t():6.2f} still named after 3 s: {still}; put back at {back}")
         cleared = await self.until(lambda: not self.issue_with(text), 15, f"GC clears {text}")
         ready = await self.until(self.ready, 10, "no readiness issue")
-        now = next(((round(r[2], 3), round(r[3], 3)) for r in self.robots_of(team)
-                    if r[1] == rid), None)
         print(f"{self.seen.t():6.2f} cleared {time.monotonic() - t:.2f} s after "
               f"{'the put back' if back else 'the teleport'} ({cleared}), ready {ready}; "
-              f"{team} {rid} (truth) at {now}")
+              f"{team} {rid} truth {self.truth_at(team, rid)}, tracked "
+              f"{self.tracked_at(team, rid)}")
+
+    def truth_at(self, team: str, rid: int) -> tuple[float, float] | None:
+        return next(((round(r[2], 3), round(r[3], 3)) for r in self.robots_of(team)
+                     if r[1] == rid), None)
+
+    def tracked_at(self, team: str, rid: int) -> tuple[float, float] | None:
+        return next(((round(r[2], 3), round(r[3], 3)) for r in self.seen.tracked_robots
+                     if r[0] == team and r[1] == rid), None)
 
     async def manual(self) -> None:
+        """setup() with auto continue off, and the team nobody drives back in fieldsim's
+        start formation on its half (a scenario before may have moved it)."""
         await self.setup()
         await self.send({"configDelta": {"autoContinue": False}})
-        await asyncio.sleep(0.3)
+        ours = await self.our_team()
+        theirs = "yellow" if ours == "blue" else "blue"
+        side = 1 if self.team_state(theirs).get("onPositiveHalf") else -1
+        poses = formation(self.a.robots, side, division_geometry(self.a.division))
+        for rid, (x, y, th) in enumerate(poses):
+            self.teleport(theirs, rid, x, y, th, present=True)
+        await asyncio.sleep(0.5)
 
     async def kickoff(self) -> None:
         for team in self.a.teams:
@@ -548,13 +568,13 @@ class Check:
                        if math.dist(r[2:4], mark) > 0.4),
                       key=lambda r: side * r[2])[1]
             await self.misplace(ours, rid, (mark[0] + side * 0.6, 1.2), None,
-                                f"{rid} {ours.upper()} does not keep required distance")
+                                f"{ours.upper()} does not keep required distance")
         else:  # our keeper out of the goal, then a robot of ours in front of the ball
             await self.misplace(ours, keeper, (side * (self.a.half_length - 0.6), 0.4), None,
                                 "Keeper is not inside goal")
             rid = next(r[1] for r in self.robots_of(ours) if r[1] != keeper)
             await self.misplace(ours, rid, (mark[0] + side * 0.6, 1.2), None,
-                                f"{rid} {ours.upper()} does not keep required distance")
+                                f"{ours.upper()} does not keep required distance")
 
     async def robot_count(self) -> None:
         for team in self.a.teams:
@@ -660,16 +680,21 @@ def main() -> None:
                    help="fieldsim's simulation control port (kickoff, penalty, robot-count)")
     p.add_argument("--team", dest="teams", action="append", choices=["blue", "yellow"],
                    help="whose kick-off / penalty / card (repeatable; default both)")
-    p.add_argument("--half-length", type=float, default=4.5, help="m (DIV_B)")
-    p.add_argument("--half-width", type=float, default=3.0, help="m (DIV_B)")
-    p.add_argument("--penalty-mark-distance", type=float, default=6.0,
-                   help="from the goal centre, m (the GC's DIV_B default)")
+    p.add_argument("--division", default="B", choices=["A", "B"], help="fieldsim's field")
+    p.add_argument("--robots", type=int, default=6, help="per team in fieldsim")
+    p.add_argument("--penalty-mark-distance", type=float, default=None,
+                   help="from the goal centre, m (default: the division's, as fieldsim "
+                        "sends it to the GC)")
     p.add_argument("scenario", nargs="+", choices=["placement-timeout", "placement-complete",
                                                    "stop-ready", "no-progress", "rest",
                                                    "kickoff", "penalty", "robot-count"])
     a = p.parse_args()
     a.rest_spots = a.rest_spots or [(1.5, 0.0), (-2.0, -2.2), (0.0, 1.0)]
     a.teams = a.teams or ["blue", "yellow"]
+    field = division_geometry(a.division)
+    a.half_length, a.half_width = field.half_length / 1000.0, field.half_width / 1000.0
+    if a.penalty_mark_distance is None:
+        a.penalty_mark_distance = field.penalty_mark_distance / 1000.0
     asyncio.run(run(a))
 
 
