@@ -1,4 +1,4 @@
-"""Robot motion: commanded local velocity with gain, limits and timeout; contacts; goal boxes.
+"""Robot motion: commanded local velocity with gain, limits and timeout; contacts; goal walls.
 
 Robots are discs driven by a commanded LOCAL velocity (forward = along the heading towards the
 kicker, left, angular ccw) scaled by a per-robot gain C, with acceleration and speed limits;
@@ -36,10 +36,10 @@ class RobotPhysics:
     """Steps the robots of a World; remembers which pairs are in contact."""
 
     def __init__(self, config: SimConfig, wall_x: float, wall_y: float,
-                 goal_boxes: list[Rect], half_length: float) -> None:
+                 goal_walls: list[Rect], half_length: float) -> None:
         self.config = config
         self._wall_x, self._wall_y = wall_x, wall_y
-        self._goal_boxes = goal_boxes
+        self._goal_walls = goal_walls
         self._hl = half_length
         self._contacts: set[tuple[RobotKey, RobotKey]] = set()
 
@@ -149,13 +149,14 @@ class RobotPhysics:
         return new
 
     def _vs_goals(self, robots: dict[RobotKey, Robot]) -> None:
-        """Robots stay out of the goal boxes (goal interior and walls)."""
+        """Robots stop at the goals' back and side walls; the goal's inside is open to them
+        (a real robot can drive in; a keeper on its goal line stands half in the goal)."""
         R = self.config.robot_radius_m
         reach_x = self._hl - R
         for robot in robots.values():
             if abs(robot.x) <= reach_x:
                 continue
-            for box in self._goal_boxes:
+            for box in self._goal_walls:
                 push = push_out_of_rect(robot.x, robot.y, box, R)
                 if push is None:
                     continue

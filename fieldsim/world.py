@@ -17,10 +17,12 @@ What a match needs on top of that:
 - **Goals**: behind each goal line a goal of ``goal_width`` x ``goal_depth`` (geometry) with thin
   back and side walls (``goal_wall_thickness_m``). The ball bounces off them (restitution
   ``goal_wall_restitution``, swept test so a fast ball cannot tunnel) unless it flies above
-  ``goal_height``; robots cannot enter the goal box (walls included). A ball fully over the goal
-  line between the posts (centre beyond the line by its radius, ``|y| < goal_width / 2``, below
-  the goal height) is a goal: one ``goal`` event, ``ball_in_goal`` is set and the goal mouth
-  closes behind the ball (it rolls to rest against the walls) until the ball is teleported.
+  ``goal_height``; robots stop at the walls and may drive into the goal, as real ones can (a
+  keeper touching its goal line stands partly in it: the game controller's penalty check). A
+  ball fully over the goal line between the posts (centre beyond the line by its radius,
+  ``|y| < goal_width / 2``, below the goal height) is a goal: one ``goal`` event,
+  ``ball_in_goal`` is set and the goal mouth closes behind the ball (it rolls to rest against
+  the walls) until the ball is teleported.
 - **Ball out**: a ball fully over a touch line or over a goal line outside the goal (or above
   the goal) gives one ``ball_out`` event; re-armed once the ball centre is back inside the
   field lines (or the ball is teleported). The outer walls still bounce it back.
@@ -88,14 +90,12 @@ class World:
         self._goal_hw = g.goal_width / 2000.0
         self._goal_height = g.goal_height / 1000.0
         depth, thick = g.goal_depth / 1000.0, self.config.goal_wall_thickness_m
-        # per side (+1, -1): the solid goal box robots cannot enter, and the ball's three walls
-        self._goal_boxes: list[Rect] = []
+        # per side (+1, -1): the three walls of the goal, for the ball and the robots
         self._goal_walls: list[Rect] = []
         for side in (1.0, -1.0):
             gy, gy_out = self._goal_hw, self._goal_hw + thick
             xs = (self._hl, self._hl + depth, self._hl + depth + thick)
             a, b, c = (side * x for x in xs)
-            self._goal_boxes.append((min(a, c), max(a, c), -gy_out, gy_out))
             self._goal_walls.append((min(b, c), max(b, c), -gy_out, gy_out))  # back
             self._goal_walls.append((min(a, b), max(a, b), gy, gy_out))  # side walls
             self._goal_walls.append((min(a, b), max(a, b), -gy_out, -gy))
@@ -110,7 +110,7 @@ class World:
         # the robot that just kicked or lost the ball: no re-catch until it left its kicker zone
         self._no_catch: RobotKey | None = None
         self.robot_physics = RobotPhysics(self.config, self._wall_x, self._wall_y,
-                                          self._goal_boxes, self._hl)
+                                          self._goal_walls, self._hl)
         self.ball_physics = BallPhysics(self.config, self._wall_x, self._wall_y,
                                         self._goal_walls, self._hl, self._goal_height)
         #: balls other than the ball (left on the field): seen by the cameras, not played

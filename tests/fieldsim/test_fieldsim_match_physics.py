@@ -408,7 +408,10 @@ def test_dribbler_speed_passed_through_by_both_protocols() -> None:
 # -- goal box and robots -----------------------------------------------------------------------
 
 
-def test_robot_cannot_enter_goal_box() -> None:
+def test_robot_stops_at_the_goal_walls_and_may_enter_the_goal() -> None:
+    """The goal is open in front, as a real one: a robot driving into the mouth stops at the
+    back wall (a keeper can stand on its goal line, half in the goal: the game controller's
+    penalty check wants its centre within a robot radius of the line); the walls stay solid."""
     w = world()
     hl = w.geometry.half_length / 1000.0
     gw2 = w.geometry.goal_width / 2000.0
@@ -417,30 +420,39 @@ def test_robot_cannot_enter_goal_box() -> None:
     R = w.config.robot_radius_m
     rb = w.robot(*B0)
     assert rb is not None
+    walls = [(hl + depth, hl + depth + thick, -gw2 - thick, gw2 + thick),  # back
+             (hl, hl + depth, gw2, gw2 + thick), (hl, hl + depth, -gw2 - thick, -gw2)]
 
-    def outside_box() -> bool:
-        dx = max(hl - rb.x, 0.0, rb.x - (hl + depth + thick))
-        dy = max(abs(rb.y) - (gw2 + thick), 0.0)
-        return math.hypot(dx, dy) >= R - 1e-9
+    def off_walls() -> bool:
+        for x0, x1, y0, y1 in walls:
+            dx = max(x0 - rb.x, 0.0, rb.x - x1)
+            dy = max(y0 - rb.y, 0.0, rb.y - y1)
+            if math.hypot(dx, dy) < R - 1e-9:
+                return False
+        return True
 
-    # straight into the mouth
+    # straight into the mouth: in, up to the back wall
     w.teleport_robot(Team.BLUE, 0, 4.0, 0.0, 0.0)
     for _ in range(round(2.0 / w.dt)):
         w.set_command(Team.BLUE, 0, 2.0, 0.0, 0.0)
         w.step()
-        assert outside_box()
-    assert rb.x == pytest.approx(hl - R, abs=1e-6) and rb.vx == 0.0
+        assert off_walls()
+    assert rb.x == pytest.approx(hl + depth - R, abs=1e-6) and rb.vx == 0.0
     # along the boundary beside the goal, into its side wall
     w.teleport_robot(Team.BLUE, 0, hl + 0.1, 1.2, -math.pi / 2)
     for _ in range(round(2.0 / w.dt)):
         w.set_command(Team.BLUE, 0, 2.0, 0.0, 0.0)
         w.step()
-        assert outside_box()
+        assert off_walls()
     assert rb.y == pytest.approx(gw2 + thick + R, abs=1e-6)
-    # teleported into the goal: pushed out on the next step
-    w.teleport_robot(Team.BLUE, 0, hl + 0.05, 0.0, 0.0)
+    # teleported onto the back wall: pushed off it on the next step
+    w.teleport_robot(Team.BLUE, 0, hl + depth + 0.05, 0.0, 0.0)
     w.step()
-    assert outside_box()
+    assert off_walls()
+    # a keeper on its goal line, half in the goal, stays there
+    w.teleport_robot(Team.BLUE, 0, hl - 0.045, 0.0, math.pi)
+    run(w, 0.5)
+    assert rb.x == pytest.approx(hl - 0.045, abs=1e-6)
 
 
 # -- collisions --------------------------------------------------------------------------------
