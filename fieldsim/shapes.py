@@ -1,4 +1,4 @@
-"""Plane geometry of discs and axis-aligned rectangles (walls, goal boxes) for the physics.
+"""Plane geometry of discs and axis-aligned rectangles (walls, goal walls) for the physics.
 
 Pure functions in metres; swept tests so that a fast ball cannot tunnel through a thin wall.
 """

@@ -405,7 +405,7 @@ def test_dribbler_speed_passed_through_by_both_protocols() -> None:
     assert ry is not None and ry.command is not None and ry.command.dribbler_rpm > 0.0
 
 
-# -- goal box and robots -----------------------------------------------------------------------
+# -- goal walls and robots ----------------------------------------------------------------------
 
 
 def test_robot_stops_at_the_goal_walls_and_may_enter_the_goal() -> None:
