@@ -130,7 +130,11 @@ async def gc_reader(ws: Any, seen: Seen) -> None:
                 print(f"{seen.t():6.2f} GC command {seen.command()}; {seen.balls()}")
         if out.get("gcState"):
             before = seen.actions()
+            trackers = seen.gc.get("trackers")
             seen.gc = out["gcState"]
+            if seen.gc.get("trackers") != trackers and trackers is not None:
+                # without a tracker source the GC finds no issue at all (no data, no check)
+                print(f"{seen.t():6.2f} GC trackers now {seen.gc.get('trackers') or 'none'}")
             if seen.actions() != before:
                 print(f"{seen.t():6.2f} GC continue: {seen.actions()}")
         for entry in (out.get("protocol") or {}).get("entry") or []:
@@ -585,7 +589,7 @@ class Check:
         ours = await self.our_team()
         print(f"- yellow card for {team} (Touchline plays {ours})")
         await self.manual()
-        await self.ball(1.0 if team == "blue" else -1.0, 0.0)
+        await self.ball(0.0, -1.0)  # away from both teams
         await asyncio.sleep(1.0)
         n0 = len(self.robots_of(team))
         tracked0 = sum(1 for r in self.seen.tracked_robots if r[0] == team)
