@@ -37,6 +37,8 @@ prepare command and only says whether it would continue):
 - ``robot-count``: STOP, a yellow card for each team in turn: the GC's "too many robots" while
   the team has more robots on the field than it is allowed; the excess robot (ours: the one
   Touchline sends to the halfway line; theirs: any) taken off fieldsim: when the issue clears.
+- ``card-running``: a yellow card for us during FORCE_START, the robot Touchline sends off taken
+  off ``--lift-after`` s later: whether the GC files TOO_MANY_ROBOTS (after the card's 10 s).
 """
 
 from __future__ import annotations
@@ -639,6 +641,43 @@ class Check:
         print(f"{self.seen.t():6.2f} {team} {rid} back on the field: flagged again "
               f"{time.monotonic() - t:.2f} s later ({back})")
 
+    async def card_running(self) -> None:
+        """A yellow card for us in a running game (FORCE_START, the match play): the GC counts
+        after the card's 10 s removal time, every tick, and files TOO_MANY_ROBOTS while our
+        team has more robots in the frames than allowed. The robot Touchline sends to the
+        halfway line is taken off fieldsim ``--lift-after`` s after the card (the handler)."""
+        ours = await self.our_team()
+        await self.manual()
+        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+        await self.ball(0.0, -1.0)
+        await asyncio.sleep(1.0)
+        self.seen.events.clear()
+        await self.command("FORCE_START")
+        await asyncio.sleep(1.0)
+        t = time.monotonic()
+        await self.send({"change": {"addYellowCardChange": {"forTeam": ours.upper()}}})
+        print(f"{self.seen.t():6.2f} yellow card for {ours} in a running game; lift after "
+              f"{self.a.lift_after} s")
+
+        def leaving() -> list[tuple[str, int, float, float, float]]:
+            return [r for r in self.robots_of(ours) if abs(r[2]) < 1.0
+                    and abs(r[3]) > self.a.half_width - 0.6]
+        await self.until(lambda: bool(leaving()), self.a.lift_after, "a robot at the halfway line")
+        left = max(0.0, self.a.lift_after - (time.monotonic() - t))
+        await asyncio.sleep(left)
+        rid = leaving()[0][1] if leaving() else max(self.robots_of(ours),
+                                                    key=lambda r: abs(r[3]))[1]
+        self.teleport(ours, rid, present=False)
+        t_lift = time.monotonic() - t
+        print(f"{self.seen.t():6.2f} {ours} {rid} taken off {t_lift:.2f} s after the card")
+        await self.until(lambda: "TOO_MANY_ROBOTS" in self.seen.events, 15 - t_lift,
+                         "TOO_MANY_ROBOTS")
+        gone = "TOO_MANY_ROBOTS" in self.seen.events
+        print(f"{self.seen.t():6.2f} TOO_MANY_ROBOTS {'filed' if gone else 'not filed'} "
+              f"({time.monotonic() - t:.2f} s after the card); events {self.seen.events}")
+        await self.command("STOP")
+        self.teleport(ours, rid, 0.0, -(self.a.half_width - 0.3), present=True)
+
 
 async def run(a: argparse.Namespace) -> None:
     seen = Seen()
@@ -684,6 +723,8 @@ def main() -> None:
                    help="fieldsim's simulation control port (kickoff, penalty, robot-count)")
     p.add_argument("--team", dest="teams", action="append", choices=["blue", "yellow"],
                    help="whose kick-off / penalty / card (repeatable; default both)")
+    p.add_argument("--lift-after", type=float, default=5.0,
+                   help="card-running: s between the card and the robot taken off")
     p.add_argument("--division", default="B", choices=["A", "B"], help="fieldsim's field")
     p.add_argument("--robots", type=int, default=6, help="per team in fieldsim")
     p.add_argument("--penalty-mark-distance", type=float, default=None,
@@ -691,7 +732,8 @@ def main() -> None:
                         "sends it to the GC)")
     p.add_argument("scenario", nargs="+", choices=["placement-timeout", "placement-complete",
                                                    "stop-ready", "no-progress", "rest",
-                                                   "kickoff", "penalty", "robot-count"])
+                                                   "kickoff", "penalty", "robot-count",
+                                                   "card-running"])
     a = p.parse_args()
     a.rest_spots = a.rest_spots or [(1.5, 0.0), (-2.0, -2.2), (0.0, 1.0)]
     a.teams = a.teams or ["blue", "yellow"]

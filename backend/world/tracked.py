@@ -5,8 +5,12 @@ records and read by any tool that reads tracked vision (the league's log player,
 The world is in mm, mm/s, rad, rad/s; tracked vision is in m, m/s, rad, rad/s.
 
 Visibility (0..1): 1 for an object seen now, 0.5 while its position is extrapolated
-(``predicted``: not seen for a few frames), 0 once it is lost (frozen, not visible). Lost
-objects are still sent, as the league's trackers do, until the world model drops them.
+(``predicted``: not seen for a few frames), 0 once it is lost (frozen, not visible). A lost
+ball is still sent until the world model drops it; a lost robot only until it has not been
+seen for ``LOST_ROBOT_SENT_S``: the game controller counts every robot of the frame against
+the robots a team may have, whatever its visibility, so a robot the handler lifted after a
+yellow card counted for the world model's 3 s and a lift in the last 3 s of the card's 10 s
+was a TOO_MANY_ROBOTS foul (docs/tracker.md). A short occlusion keeps the robot in the frame.
 
 A kick in progress (``WorldState.kicked_ball``) is the frame's ``kicked_ball`` (start, initial
 velocity, predicted stop, kicker), and the frame then carries the capability
@@ -32,9 +36,11 @@ from sslpb.ssl_vision_detection_tracked_pb2 import (
 )
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
-from .state import Team, WorldState
+from .state import RobotState, Team, WorldState
 
 MM = 0.001  # m per mm
+#: a lost robot is left out of the frame once it has not been seen for this long (s)
+LOST_ROBOT_SENT_S = 0.5
 _TEAM: dict[Team, PbTeam.ValueType] = {"yellow": YELLOW, "blue": BLUE}
 
 
@@ -42,6 +48,10 @@ def _visibility(visible: bool, predicted: bool, lost: bool) -> float:
     if lost or not visible:
         return 0.0
     return 0.5 if predicted else 1.0
+
+
+def _sent(r: RobotState, t_capture: float) -> bool:
+    return not r.lost or t_capture - r.t_seen <= LOST_ROBOT_SENT_S
 
 
 def team_enum(team: Team) -> PbTeam.ValueType:
@@ -66,6 +76,8 @@ def tracked_packet_pb(world: WorldState, uuid: str, frame_number: int,
         ob = f.balls.add(visibility=1.0)
         ob.pos.x, ob.pos.y, ob.pos.z = o.x * MM, o.y * MM, 0.0
     for r in world.robots:
+        if not _sent(r, world.t_capture):
+            continue
         tr = f.robots.add(orientation=r.orientation, vel_angular=r.omega,
                           visibility=_visibility(r.visible, r.predicted, r.lost))
         tr.robot_id.id = r.id
@@ -150,7 +162,10 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
     for o in world.other_balls:
         parts.append(_len(0x1A, _vec3(0x0A, o.x * MM, o.y * MM, 0.0) + b"\x1d" + _ONE))
     pack = _ROBOT.pack
+    t = world.t_capture
     for r in world.robots:
+        if r.lost and t - r.t_seen > LOST_ROBOT_SENT_S:  # _sent(), inline: every tick
+            continue
         parts.append(pack(0x22, 45, 0x0A, 4, 0x08, r.id & 0x7F, 0x10, int(team_enum(r.team)),
                           0x12, 10, 0x0D, r.x * MM, 0x15, r.y * MM, 0x1D, r.orientation,
                           0x22, 10, 0x0D, r.vx * MM, 0x15, r.vy * MM, 0x2D, r.omega,

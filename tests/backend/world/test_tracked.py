@@ -21,7 +21,8 @@ def world() -> WorldState:
             RobotState("yellow", 3, x=-1000.0, y=2000.0, orientation=1.5, vx=100.0, vy=-300.0,
                        omega=-2.0),
             RobotState("blue", 7, x=500.0, y=0.0, orientation=-math.pi / 2, predicted=True),
-            RobotState("blue", 0, x=0.0, y=0.0, orientation=0.0, visible=False, lost=True),
+            RobotState("blue", 0, x=0.0, y=0.0, orientation=0.0, visible=False, lost=True,
+                       t_seen=1700000000.25 - 0.3),  # lost, not seen for 0.3 s
         ),
     )
 
@@ -54,6 +55,24 @@ def test_values_are_converted_to_metres() -> None:
     assert b7.visibility == 0.5  # extrapolated
     assert f.robots[2].visibility == 0.0  # lost
     assert list(f.capabilities) == [] and not f.HasField("kicked_ball")
+
+
+def test_a_robot_lost_for_longer_than_half_a_second_is_left_out() -> None:
+    """The game controller counts every robot of the frame (visibility aside): a robot lifted
+    off the field must leave the frame soon, or the lift after a yellow card is a foul."""
+    from dataclasses import replace
+
+    from backend.world.tracked import LOST_ROBOT_SENT_S, tracked_packet_pb
+
+    w = world()
+    gone = RobotState("yellow", 5, x=100.0, y=-2900.0, orientation=0.0, visible=False,
+                      lost=True, t_seen=w.t_capture - LOST_ROBOT_SENT_S - 0.01)
+    just = replace(gone, id=6, t_seen=w.t_capture - LOST_ROBOT_SENT_S + 0.01)
+    w = replace(w, robots=(*w.robots, gone, just))
+    data = tracked_packet(w, "u", 1)
+    ids = [(r.robot_id.team, r.robot_id.id) for r in decode(data).tracked_frame.robots]
+    assert ids == [(1, 3), (2, 7), (2, 0), (1, 6)]
+    assert data == tracked_packet_pb(w, "u", 1)
 
 
 def test_team_numbers_on_the_wire() -> None:
@@ -112,7 +131,8 @@ def test_the_hand_encoder_writes_the_runtimes_bytes() -> None:
     many = tuple(RobotState("blue" if i % 2 else "yellow", i % 16, x=i * 123.4 - 6000,
                             y=-i * 77.7, orientation=-3.1 + i * 0.2, vx=i * 40.0 - 900,
                             vy=1e6 if i == 3 else -i, omega=i * 0.5, visible=i % 5 != 0,
-                            predicted=i % 3 == 0) for i in range(22))
+                            predicted=i % 3 == 0, lost=i % 7 == 0,
+                            t_seen=1.8e9 - (0.2 if i % 2 else 0.9)) for i in range(22))
     worlds.append(WorldState(t_capture=1.8e9 + 0.123456, receive_time_ns=1, robots=many,
                              ball=BallState(x=-0.0, y=1e-30, vx=math.inf, vy=-1e38)))
     worlds.append(kicked())
