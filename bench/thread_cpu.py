@@ -43,9 +43,9 @@ def threads(pid: int) -> dict[str, float]:
 
 def counts(client: httpx.Client, url: str) -> tuple[int, int]:
     """(answers the relay got from the simulator, feedback envelopes the backend got)."""
-    h = client.get(url + "/api/health").json()
-    relay = (h.get("relay") or {}).get("streams", {}).get("sim_responses", {})
-    backend = h.get("streams", {}).get("feedback", {})
+    streams = client.get(url + "/api/health").json().get("streams", {})
+    relay = streams.get("relay.sim_responses", {})
+    backend = streams.get("feedback", {})
     return int(relay.get("packets", 0)), int(backend.get("packets", 0))
 
 
