@@ -10,8 +10,10 @@ per answer stream (kind of answer and team):
   changes is never delayed); answers held back before it are forwarded first, so that every
   envelope stands only for answers with its own bytes;
 - an answer with the same bytes goes on at once if the last forward is ``interval_s`` old,
-  else it is held: only the latest one held is kept, and it goes on ``interval_s`` after the
-  last forward (the relay's timer) unless a newer answer has gone on by then;
+  else it is held: only the latest one held is kept; the next answer after the interval
+  takes its place, and if none comes it goes on by itself two intervals after the last
+  forward (the relay's timer: while answers keep coming the timer never fires, it is
+  cancelled by the forward, so the coalescing costs the relay no wake-up of its own);
 - every valid answer is counted: an envelope's ``sequence`` is the stream's count of answers
   at the one it carries, so the backend knows how many answers (all with its bytes) it
   stands for: its sequence minus the previous envelope's of the same stream.
@@ -80,5 +82,5 @@ class FeedbackGate:
 
     @property
     def flush_at(self) -> float:
-        """When a held answer is due (the caller's clock)."""
-        return self.last_forward + self.interval_s
+        """When a held answer goes on if no newer one has (the caller's clock)."""
+        return self.last_forward + 2.0 * self.interval_s

@@ -898,22 +898,26 @@ class Relay:
         unless a newer one goes first."""
         now = time.monotonic()
         sent = self._sent[gate.team]
+        key = (gate.kind, gate.team)
         if gate.arrive(data, now):
             held = gate.held
-            if held is not None and held.data != data:  # the answers before a change first
-                self._publish_feedback(gate, held)
+            if held is not None:
+                if held.data != data:  # the answers before a change first
+                    self._publish_feedback(gate, held)
+                timer = self._gate_timers.pop(key, None)
+                if timer is not None:  # nothing held any more: no wake-up for it
+                    timer.cancel()
             self._publish_feedback(gate, HeldAnswer(data, addr, receive_ns, gate.answers, sent))
             gate.forwarded(data, now)
             return
         gate.hold(HeldAnswer(data, addr, receive_ns, gate.answers, dict(sent)))
-        key = (gate.kind, gate.team)
         if key not in self._gate_timers:
             loop = asyncio.get_running_loop()
             self._gate_timers[key] = loop.call_at(self._loop_time(gate.flush_at),
                                                   self._flush_feedback, gate)
 
     def _flush_feedback(self, gate: FeedbackGate) -> None:
-        """A held answer is due: it goes on (unless a newer one went first)."""
+        """A held answer is due (no newer one came to take its place): it goes on."""
         self._gate_timers.pop((gate.kind, gate.team), None)
         held = gate.held
         if held is None:

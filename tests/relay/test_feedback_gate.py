@@ -26,7 +26,7 @@ def test_repeats_held_a_change_at_once_the_held_ones_first() -> None:
     assert offer(g, b"a", 0.005) == "hold"
     assert offer(g, b"a", 0.010) == "hold"
     assert g.held is not None and g.held.sequence == 3  # only the latest is kept
-    assert g.flush_at == 0.02
+    assert g.flush_at == 0.04  # by itself: two intervals after the last forward
     # contact changed: at once, after the held "a" (which stands for answers 2 and 3)
     assert offer(g, b"b", 0.011) == "flush+forward"
     assert g.answers == 4 and g.held is None and g.last_forward == 0.011

@@ -106,7 +106,7 @@ async def test_repeated_answers_coalesced_a_change_at_once() -> None:
     """The same bytes again and again go on as fewer envelopes whose sequence counts every
     answer; the last one held goes on by itself (the timer); a change goes on at once, after
     the held answers before it."""
-    async with running_relay(feedback_interval_s=0.1) as h:
+    async with running_relay(feedback_interval_s=0.05) as h:
         sub = h.subscriber(b"feedback")
         pub = await connect_commands(h)
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=1)))
