@@ -672,16 +672,18 @@ class Relay:
             self._arm(earliest)
 
     def _arm(self, t: float) -> None:
-        """The next cycle is due at monotonic ``t``. One timer at most: a timer armed for a
-        later time is moved; one armed earlier stays and re-arms itself when it fires."""
+        """The next cycle is due at monotonic ``t``. One timer at most, moved to ``t`` unless
+        it is due within the cycle tolerance (0.5 ms) of it: a command set re-phases the
+        schedule a period later, and the timer left where it was would wake the loop for
+        nothing (a cycle ran since) several times per period at one set per camera frame."""
         self._next_cycle = t
         timer = self._timer
+        when = self._loop_time(t)
         if timer is not None:
-            if timer.when() <= self._loop_time(t):
+            if abs(timer.when() - when) <= 0.0005:
                 return
             timer.cancel()
-        loop = asyncio.get_running_loop()
-        self._timer = loop.call_at(self._loop_time(t), self._on_timer)
+        self._timer = asyncio.get_running_loop().call_at(when, self._on_timer)
 
     @staticmethod
     def _loop_time(t: float) -> float:
