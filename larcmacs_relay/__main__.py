@@ -90,6 +90,10 @@ def build_parser() -> argparse.ArgumentParser:
         default=d.hold_time_s,
         help="seconds zero velocity is sent before the relay stops sending to a robot",
     )
+    a("--feedback-interval", type=float, default=d.feedback_interval_s, metavar="SECONDS",
+      help="simulator answers the same as the last one forwarded go to the backend at most "
+           "this often per team (counted, not each forwarded; a change goes at once); "
+           "0: every answer")
     a("--chip-angle", type=float, default=d.chip_angle_deg, help="chip kick angle, degrees")
     a("--kick-mps-per-volt", type=float, default=d.kick_mps_per_volt)
     a("--dribbler-rpm-per-unit", type=float, default=d.dribbler_rpm_per_unit)
@@ -157,6 +161,7 @@ def config_from_args(args: argparse.Namespace) -> RelayConfig:
         max_datagram_bytes=args.max_datagram,
         command_timeout_s=args.command_timeout,
         hold_time_s=args.hold_time,
+        feedback_interval_s=args.feedback_interval,
         chip_angle_deg=args.chip_angle,
         kick_mps_per_volt=args.kick_mps_per_volt,
         dribbler_rpm_per_unit=args.dribbler_rpm_per_unit,

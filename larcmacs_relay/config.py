@@ -50,6 +50,10 @@ class RelayConfig:
     min_output_gap_s: float | None = None
     command_timeout_s: float = 0.100
     hold_time_s: float = 1.0
+    # simulator answers with the same bytes as the last one forwarded go on at most this
+    # often per team (the rest are counted, not forwarded: larcmacs_relay/feedback.py); a
+    # change goes on at once. 0: every answer. The backend reads them at 50 Hz.
+    feedback_interval_s: float = 0.02
 
     # Kick / dribbler conversions (uncalibrated, documented in README.md).
     chip_angle_deg: float = 45.0
@@ -129,6 +133,10 @@ class RelayConfig:
             raise ValueError("command_timeout_s must be in (0, 1] s")
         if self.hold_time_s < 0.0:
             raise ValueError("hold_time_s must be >= 0")
+        if not 0.0 <= self.feedback_interval_s <= 0.05:
+            # a held answer goes on within two intervals; the backend trusts a robot's ball
+            # contact for 0.2 s after its last answer
+            raise ValueError("feedback_interval_s must be in [0, 0.05] s")
         if self.our_team not in ("blue", "yellow"):
             raise ValueError(f"our_team must be blue or yellow, not {self.our_team!r}")
         if not 0 < self.tracker_out_port < 65536:

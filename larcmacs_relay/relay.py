@@ -24,6 +24,7 @@ from larcmacs_relay.codecs import Command, CommandError
 from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
+from larcmacs_relay.feedback import FeedbackGate, HeldAnswer
 from sslnet import proc, streams
 from sslnet.multicast import open_multicast_receiver, open_multicast_sender, open_udp_server
 from sslnet.rate import RateCounter
@@ -83,7 +84,11 @@ class Relay:
         self.compat_referee_address = ""
         self._stop = asyncio.Event()
         self._ratelog = RateLimitedLog(log, config.log_interval_s)
-        self._sequences = {"vision": 0, "referee": 0, "tracker": 0, "feedback": 0}
+        self._sequences = {"vision": 0, "referee": 0, "tracker": 0}
+        #: the feedback forwarding rule per (kind, team) (feedback.py) and each one's timer
+        #: for a held answer
+        self._gates: dict[tuple[int, int], FeedbackGate] = {}
+        self._gate_timers: dict[tuple[int, int], asyncio.TimerHandle] = {}
         #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
         #: with every answer (the backend's round trip and losses)
         self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
@@ -262,6 +267,9 @@ class Relay:
             if self._timer is not None:
                 self._timer.cancel()
                 self._timer = None
+            for timer in self._gate_timers.values():
+                timer.cancel()
+            self._gate_timers.clear()
             if sub_fd is not None:
                 with contextlib.suppress(Exception):
                     loop.remove_reader(sub_fd)
@@ -343,9 +351,7 @@ class Relay:
                 seq += 1
                 source = sources.get(addr)
                 if source is None:
-                    source = f"{addr[0]}:{addr[1]}"
-                    if len(sources) < 256:  # a spoofing flood cannot grow it
-                        sources[addr] = source
+                    source = self._source(addr)
                 env = touchline_pb2.Envelope(
                     stream=stream,
                     receive_time_ns=receive_ns,
@@ -666,16 +672,18 @@ class Relay:
             self._arm(earliest)
 
     def _arm(self, t: float) -> None:
-        """The next cycle is due at monotonic ``t``. One timer at most: a timer armed for a
-        later time is moved; one armed earlier stays and re-arms itself when it fires."""
+        """The next cycle is due at monotonic ``t``. One timer at most, moved to ``t`` unless
+        it is due within the cycle tolerance (0.5 ms) of it: a command set re-phases the
+        schedule a period later, and the timer left where it was would wake the loop for
+        nothing (a cycle ran since) several times per period at one set per camera frame."""
         self._next_cycle = t
         timer = self._timer
+        when = self._loop_time(t)
         if timer is not None:
-            if timer.when() <= self._loop_time(t):
+            if abs(timer.when() - when) <= 0.0005:
                 return
             timer.cancel()
-        loop = asyncio.get_running_loop()
-        self._timer = loop.call_at(self._loop_time(t), self._on_timer)
+        self._timer = asyncio.get_running_loop().call_at(when, self._on_timer)
 
     @staticmethod
     def _loop_time(t: float) -> float:
@@ -823,12 +831,20 @@ class Relay:
             port = addr[1]
             team = (codecs.TEAM_BLUE if port == self.config.sim_blue_port else
                     codecs.TEAM_YELLOW if port == self.config.sim_yellow_port else None)
+            gate: FeedbackGate | None = None
             if team is None:  # the control port's SimulatorResponse: errors only
                 n, reason = codecs.count_response_errors(data)
                 kind = None if n == 0 or reason.startswith("simulator error") else \
                     codecs.classify(reason, data)
             else:
-                n, reason, kind = codecs.check_robot_control_response(data)
+                gate = self._gate(touchline_pb2.FEEDBACK_SIM_RESPONSE, team)
+                checked = gate.checked
+                if checked is not None and checked[0] == data:  # a repeat: said the same
+                    n, reason, kind = checked[1], checked[2], None
+                else:
+                    n, reason, kind = codecs.check_robot_control_response(data)
+                    if kind is None:
+                        gate.checked = (data, n, reason)
             if kind is not None:
                 counter.error(kind, reason)
                 self._ratelog.warning("sim-resp-bad", "bad answer from the simulator at "
@@ -839,9 +855,8 @@ class Relay:
                 self._ratelog.warning(
                     "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
                 )
-            if team is not None:
-                self._forward_feedback(touchline_pb2.FEEDBACK_SIM_RESPONSE, team, data, addr,
-                                       receive_ns)
+            if gate is not None:
+                self._forward_feedback(gate, data, addr, receive_ns)
 
     def _drain_grsim_status(self, sock: socket.socket, team: int) -> None:
         """grSim's Robots_Status datagrams of one team, validated and forwarded unchanged."""
@@ -866,24 +881,75 @@ class Relay:
                                       "%s", addr[0], addr[1], reason)
                 continue
             counter.packet(len(data))
-            self._forward_feedback(touchline_pb2.FEEDBACK_GRSIM_STATUS, team, data, addr,
-                                   receive_ns)
+            self._forward_feedback(self._gate(touchline_pb2.FEEDBACK_GRSIM_STATUS, team), data,
+                                   addr, receive_ns)
 
-    def _forward_feedback(self, kind: touchline_pb2.FeedbackKind.ValueType, team: int,
-                          data: bytes, addr: tuple[str, int], receive_ns: int) -> None:
-        """One answer onto the PUB ("feedback"), with what was sent to the team's robots."""
-        self._sequences["feedback"] += 1
+    def _gate(self, kind: int, team: int) -> FeedbackGate:
+        """The forwarding rule of one answer stream: simulator answers are coalesced
+        (feedback.py), grSim's robot status (only sent on a change) never is."""
+        gate = self._gates.get((kind, team))
+        if gate is None:
+            interval = self.config.feedback_interval_s \
+                if kind == touchline_pb2.FEEDBACK_SIM_RESPONSE else 0.0
+            gate = self._gates[(kind, team)] = FeedbackGate(kind, team, interval)
+        return gate
+
+    def _forward_feedback(self, gate: FeedbackGate, data: bytes, addr: tuple[str, int],
+                          receive_ns: int) -> None:
+        """One valid answer: onto the PUB now, or held (feedback.py) and sent by a timer
+        unless a newer one goes first."""
+        now = time.monotonic()
+        sent = self._sent[gate.team]
+        key = (gate.kind, gate.team)
+        if gate.arrive(data, now):
+            held = gate.held
+            if held is not None:
+                if held.data != data:  # the answers before a change first
+                    self._publish_feedback(gate, held)
+                timer = self._gate_timers.pop(key, None)
+                if timer is not None:  # nothing held any more: no wake-up for it
+                    timer.cancel()
+            self._publish_feedback(gate, HeldAnswer(data, addr, receive_ns, gate.answers, sent))
+            gate.forwarded(data, now)
+            return
+        gate.hold(HeldAnswer(data, addr, receive_ns, gate.answers, dict(sent)))
+        if key not in self._gate_timers:
+            loop = asyncio.get_running_loop()
+            self._gate_timers[key] = loop.call_at(self._loop_time(gate.flush_at),
+                                                  self._flush_feedback, gate)
+
+    def _flush_feedback(self, gate: FeedbackGate) -> None:
+        """A held answer is due (no newer one came to take its place): it goes on."""
+        self._gate_timers.pop((gate.kind, gate.team), None)
+        held = gate.held
+        if held is None:
+            return
+        self._publish_feedback(gate, held)
+        gate.forwarded(held.data, time.monotonic())
+
+    def _publish_feedback(self, gate: FeedbackGate, a: HeldAnswer) -> None:
+        """One answer onto the PUB ("feedback"), with what had been sent to the team's robots
+        when it arrived and its stream's count of answers then (``sequence``)."""
         env = touchline_pb2.RobotFeedbackEnvelope(
-            kind=kind,
-            team=team,  # type: ignore[arg-type]
-            receive_time_ns=receive_ns,
-            sequence=self._sequences["feedback"],
-            source=f"{addr[0]}:{addr[1]}",
-            payload=data,
+            kind=gate.kind,  # type: ignore[arg-type]
+            team=gate.team,  # type: ignore[arg-type]
+            receive_time_ns=a.receive_ns,
+            sequence=a.sequence,
+            source=self._source(a.addr),
+            payload=a.data,
             sent=[touchline_pb2.RobotSent(id=rid, commands_sent=n, last_sent_time_ns=t)
-                  for rid, (n, t) in sorted(self._sent.get(team, {}).items())],
+                  for rid, (n, t) in sorted(a.sent.items())],
         )
         self._publish(self._pub, [b"feedback", env.SerializeToString()])
+
+    def _source(self, addr: tuple[str, int]) -> str:
+        """"ip:port" of a datagram's sender, made once per sender (at most 256 kept)."""
+        source = self._sources.get(addr)
+        if source is None:
+            source = f"{addr[0]}:{addr[1]}"
+            if len(self._sources) < 256:  # a spoofing flood cannot grow it
+                self._sources[addr] = source
+        return source
 
     # ------------------------------------------------------------------ stats
 

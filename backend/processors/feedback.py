@@ -10,7 +10,7 @@ from sslnet.streams import StreamCounter
 from .. import topics
 from ..bus import DataBus, Reader
 from ..processor import Every, Processor
-from ..world.feedback import FeedbackTracker, decode
+from ..world.feedback import Decoder, FeedbackTracker
 from .common import badlog
 
 
@@ -27,10 +27,12 @@ class FeedbackProcessor(Processor):
         self.commands = Reader(bus.of(topics.ROBOT_COMMANDS))
         self.out = bus.of(topics.ROBOT_FEEDBACK)
         self.tracker = FeedbackTracker()
+        self.decode = Decoder()
         self.counter = StreamCounter("feedback")
 
     def reset(self) -> None:
         self.tracker.clear()
+        self.decode.clear()
 
     async def tick(self) -> None:
         now = time.monotonic()
@@ -41,7 +43,7 @@ class FeedbackProcessor(Processor):
                 self.tracker.command(c.team, c.id, now)
         for env in self.packets.read_new():
             self.counter.packet(len(env.payload))
-            dec = decode(env)
+            dec = self.decode(env)
             if isinstance(dec, tuple):
                 self.counter.error(*dec)
                 badlog.warning("feedback", "bad robot feedback from %s: %s", env.source,

@@ -3,14 +3,17 @@ arguments).
 
 ``decode(env)`` turns one ``RobotFeedbackEnvelope`` from the relay (a ``RobotControlResponse``
 of the SSL simulation protocol, or a grSim ``Robots_Status``) into one ``Answer`` per robot,
-or the reason it is refused (``sslnet.streams`` reasons). ``FeedbackTracker`` keeps per robot:
-ball contact (``dribbler_ball_contact`` or grSim's infrared), the last kick (grSim's flat /
-chip flags) and when, the time of the last answer, and for the transport that answers every
-command (the simulation protocol) the round trip (the relay's last send -> the answer's
-arrival at the relay) and the losses (commands sent vs answers over the last
-``LOSS_WINDOW_S``). A robot the station commands that has not answered for ``NO_ANSWER_S``
-is marked ``no_answer``. Battery and kicker voltages are a hook for real robots: they stay
-None until a transport fills them.
+or the reason it is refused (``sslnet.streams`` reasons); ``Decoder`` does the same but parses
+a payload only when it differs from the last one of its stream (the relay forwards a
+simulator's repeated answers coalesced: larcmacs_relay/feedback.py). ``FeedbackTracker`` keeps
+per robot: ball contact (``dribbler_ball_contact`` or grSim's infrared), the last kick
+(grSim's flat / chip flags) and when, the time of the last answer, and for the transport that
+answers every command (the simulation protocol) the round trip (the relay's last send -> the
+answer's arrival at the relay, one sample per envelope) and the losses (commands sent vs
+answers over the last ``LOSS_WINDOW_S``; an envelope stands for as many answers, all with its
+bytes, as its ``sequence`` advanced since the previous envelope of its stream). A robot the
+station commands that has not answered for ``NO_ANSWER_S`` is marked ``no_answer``. Battery
+and kicker voltages are a hook for real robots: they stay None until a transport fills them.
 """
 
 from __future__ import annotations
@@ -101,6 +104,29 @@ def decode(env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
     return streams.OTHER, f"feedback of kind {env.kind}"
 
 
+class Decoder:
+    """``decode`` with a memory per answer stream (kind, team): a payload with the same bytes
+    as the last one decoded is not parsed again (its ``Decoded`` is immutable: the same
+    one is returned)."""
+
+    def __init__(self) -> None:
+        self._last: dict[tuple[int, int], tuple[bytes, Decoded]] = {}
+
+    def clear(self) -> None:
+        self._last.clear()
+
+    def __call__(self, env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
+        key = (env.kind, env.team)
+        payload = env.payload
+        last = self._last.get(key)
+        if last is not None and last[0] == payload:
+            return last[1]
+        dec = decode(env)
+        if not isinstance(dec, tuple):
+            self._last[key] = (payload, dec)
+        return dec
+
+
 @dataclass
 class RobotFeedbackState:
     """One robot's feedback; times are the tracker's clock (monotonic s)."""
@@ -160,11 +186,24 @@ class FeedbackTracker:
         self.answering: set[Team] = set()
         #: the station's last command per robot (tracker clock)
         self.commanded: dict[tuple[Team, int], float] = {}
+        #: the last envelope's sequence per answer stream (kind, team)
+        self.sequences: dict[tuple[int, int], int] = {}
 
     def clear(self) -> None:
         self.robots.clear()
         self.answering.clear()
         self.commanded.clear()
+        self.sequences.clear()
+
+    def _answers_in(self, env: tl.RobotFeedbackEnvelope) -> int:
+        """How many answers ``env`` stands for: the relay forwards a run of answers with the
+        same bytes as one envelope, and its ``sequence`` counts every answer of the stream;
+        1 without a previous sequence, or when it did not advance (a restarted relay)."""
+        key = (env.kind, env.team)
+        seq = env.sequence
+        last = self.sequences.get(key)
+        self.sequences[key] = seq
+        return seq - last if last is not None and seq > last else 1
 
     def command(self, team: Team, rid: int, now: float) -> None:
         """The station commanded this robot at ``now``."""
@@ -197,6 +236,7 @@ class FeedbackTracker:
         if dec.transport != "sim":
             return
         self.answering.add(team)
+        n = self._answers_in(env)
         # every robot sent to, in every answer (several hundred a second): each protobuf
         # field read once, the window's start computed once
         robots = self.robots
@@ -209,7 +249,7 @@ class FeedbackTracker:
                 self._state(team, rid, "sim")
             st.sent_total = s.commands_sent
             if rid in answered:
-                st.answers_total += 1
+                st.answers_total += n
                 last_sent = s.last_sent_time_ns
                 if last_sent > 0 and received >= last_sent:
                     st.round_trips_ms.append((received - last_sent) / 1e6)

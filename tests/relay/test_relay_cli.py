@@ -44,6 +44,16 @@ def test_min_gap_flag() -> None:
             config_from_args(build_parser().parse_args(["--min-gap", bad])).validate()
 
 
+def test_feedback_interval_flag() -> None:
+    assert config_from_args(build_parser().parse_args([])).feedback_interval_s == 0.02
+    cfg = config_from_args(build_parser().parse_args(["--feedback-interval", "0"]))
+    cfg.validate()
+    assert cfg.feedback_interval_s == 0.0  # every answer forwarded
+    for bad in ("-0.01", "0.06"):  # held answers must stay well inside the contact's 0.2 s
+        with pytest.raises(ValueError, match="feedback_interval_s"):
+            config_from_args(build_parser().parse_args(["--feedback-interval", bad])).validate()
+
+
 def test_profile_written_on_stop(tmp_path: Path) -> None:
     """--profile FILE: the cProfile stats are there after a normal stop (bench/ reads them)."""
     out = tmp_path / "relay.prof"

@@ -100,3 +100,52 @@ async def test_grsim_status_forwarded_bad_counted() -> None:
             assert counter.by_reason == {"missing required field": 1, "truncated": 1}
         finally:
             grsim.close()
+
+
+async def test_repeated_answers_coalesced_a_change_at_once() -> None:
+    """The same bytes again and again go on as fewer envelopes whose sequence counts every
+    answer; the last one held goes on by itself (the timer); a change goes on at once, after
+    the held answers before it."""
+    async with running_relay(feedback_interval_s=0.05) as h:
+        sub = h.subscriber(b"feedback")
+        pub = await connect_commands(h)
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=1)))
+        _, _, addr = await recv_udp_from(h.sim_blue)
+
+        def answer(contact: bool) -> bytes:
+            resp = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
+            resp.feedback.add(id=1, dribbler_ball_contact=contact)
+            return resp.SerializeToString()
+
+        no, yes = answer(False), answer(True)
+        env = None
+        for _ in range(100):  # the ZeroMQ slow joiner
+            h.sim_blue.sendto(no, addr)
+            if await sub.poll(30):
+                env = await next_feedback(sub)
+                break
+        assert env is not None, "no feedback forwarded"
+        # everything answered so far has been forwarded or is held: wait for the held one
+        while env.sequence < h.relay.streams["sim_responses"].packets:
+            env = await next_feedback(sub)
+        first = env.sequence
+        counter = h.relay.streams["sim_responses"]
+        for _ in range(11):
+            h.sim_blue.sendto(yes, addr)
+        got = []
+        while not got or got[-1].sequence < first + 11:
+            got.append(await next_feedback(sub))
+        assert all(e.payload == yes for e in got)
+        assert got[0].sequence == first + 1  # a change: at once
+        assert len(got) < 11 and got[-1].sequence == first + 11
+        assert [s.id for s in got[-1].sent] == [1]
+        # five more of the same, then no contact: the held ones go on first, then the change
+        for _ in range(5):
+            h.sim_blue.sendto(yes, addr)
+        h.sim_blue.sendto(no, addr)
+        got = []
+        while not got or got[-1].payload != no:
+            got.append(await next_feedback(sub))
+        assert got[-2].payload == yes and got[-2].sequence == first + 16
+        assert got[-1].sequence == first + 17
+        assert counter.packets == first + 17 and counter.errors == 0

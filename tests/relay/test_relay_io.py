@@ -174,6 +174,30 @@ async def test_idle_relay_sends_nothing_and_wakes_on_a_command() -> None:
         assert cycles.total == total and drain_udp(h.sim_blue) == 0
 
 
+async def test_a_command_set_moves_the_output_timer_with_the_schedule() -> None:
+    """A command set goes out at once and re-phases the repeats a period later: the one
+    output timer moves there, it does not stay at the old time to wake the loop for
+    nothing."""
+    async with running_relay(output_rate_hz=100.0) as h:
+        pub = await connect_commands(h)
+        relay = h.relay
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
+        await recv_udp(h.sim_blue)
+        first = relay._last_cycle
+        await wait_for(lambda: time.monotonic() > first + 0.002, what="2 ms after the cycle")
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4,
+                                                                        forward_mps=0.5)))
+        while True:  # the new command's datagram (a repeat of the old one may come first)
+            data, _ = await recv_udp(h.sim_blue)
+            if decode_rc(data).robot_commands[0].move_command.local_velocity.forward > 0.4:
+                break
+        timer = relay._timer
+        assert timer is not None and math.isfinite(relay._next_cycle)
+        loop = asyncio.get_running_loop()
+        due = loop.time() + (relay._next_cycle - time.monotonic())
+        assert abs(timer.when() - due) <= 0.0006
+
+
 # ----------------------------------------------------------------- commands, sim mode
 
 

@@ -5,7 +5,14 @@ from __future__ import annotations
 
 import pytest
 
-from backend.world.feedback import NO_ANSWER_S, Answer, Decoded, FeedbackTracker, decode
+from backend.world.feedback import (
+    NO_ANSWER_S,
+    Answer,
+    Decoded,
+    Decoder,
+    FeedbackTracker,
+    decode,
+)
 from sslpb import touchline_pb2 as tl
 from tests.wire import key, ld, uv, varint
 
@@ -26,9 +33,11 @@ def grsim_status(rid: int, infrared: bool, flat: bool, chip: bool) -> bytes:
 
 
 def env(kind: int, team: int, payload: bytes, t_ns: int = 0,
-        sent: list[tuple[int, int, int]] | None = None) -> tl.RobotFeedbackEnvelope:
+        sent: list[tuple[int, int, int]] | None = None,
+        sequence: int = 0) -> tl.RobotFeedbackEnvelope:
     return tl.RobotFeedbackEnvelope(
         kind=kind, team=team, receive_time_ns=t_ns, payload=payload,  # type: ignore[arg-type]
+        sequence=sequence,
         sent=[tl.RobotSent(id=i, commands_sent=n, last_sent_time_ns=t) for i, n, t in
               sent or []])
 
@@ -146,3 +155,41 @@ def test_contact_is_said_only_by_robots_whose_answers_carry_it_and_only_while_fr
     assert silent.contact(0.2) is None  # its answers never carry contact: not "no ball"
     old = tr.view("blue", 1, 10.5)
     assert old is not None and old.contact(0.2) is None  # no answer lately: not said now
+
+
+def test_decoder_parses_a_payload_only_when_it_changed() -> None:
+    dec = Decoder()
+    a, b = ld(2, sim_feedback(0, True)), ld(2, sim_feedback(0, False))
+    first = dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, a))
+    assert first == decode(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, a))
+    assert dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, a)) is first  # the same bytes: not parsed
+    other = dec(env(tl.FEEDBACK_SIM_RESPONSE, YELLOW, a))  # another stream: its own
+    assert other is not first and other == Decoded("yellow", "sim", (Answer(0, True),))
+    changed = dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, b))
+    assert changed == Decoded("blue", "sim", (Answer(0, False),))
+    bad = b"\x12\x08\x08"
+    assert dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, bad))[0] == "truncated"  # type: ignore[index]
+    assert dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, b)) is changed  # a bad one is not kept
+    dec.clear()
+    assert dec(env(tl.FEEDBACK_SIM_RESPONSE, BLUE, b)) is not changed
+
+
+def test_coalesced_answers_counted_from_the_sequence() -> None:
+    """The relay forwards a run of identical answers as one envelope: the sequence says how
+    many answers it stands for, so nothing answered looks lost."""
+    tr = FeedbackTracker()
+    payload = ld(2, sim_feedback(0, True))
+    # 30 commands, each answered; forwarded as envelopes at answers 1, 10, 20, 30
+    for k, seq in enumerate((1, 10, 20, 30)):
+        feed(tr, env(tl.FEEDBACK_SIM_RESPONSE, BLUE, payload, 0, [(0, seq, 0)], seq), k * 0.1)
+    v = tr.view("blue", 0, 0.3)
+    assert v is not None and (v.commands_sent, v.answers, v.loss) == (29, 29, 0.0)
+    # robot 1 was sent 10 more, but is not in the answers: all lost
+    feed(tr, env(tl.FEEDBACK_SIM_RESPONSE, BLUE, payload, 0, [(0, 40, 0), (1, 10, 0)], 40), 0.4)
+    feed(tr, env(tl.FEEDBACK_SIM_RESPONSE, BLUE, payload, 0, [(0, 50, 0), (1, 20, 0)], 50), 0.5)
+    one = tr.view("blue", 1, 0.5)
+    assert one is not None and (one.commands_sent, one.answers, one.loss) == (10, 0, 1.0)
+    # a restarted relay counts from 1 again: one answer, not a negative count
+    feed(tr, env(tl.FEEDBACK_SIM_RESPONSE, BLUE, payload, 0, [(0, 51, 0)], 1), 0.6)
+    v = tr.view("blue", 0, 0.6)
+    assert v is not None and v.answers == 50 and v.loss == 0.0
