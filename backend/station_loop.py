@@ -35,6 +35,29 @@ def _name_native_thread(name: str) -> None:
         pass
 
 
+SWITCH_INTERVAL_ENV = "TOUCHLINE_SWITCH_INTERVAL_S"
+DEFAULT_SWITCH_INTERVAL_S = 0.0005
+
+
+def switch_interval_s() -> float:
+    """The GIL switch interval the station runs with: how long another thread may hold the GIL
+    while the station thread waits for it (the default 5 ms of Python would be the station's
+    worst wait). ``TOUCHLINE_SWITCH_INTERVAL_S`` overrides it (benches); a value that is not a
+    positive number is ignored with a warning."""
+    raw = os.environ.get(SWITCH_INTERVAL_ENV, "")
+    if not raw:
+        return DEFAULT_SWITCH_INTERVAL_S
+    try:
+        value = float(raw)
+    except ValueError:
+        value = -1.0
+    if not (0.0 < value <= 1.0):
+        log.warning("%s=%r is not a number of seconds in (0, 1]: %g s used",
+                    SWITCH_INTERVAL_ENV, raw, DEFAULT_SWITCH_INTERVAL_S)
+        return DEFAULT_SWITCH_INTERVAL_S
+    return value
+
+
 class StationLoop:
     """Runs ``start()`` on a new event loop in its own thread, keeps the loop running until
     ``stop_thread``, then runs ``stop()``. ``after_command`` runs on the loop after every
@@ -85,8 +108,9 @@ class StationLoop:
                 self.loop = None
                 loop.close()
 
-        # control latency: let the station thread take the GIL back quickly from web work
-        sys.setswitchinterval(0.0005)
+        # control latency: let the station thread take the GIL back quickly from web work and
+        # the strategy's worker (TOUCHLINE_SWITCH_INTERVAL_S: another value, for benches)
+        sys.setswitchinterval(switch_interval_s())
         self.thread = threading.Thread(target=main, name="station", daemon=True)
         self.thread.start()
         if not ready.wait(30):
