@@ -515,11 +515,11 @@ class WorldModel:
                 seen = tr.cam_seen
                 if len(seen) == 1:
                     ((c, _),) = seen.items()  # seen at t_meas: inside the camera window
-                    cams: tuple[int, ...] = (c,) if c >= 0 else ()
+                    seen_by: tuple[int, ...] = (c,) if c >= 0 else ()
                 else:
-                    cams = self._cams(tr)
+                    seen_by = self._cams(tr)
                 state = RobotState(key[0], key[1], est[0], est[1], o, vx, vy, omega, tr.t_meas,
-                                   True, cams, raw.x, raw.y, raw.o, False, False, tr.kind)
+                                   True, seen_by, raw.x, raw.y, raw.o, False, False, tr.kind)
                 tr.snap = state
                 robots.append(state)
                 continue
