@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import cProfile
+import ctypes
 import logging
 import os
 import sys
@@ -19,6 +20,42 @@ log = logging.getLogger("touchline.station")
 T = TypeVar("T")
 
 PROFILE_ENV = "TOUCHLINE_PROFILE"
+
+
+def _name_native_thread(name: str) -> None:
+    """Names the calling thread for the OS too (Linux: /proc/PID/task/TID/comm), so per-thread
+    CPU figures (bench/loop_bench.py, top -H) tell the station thread from the others.
+    Best effort: elsewhere nothing happens."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(15, name.encode()[:15], 0, 0, 0)  # PR_SET_NAME
+    except (OSError, AttributeError):
+        pass
+
+
+SWITCH_INTERVAL_ENV = "TOUCHLINE_SWITCH_INTERVAL_S"
+DEFAULT_SWITCH_INTERVAL_S = 0.0005
+
+
+def switch_interval_s() -> float:
+    """The GIL switch interval the station runs with: how long another thread may hold the GIL
+    while the station thread waits for it (the default 5 ms of Python would be the station's
+    worst wait). ``TOUCHLINE_SWITCH_INTERVAL_S`` overrides it (benches); a value that is not a
+    positive number is ignored with a warning."""
+    raw = os.environ.get(SWITCH_INTERVAL_ENV, "")
+    if not raw:
+        return DEFAULT_SWITCH_INTERVAL_S
+    try:
+        value = float(raw)
+    except ValueError:
+        value = -1.0
+    if not (0.0 < value <= 1.0):
+        log.warning("%s=%r is not a number of seconds in (0, 1]: %g s used",
+                    SWITCH_INTERVAL_ENV, raw, DEFAULT_SWITCH_INTERVAL_S)
+        return DEFAULT_SWITCH_INTERVAL_S
+    return value
 
 
 class StationLoop:
@@ -39,7 +76,12 @@ class StationLoop:
         errors: list[BaseException] = []
 
         def main() -> None:
+            _name_native_thread("station")
             loop = asyncio.new_event_loop()
+            # the strategy's worker (asyncio.to_thread) named too
+            loop.set_default_executor(concurrent.futures.ThreadPoolExecutor(
+                thread_name_prefix="station-worker", initializer=_name_native_thread,
+                initargs=("station-worker",)))
             asyncio.set_event_loop(loop)
             stop_event = asyncio.Event()
             self._stop_event = stop_event
@@ -66,8 +108,9 @@ class StationLoop:
                 self.loop = None
                 loop.close()
 
-        # control latency: let the station thread take the GIL back quickly from web work
-        sys.setswitchinterval(0.0005)
+        # control latency: let the station thread take the GIL back quickly from web work and
+        # the strategy's worker (TOUCHLINE_SWITCH_INTERVAL_S: another value, for benches)
+        sys.setswitchinterval(switch_interval_s())
         self.thread = threading.Thread(target=main, name="station", daemon=True)
         self.thread.start()
         if not ready.wait(30):

@@ -85,6 +85,20 @@ def floor(a: argparse.Namespace) -> dict[str, Any]:
     return {**cpu, "p50_ms": lat["p50_ms"], "p99_ms": lat["p99_ms"]}
 
 
+def thread_cpu_s(pid: int) -> dict[str, float]:
+    """CPU seconds of each thread of ``pid`` by thread name (threads of one name summed)."""
+    out: dict[str, float] = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            stat = (task / "stat").read_text()
+        except OSError:  # the thread ended meanwhile
+            continue
+        name = stat[stat.index("(") + 1:stat.rindex(")")]
+        fields = stat.rsplit(")", 1)[1].split()
+        out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / TICKS
+    return out
+
+
 def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
     """Touchline's row; ``browser``: with headless Chromium showing the page meanwhile (its
     own CPU apart: only the relay's and the backend's count)."""
@@ -118,6 +132,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
         p50s: list[float] = []
         p99s: list[float] = []
         c0 = {k: cpu_s(v) for k, v in pids.items()}
+        th0 = thread_cpu_s(pids["backend"])
         t0 = time.monotonic()
         while time.monotonic() - t0 < a.seconds:
             time.sleep(1.0)
@@ -126,6 +141,8 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
                 p50s.append(r["command_latency_p50_ms"])
                 p99s.append(r["command_latency_p99_ms"])
         dt = time.monotonic() - t0
+        th1 = thread_cpu_s(pids["backend"])
+        threads = {k: (v - th0.get(k, 0.0)) / dt * 100 for k, v in th1.items()}
         cpu = {("sim" if k == "fieldsim" else k): (cpu_s(v) - c0[k]) / dt * 100
                for k, v in pids.items()}
     finally:
@@ -136,7 +153,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
         proc.wait(timeout=20)
     return {**cpu, "p50_ms": statistics.median(p50s) if p50s else -1,
             "p99_ms": statistics.median(p99s) if p99s else -1,
-            "p99_worst_ms": max(p99s) if p99s else -1}
+            "p99_worst_ms": max(p99s) if p99s else -1, "threads": threads}
 
 
 def main() -> None:
@@ -157,6 +174,9 @@ def main() -> None:
         print(f"Touchline: relay {t['relay']:.1f} % backend {t['backend']:.1f} % "
               f"simulator {t['sim']:.1f} %, arrival -> command p50 {t['p50_ms']:.2f} ms "
               f"p99 {t['p99_ms']:.2f} ms (worst 1 s p99 {t['p99_worst_ms']:.2f} ms)")
+        print("backend threads (% of one core): " + ", ".join(
+            f"{k} {v:.1f}" for k, v in sorted(t["threads"].items(), key=lambda kv: -kv[1])
+            if v >= 0.05))
         return
     f = floor(a)
     rows = [("floor", f), ("Touchline", t)]

@@ -19,7 +19,13 @@ def next_waypoint(entry: TargetEntry, x_mm: float, y_mm: float) -> Target:
         return entry.target
     # the nearest waypoint; the next one once it is reached or already passed (the path
     # was planned a strategy tick ago, the robot has moved along it since)
-    k = min(range(len(path)), key=lambda i: math.hypot(path[i][0] - x_mm, path[i][1] - y_mm))
+    # (as min() with a key function would, without a call per waypoint at every step)
+    hypot = math.hypot
+    k, best = 0, hypot(path[0][0] - x_mm, path[0][1] - y_mm)
+    for i in range(1, len(path)):
+        d = hypot(path[i][0] - x_mm, path[i][1] - y_mm)
+        if d < best:
+            k, best = i, d
     if k < len(path) - 1:
         px, py = path[k]
         nx, ny = path[k + 1]

@@ -171,7 +171,7 @@ class LineController:
         px, py = state.x_mm / 1000.0, state.y_mm / 1000.0
         if self._target is None or self._lost:
             self._start(px, py, target)
-        elif target != self._target:
+        elif target is not self._target and target != self._target:  # (same: no compare)
             moved_mm = math.hypot(target.x - self._target.x, target.y - self._target.y)
             if moved_mm == 0.0:
                 self._target = target  # orientation only: no restart

@@ -63,6 +63,10 @@ class ControlProcessor(Processor):
         self._step_t: dict[tuple[Team, int], float] = {}
         self._command: str | None = None
         self._keys: list[tuple[Team, int]] = []
+        #: the robots to command, sorted, and what from (the targets' sequence number, our
+        #: team, whether the other team may be driven)
+        self._sorted_keys: list[tuple[Team, int]] = []
+        self._keys_of: tuple[int, str, bool] | None = None
         self._indexed: WorldState | None = None
         self._robots: dict[tuple[Team, int], RobotState] = {}
         self.internal: InternalRefereeProcessor | None = None
@@ -132,7 +136,13 @@ class ControlProcessor(Processor):
             self.last_commands = {}
             return
         other_ok = self.may_drive_other_team()
-        keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
+        # the robots commanded change with the targets (20 Hz), not with every camera frame
+        keys_of = (self.targets.seq, self.our_team, other_ok)
+        if keys_of == self._keys_of:
+            keys = self._sorted_keys
+        else:
+            keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
+            self._keys_of, self._sorted_keys = keys_of, keys
         zero = LocalVelocity.zero()
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s

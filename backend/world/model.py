@@ -469,15 +469,23 @@ class WorldModel:
         return p[0], p[1], 0.0, 0.0, False, True
 
     def _cams(self, tr: _Track) -> tuple[int, ...]:
+        """The cameras that saw the object within ``camera_window_s`` of its latest
+        measurement. The others are forgotten here: ``t_meas`` only grows, so they would not
+        count again before they see it again (and a robot seen by one camera then takes the
+        snapshot's short way)."""
         w = self.config.camera_window_s
-        return tuple(sorted(c for c, tc in tr.cam_seen.items()
-                            if c >= 0 and tr.t_meas - tc <= w))
+        t = tr.t_meas
+        seen = tr.cam_seen
+        for c in [c for c, tc in seen.items() if t - tc > w]:
+            del seen[c]
+        return tuple(sorted(c for c in seen if c >= 0))
 
     def snapshot(self, now: float | None = None) -> WorldState:
         """The current world. ``now`` (Unix s) defaults to the newest capture time."""
         cfg = self.config
         t_now = self._t_latest if now is None else now
         robots: list[RobotState] = []
+        predict_after = cfg.predict_after_s
         if len(self._order) != len(self._robots):  # a robot came or went: sort again
             self._order = sorted(self._robots)
         dropped = False
@@ -488,8 +496,32 @@ class WorldModel:
                 del self._robots[key]
                 dropped = True
                 continue
-            if tr.snap is not None and age <= cfg.predict_after_s:
-                robots.append(tr.snap)  # unchanged since the last snapshot
+            if age <= predict_after:
+                if tr.snap is not None:
+                    robots.append(tr.snap)  # unchanged since the last snapshot
+                    continue
+                # seen now (the common case, _where's first branch and _cams inlined: every
+                # robot a camera saw since the last snapshot is built here)
+                raw = tr.raw
+                est = tr.pos.estimate() or (raw.x, raw.y)
+                vx, vy = tr.pos.velocity()
+                o, omega = raw.o, 0.0
+                ang = tr.ang
+                if ang is not None:
+                    eo = ang.estimate()
+                    if eo is not None:
+                        o = eo
+                    omega = ang.rate()
+                seen = tr.cam_seen
+                if len(seen) == 1:
+                    ((c, _),) = seen.items()  # seen at t_meas: inside the camera window
+                    seen_by: tuple[int, ...] = (c,) if c >= 0 else ()
+                else:
+                    seen_by = self._cams(tr)
+                state = RobotState(key[0], key[1], est[0], est[1], o, vx, vy, omega, tr.t_meas,
+                                   True, seen_by, raw.x, raw.y, raw.o, False, False, tr.kind)
+                tr.snap = state
+                robots.append(state)
                 continue
             x, y, vx, vy, predicted, lost = self._where(tr, t_now)
             ang = tr.ang
@@ -507,7 +539,7 @@ class WorldModel:
                 key[0], key[1], x, y, o, vx, vy, omega, tr.t_meas, not lost, self._cams(tr),
                 raw_x=tr.raw.x, raw_y=tr.raw.y, raw_orientation=tr.raw.o,
                 predicted=predicted, lost=lost, filter=tr.kind)
-            tr.snap = None if predicted or lost else state
+            tr.snap = None
             robots.append(state)
         if dropped:
             self._order = sorted(self._robots)

@@ -28,6 +28,28 @@ def test_reader_sees_each_record_once_and_counts_missed() -> None:
     assert r.missed == 3
 
 
+def test_reader_one_record_at_a_time_and_after_a_clear() -> None:
+    """The one-new-record way and the general one agree: each record once, in order, misses
+    counted (a ring of 1 overwritten, a cleared topic whose records were never read)."""
+    t: Topic[int] = Topic("t", 1)
+    r = Reader(t)
+    for i in range(1, 4):
+        t.write(i)
+        assert r.read_new() == [i]
+        assert r.read_new() == []
+    t.write(4)
+    t.write(5)  # 4 overwritten in the ring of 1
+    assert r.read_new() == [5]
+    assert r.missed == 1
+    t.write(6)
+    t.clear()  # 6 forgotten before it was read
+    assert r.read_new() == []
+    assert r.missed == 2
+    t.write(7)
+    assert r.read_new() == [7]
+    assert r.missed == 2
+
+
 def test_two_readers_have_independent_cursors() -> None:
     t: Topic[str] = Topic("t", 10)
     a, b = Reader(t), Reader(t)

@@ -22,6 +22,31 @@ def test_two_cameras_seeing_one_robot_make_one_object_at_the_mean() -> None:
     assert r.cameras == (0, 1)
 
 
+def test_cameras_of_a_robot_follow_it_from_one_camera_to_the_next() -> None:
+    """The cameras that saw it within camera_window_s of its latest measurement, in every
+    snapshot (built afresh, or the one-camera short way once the other camera is forgotten);
+    the snapshot's robot state is reused while nothing new came."""
+    m = WorldModel()
+    w = m.config.camera_window_s
+    seen = []
+    t = 100.0
+    for k in range(12):  # camera 0 alone, then both at one instant, then camera 1 alone
+        t = 100.0 + k * 0.0133
+        cams = [0] if k < 4 else [0, 1] if k < 6 else [1]
+        for c in cams:
+            m.update(frame(c, t + 0.001 * c, [RawRobot("blue", 3, 10.0 * k, 0.0, 0.0, 0.9)]))
+        r = m.snapshot().robots[0]
+        seen.append(r.cameras)
+        assert m.snapshot().robots[0] is r  # nothing new: the same state object
+    assert seen[:4] == [(0,)] * 4
+    assert seen[4:6] == [(0, 1)] * 2
+    # camera 0 last saw it at k = 5: it counts until camera_window_s after that
+    last0 = 100.0 + 5 * 0.0133
+    assert seen[6:] == [(0, 1) if 100.0 + k * 0.0133 + 0.001 - last0 <= w else (1,)
+                        for k in range(6, 12)]
+    assert seen[-1] == (1,)
+
+
 def test_same_id_in_both_teams_are_two_objects() -> None:
     m = WorldModel()
     m.update(frame(0, 1.0, [RawRobot("blue", 1, 0, 0, 0, 1), RawRobot("yellow", 1, 500, 0, 0, 1)]))
