@@ -614,10 +614,11 @@ class AdaptiveIMM:
                     bk = self._save()
                     self._init(t, zx, zy, (vx, vy))
                     self._backup = bk  # three aligned outliers: the next measurement tells
+                    if len(pred) < 22:  # (1-D: the line is taken at once)
+                        return (zx, zy)
                     d = S[1] - t  # the line and the old track at its last measurement used
                     ovx, ovy = _velocity(S)
-                    if len(pred) > 21 and (
-                            (zx + vx * d - ex + ovx * (S[0] - S[1])) ** 2
+                    if ((zx + vx * d - ex + ovx * (S[0] - S[1])) ** 2
                             + (zy + vy * d - ey + ovy * (S[0] - S[1])) ** 2 > tol2):
                         # a line that does not start where the object was (false detections
                         # in a line, or a lost track): until the next measurement tells, the
