@@ -232,9 +232,10 @@ class WorldModel:
                 self.camera_pairs.add(first, fx, fy, cam, x, y, math.hypot(vx, vy))
             if tr.ang is not None:
                 tr.ang.revise(mo)
-            tr.raw = _Meas(tr.raw.t, mx, my, mo)
-            if tr.history:
-                tr.history[-1] = tr.raw
+            # the instant's measurement (also the history's last: changed in place, not
+            # rebuilt: this runs for every object each further camera sees)
+            raw = tr.raw
+            raw.x, raw.y, raw.o = mx, my, mo
             tr.raw_vel.replace_last(mx, my)
             tr.cam_seen[cam] = t
             return True
