@@ -102,6 +102,7 @@ class AdaptiveIMM:
         "_prev",
         "_pri",
         "_pri_h",
+        "_pure",
         "_vheld",
         "c_rest",
         "clutter",
@@ -184,6 +185,10 @@ class AdaptiveIMM:
         self._pri: tuple[Any, ...] | None = None  # the last step's predictions (revise)
         self._book: tuple[float, ...] | None = None  # the last measurement used, to learn from
         self._pri_h: tuple[float, ...] = ()  # _h when the predictions were made
+        #: the state is what the last correction made of the last step's predictions, nothing
+        #: else happened since (revise: the state before the step need not be restored unless
+        #: the measurement is rejected)
+        self._pure = False
 
     # -- state -------------------------------------------------------------------------------
 
@@ -221,6 +226,7 @@ class AdaptiveIMM:
         self.S = []
         self._prev = self._pend = self._far = self._backup = self._pri = self._book = None
         self._vheld = None
+        self._pure = False
         self._h = ()
 
     def _save(self) -> tuple[object, ...]:
@@ -246,23 +252,33 @@ class AdaptiveIMM:
     # -- the step ----------------------------------------------------------------------------
 
     def revise(self, x: float, y: float) -> Vec:
-        self._vheld = None
         pri = self._pri
         if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
-            # the state before the step, except what the step did before its predictions
-            # (it had learnt from its book)
-            self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
-            self._book, self._h = None, self._pri_h
+            if not self._pure:
+                self._restore()
+            # (else the correction overwrites all the step changed after its predictions, and
+            # restores the state before the step itself if it rejects the measurement: a
+            # second camera's revise, the common case, costs the correction alone)
             return self._correct(pri, x, y)
+        self._vheld = None
         if self._prev is None or not self.S:
             return self.update(self.S[0] if self.S else 0.0, x, y)
         t = self.S[0]
         self._load(self._prev)  # (the step keeps it as it is)
         return self.update(t, x, y)
 
+    def _restore(self) -> None:
+        """The state before the last step, except what the step did before its predictions
+        (it had learnt from its book): what a revise corrects."""
+        self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
+        self._book, self._h = None, self._pri_h
+        self._vheld = None
+        self._pure = False
+
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         self._vheld = None
+        self._pure = False
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
          gate2, clutter, rho_keep, q_c, switch_c) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
@@ -450,6 +466,8 @@ class AdaptiveIMM:
         vx = v1x + k1 * nmx
         vy = v1y + k1 * nmy
         if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
+            if self._pure:  # a revise (see there)
+                self._restore()
             if cpri is None:
                 return self._rejected(t, dt, zx, zy, [
                     t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
@@ -495,6 +513,7 @@ class AdaptiveIMM:
                 self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1,
                           ux, uy, ex, ey, cx, cy, cvx + kc1 * ncx, cvy + kc1 * ncy, ca1, cb1,
                           cc1, lam]
+                self._pure = True
                 return (ex, ey)
             lam = -(t + self.c_rest)
         w = 1.0 - mu
@@ -502,6 +521,7 @@ class AdaptiveIMM:
         ey = mu * sy + w * my
         self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
                   ex, ey, mx, my, vx, vy, ap1, bp1, cp1, lam]
+        self._pure = True
         return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> bool:
@@ -670,6 +690,7 @@ class AdaptiveIMM:
         self.rejected -= 1  # (counted again if the redone step rejects it too)
         out = self.update(t, zx, zy)
         self._prev = prev
+        self._pure = False  # (a revise restores the state before the outer step)
         # from rest, one measurement a little outside the gate moves the estimate a few mm but
         # must not report its velocity (0.5 m/s from a 4.5-sigma noise sample, about one frame
         # in 10^4 at 2 mm: the game controller reads a ball "not steady", docs/tracker.md);
@@ -742,6 +763,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
 
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        self._pure = False
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
          gate2, _, rho_keep, _, _) = self._k
         cache = self._backup is None
@@ -847,6 +869,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         d2s = ns * ns * iss
         d2m = nm * nm * ism
         if d2s > gs2 and d2m > gm2:
+            if self._pure:
+                self._restore()
             return self._rejected(t, dt, zx, 0.0, [
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
                 cs * x0 + cm * xp, 0.0])
@@ -861,4 +885,5 @@ class AdaptiveIMM1D(AdaptiveIMM):
         ex = mu * sx + (1.0 - mu) * mx
         self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
                   cp1, ux, 0.0, ex, 0.0]
+        self._pure = True
         return (ex, 0.0)
