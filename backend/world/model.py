@@ -127,7 +127,9 @@ class _Track:
     instant_cams: set[int] = field(default_factory=set)
     cam_seen: dict[int, float] = field(default_factory=dict)
     history: deque[_Meas] = field(default_factory=deque)
-    raw_vel: VelocityFit = field(default_factory=lambda: VelocityFit(0.1, 16))
+    #: the velocity of the raw measurements (the ball's association reads it; robots have none:
+    #: nothing reads theirs, and it cost two calls per detection)
+    raw_vel: VelocityFit | None = None
     #: the robot's state as the last snapshot built it, while it holds (no measurement or
     #: filter change since, and not predicted): eight cameras see a robot in few frames
     snap: RobotState | None = None
@@ -181,7 +183,8 @@ class WorldModel:
         params = self._settings.params_for(kind)
         ang = AngleFilter(make_filter(kind, params, angle=True)) if with_angle else None
         return _Track(kind, (kind, params), make_filter(kind, params), ang,
-                      history=deque(maxlen=self.config.history))
+                      history=deque(maxlen=self.config.history),
+                      raw_vel=None if with_angle else VelocityFit(0.1, 16))
 
     def configure(self, settings: FilterSettings) -> None:
         """Use new filter settings from now on. An object whose filter kind or parameters
@@ -236,7 +239,8 @@ class WorldModel:
             # rebuilt: this runs for every object each further camera sees)
             raw = tr.raw
             raw.x, raw.y, raw.o = mx, my, mo
-            tr.raw_vel.replace_last(mx, my)
+            if tr.raw_vel is not None:
+                tr.raw_vel.replace_last(mx, my)
             tr.cam_seen[cam] = t
             return True
         if t <= tr.t_meas:
@@ -251,7 +255,8 @@ class WorldModel:
             tr.ang.update(t, o)
         tr.raw = _Meas(t, x, y, o)
         tr.history.append(tr.raw)
-        tr.raw_vel.add(t, x, y)
+        if tr.raw_vel is not None:
+            tr.raw_vel.add(t, x, y)
         tr.cam_seen[cam] = t
         return True
 
@@ -395,7 +400,7 @@ class WorldModel:
             if not flying and self.kicks.kick is not None:
                 gate += cfg.ball_camera_disparity_mm  # perhaps rising, not yet recognised
         else:
-            vx, vy = bt.raw_vel.velocity()
+            vx, vy = bt.raw_vel.velocity() if bt.raw_vel is not None else (0.0, 0.0)
             ref = (bt.raw.x + vx * dt, bt.raw.y + vy * dt)
             gate = self._gate(dt) if dt <= cfg.ball_assoc_window_s else -1.0
         best_i, best_d2 = -1, gate * gate if gate >= 0 else -1.0
