@@ -251,15 +251,9 @@ class AdaptiveIMM:
 
     # -- the step ----------------------------------------------------------------------------
 
-    def revise(self, x: float, y: float) -> Vec:
-        pri = self._pri
-        if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
-            if not self._pure:
-                self._restore()
-            # (else the correction overwrites all the step changed after its predictions, and
-            # restores the state before the step itself if it rejects the measurement: a
-            # second camera's revise, the common case, costs the correction alone)
-            return self._correct(pri, x, y)
+    def _redo(self, x: float, y: float) -> Vec:
+        """A revise without the last step's predictions (after a jump, or none yet): the
+        step again from the state before it."""
         self._vheld = None
         if self._prev is None or not self.S:
             return self.update(self.S[0] if self.S else 0.0, x, y)
@@ -418,7 +412,7 @@ class AdaptiveIMM:
         k1 = bp * ism
         g = p0 * iss
         # the cruise model: constant velocity with a small fixed q, beside the moving one
-        # (not mixed with it: restarted from it, see _correct); lam < 0: it rests (ruled
+        # (not mixed with it: restarted from it, see revise); lam < 0: it rests (ruled
         # out by a maneuver: the moving model alone) until the time -lam
         if lam >= 0.0 or t >= -lam:
             if lam < 0.0:  # it wakes where the moving model is
@@ -449,11 +443,22 @@ class AdaptiveIMM:
                _sqrt(ism), cpri, lam)
         self._pri = pri if cache else None
         self._pri_h = self._h
-        return self._correct(pri, zx, zy)
+        return self.revise(zx, zy, pri)
 
-    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
-        """The measurement against both models' predictions ``pri`` (a step's second half,
-        all a ``revise`` has to redo)."""
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
+        """A second camera's measurement at the last step's instant instead of the last one:
+        the measurement against the step's predictions again. ``pri``: update's own
+        predictions (the step's second half: one function for both, since a call costs about
+        a tenth of the correction, and this runs for every object each camera sees)."""
+        if pri is None:
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:  # no predictions of this step
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
+            # (else the correction overwrites all the step changed after its predictions, and
+            # restores the state before the step itself if it rejects the measurement: a
+            # second camera's revise, the common case, costs the correction alone)
         (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
          cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w, cpri,
          lam) = pri
@@ -859,9 +864,15 @@ class AdaptiveIMM1D(AdaptiveIMM):
                _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
-        return self._correct(pri, zx, 0.0)
+        return self.revise(zx, 0.0, pri)
 
-    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
+        if pri is None:  # as in 2-D
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
         (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
          g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
