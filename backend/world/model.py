@@ -215,28 +215,32 @@ class WorldModel:
         cfg = self.config
         if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
             tr.snap = None
-            # another camera at the same instant: one measurement, the mean
-            pair = tr.n == 1 and tr.ang is not None  # a robot seen by a second camera: compare
+            # another camera at the same instant: one measurement, the mean (the sums in
+            # locals: this runs for every object each further camera sees)
+            n, ang, sx, sy = tr.n, tr.ang, tr.sx, tr.sy
+            pair = n == 1 and ang is not None  # a robot seen by a second camera: compare
             if pair:
                 (first,) = tr.instant_cams
-                fx, fy = tr.sx, tr.sy
+                fx, fy = sx, sy
             tr.instant_cams.add(cam)
-            tr.n += 1
-            tr.sx += x
-            tr.sy += y
-            tr.ss += math.sin(o)
-            tr.sc += math.cos(o)
-            mx, my = tr.sx / tr.n, tr.sy / tr.n
-            mo = math.atan2(tr.ss, tr.sc)
-            tr.pos.revise(mx, my)
+            n += 1
+            sx += x
+            sy += y
+            ss = tr.ss + math.sin(o)
+            sc = tr.sc + math.cos(o)
+            tr.n, tr.sx, tr.sy, tr.ss, tr.sc = n, sx, sy, ss, sc
+            mx, my = sx / n, sy / n
+            mo = math.atan2(ss, sc)
+            pos = tr.pos
+            pos.revise(mx, my)
             if pair:  # the speed of the merged measurement (the first camera's alone may
                 # have looked like a jump to the filter)
-                vx, vy = tr.pos.velocity()
+                vx, vy = pos.velocity()
                 self.camera_pairs.add(first, fx, fy, cam, x, y, math.hypot(vx, vy))
-            if tr.ang is not None:
-                tr.ang.revise(mo)
+            if ang is not None:
+                ang.revise(mo)
             # the instant's measurement (also the history's last: changed in place, not
-            # rebuilt: this runs for every object each further camera sees)
+            # rebuilt)
             raw = tr.raw
             raw.x, raw.y, raw.o = mx, my, mo
             if tr.raw_vel is not None:
