@@ -212,8 +212,8 @@ class WorldModel:
 
     def _measure(self, tr: _Track, t: float, cam: int, x: float, y: float, o: float) -> bool:
         """Feed one detection; False if it was ignored (older than the latest instant)."""
-        cfg = self.config
-        if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
+        w = self.config.merge_window_s
+        if -w <= t - tr.t_meas <= w and tr.n > 0 and cam not in tr.instant_cams:
             tr.snap = None
             # another camera at the same instant: one measurement, the mean (the sums in
             # locals: this runs for every object each further camera sees)
