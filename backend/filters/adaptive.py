@@ -30,7 +30,8 @@ the moving model (a three-model IMM's mixing would cost more than the model); on
 robot does not pay for it every step) and restarts from the moving model's state, which is what
 the mixing would do then. The moving model's q learns from its own innovations as before. Cost:
 2.8 -> 3.6 us per 2-D step, +9 to +12 us per world-model frame of 22 robots and a ball
-(bench/world_bench.py: about 103 us against Kalman's 94).
+(bench/world_bench.py: about 103 us against Kalman's 94 then; 83 against 56 since the revise
+below and the world model's cheaper merge, docs/experiments/filters/README.md).
 
 Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outside the gate. They
 are told apart by physics and by the data: a measurement farther than the object could have
@@ -46,6 +47,10 @@ several times faster than small matrices, and this runs for every object in ever
 The state is one list of floats, unpacked at the start of a step and replaced by a new list at
 its end: one bytecode instead of twenty attribute reads, and the list before the step is kept
 as it is, so ``revise`` (a second camera at the same instant) costs nothing until it is used.
+``revise`` is the correction itself (``update`` passes it its predictions: a call costs about a
+tenth of the correction) and, right after an accepted correction, does not restore the state
+before the step (the correction overwrites all of it; a rejected measurement restores it
+first): with eight cameras a robot is revised about five times per step.
 """
 
 from __future__ import annotations
