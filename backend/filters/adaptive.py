@@ -30,7 +30,8 @@ the moving model (a three-model IMM's mixing would cost more than the model); on
 robot does not pay for it every step) and restarts from the moving model's state, which is what
 the mixing would do then. The moving model's q learns from its own innovations as before. Cost:
 2.8 -> 3.6 us per 2-D step, +9 to +12 us per world-model frame of 22 robots and a ball
-(bench/world_bench.py: about 103 us against Kalman's 94).
+(bench/world_bench.py: about 103 us against Kalman's 94 then; 83 against 56 since the revise
+below and the world model's cheaper merge, docs/experiments/filters/README.md).
 
 Outliers and maneuvers (a kick, a bounce) both show up as a measurement far outside the gate. They
 are told apart by physics and by the data: a measurement farther than the object could have
@@ -46,6 +47,10 @@ several times faster than small matrices, and this runs for every object in ever
 The state is one list of floats, unpacked at the start of a step and replaced by a new list at
 its end: one bytecode instead of twenty attribute reads, and the list before the step is kept
 as it is, so ``revise`` (a second camera at the same instant) costs nothing until it is used.
+``revise`` is the correction itself (``update`` passes it its predictions: a call costs about a
+tenth of the correction) and, right after an accepted correction, does not restore the state
+before the step (the correction overwrites all of it; a rejected measurement restores it
+first): with eight cameras a robot is revised about five times per step.
 """
 
 from __future__ import annotations
@@ -102,6 +107,7 @@ class AdaptiveIMM:
         "_prev",
         "_pri",
         "_pri_h",
+        "_pure",
         "_vheld",
         "c_rest",
         "clutter",
@@ -184,6 +190,10 @@ class AdaptiveIMM:
         self._pri: tuple[Any, ...] | None = None  # the last step's predictions (revise)
         self._book: tuple[float, ...] | None = None  # the last measurement used, to learn from
         self._pri_h: tuple[float, ...] = ()  # _h when the predictions were made
+        #: the state is what the last correction made of the last step's predictions, nothing
+        #: else happened since (revise: the state before the step need not be restored unless
+        #: the measurement is rejected)
+        self._pure = False
 
     # -- state -------------------------------------------------------------------------------
 
@@ -221,6 +231,7 @@ class AdaptiveIMM:
         self.S = []
         self._prev = self._pend = self._far = self._backup = self._pri = self._book = None
         self._vheld = None
+        self._pure = False
         self._h = ()
 
     def _save(self) -> tuple[object, ...]:
@@ -245,24 +256,28 @@ class AdaptiveIMM:
 
     # -- the step ----------------------------------------------------------------------------
 
-    def revise(self, x: float, y: float) -> Vec:
+    def _redo(self, x: float, y: float) -> Vec:
+        """A revise without the last step's predictions (after a jump, or none yet): the
+        step again from the state before it."""
         self._vheld = None
-        pri = self._pri
-        if pri is not None and pri[0] == self.S[0]:  # the last step's predictions are good
-            # the state before the step, except what the step did before its predictions
-            # (it had learnt from its book)
-            self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
-            self._book, self._h = None, self._pri_h
-            return self._correct(pri, x, y)
         if self._prev is None or not self.S:
             return self.update(self.S[0] if self.S else 0.0, x, y)
         t = self.S[0]
         self._load(self._prev)  # (the step keeps it as it is)
         return self.update(t, x, y)
 
+    def _restore(self) -> None:
+        """The state before the last step, except what the step did before its predictions
+        (it had learnt from its book): what a revise corrects."""
+        self.S, _, self._pend, self._far, self._backup, _ = self._prev  # type: ignore
+        self._book, self._h = None, self._pri_h
+        self._vheld = None
+        self._pure = False
+
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
         self._vheld = None
+        self._pure = False
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
          gate2, clutter, rho_keep, q_c, switch_c) = self._k
         cache = self._backup is None  # (after a jump, revise takes the long way)
@@ -402,7 +417,7 @@ class AdaptiveIMM:
         k1 = bp * ism
         g = p0 * iss
         # the cruise model: constant velocity with a small fixed q, beside the moving one
-        # (not mixed with it: restarted from it, see _correct); lam < 0: it rests (ruled
+        # (not mixed with it: restarted from it, see revise); lam < 0: it rests (ruled
         # out by a maneuver: the moving model alone) until the time -lam
         if lam >= 0.0 or t >= -lam:
             if lam < 0.0:  # it wakes where the moving model is
@@ -433,11 +448,22 @@ class AdaptiveIMM:
                _sqrt(ism), cpri, lam)
         self._pri = pri if cache else None
         self._pri_h = self._h
-        return self._correct(pri, zx, zy)
+        return self.revise(zx, zy, pri)
 
-    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
-        """The measurement against both models' predictions ``pri`` (a step's second half,
-        all a ``revise`` has to redo)."""
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
+        """A second camera's measurement at the last step's instant instead of the last one:
+        the measurement against the step's predictions again. ``pri``: update's own
+        predictions (the step's second half: one function for both, since a call costs about
+        a tenth of the correction, and this runs for every object each camera sees)."""
+        if pri is None:
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:  # no predictions of this step
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
+            # (else the correction overwrites all the step changed after its predictions, and
+            # restores the state before the step itself if it rejects the measurement: a
+            # second camera's revise, the common case, costs the correction alone)
         (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
          cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w, cpri,
          lam) = pri
@@ -450,6 +476,8 @@ class AdaptiveIMM:
         vx = v1x + k1 * nmx
         vy = v1y + k1 * nmy
         if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
+            if self._pure:  # a revise (see there)
+                self._restore()
             if cpri is None:
                 return self._rejected(t, dt, zx, zy, [
                     t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
@@ -495,6 +523,7 @@ class AdaptiveIMM:
                 self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1,
                           ux, uy, ex, ey, cx, cy, cvx + kc1 * ncx, cvy + kc1 * ncy, ca1, cb1,
                           cc1, lam]
+                self._pure = True
                 return (ex, ey)
             lam = -(t + self.c_rest)
         w = 1.0 - mu
@@ -502,6 +531,7 @@ class AdaptiveIMM:
         ey = mu * sy + w * my
         self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
                   ex, ey, mx, my, vx, vy, ap1, bp1, cp1, lam]
+        self._pure = True
         return (ex, ey)
 
     def _after_jump(self, t: float, zx: float, zy: float) -> bool:
@@ -614,10 +644,11 @@ class AdaptiveIMM:
                     bk = self._save()
                     self._init(t, zx, zy, (vx, vy))
                     self._backup = bk  # three aligned outliers: the next measurement tells
+                    if len(pred) < 22:  # (1-D: the line is taken at once)
+                        return (zx, zy)
                     d = S[1] - t  # the line and the old track at its last measurement used
                     ovx, ovy = _velocity(S)
-                    if len(pred) > 21 and (
-                            (zx + vx * d - ex + ovx * (S[0] - S[1])) ** 2
+                    if ((zx + vx * d - ex + ovx * (S[0] - S[1])) ** 2
                             + (zy + vy * d - ey + ovy * (S[0] - S[1])) ** 2 > tol2):
                         # a line that does not start where the object was (false detections
                         # in a line, or a lost track): until the next measurement tells, the
@@ -669,6 +700,7 @@ class AdaptiveIMM:
         self.rejected -= 1  # (counted again if the redone step rejects it too)
         out = self.update(t, zx, zy)
         self._prev = prev
+        self._pure = False  # (a revise restores the state before the outer step)
         # from rest, one measurement a little outside the gate moves the estimate a few mm but
         # must not report its velocity (0.5 m/s from a 4.5-sigma noise sample, about one frame
         # in 10^4 at 2 mm: the game controller reads a ball "not steady", docs/tracker.md);
@@ -741,6 +773,7 @@ class AdaptiveIMM1D(AdaptiveIMM):
 
     def update(self, t: float, zx: float, zy: float) -> Vec:
         self._prev = (self.S, self._h, self._pend, self._far, self._backup, self._book)
+        self._pure = False
         (gap_s, q_rate, q_down, q_min, q_max, horizon, r_min, r_max, switch_sm, switch_ms, q_s,
          gate2, _, rho_keep, _, _) = self._k
         cache = self._backup is None
@@ -836,9 +869,15 @@ class AdaptiveIMM1D(AdaptiveIMM):
                _sqrt(ism))
         self._pri = pri if cache else None
         self._pri_h = self._h
-        return self._correct(pri, zx, 0.0)
+        return self.revise(zx, 0.0, pri)
 
-    def _correct(self, pri: tuple[Any, ...], zx: float, zy: float) -> Vec:
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
+        if pri is None:  # as in 2-D
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
         (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
          g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0
@@ -846,6 +885,8 @@ class AdaptiveIMM1D(AdaptiveIMM):
         d2s = ns * ns * iss
         d2m = nm * nm * ism
         if d2s > gs2 and d2m > gm2:
+            if self._pure:
+                self._restore()
             return self._rejected(t, dt, zx, 0.0, [
                 t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
                 cs * x0 + cm * xp, 0.0])
@@ -860,4 +901,5 @@ class AdaptiveIMM1D(AdaptiveIMM):
         ex = mu * sx + (1.0 - mu) * mx
         self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
                   cp1, ux, 0.0, ex, 0.0]
+        self._pure = True
         return (ex, 0.0)

@@ -29,6 +29,8 @@ from .params import (
 )
 
 Vec = tuple[float, float]
+#: (wrap_angle's constants, for the angle filter's step)
+_PI, _TAU = math.pi, 2.0 * math.pi
 
 
 def _median(vals: list[float]) -> float:
@@ -392,19 +394,24 @@ class AngleFilter:
     def _unwrap(self, ref: float | None, a: float) -> float:
         return a if ref is None else ref + wrap_angle(a - ref)
 
+    # update and revise run for every robot in every camera frame: wrap_angle and _unwrap are
+    # written out in them (the same arithmetic: a call costs more than the expression)
+
     def update(self, t_s: float, a: float) -> float:
-        t0 = self.inner.t_last
-        if t0 is not None and self._u is not None and self.inner.estimate() is None:
-            self._u = None
-        self._u_before = self._u
-        u = self._unwrap(self._u, a)
+        inner = self.inner
+        ref = self._u
+        if ref is not None and inner.estimate() is None and inner.t_last is not None:
+            ref = None  # the inner filter forgot the object: no unwrapping against it
+        self._u_before = ref
+        u = a if ref is None else ref + ((a - ref + _PI) % _TAU - _PI)
         self._u = u
-        return wrap_angle(self.inner.update(t_s, u, 0.0)[0])
+        return (inner.update(t_s, u, 0.0)[0] + _PI) % _TAU - _PI
 
     def revise(self, a: float) -> float:
-        u = self._unwrap(self._u_before, a)
+        ref = self._u_before
+        u = a if ref is None else ref + ((a - ref + _PI) % _TAU - _PI)
         self._u = u
-        return wrap_angle(self.inner.revise(u, 0.0)[0])
+        return (self.inner.revise(u, 0.0)[0] + _PI) % _TAU - _PI
 
     def estimate(self) -> float | None:
         e = self.inner.estimate()

@@ -39,7 +39,10 @@ class CameraPairs:
             return
         if cam_a > cam_b:
             cam_a, xa, ya, cam_b, xb, yb = cam_b, xb, yb, cam_a, xa, ya
-        self.pairs.setdefault((cam_a, cam_b), PairOffset()).add(xb - xa, yb - ya)
+        p = self.pairs.get((cam_a, cam_b))
+        if p is None:  # (not setdefault: it would build one per call, for every robot seen twice)
+            p = self.pairs[(cam_a, cam_b)] = PairOffset()
+        p.add(xb - xa, yb - ya)
 
     def view(self) -> list[dict[str, float | int]]:
         return [{"camera_a": a, "camera_b": b, "dx_mm": p.dx, "dy_mm": p.dy, "samples": p.n}

@@ -127,7 +127,9 @@ class _Track:
     instant_cams: set[int] = field(default_factory=set)
     cam_seen: dict[int, float] = field(default_factory=dict)
     history: deque[_Meas] = field(default_factory=deque)
-    raw_vel: VelocityFit = field(default_factory=lambda: VelocityFit(0.1, 16))
+    #: the velocity of the raw measurements (the ball's association reads it; robots have none:
+    #: nothing reads theirs, and it cost two calls per detection)
+    raw_vel: VelocityFit | None = None
     #: the robot's state as the last snapshot built it, while it holds (no measurement or
     #: filter change since, and not predicted): eight cameras see a robot in few frames
     snap: RobotState | None = None
@@ -181,7 +183,8 @@ class WorldModel:
         params = self._settings.params_for(kind)
         ang = AngleFilter(make_filter(kind, params, angle=True)) if with_angle else None
         return _Track(kind, (kind, params), make_filter(kind, params), ang,
-                      history=deque(maxlen=self.config.history))
+                      history=deque(maxlen=self.config.history),
+                      raw_vel=None if with_angle else VelocityFit(0.1, 16))
 
     def configure(self, settings: FilterSettings) -> None:
         """Use new filter settings from now on. An object whose filter kind or parameters
@@ -209,33 +212,39 @@ class WorldModel:
 
     def _measure(self, tr: _Track, t: float, cam: int, x: float, y: float, o: float) -> bool:
         """Feed one detection; False if it was ignored (older than the latest instant)."""
-        cfg = self.config
-        if abs(t - tr.t_meas) <= cfg.merge_window_s and tr.n > 0 and cam not in tr.instant_cams:
+        w = self.config.merge_window_s
+        if -w <= t - tr.t_meas <= w and tr.n > 0 and cam not in tr.instant_cams:
             tr.snap = None
-            # another camera at the same instant: one measurement, the mean
-            pair = tr.n == 1 and tr.ang is not None  # a robot seen by a second camera: compare
+            # another camera at the same instant: one measurement, the mean (the sums in
+            # locals: this runs for every object each further camera sees)
+            n, ang, sx, sy = tr.n, tr.ang, tr.sx, tr.sy
+            pair = n == 1 and ang is not None  # a robot seen by a second camera: compare
             if pair:
                 (first,) = tr.instant_cams
-                fx, fy = tr.sx, tr.sy
+                fx, fy = sx, sy
             tr.instant_cams.add(cam)
-            tr.n += 1
-            tr.sx += x
-            tr.sy += y
-            tr.ss += math.sin(o)
-            tr.sc += math.cos(o)
-            mx, my = tr.sx / tr.n, tr.sy / tr.n
-            mo = math.atan2(tr.ss, tr.sc)
-            tr.pos.revise(mx, my)
+            n += 1
+            sx += x
+            sy += y
+            ss = tr.ss + math.sin(o)
+            sc = tr.sc + math.cos(o)
+            tr.n, tr.sx, tr.sy, tr.ss, tr.sc = n, sx, sy, ss, sc
+            mx, my = sx / n, sy / n
+            mo = math.atan2(ss, sc)
+            pos = tr.pos
+            pos.revise(mx, my)
             if pair:  # the speed of the merged measurement (the first camera's alone may
                 # have looked like a jump to the filter)
-                vx, vy = tr.pos.velocity()
+                vx, vy = pos.velocity()
                 self.camera_pairs.add(first, fx, fy, cam, x, y, math.hypot(vx, vy))
-            if tr.ang is not None:
-                tr.ang.revise(mo)
-            tr.raw = _Meas(tr.raw.t, mx, my, mo)
-            if tr.history:
-                tr.history[-1] = tr.raw
-            tr.raw_vel.replace_last(mx, my)
+            if ang is not None:
+                ang.revise(mo)
+            # the instant's measurement (also the history's last: changed in place, not
+            # rebuilt)
+            raw = tr.raw
+            raw.x, raw.y, raw.o = mx, my, mo
+            if tr.raw_vel is not None:
+                tr.raw_vel.replace_last(mx, my)
             tr.cam_seen[cam] = t
             return True
         if t <= tr.t_meas:
@@ -250,7 +259,8 @@ class WorldModel:
             tr.ang.update(t, o)
         tr.raw = _Meas(t, x, y, o)
         tr.history.append(tr.raw)
-        tr.raw_vel.add(t, x, y)
+        if tr.raw_vel is not None:
+            tr.raw_vel.add(t, x, y)
         tr.cam_seen[cam] = t
         return True
 
@@ -394,7 +404,7 @@ class WorldModel:
             if not flying and self.kicks.kick is not None:
                 gate += cfg.ball_camera_disparity_mm  # perhaps rising, not yet recognised
         else:
-            vx, vy = bt.raw_vel.velocity()
+            vx, vy = bt.raw_vel.velocity() if bt.raw_vel is not None else (0.0, 0.0)
             ref = (bt.raw.x + vx * dt, bt.raw.y + vy * dt)
             gate = self._gate(dt) if dt <= cfg.ball_assoc_window_s else -1.0
         best_i, best_d2 = -1, gate * gate if gate >= 0 else -1.0

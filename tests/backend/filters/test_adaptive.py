@@ -293,3 +293,19 @@ def test_the_orientation_filter_takes_a_sample_just_outside_its_gate_from_rest()
             x = 0.5 + rng.gauss(0.0, 0.01) + (0.055 if i == 900 else 0.0)
             f.update(i / 60.0, x, 0.0)
         assert abs(f.estimate_fast()[0] - 0.5) < 0.01
+
+
+def test_the_orientation_filter_takes_three_aligned_far_headings() -> None:
+    """Three rejected headings on one line re-acquire the track; the 1-D state has no cruise
+    model, and the check whether the line starts where the object was read it (IndexError:
+    the world model lost the frame)."""
+    rng = random.Random(1)
+    f = AdaptiveIMM1D()
+    for i in range(60):
+        f.update(i / 60.0, 0.5 + rng.gauss(0.0, 0.01), 0.0)
+    for k in range(3):  # 1.5 rad away: farther than the top rate allows in a frame
+        f.update((60 + k) / 60.0, 2.0 + 0.1 * k, 0.0)
+    assert f.estimate_fast()[0] == 2.2
+    f.update(63 / 60.0, 2.3, 0.0)
+    assert abs(f.estimate_fast()[0] - 2.3) < 0.01
+    assert abs(f.velocity()[0] - 6.0) < 0.5
