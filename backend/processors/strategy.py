@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import asyncio
+import os
+import pickle
 import time
 from collections.abc import Callable
+from typing import BinaryIO
 
 import numpy as np
 
@@ -26,6 +29,10 @@ DRIBBLER_RPM = 3000.0
 #: a robot's word on ball contact counts for this long after its answer (the simulation
 #: protocol answers every command; grSim's status comes at its own rate)
 CONTACT_MAX_AGE_S = 0.2
+#: ``TOUCHLINE_STRATEGY_RECORD=FILE`` (bench/strategy_replay.py): each tick's strategy input
+#: is pickled to FILE, so the strategy's cost at full scale can be replayed and profiled
+#: offline on the inputs of a real game (``{team}`` in FILE: our team, for two backends)
+RECORD_ENV = "TOUCHLINE_STRATEGY_RECORD"
 
 
 class StrategyProcessor(Processor):
@@ -58,6 +65,7 @@ class StrategyProcessor(Processor):
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
+        self._record: BinaryIO | None = None
 
     def ball_contact(self, team: Team, rid: int) -> bool:
         """The robot reports the ball at its dribbler (False when it reports nothing)."""
@@ -83,6 +91,9 @@ class StrategyProcessor(Processor):
         self.side_from_referee = t.side_from_referee
         self.params = params.strategy
         self.set_rate(params.processors.strategy_hz)
+        rec = os.environ.get(RECORD_ENV)
+        if rec and self._record is None:
+            self._record = open(rec.replace("{team}", self.our_team), "wb")  # noqa: SIM115
 
     async def tick(self) -> None:
         for op in self.operator.read_new():
@@ -101,6 +112,9 @@ class StrategyProcessor(Processor):
                                      self.params, self.our_team, self.our_side_negative,
                                      self.side_from_referee, now, self.contacts(self.our_team))
             keeper = await self._engine_keeper(prep)
+            if self._record is not None:
+                pickle.dump((prep, keeper), self._record)
+                self._record.flush()
             team = self.our_team
             # roles and paths in a worker thread: a slow decision never holds up a control
             # tick on the station loop (control goes on with the previous targets meanwhile)

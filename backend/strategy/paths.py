@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple
 
@@ -67,7 +68,9 @@ __all__ = [
     "nearest_free_point",
     "plan_path",
     "point_is_free",
+    "recheck_path",
     "segment_is_free",
+    "straight_is_clear",
 ]
 
 Array = NDArray[np.float64]
@@ -600,8 +603,12 @@ def _tangent_ok(ux: Array, uy: Array, vx: Array, vy: Array, graph: _Graph,
     return np.asarray((s1 * s2 >= -1e-9 * scale) | inside | graph.always[vi])
 
 
+class _OverBudget(Exception):
+    """``_astar`` expanded more nodes than its budget allows."""
+
+
 def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
-           prune: bool) -> list[Array] | None:
+           prune: bool, budget: int | None = None) -> list[Array] | None:
     """Shortest path s -> g (excluding s) of length <= ``limit`` through the graph's nodes,
     in the lazily built visibility graph; None when there is none that short.
 
@@ -613,7 +620,8 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
     search stops when the smallest f left is no better than the goal's cost, so the result
     is the exact shortest path in the graph. An edge is tested only when it improves its end
     node and could still lead to a path under the bound; with ``prune`` also only when it
-    passes ``_tangent_ok``."""
+    passes ``_tangent_ok``. With a ``budget`` it raises ``_OverBudget`` after that many
+    expansions."""
     cx, cy = graph.xy[:, 0], graph.xy[:, 1]
     near = np.hypot(cx - s[0], cy - s[1]) + np.hypot(cx - g[0], cy - g[1]) <= limit
     ends = _Graph(np.vstack([s, g]), np.zeros((2, 2)), np.zeros((2, 2)),
@@ -641,6 +649,10 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
                 expanded_at[u] = bu
         if not batch:
             break
+        if budget is not None:
+            budget -= len(batch)
+            if budget < 0:
+                raise _OverBudget
         ub = np.asarray(batch, dtype=np.int64)
         ux, uy = x[ub][:, None], y[ub][:, None]
         new = best[ub][:, None] + np.hypot(x - ux, y - uy)  # (B, V)
@@ -681,6 +693,22 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
 #: units of the largest inflated circle's circumference, and the growth factor
 CORRIDOR_FIRST = 1.0
 CORRIDOR_GROWTH = 2.5
+#: node expansions of the search back from the goal before the unbounded search (see
+#: ``_enclosed``)
+POCKET_BUDGET = 2 * EXPAND_BATCH
+
+
+def _enclosed(inf: _Inflated, s: Array, g: Array, graph: _Graph) -> bool:
+    """The goal sits in a small pocket the start cannot reach (e.g. a goal moved to the nearest
+    free point between two robots and a defence area): the search back from the goal runs
+    out of nodes within ``POCKET_BUDGET`` expansions without meeting the start. The graph's
+    edges are the same both ways, so then there is no path at all, and the unbounded search
+    from the start, which would visit every node on the field twice (pruned, then not), is
+    not needed."""
+    try:
+        return _astar(inf, g, s, graph, math.inf, False, POCKET_BUDGET) is None
+    except _OverBudget:
+        return False
 
 
 def _shortest(inf: _Inflated, s: Array, g: Array, prune: bool = True) -> list[Array] | None:
@@ -711,6 +739,8 @@ def _shortest(inf: _Inflated, s: Array, g: Array, prune: bool = True) -> list[Ar
             used = take
             graph = _graph_nodes(inf, s, g, np.nonzero(take[:k])[0], np.nonzero(take[k:])[0])
         assert graph is not None
+        if math.isinf(limit) and _enclosed(inf, s, g, graph):
+            return None
         chain = _astar(inf, s, g, graph, limit, prune)
         if chain is not None or math.isinf(limit):
             break
@@ -760,6 +790,15 @@ def _straight_is_clear(s: Array, g: Array, obstacles: Obstacles, clearance: floa
     return True
 
 
+def straight_is_clear(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles,
+                      clearance: float, bounds: Bounds | None = None) -> bool:
+    """The straight drive start -> goal is free and in bounds (``obstacles.bounds`` when
+    None): ``plan_path`` would answer the goal itself, without any search."""
+    box = _check_bounds(bounds) if bounds is not None else obstacles.bounds
+    return _straight_is_clear(_point(start, "start"), _point(goal, "goal"), obstacles,
+                              clearance, box)
+
+
 def plan_path(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles, clearance: float, *,
               bounds: Bounds | None = None, max_waypoints: int = 8) -> PlannedPath:
     """A collision-free polyline from ``start`` to ``goal`` (mm) around ``obstacles`` grown by
@@ -803,6 +842,30 @@ def plan_path(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles, clearance
         return _finish(s0, pts, max_waypoints, goal_moved, start_escape, True)
     pts += chain
     return _finish(s0, pts, max_waypoints, goal_moved, start_escape, False)
+
+
+def recheck_path(start: ArrayLike, points: Sequence[Point], obstacles: Obstacles,
+                 clearance: float, *, bounds: Bounds | None = None) -> tuple[Point, ...] | None:
+    """A path planned earlier, still good from ``start`` among these obstacles: ``points``
+    from the farthest waypoint that ``start`` sees directly on (the waypoints the robot has
+    passed dropped), when that waypoint and every later one and segment are free; else None
+    (plan again). Two vectorised tests instead of a search: the cheap way to keep a detour
+    while the robot drives it."""
+    s = _point(start, "start")
+    if not points:
+        return None
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    inf = _Inflated(obstacles, clearance, bounds)
+    free = inf.points_free(np.vstack([s[None, :], pts]))
+    if not free.all():
+        return None
+    if len(pts) > 1 and inf.segments_blocked(pts[:-1, 0], pts[:-1, 1],
+                                              pts[1:, 0], pts[1:, 1]).any():
+        return None
+    seen = np.nonzero(~inf.blocked_from(s, pts))[0]
+    if not len(seen):
+        return None
+    return tuple((float(x), float(y)) for x, y in pts[int(seen[-1]):])
 
 
 def _finish(s0: Array, pts: list[Array], max_waypoints: int, goal_moved: bool,
