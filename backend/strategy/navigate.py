@@ -18,7 +18,14 @@ import numpy as np
 from domain.field import Field
 
 from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Intent, Move, own_defense, their_defense
-from .paths import Obstacles, PlannedPath, plan_path, recheck_path, straight_is_clear
+from .paths import (
+    Obstacles,
+    PlannedPath,
+    plan_path,
+    recheck_path,
+    straight_clear_of_circles,
+    straight_clear_of_rest,
+)
 
 R = ROBOT_RADIUS_MM
 
@@ -143,9 +150,21 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
               fs.half_length + 150.0, fs.half_width + 150.0)
     out: dict[int, Move] = {}
     searched: set[int] = set()
-    for idx, (kind, bot) in enumerate(everyone):
-        if kind != "o" or bot.id not in intents:
-            continue
+    mine = [idx for idx, (kind, bot) in enumerate(everyone)
+            if kind == "o" and bot.id in intents]
+    clear: dict[int, bool] = {}
+    if memory is not None and mine:
+        # the straight test against the robots and the corridor for all our robots in one
+        # numpy pass (each robot's own ball disc, areas and bounds follow in plain floats)
+        common = np.vstack([all_circles, np.array(extra_circles).reshape(-1, 3)])
+        ends = np.array([[everyone[i][1].x, everyone[i][1].y,
+                          intents[everyone[i][1].id].x, intents[everyone[i][1].id].y]
+                         for i in mine], dtype=np.float64)
+        ok = straight_clear_of_circles(ends[:, :2], ends[:, 2:], common, R,
+                                       np.asarray(mine, dtype=np.int64))
+        clear = dict(zip(mine, ok.tolist(), strict=True))
+    for idx in mine:
+        bot = everyone[idx][1]
         it = intents[bot.id]
         goal = (it.x, it.y)
         rects = ([] if it.their_defense_ok else [their_def]) \
@@ -154,11 +173,14 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         if not plan and any(_inside(goal, r, 0.0) for r in rects):
             plan = True  # a straight drive would end in a forbidden area: plan instead
         blocked = False
-        if plan:
+        ball_disc = [[ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)]] \
+            if it.avoid_ball_mm > 0.0 and ball is not None else []
+        if plan and clear.get(idx) and math.isfinite(goal[0]) and math.isfinite(goal[1]) \
+                and straight_clear_of_rest(bot.xy, goal, ball_disc, rects, R, bounds):
+            pts = (goal,)  # the common case: nothing to plan, nothing to remember
+        elif plan:
             circles = np.delete(all_circles, idx, axis=0)
-            extra = list(extra_circles)
-            if it.avoid_ball_mm > 0.0 and ball is not None:
-                extra.append([ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)])
+            extra = extra_circles + ball_disc
             if extra:
                 circles = np.vstack([circles, np.array(extra, dtype=np.float64)])
             obstacles = Obstacles(circles=circles,
@@ -167,8 +189,6 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
                 res = plan_path(bot.xy, goal, obstacles, R, bounds=bounds)
                 pts = tuple(res.points) if res.points else (goal,)
                 blocked = res.blocked
-            elif straight_is_clear(bot.xy, goal, obstacles, R, bounds):
-                pts = (goal,)  # the common case: one cheap test, nothing to remember
             else:
                 pts, blocked = memory.path(bot.id, bot.xy, goal, obstacles, bounds, now)
                 searched.add(bot.id)

@@ -27,6 +27,8 @@ from backend.strategy.paths import (
     point_is_free,
     recheck_path,
     segment_is_free,
+    straight_clear_of_circles,
+    straight_clear_of_rest,
     straight_is_clear,
 )
 from domain.field import DIVISION_A, DIVISION_B
@@ -583,3 +585,31 @@ def test_straight_is_clear_is_plan_paths_first_answer() -> None:
     assert straight_is_clear((-1500.0, 1000.0), (1500.0, 1000.0), obs, 90.0)
     assert not straight_is_clear((-1500.0, 0.0), (1500.0, 0.0), obs, 90.0)
     assert not straight_is_clear((-1500.0, 1000.0), (3500.0, 1000.0), obs, 90.0)
+
+
+@given(scenes(), st.lists(st.tuples(pt, pt), min_size=1, max_size=6), st.data())
+@settings(max_examples=200, deadline=None)
+def test_straight_tests_for_many_robots_agree_with_plan_paths(
+        scene: tuple[Obstacles, float], segs: list[tuple[tuple[float, float], ...]],
+        data: st.DataObject) -> None:
+    """navigate's one-pass straight test (circles for all robots, then each robot's own
+    discs, areas and bounds) answers as plan_path's straight case, with a circle left out
+    per robot (the robot itself) and some circles given as the robot's own."""
+    obs, clearance = scene
+    k = len(obs.circles)
+    skip = np.array([data.draw(st.integers(-1, k - 1), "skip") for _ in segs], dtype=np.int64)
+    split = data.draw(st.integers(0, k), "own circles from")
+    starts = np.array([s for s, _ in segs], dtype=np.float64).reshape(-1, 2)
+    goals = np.array([g for _, g in segs], dtype=np.float64).reshape(-1, 2)
+    common = obs.circles[:split]
+    skip = np.where(skip < split, skip, -1)
+    ok = straight_clear_of_circles(starts, goals, common, clearance, skip)
+    for i, (s, g) in enumerate(segs):
+        keep = np.ones(k, dtype=bool)
+        if skip[i] >= 0:
+            keep[skip[i]] = False
+        ref = straight_is_clear(s, g, Obstacles(obs.circles[keep], obs.rects, obs.bounds),
+                                clearance)
+        got = bool(ok[i]) and straight_clear_of_rest(
+            s, g, obs.circles[split:].tolist(), obs.rects.tolist(), clearance, obs.bounds)
+        assert got == ref
