@@ -112,6 +112,10 @@ def _rect_grow(r: tuple[float, float, float, float], g: float) -> list[float]:
     return [r[0] - g, r[1] - g, r[2] + g, r[3] + g]
 
 
+def _finite(*v: float) -> bool:
+    return all(math.isfinite(x) for x in v)
+
+
 def _inside(p: tuple[float, float], r: Sequence[float], g: float) -> bool:
     return r[0] - g <= p[0] <= r[2] + g and r[1] - g <= p[1] <= r[3] + g
 
@@ -175,9 +179,11 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         blocked = False
         ball_disc = [[ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)]] \
             if it.avoid_ball_mm > 0.0 and ball is not None else []
-        if plan and clear.get(idx) and math.isfinite(goal[0]) and math.isfinite(goal[1]) \
+        if plan and clear.get(idx) and _finite(goal[0], goal[1], bot.x, bot.y) \
                 and straight_clear_of_rest(bot.xy, goal, ball_disc, rects, R, bounds):
-            pts = (goal,)  # the common case: nothing to plan, nothing to remember
+            # the common case: nothing to plan, nothing to remember (a value that is not
+            # finite goes to plan_path, which refuses it as before)
+            pts = (goal,)
         elif plan:
             circles = np.delete(all_circles, idx, axis=0)
             extra = extra_circles + ball_disc
