@@ -177,6 +177,7 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         if not plan and any(_inside(goal, r, 0.0) for r in rects):
             plan = True  # a straight drive would end in a forbidden area: plan instead
         blocked = False
+        pts: tuple[tuple[float, float], ...]
         ball_disc = [[ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)]] \
             if it.avoid_ball_mm > 0.0 and ball is not None else []
         if plan and clear.get(idx) and _finite(goal[0], goal[1], bot.x, bot.y) \
