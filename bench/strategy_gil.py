@@ -7,7 +7,8 @@ station pass's worth of Python work, and records how long after the send the pas
 Meanwhile a worker thread runs the strategy over a recording (bench/strategy_replay.py) at
 20 Hz, as the StrategyProcessor does. Rows: no strategy (the floor), then the strategy with
 Python's default switch interval (5 ms) and with the station's (0.5 ms,
-backend/station_loop.py), with and without path reuse.
+backend/station_loop.py), with and without path reuse, and with the pause between two
+robots that the StrategyProcessor gives the strategy (sleep(0): the GIL released).
 
 Wall-clock figures: on a shared machine read the rows against each other, not alone.
 
@@ -30,6 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from backend.processors.strategy import _let_station_run
 from backend.strategy.core import StrategyCore
 from bench.strategy_replay import DEFAULT, load
 
@@ -57,17 +59,22 @@ def station_pass(work: np.ndarray) -> float:
     return acc
 
 
-def strategy(ticks: list[Any], reuse: bool, stop: threading.Event, done: list[float]) -> None:
-    core = StrategyCore()
-    core.reuse_paths = reuse
+def strategy(ticks: list[Any], reuse: bool, pause: bool, stop: threading.Event,
+             done: list[float]) -> None:
+    def fresh() -> StrategyCore:
+        core = StrategyCore()
+        core.reuse_paths = reuse
+        core.pause = _let_station_run if pause else None
+        return core
+
+    core = fresh()
     k = 0
     c0 = time.thread_time()
     while not stop.is_set():
         t = time.monotonic()
         prep, keeper = ticks[k % len(ticks)]
         if k and k % len(ticks) == 0:
-            core = StrategyCore()  # the recording starts over: no stale plans
-            core.reuse_paths = reuse
+            core = fresh()  # the recording starts over: no stale plans
         core.decide(prep, keeper)
         k += 1
         rest = 0.05 - (time.monotonic() - t)
@@ -76,7 +83,7 @@ def strategy(ticks: list[Any], reuse: bool, stop: threading.Event, done: list[fl
     done.append(time.thread_time() - c0)
 
 
-def run(ticks: list[Any] | None, reuse: bool, interval: float, seconds: float,
+def run(ticks: list[Any] | None, reuse: bool, pause: bool, interval: float, seconds: float,
         hz: float) -> tuple[np.ndarray, float]:
     sys.setswitchinterval(interval)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -86,7 +93,8 @@ def run(ticks: list[Any] | None, reuse: bool, interval: float, seconds: float,
     cpu: list[float] = []
     worker = None
     if ticks is not None:
-        worker = threading.Thread(target=strategy, args=(ticks, reuse, stop, cpu), daemon=True)
+        worker = threading.Thread(target=strategy, args=(ticks, reuse, pause, stop, cpu),
+                                  daemon=True)
         worker.start()
     sender = subprocess.Popen([sys.executable, "-c", SENDER, str(port), str(hz), str(seconds)])
     work = np.random.default_rng(1).random((60, 8))
@@ -116,15 +124,15 @@ def main() -> None:
     ap.add_argument("--hz", type=float, default=600.0)
     a = ap.parse_args()
     ticks = load(a.inp)
-    rows = [("no strategy", None, True, 0.0005),
-            ("reuse off, 5 ms", ticks, False, 0.005),
-            ("reuse off, 0.5 ms", ticks, False, 0.0005),
-            ("reuse on, 5 ms", ticks, True, 0.005),
-            ("reuse on, 0.5 ms", ticks, True, 0.0005)]
+    rows = [("no strategy", None, True, False, 0.0005),
+            ("reuse off, 5 ms", ticks, False, False, 0.005),
+            ("reuse off, 0.5 ms", ticks, False, False, 0.0005),
+            ("reuse on, 0.5 ms", ticks, True, False, 0.0005),
+            ("reuse on, 0.5 ms, pause", ticks, True, True, 0.0005)]
     print(f"{'strategy, switch interval':>26} {'p50 ms':>7} {'p99 ms':>7} {'p99.9':>7} "
           f"{'max':>7} {'strategy CPU %':>15}")
-    for name, tk, reuse, interval in rows:
-        d, cpu = run(tk, reuse, interval, a.seconds, a.hz)
+    for name, tk, reuse, pause, interval in rows:
+        d, cpu = run(tk, reuse, pause, interval, a.seconds, a.hz)
         print(f"{name:>26} {np.median(d):7.3f} {np.percentile(d, 99):7.3f} "
               f"{np.percentile(d, 99.9):7.3f} {d.max():7.2f} {cpu:15.1f}")
 

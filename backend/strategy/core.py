@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -61,6 +61,8 @@ class StrategyCore:
         #: every tick, as bench/strategy_replay.py --compare does)
         self.paths = PathMemory()
         self.reuse_paths = True
+        #: called between two robots' navigation (see ``StrategyProcessor``); None: never
+        self.pause: Callable[[], None] | None = None
 
     def prepare(self, world: WorldState, geometry: dict[str, float] | None,
                 referee: RefereeState | None, params: StrategyParams, our_team: Team,
@@ -158,6 +160,6 @@ class StrategyCore:
             their_margin = max(self.defense_margin_mm, STOPPED_DEFENSE_MARGIN_MM)
         moves = navigate(intents, inp.ours, inp.theirs, inp.ball, inp.fs, prep.frame,
                          self.robot_margin_mm, self.defense_margin_mm, corridor, their_margin,
-                         self.paths if self.reuse_paths else None, inp.t)
+                         self.paths if self.reuse_paths else None, inp.t, self.pause)
         self.last_tick_ms = (time.perf_counter() - t0) * 1000.0
         return moves

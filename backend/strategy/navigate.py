@@ -11,7 +11,7 @@ radius, so the planned centre line keeps the robot's body clear.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -126,6 +126,7 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
              corridor: tuple[tuple[float, float], tuple[float, float], float] | None = None,
              their_defense_margin_mm: float | None = None,
              memory: PathMemory | None = None, now: float = 0.0,
+             pause: Callable[[], None] | None = None,
              ) -> dict[int, Move]:
     """Paths for every intent, returned as moves in the field frame.
 
@@ -133,7 +134,8 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
     ``their_defense_margin_mm``: how far the robots' bodies keep from the opponents' defence
     area (default ``defense_margin_mm``; the rules ask 0.2 m while the game is stopped).
     ``memory``: the robots' earlier searches, reused when they still hold (``now``: the
-    tick's time, s); without it every robot plans afresh.
+    tick's time, s); without it every robot plans afresh. ``pause``: called between two
+    robots (the processor lets the station thread have the GIL there).
     """
     everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
     all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
@@ -167,7 +169,9 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         ok = straight_clear_of_circles(ends[:, :2], ends[:, 2:], common, R,
                                        np.asarray(mine, dtype=np.int64))
         clear = dict(zip(mine, ok.tolist(), strict=True))
-    for idx in mine:
+    for n, idx in enumerate(mine):
+        if pause is not None and n:
+            pause()
         bot = everyone[idx][1]
         it = intents[bot.id]
         goal = (it.x, it.y)

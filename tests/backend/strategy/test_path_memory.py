@@ -102,3 +102,13 @@ def test_straight_drives_are_not_remembered() -> None:
     assert drive(mem, other=Bot(7, 0.0, 2000.0, 0.0), now=0.05) == ((GOAL.x, GOAL.y),)
     assert not mem.plans
     assert mem.searches == 1
+
+
+def test_the_pause_comes_between_two_robots() -> None:
+    """The processor's pause (the GIL handed to the station thread) runs between robots."""
+    calls: list[int] = []
+    ours = [Bot(k, -2000.0, 500.0 * k, 0.0) for k in range(4)]
+    intents = {b.id: Intent("supporter", 2000.0, b.y, None) for b in ours}
+    moves = navigate(intents, ours, [], None, FS, Frame(1), 60.0, 120.0, memory=PathMemory(),
+                     pause=lambda: calls.append(len(calls)))
+    assert len(moves) == 4 and len(calls) == 3
