@@ -32,6 +32,7 @@ from typing import Any
 import httpx
 
 from launcher.supervisor import Ports
+from sslnet.proc import thread_cpu_s
 
 ROOT = Path(__file__).resolve().parent.parent
 TICKS = os.sysconf("SC_CLK_TCK")
@@ -85,17 +86,11 @@ def floor(a: argparse.Namespace) -> dict[str, Any]:
     return {**cpu, "p50_ms": lat["p50_ms"], "p99_ms": lat["p99_ms"]}
 
 
-def thread_cpu_s(pid: int) -> dict[str, float]:
+def thread_cpu_by_name(pid: int) -> dict[str, float]:
     """CPU seconds of each thread of ``pid`` by thread name (threads of one name summed)."""
     out: dict[str, float] = {}
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        try:
-            stat = (task / "stat").read_text()
-        except OSError:  # the thread ended meanwhile
-            continue
-        name = stat[stat.index("(") + 1:stat.rindex(")")]
-        fields = stat.rsplit(")", 1)[1].split()
-        out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / TICKS
+    for (name, _tid), seconds in thread_cpu_s(pid).items():
+        out[name] = out.get(name, 0.0) + seconds
     return out
 
 
@@ -132,7 +127,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
         p50s: list[float] = []
         p99s: list[float] = []
         c0 = {k: cpu_s(v) for k, v in pids.items()}
-        th0 = thread_cpu_s(pids["backend"])
+        th0 = thread_cpu_by_name(pids["backend"])
         t0 = time.monotonic()
         while time.monotonic() - t0 < a.seconds:
             time.sleep(1.0)
@@ -141,7 +136,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
                 p50s.append(r["command_latency_p50_ms"])
                 p99s.append(r["command_latency_p99_ms"])
         dt = time.monotonic() - t0
-        th1 = thread_cpu_s(pids["backend"])
+        th1 = thread_cpu_by_name(pids["backend"])
         threads = {k: (v - th0.get(k, 0.0)) / dt * 100 for k, v in th1.items()}
         cpu = {("sim" if k == "fieldsim" else k): (cpu_s(v) - c0[k]) / dt * 100
                for k, v in pids.items()}

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import time
@@ -23,22 +22,14 @@ from pathlib import Path
 
 import httpx
 
+from sslnet.proc import thread_cpu_s
+
 ROOT = Path(__file__).resolve().parent.parent
-TICKS = os.sysconf("SC_CLK_TCK")
 
 
 def threads(pid: int) -> dict[str, float]:
     """CPU seconds per thread of ``pid``, keyed "name/tid" (a thread that ended is left out)."""
-    out: dict[str, float] = {}
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        try:
-            text = (task / "stat").read_text()
-        except OSError:
-            continue
-        name = text[text.index("(") + 1:text.rindex(")")]
-        fields = text.rsplit(")", 1)[1].split()
-        out[f"{name}/{task.name}"] = (int(fields[11]) + int(fields[12])) / TICKS
-    return out
+    return {f"{name}/{tid}": sec for (name, tid), sec in thread_cpu_s(pid).items()}
 
 
 def counts(client: httpx.Client, url: str) -> tuple[int, int]:

@@ -34,3 +34,25 @@ def rss_mb() -> float:
             return int(f.read().split()[1]) * _PAGE / 2**20
     except (OSError, ValueError, IndexError):
         return 0.0
+
+
+def thread_cpu_s(pid: int) -> dict[tuple[str, int], float]:
+    """CPU seconds (user + system) of each thread of process ``pid`` so far, keyed by the
+    thread's OS name and id, from /proc (benches read two of these over an interval; a thread
+    that ends meanwhile is left out)."""
+    ticks = os.sysconf("SC_CLK_TCK")
+    out: dict[tuple[str, int], float] = {}
+    try:
+        tasks = list(os.scandir(f"/proc/{pid}/task"))
+    except OSError:
+        return out
+    for task in tasks:
+        try:
+            with open(os.path.join(task.path, "stat")) as f:
+                stat = f.read()
+        except OSError:
+            continue
+        name = stat[stat.index("(") + 1:stat.rindex(")")]
+        fields = stat.rsplit(")", 1)[1].split()
+        out[(name, int(task.name))] = (int(fields[11]) + int(fields[12])) / ticks
+    return out

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import asyncio
+import os
+import pickle
 import time
 from collections.abc import Callable
+from typing import BinaryIO
 
 import numpy as np
 
@@ -26,6 +29,14 @@ DRIBBLER_RPM = 3000.0
 #: a robot's word on ball contact counts for this long after its answer (the simulation
 #: protocol answers every command; grSim's status comes at its own rate)
 CONTACT_MAX_AGE_S = 0.2
+#: ``TOUCHLINE_STRATEGY_RECORD=FILE`` (bench/strategy_replay.py): each tick's strategy input
+#: is pickled to FILE, so the strategy's cost at full scale can be replayed and profiled
+#: offline on the inputs of a real game (``{team}`` in FILE: our team, for two backends)
+RECORD_ENV = "TOUCHLINE_STRATEGY_RECORD"
+
+
+def _let_station_run() -> None:
+    time.sleep(0)
 
 
 class StrategyProcessor(Processor):
@@ -50,6 +61,12 @@ class StrategyProcessor(Processor):
         self.side_from_referee = True
         self.params = params or StrategyParams()
         self.core = StrategyCore()
+        # decide runs in a worker thread beside the station thread, and both need the GIL:
+        # between two robots' paths the worker gives it up (sleep(0) releases it and lets
+        # the OS run the station thread), so a station pass waits for one robot's planning
+        # at most instead of the whole tick's share of it (bench/strategy_gil.py: the
+        # station's p99 delay 2.2-2.6 -> 0.9-1.0 ms beside a busy strategy)
+        self.core.pause = _let_station_run
         self.referee_source: Callable[[], RefereeState | None] = self.referee.latest_value
         self.operator_targets: dict[tuple[Team, int], Target] = {}
         self.engine: PoolEngine | None = None
@@ -58,6 +75,7 @@ class StrategyProcessor(Processor):
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
+        self._record: BinaryIO | None = None
 
     def ball_contact(self, team: Team, rid: int) -> bool:
         """The robot reports the ball at its dribbler (False when it reports nothing)."""
@@ -83,6 +101,9 @@ class StrategyProcessor(Processor):
         self.side_from_referee = t.side_from_referee
         self.params = params.strategy
         self.set_rate(params.processors.strategy_hz)
+        rec = os.environ.get(RECORD_ENV)
+        if rec and self._record is None:
+            self._record = open(rec.replace("{team}", self.our_team), "wb")  # noqa: SIM115
 
     async def tick(self) -> None:
         for op in self.operator.read_new():
@@ -101,6 +122,9 @@ class StrategyProcessor(Processor):
                                      self.params, self.our_team, self.our_side_negative,
                                      self.side_from_referee, now, self.contacts(self.our_team))
             keeper = await self._engine_keeper(prep)
+            if self._record is not None:
+                pickle.dump((prep, keeper), self._record)
+                self._record.flush()
             team = self.our_team
             # roles and paths in a worker thread: a slow decision never holds up a control
             # tick on the station loop (control goes on with the previous targets meanwhile)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -26,7 +26,7 @@ from ..params.model import StrategyParams
 from ..world.referee import RefereeState
 from ..world.state import Team, WorldState
 from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Move
-from .navigate import navigate
+from .navigate import PathMemory, navigate
 from .plays import Strategy, StrategyInput, Tuning
 from .situation import Situation, SituationTracker
 
@@ -57,6 +57,12 @@ class StrategyCore:
         self.robot_margin_mm = 60.0
         self.defense_margin_mm = 120.0
         self.last_tick_ms = 0.0
+        #: the robots' earlier path searches, reused while they hold (False: plan afresh
+        #: every tick, as bench/strategy_replay.py --compare does)
+        self.paths = PathMemory()
+        self.reuse_paths = True
+        #: called between two robots' navigation (see ``StrategyProcessor``); None: never
+        self.pause: Callable[[], None] | None = None
 
     def prepare(self, world: WorldState, geometry: dict[str, float] | None,
                 referee: RefereeState | None, params: StrategyParams, our_team: Team,
@@ -153,6 +159,7 @@ class StrategyCore:
             # rules: 0.2 m from the opponents' defence area during stop and free kicks
             their_margin = max(self.defense_margin_mm, STOPPED_DEFENSE_MARGIN_MM)
         moves = navigate(intents, inp.ours, inp.theirs, inp.ball, inp.fs, prep.frame,
-                         self.robot_margin_mm, self.defense_margin_mm, corridor, their_margin)
+                         self.robot_margin_mm, self.defense_margin_mm, corridor, their_margin,
+                         self.paths if self.reuse_paths else None, inp.t, self.pause)
         self.last_tick_ms = (time.perf_counter() - t0) * 1000.0
         return moves

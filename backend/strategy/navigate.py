@@ -11,16 +11,94 @@ radius, so the planned centre line keeps the robot's body clear.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from domain.field import Field
 
 from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Intent, Move, own_defense, their_defense
-from .paths import Obstacles, plan_path
+from .paths import (
+    Obstacles,
+    PlannedPath,
+    plan_path,
+    recheck_path,
+    straight_clear_of_circles,
+    straight_clear_of_rest,
+)
 
 R = ROBOT_RADIUS_MM
+
+#: a robot's earlier plan stands while its start, its goal and every obstacle moved at most
+#: this much (mm; vision noise is ~1 mm): a still robot in a still scene plans once, not at
+#: every tick (a robot boxed in by others searched the whole graph, ~20 ms, each tick)
+REUSE_MM = 5.0
+#: ... for at most this long (s)
+REUSE_MAX_AGE_S = 1.0
+#: a detour is kept while it stays clear and its goal within ``REUSE_MM``, re-checked instead
+#: of searched again, for at most this long (s): a shorter way opened meanwhile is taken then
+DETOUR_MAX_AGE_S = 0.25
+
+
+class _Plan:
+    """One robot's last search: its inputs and result."""
+
+    __slots__ = ("blocked", "circles", "goal", "points", "rects", "simple", "start", "t")
+
+    def __init__(self, start: tuple[float, float], goal: tuple[float, float],
+                 obstacles: Obstacles, res: PlannedPath, t: float) -> None:
+        self.start, self.goal, self.t = start, goal, t
+        self.circles, self.rects = obstacles.circles, obstacles.rects
+        self.points = res.points
+        self.blocked = res.blocked
+        #: a plain detour: every segment from the start on was checked (see ``recheck_path``)
+        self.simple = not (res.blocked or res.goal_moved or res.start_escape or res.truncated)
+
+    def same(self, start: tuple[float, float], goal: tuple[float, float],
+             obstacles: Obstacles) -> bool:
+        """Nothing moved more than ``REUSE_MM`` since this plan."""
+        c, r = obstacles.circles, obstacles.rects
+        return (math.dist(start, self.start) <= REUSE_MM
+                and math.dist(goal, self.goal) <= REUSE_MM
+                and c.shape == self.circles.shape and r.shape == self.rects.shape
+                and (not c.size or float(np.abs(c - self.circles).max()) <= REUSE_MM)
+                and (not r.size or float(np.abs(r - self.rects).max()) <= REUSE_MM))
+
+
+class PathMemory:
+    """Each robot's last search, so a tick whose inputs barely changed does not search again:
+    the path is reused while nothing moved (``REUSE_MM``), or while a detour stays clear
+    (``DETOUR_MAX_AGE_S``). Straight drives (one cheap test) are not remembered."""
+
+    def __init__(self) -> None:
+        self.plans: dict[int, _Plan] = {}
+        self.searches = 0
+        self.reused = 0
+
+    def forget(self, keep: set[int]) -> None:
+        for rid in [r for r in self.plans if r not in keep]:
+            del self.plans[rid]
+
+    def path(self, rid: int, start: tuple[float, float], goal: tuple[float, float],
+             obstacles: Obstacles, bounds: tuple[float, float, float, float],
+             now: float) -> tuple[tuple[tuple[float, float], ...], bool]:
+        """The waypoints for ``rid`` and whether it is blocked: a reused plan or a new one."""
+        old = self.plans.get(rid)
+        if old is not None:
+            age = now - old.t
+            if 0.0 <= age <= REUSE_MAX_AGE_S and old.same(start, goal, obstacles):
+                self.reused += 1
+                return old.points, old.blocked
+            if old.simple and 0.0 <= age <= DETOUR_MAX_AGE_S \
+                    and math.dist(goal, old.goal) <= REUSE_MM:
+                pts = recheck_path(start, old.points, obstacles, R, bounds=bounds)
+                if pts is not None:
+                    self.reused += 1
+                    return pts, False
+        self.searches += 1
+        res = plan_path(start, goal, obstacles, R, bounds=bounds)
+        self.plans[rid] = _Plan(start, goal, obstacles, res, now)
+        return (tuple(res.points) if res.points else (goal,)), res.blocked
 
 #: another robot's centre this close ahead (within 60 deg of the way we go) caps our speed:
 #: a crash above 1.5 m/s relative is a foul, and paths avoid robots where they are, not
@@ -34,6 +112,10 @@ def _rect_grow(r: tuple[float, float, float, float], g: float) -> list[float]:
     return [r[0] - g, r[1] - g, r[2] + g, r[3] + g]
 
 
+def _finite(*v: float) -> bool:
+    return all(math.isfinite(x) for x in v)
+
+
 def _inside(p: tuple[float, float], r: Sequence[float], g: float) -> bool:
     return r[0] - g <= p[0] <= r[2] + g and r[1] - g <= p[1] <= r[3] + g
 
@@ -43,12 +125,17 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
              defense_margin_mm: float,
              corridor: tuple[tuple[float, float], tuple[float, float], float] | None = None,
              their_defense_margin_mm: float | None = None,
+             memory: PathMemory | None = None, now: float = 0.0,
+             pause: Callable[[], None] | None = None,
              ) -> dict[int, Move]:
     """Paths for every intent, returned as moves in the field frame.
 
     ``corridor`` = (ball, mark, radius): keep clear of the capsule around that segment.
     ``their_defense_margin_mm``: how far the robots' bodies keep from the opponents' defence
     area (default ``defense_margin_mm``; the rules ask 0.2 m while the game is stopped).
+    ``memory``: the robots' earlier searches, reused when they still hold (``now``: the
+    tick's time, s); without it every robot plans afresh. ``pause``: called between two
+    robots (the processor lets the station thread have the GIL there).
     """
     everyone = [("o", b) for b in ours] + [("t", b) for b in theirs]
     all_circles = np.array([[b.x, b.y, R + robot_margin_mm] for _, b in everyone],
@@ -68,9 +155,24 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
     bounds = (-fs.half_length - 150.0, -fs.half_width - 150.0,
               fs.half_length + 150.0, fs.half_width + 150.0)
     out: dict[int, Move] = {}
-    for idx, (kind, bot) in enumerate(everyone):
-        if kind != "o" or bot.id not in intents:
-            continue
+    searched: set[int] = set()
+    mine = [idx for idx, (kind, bot) in enumerate(everyone)
+            if kind == "o" and bot.id in intents]
+    clear: dict[int, bool] = {}
+    if memory is not None and mine:
+        # the straight test against the robots and the corridor for all our robots in one
+        # numpy pass (each robot's own ball disc, areas and bounds follow in plain floats)
+        common = np.vstack([all_circles, np.array(extra_circles).reshape(-1, 3)])
+        ends = np.array([[everyone[i][1].x, everyone[i][1].y,
+                          intents[everyone[i][1].id].x, intents[everyone[i][1].id].y]
+                         for i in mine], dtype=np.float64)
+        ok = straight_clear_of_circles(ends[:, :2], ends[:, 2:], common, R,
+                                       np.asarray(mine, dtype=np.int64))
+        clear = dict(zip(mine, ok.tolist(), strict=True))
+    for n, idx in enumerate(mine):
+        if pause is not None and n:
+            pause()
+        bot = everyone[idx][1]
         it = intents[bot.id]
         goal = (it.x, it.y)
         rects = ([] if it.their_defense_ok else [their_def]) \
@@ -79,18 +181,28 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
         if not plan and any(_inside(goal, r, 0.0) for r in rects):
             plan = True  # a straight drive would end in a forbidden area: plan instead
         blocked = False
-        if plan:
+        pts: tuple[tuple[float, float], ...]
+        ball_disc = [[ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)]] \
+            if it.avoid_ball_mm > 0.0 and ball is not None else []
+        if plan and clear.get(idx) and _finite(goal[0], goal[1], bot.x, bot.y) \
+                and straight_clear_of_rest(bot.xy, goal, ball_disc, rects, R, bounds):
+            # the common case: nothing to plan, nothing to remember (a value that is not
+            # finite goes to plan_path, which refuses it as before)
+            pts = (goal,)
+        elif plan:
             circles = np.delete(all_circles, idx, axis=0)
-            extra = list(extra_circles)
-            if it.avoid_ball_mm > 0.0 and ball is not None:
-                extra.append([ball.x, ball.y, max(1.0, it.avoid_ball_mm - R)])
+            extra = extra_circles + ball_disc
             if extra:
                 circles = np.vstack([circles, np.array(extra, dtype=np.float64)])
             obstacles = Obstacles(circles=circles,
                                   rects=np.array(rects, dtype=np.float64).reshape(-1, 4))
-            res = plan_path(bot.xy, goal, obstacles, R, bounds=bounds)
-            pts = tuple(res.points) if res.points else (goal,)
-            blocked = res.blocked
+            if memory is None:
+                res = plan_path(bot.xy, goal, obstacles, R, bounds=bounds)
+                pts = tuple(res.points) if res.points else (goal,)
+                blocked = res.blocked
+            else:
+                pts, blocked = memory.path(bot.id, bot.xy, goal, obstacles, bounds, now)
+                searched.add(bot.id)
         else:
             pts = (goal,)
         end = pts[-1]
@@ -105,6 +217,8 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             orientation=None if it.orientation is None else frame.angle(it.orientation),
             path=field_pts, kick_speed_mps=it.kick_speed_mps, chip=it.chip,
             dribbler=it.dribbler, max_speed_mps=max_speed, blocked=blocked)
+    if memory is not None:
+        memory.forget(searched)
     return out
 
 

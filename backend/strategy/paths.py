@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple
 
@@ -67,7 +68,11 @@ __all__ = [
     "nearest_free_point",
     "plan_path",
     "point_is_free",
+    "recheck_path",
     "segment_is_free",
+    "straight_clear_of_circles",
+    "straight_clear_of_rest",
+    "straight_is_clear",
 ]
 
 Array = NDArray[np.float64]
@@ -600,8 +605,12 @@ def _tangent_ok(ux: Array, uy: Array, vx: Array, vy: Array, graph: _Graph,
     return np.asarray((s1 * s2 >= -1e-9 * scale) | inside | graph.always[vi])
 
 
+class _OverBudget(Exception):
+    """``_astar`` expanded more nodes than its budget allows."""
+
+
 def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
-           prune: bool) -> list[Array] | None:
+           prune: bool, budget: int | None = None) -> list[Array] | None:
     """Shortest path s -> g (excluding s) of length <= ``limit`` through the graph's nodes,
     in the lazily built visibility graph; None when there is none that short.
 
@@ -613,7 +622,8 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
     search stops when the smallest f left is no better than the goal's cost, so the result
     is the exact shortest path in the graph. An edge is tested only when it improves its end
     node and could still lead to a path under the bound; with ``prune`` also only when it
-    passes ``_tangent_ok``."""
+    passes ``_tangent_ok``. With a ``budget`` it raises ``_OverBudget`` after that many
+    expansions."""
     cx, cy = graph.xy[:, 0], graph.xy[:, 1]
     near = np.hypot(cx - s[0], cy - s[1]) + np.hypot(cx - g[0], cy - g[1]) <= limit
     ends = _Graph(np.vstack([s, g]), np.zeros((2, 2)), np.zeros((2, 2)),
@@ -641,6 +651,10 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
                 expanded_at[u] = bu
         if not batch:
             break
+        if budget is not None:
+            budget -= len(batch)
+            if budget < 0:
+                raise _OverBudget
         ub = np.asarray(batch, dtype=np.int64)
         ux, uy = x[ub][:, None], y[ub][:, None]
         new = best[ub][:, None] + np.hypot(x - ux, y - uy)  # (B, V)
@@ -681,6 +695,22 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
 #: units of the largest inflated circle's circumference, and the growth factor
 CORRIDOR_FIRST = 1.0
 CORRIDOR_GROWTH = 2.5
+#: node expansions of the search back from the goal before the unbounded search (see
+#: ``_enclosed``)
+POCKET_BUDGET = 2 * EXPAND_BATCH
+
+
+def _enclosed(inf: _Inflated, s: Array, g: Array, graph: _Graph) -> bool:
+    """The goal sits in a small pocket the start cannot reach (e.g. a goal moved to the nearest
+    free point between two robots and a defence area): the search back from the goal runs
+    out of nodes within ``POCKET_BUDGET`` expansions without meeting the start. The graph's
+    edges are the same both ways, so then there is no path at all, and the unbounded search
+    from the start, which would visit every node on the field twice (pruned, then not), is
+    not needed."""
+    try:
+        return _astar(inf, g, s, graph, math.inf, False, POCKET_BUDGET) is None
+    except _OverBudget:
+        return False
 
 
 def _shortest(inf: _Inflated, s: Array, g: Array, prune: bool = True) -> list[Array] | None:
@@ -711,6 +741,8 @@ def _shortest(inf: _Inflated, s: Array, g: Array, prune: bool = True) -> list[Ar
             used = take
             graph = _graph_nodes(inf, s, g, np.nonzero(take[:k])[0], np.nonzero(take[k:])[0])
         assert graph is not None
+        if math.isinf(limit) and _enclosed(inf, s, g, graph):
+            return None
         chain = _astar(inf, s, g, graph, limit, prune)
         if chain is not None or math.isinf(limit):
             break
@@ -736,12 +768,8 @@ def _straight_is_clear(s: Array, g: Array, obstacles: Obstacles, clearance: floa
     """Both ends in bounds and segment [s, g] entering no inflated obstacle (ends inside
     one count as entering): the common case, tested without building the graph data."""
     sx, sy, gx, gy = float(s[0]), float(s[1]), float(g[0]), float(g[1])
-    if bounds is not None:
-        x0, y0, x1, y1 = bounds
-        e = EPS_MM
-        if not (x0 - e <= sx <= x1 + e and x0 - e <= gx <= x1 + e
-                and y0 - e <= sy <= y1 + e and y0 - e <= gy <= y1 + e):
-            return False
+    if not _ends_in_bounds(sx, sy, gx, gy, bounds):
+        return False
     c = obstacles.circles
     if len(c):
         dx, dy = gx - sx, gy - sy
@@ -753,11 +781,80 @@ def _straight_is_clear(s: Array, g: Array, obstacles: Obstacles, clearance: floa
         r = np.maximum(c[:, 2] + (clearance - EPS_MM), 0.0)
         if (fx * fx + fy * fy < r * r).any():
             return False
+    return _clear_of_rects(sx, sy, gx, gy, obstacles.rects.tolist(), clearance)
+
+
+def _ends_in_bounds(sx: float, sy: float, gx: float, gy: float, bounds: Bounds | None) -> bool:
+    if bounds is None:
+        return True
+    x0, y0, x1, y1 = bounds
+    e = EPS_MM
+    return (x0 - e <= sx <= x1 + e and x0 - e <= gx <= x1 + e
+            and y0 - e <= sy <= y1 + e and y0 - e <= gy <= y1 + e)
+
+
+def _clear_of_rects(sx: float, sy: float, gx: float, gy: float,
+                    rects: Sequence[Sequence[float]], clearance: float) -> bool:
     grow = clearance - EPS_MM
-    for x0, y0, x1, y1 in obstacles.rects.tolist():
+    for x0, y0, x1, y1 in rects:
         if _rect_entry(sx, sy, gx, gy, x0 - grow, y0 - grow, x1 + grow, y1 + grow) is not None:
             return False
     return True
+
+
+def straight_clear_of_circles(starts: Array, goals: Array, circles: Array, clearance: float,
+                              skip: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """For many robots at once (one numpy pass instead of one per robot): row i's segment
+    ``starts[i]`` -> ``goals[i]`` enters none of the ``circles`` (K, 3) grown by
+    ``clearance``, leaving out circle ``skip[i]`` (the robot itself; -1: none). The same
+    test and tolerance as ``plan_path``'s straight case, for the circles only: rectangles
+    and bounds are ``straight_clear_of_rest``'s."""
+    n = len(starts)
+    if not len(circles) or not n:
+        return np.ones(n, dtype=bool)
+    sx, sy = starts[:, 0:1], starts[:, 1:2]
+    dx, dy = goals[:, 0:1] - sx, goals[:, 1:2] - sy
+    dd = dx * dx + dy * dy
+    fx, fy = circles[:, 0] - sx, circles[:, 1] - sy  # (N, K)
+    long = dd > EPS_MM * EPS_MM  # shorter segments are the point s
+    t = np.minimum(np.maximum((fx * dx + fy * dy) / np.where(long, dd, 1.0), 0.0), 1.0)
+    t = np.where(long, t, 0.0)
+    fx, fy = fx - t * dx, fy - t * dy
+    r = np.maximum(circles[:, 2] + (clearance - EPS_MM), 0.0)
+    hit = fx * fx + fy * fy < r * r
+    rows = np.nonzero(skip >= 0)[0]
+    hit[rows, skip[rows]] = False
+    return np.asarray(~hit.any(axis=1))
+
+
+def straight_clear_of_rest(start: Point, goal: Point, circles: Sequence[Sequence[float]],
+                           rects: Sequence[Sequence[float]], clearance: float,
+                           bounds: Bounds | None) -> bool:
+    """``straight_clear_of_circles``' complement for one robot, in plain floats: its own few
+    circles (the ball), the rectangles and the bounds."""
+    sx, sy, gx, gy = start[0], start[1], goal[0], goal[1]
+    if not _ends_in_bounds(sx, sy, gx, gy, bounds):
+        return False
+    dx, dy = gx - sx, gy - sy
+    dd = dx * dx + dy * dy
+    for cx, cy, cr in circles:
+        fx, fy = cx - sx, cy - sy
+        if dd > EPS_MM * EPS_MM:
+            t = min(max((fx * dx + fy * dy) / dd, 0.0), 1.0)
+            fx, fy = fx - t * dx, fy - t * dy
+        r = max(cr + (clearance - EPS_MM), 0.0)
+        if fx * fx + fy * fy < r * r:
+            return False
+    return _clear_of_rects(sx, sy, gx, gy, rects, clearance)
+
+
+def straight_is_clear(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles,
+                      clearance: float, bounds: Bounds | None = None) -> bool:
+    """The straight drive start -> goal is free and in bounds (``obstacles.bounds`` when
+    None): ``plan_path`` would answer the goal itself, without any search."""
+    box = _check_bounds(bounds) if bounds is not None else obstacles.bounds
+    return _straight_is_clear(_point(start, "start"), _point(goal, "goal"), obstacles,
+                              clearance, box)
 
 
 def plan_path(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles, clearance: float, *,
@@ -803,6 +900,30 @@ def plan_path(start: ArrayLike, goal: ArrayLike, obstacles: Obstacles, clearance
         return _finish(s0, pts, max_waypoints, goal_moved, start_escape, True)
     pts += chain
     return _finish(s0, pts, max_waypoints, goal_moved, start_escape, False)
+
+
+def recheck_path(start: ArrayLike, points: Sequence[Point], obstacles: Obstacles,
+                 clearance: float, *, bounds: Bounds | None = None) -> tuple[Point, ...] | None:
+    """A path planned earlier, still good from ``start`` among these obstacles: ``points``
+    from the farthest waypoint that ``start`` sees directly on (the waypoints the robot has
+    passed dropped), when that waypoint and every later one and segment are free; else None
+    (plan again). Two vectorised tests instead of a search: the cheap way to keep a detour
+    while the robot drives it."""
+    s = _point(start, "start")
+    if not points:
+        return None
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    inf = _Inflated(obstacles, clearance, bounds)
+    free = inf.points_free(np.vstack([s[None, :], pts]))
+    if not free.all():
+        return None
+    if len(pts) > 1 and inf.segments_blocked(pts[:-1, 0], pts[:-1, 1],
+                                              pts[1:, 0], pts[1:, 1]).any():
+        return None
+    seen = np.nonzero(~inf.blocked_from(s, pts))[0]
+    if not len(seen):
+        return None
+    return tuple((float(x), float(y)) for x, y in pts[int(seen[-1]):])
 
 
 def _finish(s0: Array, pts: list[Array], max_waypoints: int, goal_moved: bool,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from unittest.mock import patch
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from backend.geometry import in_defense_area
+from backend.strategy import paths
 from backend.strategy.paths import (
     MOVE_PAD_MM,
     NODE_PAD_MM,
@@ -23,7 +25,11 @@ from backend.strategy.paths import (
     nearest_free_point,
     plan_path,
     point_is_free,
+    recheck_path,
     segment_is_free,
+    straight_clear_of_circles,
+    straight_clear_of_rest,
+    straight_is_clear,
 )
 from domain.field import DIVISION_A, DIVISION_B
 
@@ -501,3 +507,109 @@ def test_start_inside_obstacle_with_goal_a_hair_away_escapes(gap: float) -> None
     res = plan_path((0.0, 0.0), (0.0, gap), obs, 0.0)
     assert res.start_escape
     check_path(res, (0.0, 0.0), (0.0, gap), Scene(obs, 0.0))
+
+
+# -- the cheap ways around a search (backend/strategy/navigate.py's PathMemory uses them) --
+
+
+def test_goal_in_a_pocket_is_blocked_without_searching_the_field(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A defender wedged between two others in front of our defence area (a real game's
+    case): its goal moves to the nearest free point, a pocket between the two robots and the
+    area that the start cannot reach. The search back from the goal runs dry at once, so
+    the unbounded search from the start (every node on the field) is not run."""
+    robots = [[-5877.0, -86.0, 150.0], [-3981.0, -229.0, 150.0], [-3977.0, 250.0, 150.0]]
+    obs = Obstacles(circles=robots, rects=[[-6520.0, -1920.0, -4080.0, 1920.0]])
+    bounds = (-6150.0, -4650.0, 6150.0, 4650.0)
+    start, goal = (-3959.6, 12.1), (-3980.0, -13.7)
+    calls: list[float] = []
+    real = paths._astar
+
+    def spy(inf, s, g, graph, limit, prune, budget=None):  # type: ignore[no-untyped-def]
+        if budget is None:
+            calls.append(limit)
+        return real(inf, s, g, graph, limit, prune, budget)
+
+    monkeypatch.setattr(paths, "_astar", spy)
+    res = plan_path(start, goal, obs, 90.0, bounds=bounds)
+    assert res.blocked and res.goal_moved and res.start_escape
+    assert calls and all(math.isfinite(limit) for limit in calls)
+    monkeypatch.setattr(paths, "POCKET_BUDGET", -1)  # the back search off: same answer
+    calls.clear()
+    assert plan_path(start, goal, obs, 90.0, bounds=bounds) == res
+    assert any(math.isinf(limit) for limit in calls)
+
+
+@given(scenes(), pt, pt)
+@settings(max_examples=150, deadline=None)
+def test_the_pocket_shortcut_changes_no_answer(scene: tuple[Obstacles, float],
+                                               start: tuple[float, float],
+                                               goal: tuple[float, float]) -> None:
+    obs, clearance = scene
+    fast = plan_path(start, goal, obs, clearance)
+    with patch.object(paths, "POCKET_BUDGET", -1):
+        slow = plan_path(start, goal, obs, clearance)
+    assert fast == slow
+
+
+def test_recheck_path_keeps_a_clear_detour_from_the_robot_on() -> None:
+    obs = Obstacles(circles=[[0.0, 0.0, 200.0]])
+    res = plan_path((-1500.0, 0.0), (1500.0, 0.0), obs, 90.0)
+    assert len(res.points) > 1
+    again = recheck_path((-1500.0, 0.0), res.points, obs, 90.0)
+    assert again == res.points
+    # further along: the waypoints it has passed (or no longer needs) are dropped
+    mid = res.points[len(res.points) // 2]
+    later = recheck_path(mid, res.points, obs, 90.0)
+    assert later is not None and later[-1] == (1500.0, 0.0)
+    assert len(later) < len(res.points) and set(later) <= set(res.points)
+    check_path(PlannedPath(later), mid, (1500.0, 0.0), Scene(obs, 90.0))
+
+
+def test_recheck_path_refuses_a_path_an_obstacle_now_crosses() -> None:
+    obs = Obstacles(circles=[[0.0, 0.0, 200.0]])
+    res = plan_path((-1500.0, 0.0), (1500.0, 0.0), obs, 90.0)
+    for blocker in res.points[:-1]:  # a robot on a waypoint, or on a segment
+        moved = obs.with_circles([blocker], 90.0)
+        assert recheck_path((-1500.0, 0.0), res.points, moved, 90.0) is None
+    a, b = res.points[0], res.points[1]
+    on_segment = obs.with_circles([((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)], 50.0)
+    assert recheck_path((-1500.0, 0.0), res.points, on_segment, 90.0) is None
+    # the robot itself inside an obstacle now: plan again
+    assert recheck_path((0.0, 100.0), res.points, obs, 90.0) is None
+    assert recheck_path((-1500.0, 0.0), (), obs, 90.0) is None
+
+
+def test_straight_is_clear_is_plan_paths_first_answer() -> None:
+    obs = Obstacles(circles=[[0.0, 0.0, 200.0]], bounds=(-3000.0, -3000.0, 3000.0, 3000.0))
+    assert straight_is_clear((-1500.0, 1000.0), (1500.0, 1000.0), obs, 90.0)
+    assert not straight_is_clear((-1500.0, 0.0), (1500.0, 0.0), obs, 90.0)
+    assert not straight_is_clear((-1500.0, 1000.0), (3500.0, 1000.0), obs, 90.0)
+
+
+@given(scenes(), st.lists(st.tuples(pt, pt), min_size=1, max_size=6), st.data())
+@settings(max_examples=200, deadline=None)
+def test_straight_tests_for_many_robots_agree_with_plan_paths(
+        scene: tuple[Obstacles, float], segs: list[tuple[tuple[float, float], ...]],
+        data: st.DataObject) -> None:
+    """navigate's one-pass straight test (circles for all robots, then each robot's own
+    discs, areas and bounds) answers as plan_path's straight case, with a circle left out
+    per robot (the robot itself) and some circles given as the robot's own."""
+    obs, clearance = scene
+    k = len(obs.circles)
+    skip = np.array([data.draw(st.integers(-1, k - 1), "skip") for _ in segs], dtype=np.int64)
+    split = data.draw(st.integers(0, k), "own circles from")
+    starts = np.array([s for s, _ in segs], dtype=np.float64).reshape(-1, 2)
+    goals = np.array([g for _, g in segs], dtype=np.float64).reshape(-1, 2)
+    common = obs.circles[:split]
+    skip = np.where(skip < split, skip, -1)
+    ok = straight_clear_of_circles(starts, goals, common, clearance, skip)
+    for i, (s, g) in enumerate(segs):
+        keep = np.ones(k, dtype=bool)
+        if skip[i] >= 0:
+            keep[skip[i]] = False
+        ref = straight_is_clear(s, g, Obstacles(obs.circles[keep], obs.rects, obs.bounds),
+                                clearance)
+        got = bool(ok[i]) and straight_clear_of_rest(
+            s, g, obs.circles[split:].tolist(), obs.rects.tolist(), clearance, obs.bounds)
+        assert got == ref
