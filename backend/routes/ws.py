@@ -7,6 +7,8 @@ import asyncio
 import contextlib
 import logging
 import time
+import weakref
+from collections.abc import Callable
 from dataclasses import replace
 
 from fastapi import APIRouter, WebSocket
@@ -64,19 +66,67 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                         "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
 
 
+class _LoopWakeups:
+    """Wakes every websocket client of one event loop with one hand-over from the station
+    thread per publication (not one ``call_soon_threadsafe`` per client: 25 clients at 60 Hz
+    were 1500 self-pipe writes and loop wake-ups a second). Subscribed to the station's views
+    while it has a client."""
+
+    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop) -> None:
+        self.st, self.loop = st, loop
+        self.events: set[asyncio.Event] = set()
+        self._unsubscribe: Callable[[], None] | None = None
+        self._pending = False
+
+    def add(self, event: asyncio.Event) -> None:
+        self.events.add(event)
+        if self._unsubscribe is None:
+            self._unsubscribe = self.st.subscribe_views(self._notify)
+
+    def discard(self, event: asyncio.Event) -> None:
+        self.events.discard(event)
+        if not self.events and self._unsubscribe is not None:
+            self._unsubscribe()
+            self._unsubscribe = None
+
+    def _notify(self) -> None:  # on the station thread: only hand over to the web loop
+        if not self._pending:  # one hand-over in flight is enough: it wakes everyone
+            self._pending = True
+            self.loop.call_soon_threadsafe(self._wake)
+
+    def _wake(self) -> None:
+        self._pending = False
+        for event in self.events:
+            event.set()
+
+
+_wakeups: weakref.WeakKeyDictionary[Station, dict[asyncio.AbstractEventLoop, _LoopWakeups]] = (
+    weakref.WeakKeyDictionary())
+
+
+def _wakeups_of(st: Station) -> _LoopWakeups:
+    loop = asyncio.get_running_loop()
+    per_loop = _wakeups.setdefault(st, {})
+    for old in [x for x in per_loop if x.is_closed() and not per_loop[x].events]:
+        del per_loop[old]  # a loop that ended (tests start one per client)
+    w = per_loop.get(loop)
+    if w is None or w.loop.is_closed():
+        w = per_loop[loop] = _LoopWakeups(st, loop)
+    return w
+
+
 async def _serve_views(ws: WebSocket, st: Station) -> None:
     async def send(text: str) -> None:
         try:
-            await asyncio.wait_for(ws.send_text(text), STALLED_CLIENT_S)
+            async with asyncio.timeout(STALLED_CLIENT_S):  # no task per send (wait_for makes one)
+                await ws.send_text(text)
         except TimeoutError:
             raise _Stalled from None
 
     closed = asyncio.Event()
     changed = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    def notify() -> None:  # on the station thread: only hand over to this client's loop
-        loop.call_soon_threadsafe(changed.set)
-    unsubscribe = st.subscribe_views(notify)
+    wakeups = _wakeups_of(st)
+    wakeups.add(changed)
 
     async def receive() -> None:
         try:
@@ -136,5 +186,5 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
                 await send(v.health_json)
             sent = replace(v, world_key=world_key)
     finally:
-        unsubscribe()
+        wakeups.discard(changed)
         rx.cancel()

@@ -110,3 +110,52 @@ def test_stalled_client_does_not_slow_the_others_and_is_dropped(tmp_path) -> Non
             s.close()
         server.should_exit = True
         th.join(timeout=10)
+
+
+class _Views:
+    """The station's ``subscribe_views`` contract: listeners called on another thread."""
+
+    def __init__(self) -> None:
+        self.listeners: set = set()  # type: ignore[type-arg]
+
+    def subscribe_views(self, listener):  # type: ignore[no-untyped-def]
+        self.listeners.add(listener)
+        return lambda: self.listeners.discard(listener)
+
+
+def test_all_clients_of_a_loop_are_woken_by_one_hand_over_per_publication() -> None:
+    from backend.routes.ws import _LoopWakeups
+
+    views = _Views()
+
+    async def run() -> None:
+        loop = asyncio.get_running_loop()
+        w = _LoopWakeups(views, loop)  # type: ignore[arg-type]
+        events = [asyncio.Event() for _ in range(25)]
+        for e in events:
+            w.add(e)
+        assert len(views.listeners) == 1  # one subscription for the loop, not one per client
+        handed: list[object] = []
+        real = loop.call_soon_threadsafe
+
+        def counting(cb, *args):  # type: ignore[no-untyped-def]
+            handed.append(cb)
+            return real(cb, *args)
+
+        loop.call_soon_threadsafe = counting  # type: ignore[method-assign]
+        listener = next(iter(views.listeners))
+        t = threading.Thread(target=lambda: [listener() for _ in range(3)])
+        t.start()
+        t.join()
+        await asyncio.wait_for(asyncio.gather(*(e.wait() for e in events)), 5.0)
+        assert len(handed) == 1  # three publications before the loop ran: one hand-over
+        for e in events:
+            e.clear()
+        listener()  # the next publication after the wake-up hands over again
+        await asyncio.wait_for(asyncio.gather(*(e.wait() for e in events)), 5.0)
+        assert len(handed) == 2
+        for e in events:
+            w.discard(e)
+        assert not views.listeners  # the last client gone: unsubscribed
+
+    asyncio.run(run())
