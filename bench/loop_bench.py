@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import signal
 import statistics
 import subprocess
@@ -31,17 +30,13 @@ from typing import Any
 
 import httpx
 
+from bench.station_run import full_scale_args, start_station
 from launcher.supervisor import Ports
+from sslnet.proc import process_cpu_s as cpu_s
 from sslnet.proc import thread_cpu_s
 
 ROOT = Path(__file__).resolve().parent.parent
-TICKS = os.sysconf("SC_CLK_TCK")
 PY = sys.executable
-
-
-def cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def sim_args(a: argparse.Namespace) -> list[str]:
@@ -97,21 +92,8 @@ def thread_cpu_by_name(pid: int) -> dict[str, float]:
 def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
     """Touchline's row; ``browser``: with headless Chromium showing the page meanwhile (its
     own CPU apart: only the relay's and the backend's count)."""
-    args = [PY, "-m", "launcher", "--isolated",
-            *(f"--sim-arg={x}" for x in sim_args(a)),
-            "--backend-arg=--set", "--backend-arg=strategy.play=match",
-            *(f"--relay-arg={x}" for x in a.relay_arg)]
-    proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            text=True)
-    assert proc.stdout is not None
-    pids: dict[str, int] = {}
-    url = ""
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_PIDS "):
-            pids = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_READY "):
-            url = line.split()[1]
-            break
+    station = start_station(full_scale_args(a.cameras, a.hz, a.relay_arg))
+    proc, pids, url = station.proc, station.pids, station.url
     page: subprocess.Popen[str] | None = None
     try:
         if browser:

@@ -26,7 +26,6 @@ import os
 import signal
 import socket
 import statistics
-import subprocess
 import sys
 import threading
 import time
@@ -35,17 +34,14 @@ from typing import Any
 
 import httpx
 
+from bench.station_run import full_scale_args, start_station
 from sslnet.multicast import open_multicast_receiver
+from sslnet.proc import process_cpu_s as cpu_s
 from sslpb import ssl_vision_wrapper_pb2 as wrapper_pb
 
 ROOT = Path(__file__).resolve().parent.parent
-TICKS = os.sysconf("SC_CLK_TCK")
 PY = sys.executable
 
-
-def cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def rss_mb(pid: int) -> float:
@@ -105,6 +101,11 @@ def counters(h: dict[str, Any]) -> dict[str, float]:
     }
 
 
+#: the relay's latency figures cover its last second: samples this soon after fieldsim's
+#: pause are left out of the latency summary (kept for memory)
+PAUSE_SETTLE_S = 2.5
+
+
 def paused_snapshot(sim_pid: int, url: str, listener: Listener, client: httpx.Client
                     ) -> tuple[tuple[dict[int, int], int, int], dict[str, float]]:
     """Counters with fieldsim paused and the pipeline drained: the relay's figures come from
@@ -139,25 +140,9 @@ def main() -> None:
     ap.add_argument("--hz", type=float, default=75.0)
     ap.add_argument("--json", default=None, help="also write every sample here")
     a = ap.parse_args()
-    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
-           "--camera-hz", str(a.hz)]
     err = open("/tmp/soak-station.log", "w")  # noqa: SIM115 - the station's whole life
-    proc = subprocess.Popen([PY, "-m", "launcher", "--isolated",
-                             *(f"--sim-arg={x}" for x in sim),
-                             "--backend-arg=--set", "--backend-arg=strategy.play=match"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=err, text=True)
-    assert proc.stdout is not None
-    pids: dict[str, int] = {}
-    ports: dict[str, Any] = {}
-    url = ""
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_PIDS "):
-            pids = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_PORTS "):
-            ports = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_READY "):
-            url = line.split()[1]
-            break
+    station = start_station(full_scale_args(a.cameras, a.hz), stderr=err)
+    proc, pids, ports, url = station.proc, station.pids, station.ports, station.url
     pids["launcher"] = proc.pid
     listener = Listener(ports["vision_group"], ports["vision"])
     listener.start()
@@ -177,6 +162,10 @@ def main() -> None:
                 "rss_mb": {k: round(rss_mb(p), 1) for k, p in pids.items()},
                 "p50_ms": relay.get("command_latency_p50_ms", -1),
                 "p99_ms": relay.get("command_latency_p99_ms", -1),
+                # fieldsim was paused for the counters just before t0: commands sent then
+                # still carry the last frame's arrival (up to vision_stale_s old), so the
+                # relay's figures of the first seconds measure the pause, not the station
+                "after_pause": time.monotonic() - t0 < PAUSE_SETTLE_S,
             })
             left = end - time.monotonic()
             if left <= 0:
@@ -212,8 +201,8 @@ def main() -> None:
         growth = (series[-1] - series[0]) / series[0] * 100 if series and series[0] > 0 else 0
         print(f"| {k} | {cpu[k]:.1f} | {series[0]:.1f} | {series[-1]:.1f} | {max(series):.1f} | "
               f"{growth:+.1f} % |")
-    p50 = [s["p50_ms"] for s in samples if s["p50_ms"] >= 0]
-    p99 = [s["p99_ms"] for s in samples if s["p99_ms"] >= 0]
+    p50 = [s["p50_ms"] for s in samples if s["p50_ms"] >= 0 and not s["after_pause"]]
+    p99 = [s["p99_ms"] for s in samples if s["p99_ms"] >= 0 and not s["after_pause"]]
     if p50:
         print(f"relay arrival -> command: median of the samples' p50 {statistics.median(p50):.2f}"
               f" ms, of their p99 {statistics.median(p99):.2f} ms, worst p99 {max(p99):.2f} ms")

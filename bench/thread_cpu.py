@@ -14,14 +14,12 @@ shared machine where wall-clock latency does not.
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import httpx
 
+from bench.station_run import full_scale_args, start_station
 from sslnet.proc import thread_cpu_s
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -46,22 +44,8 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=5.0)
     ap.add_argument("--relay-arg", action="append", default=[])
     a = ap.parse_args()
-    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", "8",
-           "--camera-hz", "75"]
-    args = [sys.executable, "-m", "launcher", "--isolated", *(f"--sim-arg={x}" for x in sim),
-            "--backend-arg=--set", "--backend-arg=strategy.play=match",
-            *(f"--relay-arg={x}" for x in a.relay_arg)]
-    proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            text=True)
-    assert proc.stdout is not None
-    pids: dict[str, int] = {}
-    url = ""
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_PIDS "):
-            pids = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_READY "):
-            url = line.split()[1]
-            break
+    station = start_station(full_scale_args(relay_args=a.relay_arg))
+    proc, pids, url = station.proc, station.pids, station.url
     try:
         time.sleep(a.warmup)
         client = httpx.Client(timeout=5)

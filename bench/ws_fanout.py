@@ -16,10 +16,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
-import os
 import statistics
-import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -27,34 +24,10 @@ from typing import Any
 import httpx
 from websockets.asyncio.client import connect
 
+from bench.station_run import full_scale_args, start_station
+from sslnet.proc import process_cpu_s as cpu_s
+
 ROOT = Path(__file__).resolve().parent.parent
-TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
-
-
-def start_station(a: argparse.Namespace) -> tuple[subprocess.Popen[str], str, dict[str, int]]:
-    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
-           "--camera-hz", str(a.hz)]
-    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated",
-                             *(f"--sim-arg={x}" for x in sim),
-                             "--backend-arg=--set", "--backend-arg=strategy.play=match"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
-    pids: dict[str, int] = {}
-    deadline = time.monotonic() + 60
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_PIDS "):
-            pids = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_READY "):
-            return proc, line.split()[1], pids
-        if time.monotonic() > deadline:
-            break
-    proc.kill()
-    raise RuntimeError("station did not start")
 
 
 def health(url: str) -> dict[str, Any]:
@@ -140,7 +113,8 @@ def main() -> None:
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
     a = ap.parse_args()
-    proc, url, pids = start_station(a)
+    station = start_station(full_scale_args(a.cameras, a.hz))
+    proc, url, pids = station.proc, station.url, station.pids
     try:
         time.sleep(5)
         s = Sampler(url, pids)

@@ -56,3 +56,10 @@ def thread_cpu_s(pid: int) -> dict[tuple[str, int], float]:
         fields = stat.rsplit(")", 1)[1].split()
         out[(name, int(task.name))] = (int(fields[11]) + int(fields[12])) / ticks
     return out
+
+
+def process_cpu_s(pid: int) -> float:
+    """CPU seconds (user + system, every thread) of process ``pid`` so far, from /proc."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")

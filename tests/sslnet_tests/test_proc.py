@@ -6,7 +6,9 @@ import os
 import threading
 import time
 
-from sslnet.proc import thread_cpu_s
+import pytest
+
+from sslnet.proc import process_cpu_s, thread_cpu_s
 
 
 def test_thread_cpu_counts_a_busy_thread_and_knows_the_main_thread() -> None:
@@ -46,3 +48,13 @@ def test_thread_cpu_counts_a_busy_thread_and_knows_the_main_thread() -> None:
 
 def test_thread_cpu_of_a_process_that_does_not_exist_is_empty() -> None:
     assert thread_cpu_s(2**22 + 12345) == {}
+
+
+def test_process_cpu_holds_its_threads_and_refuses_a_missing_process() -> None:
+    threads = sum(thread_cpu_s(os.getpid()).values())
+    process = process_cpu_s(os.getpid())  # read after: it can only have grown
+    assert process > 0.0  # this test process has run
+    # the process counts its live threads and those that ended (other tests' threads)
+    assert process >= threads - 0.011
+    with pytest.raises(OSError):
+        process_cpu_s(2**22 + 12345)
