@@ -27,15 +27,10 @@ from pathlib import Path
 import zmq
 
 from launcher.supervisor import Ports
+from sslnet.proc import process_cpu_s as cpu_s
 from sslpb import touchline_pb2 as tl
 
 ROOT = Path(__file__).resolve().parent.parent
-TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def backend(pub_ep: str, sub_ep: str, stop: threading.Event, stats: list[tl.RelayStats]) -> None:

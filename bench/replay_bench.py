@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import random
 import statistics
 import subprocess
@@ -37,6 +36,7 @@ from ssllog.format import (
     file_header,
 )
 from ssllog.reader import LogReader
+from sslnet.proc import process_cpu_s as cpu_s
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
@@ -44,7 +44,6 @@ from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURE = ROOT / "tests" / "data" / "fieldsim-2s.log.gz"
 JSON = {"content-type": "application/json"}
-TICKS = os.sysconf("SC_CLK_TCK")
 #: one client for every request (a new httpx client per request costs tens of ms: it makes
 #: an SSL context), so the figures are the station's, not the client's
 HTTP = httpx.Client(timeout=30)
@@ -121,11 +120,6 @@ def station(*args: str) -> Iterator[tuple[str, int]]:
     finally:
         proc.terminate()
         proc.wait(timeout=20)
-
-
-def cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def rss_mb(pid: int, key: str = "VmHWM") -> float:
