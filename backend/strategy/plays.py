@@ -177,9 +177,12 @@ class Strategy:
             if rid not in out:
                 b = bots[rid]
                 out[rid] = Intent("waiting", b.x, b.y, None, plan=False)
-        for b in everyone.ours:
+        queue = {1.0: 0, -1.0: 0}  # robots leaving by each touch line so far
+        for b in sorted(everyone.ours, key=lambda b: b.id):
             if b.id in leaving:
-                out[b.id] = _substitution(b, inp.fs)
+                side = _substitution_side(b)
+                out[b.id] = _substitution(b, inp.fs, queue[side])
+                queue[side] += 1
         out = self._constrain(out, everyone)
         self.roles = {rid: it.role for rid, it in out.items()}
         return out
@@ -452,15 +455,25 @@ class Strategy:
         return res
 
 
-def _substitution_spot(bot: Bot, fs: Field) -> tuple[float, float]:
+def _substitution_side(bot: Bot) -> float:
+    return 1.0 if bot.y >= 0.0 else -1.0
+
+
+#: a second robot leaving by the same touch line waits this far behind the first (two
+#: robots sent to one point: the second's goal is taken and it never arrives)
+SUBSTITUTION_GAP_MM = 2.0 * R + 100.0
+
+
+def _substitution_spot(bot: Bot, fs: Field, place: int = 0) -> tuple[float, float]:
     """On our side of the halfway line, by the touch line nearer the robot, inside the
-    field and well within the rules' 1 m of where the halfway line meets it."""
-    side = 1.0 if bot.y >= 0.0 else -1.0
-    return (-(R + 200.0), side * (fs.half_width - R - 20.0))
+    field and well within the rules' 1 m of where the halfway line meets it; the
+    ``place``-th robot leaving by that touch line (0 = first) further along it."""
+    return (-(R + 200.0) - place * SUBSTITUTION_GAP_MM,
+            _substitution_side(bot) * (fs.half_width - R - 20.0))
 
 
-def _substitution(bot: Bot, fs: Field) -> Intent:
-    p = _substitution_spot(bot, fs)
+def _substitution(bot: Bot, fs: Field, place: int = 0) -> Intent:
+    p = _substitution_spot(bot, fs, place)
     return Intent("substitution", p[0], p[1], None, max_speed_mps=1.5)
 
 

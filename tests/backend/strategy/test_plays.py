@@ -317,6 +317,20 @@ def test_a_card_sends_the_excess_robots_to_the_halfway_line_and_play_goes_on() -
     assert sorted(r for r, it in again.items() if it.role == "substitution") == leaving
 
 
+def test_robots_leaving_by_the_same_touch_line_get_spots_of_their_own() -> None:
+    # every robot on the +y side: the two sent off share a touch line
+    ours = [Bot(i, -1500.0 + 400.0 * i, 1200.0 + 100.0 * i, 0.0) for i in range(6)]
+    out = _with_max(4, ours, Strategy())
+    leaving = [out[rid] for rid in sorted(out) if out[rid].role == "substitution"]
+    assert len(leaving) == 2
+    a, b = leaving
+    assert a.y > 0 and b.y > 0
+    assert math.dist((a.x, a.y), (b.x, b.y)) >= 2.0 * R + 50.0  # not one point for two robots
+    for it in leaving:  # both still within the rules' 1 m, on our side, in the field
+        assert math.dist((it.x, it.y), (0.0, FS.half_width)) < 1000.0
+        assert it.x < 0.0 and abs(it.y) <= FS.half_width - R
+
+
 def test_a_robot_taken_out_is_not_replaced_and_an_expired_card_brings_robots_back() -> None:
     ours = team(6, 3)
     s = Strategy()
