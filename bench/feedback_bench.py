@@ -39,14 +39,20 @@ from sslpb import ssl_simulation_robot_feedback_pb2 as fb_pb
 from sslpb import touchline_pb2 as tl
 
 
-def simulator(sock: socket.socket, stop: threading.Event, flip: int) -> None:
-    """Answers every datagram to its sender, like a simulator's robot port."""
+def two_answers() -> list[bytes]:
+    """A simulator's answer for 11 robots, without and with robot 3's ball contact."""
     answers = []
     for contact in (False, True):
         resp = fb_pb.RobotControlResponse()
         for i in range(11):
             resp.feedback.add(id=i, dribbler_ball_contact=contact and i == 3)
         answers.append(resp.SerializeToString())
+    return answers
+
+
+def simulator(sock: socket.socket, stop: threading.Event, flip: int) -> None:
+    """Answers every datagram to its sender, like a simulator's robot port."""
+    answers = two_answers()
     sock.settimeout(0.2)
     n = 0
     while not stop.is_set():
@@ -190,12 +196,7 @@ async def micro(a: argparse.Namespace) -> None:
     rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     rx.bind(("127.0.0.1", 0))
     rx.setblocking(False)
-    answers = []
-    for contact in (False, True):
-        resp = fb_pb.RobotControlResponse()
-        for i in range(11):
-            resp.feedback.add(id=i, dribbler_ball_contact=contact and i == 3)
-        answers.append(resp.SerializeToString())
+    answers = two_answers()
     other = 0.0  # the stand-ins' sends and the subscriber's reads, not the relay's
     n = 0
     c0 = time.thread_time()
