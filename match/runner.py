@@ -8,6 +8,7 @@ that relay (blue: our strategy, yellow: the opponent), under the one supervisor
 
 from __future__ import annotations
 
+import http.client
 import json
 import logging
 import shutil
@@ -112,7 +113,9 @@ def _health_ok(port: int) -> bool:
     try:
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/health", timeout=2.0) as r:
             return r.status == 200 and bool(json.loads(r.read()).get("ok"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, http.client.HTTPException):
+        # not (yet) our backend: nothing listening, or another program's protocol on the
+        # port (a ZeroMQ greeting once: BadStatusLine crashed the runner)
         return False
 
 
