@@ -49,6 +49,7 @@ import json
 import math
 import socket
 import time
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -513,10 +514,14 @@ class Check:
             self.teleport(theirs, rid, x, y, th, present=True)
         await asyncio.sleep(0.5)
 
-    async def kickoff(self) -> None:
+    async def each_team(self, scenario: Callable[[str], Awaitable[None]]) -> None:
+        """``scenario`` for each team asked for, then the GC's auto continue as it was."""
         for team in self.a.teams:
-            await self.kickoff_for(team)
+            await scenario(team)
         await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+
+    async def kickoff(self) -> None:
+        await self.each_team(self.kickoff_for)
 
     async def kickoff_for(self, team: str) -> None:
         ours = await self.our_team()
@@ -538,9 +543,7 @@ class Check:
                             f"{rid} {ours.upper()} is not in its own half")
 
     async def penalty(self) -> None:
-        for team in self.a.teams:
-            await self.penalty_for(team)
-        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+        await self.each_team(self.penalty_for)
 
     async def penalty_for(self, team: str) -> None:
         ours = await self.our_team()
@@ -583,9 +586,7 @@ class Check:
                                 f"{ours.upper()} does not keep required distance")
 
     async def robot_count(self) -> None:
-        for team in self.a.teams:
-            await self.card_for(team)
-        await self.send({"configDelta": {"autoContinue": self.a.auto_continue}})
+        await self.each_team(self.card_for)
 
     async def card_for(self, team: str) -> None:
         ours = await self.our_team()
