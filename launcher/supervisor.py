@@ -17,6 +17,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,18 +29,33 @@ ROOT = Path(__file__).resolve().parent.parent
 log = logging.getLogger("touchline.launcher")
 
 
+#: every port this process has handed out (protocol, port): binding port 0 and closing lets the
+#: kernel give the same number to the next call, and two parts of one station (a backend's HTTP
+#: port and a relay's ZeroMQ socket, seen in a fresh clone's ``make match``) then collide
+_handed_out: set[tuple[int, int]] = set()
+_handed_lock = threading.Lock()
+
+
+def _free_port(kind: int, tries: int = 64) -> int:
+    """A port on 127.0.0.1 that is free now and was not handed out before in this process
+    (other processes can still take it before it is bound: rare, not excluded)."""
+    with _handed_lock:
+        for _ in range(tries):
+            with socket.socket(socket.AF_INET, kind) as s:
+                s.bind(("127.0.0.1", 0))
+                port: int = s.getsockname()[1]
+            if (kind, port) not in _handed_out:
+                _handed_out.add((kind, port))
+                return port
+    raise OSError(f"no fresh port after {tries} tries")
+
+
 def free_tcp_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
+    return _free_port(socket.SOCK_STREAM)
 
 
 def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
+    return _free_port(socket.SOCK_DGRAM)
 
 
 @dataclass
