@@ -189,8 +189,8 @@ class Supervisor:
 
     ``log_dir``: each child's output goes to ``<name>.log`` there (else it is inherited).
     ``restart``: :meth:`watch` restarts a child that exited, at most ``max_restarts`` times a
-    minute (then it gives up and says why). ``detach``: each child in its own session, told by
-    the kernel to stop when the supervisor dies."""
+    minute (then it gives up and says why). ``detach``: each child in its own session. Every
+    child is told by the kernel to stop (SIGTERM) when the supervisor dies, killed or not."""
 
     def __init__(self, children: list[Child], *, log_dir: Path | None = None,
                  restart: bool = False, max_restarts: int = 5, detach: bool = False,
@@ -241,7 +241,7 @@ class Supervisor:
         c.proc = subprocess.Popen(
             c.argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
             stdin=subprocess.DEVNULL if self.detach else None, start_new_session=self.detach,
-            preexec_fn=_die_with_parent if self.detach else None)
+            preexec_fn=_die_with_parent)  # never orphaned, even by a SIGKILL of ours
         c.started = time.monotonic()
 
     def child(self, name: str) -> Child:

@@ -107,3 +107,42 @@ def test_free_ports_are_never_handed_out_twice_in_one_process() -> None:
     ports = Ports.isolated(None)
     zmq_ports = [int(e.rsplit(":", 1)[1]) for e in (ports.relay_pub, ports.relay_sub)]
     assert ports.http not in zmq_ports and zmq_ports[0] != zmq_ports[1]
+
+
+def _gone(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return True
+    return state in ("Z", "X")  # ended, not yet reaped by whoever adopted it
+
+
+def test_a_killed_launcher_leaves_no_process_behind() -> None:
+    """SIGKILL of ``python -m launcher`` (a test fixture's last resort when the station does not
+    come up): the kernel stops fieldsim, the relay and the backend too (they were left running)."""
+    import json
+    import os
+    import signal
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated"], cwd=root,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    pids: dict[str, int] = {}
+    try:
+        assert proc.stdout is not None
+        for line in proc.stdout:  # bounded by the launcher's own start-up (it exits on failure)
+            if line.startswith("TOUCHLINE_PIDS "):
+                pids = json.loads(line.split(" ", 1)[1])
+                break
+        assert set(pids) >= {"fieldsim", "relay", "backend"}, pids
+        assert not any(_gone(p) for p in pids.values())
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+    try:
+        _wait(lambda: all(_gone(p) for p in pids.values()), timeout_s=20.0)
+    finally:  # a failure must not leave them running either
+        for p in pids.values():
+            if not _gone(p):
+                os.kill(p, signal.SIGKILL)
