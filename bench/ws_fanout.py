@@ -225,9 +225,12 @@ def main() -> None:
                for i, b in zip(idle, reading, strict=False)]
         both = [b["cpu_backend"] + b["cpu_relay"] - i["cpu_backend"] - i["cpu_relay"]
                 for i, b in zip(idle, reading, strict=False)]
+        per_msg = [w / 100 / max(b["msgs_mean"] * a.clients, 1e-9) * 1e6
+                   for w, b in zip(web, reading, strict=False)]
         print(f"{a.clients} reading clients add to the web thread: "
-              + " / ".join(f"{x:+.1f}" for x in web) + " % of a core (per round); to relay + "
-              "backend: " + " / ".join(f"{x:+.1f}" for x in both) + " %")
+              + " / ".join(f"{x:+.1f}" for x in web) + " % of a core (per round; "
+              + " / ".join(f"{x:.0f}" for x in per_msg) + " us per world message and client); "
+              "to relay + backend: " + " / ".join(f"{x:+.1f}" for x in both) + " %")
         print(f"relay arrival->command p99 without / with the clients (mean of the rounds' "
               f"medians): {mean(idle, 'relay_p99'):.2f} / {mean(reading, 'relay_p99'):.2f} ms;"
               f" p50 {mean(idle, 'relay_p50'):.2f} / {mean(reading, 'relay_p50'):.2f} ms")
