@@ -76,9 +76,11 @@ class Sampler:
     def sample(self) -> None:
         h = health(self.url)
         ctrl = next(p for p in h["processors"] if p["name"] == "control")
+        views = next(p for p in h["processors"] if p["name"] == "views")
         relay = h["relay"] or {}
         self.rows.append({
-            "control_hz": ctrl["measured_hz"], "backend_p50": h["latency"]["p50_ms"],
+            "control_hz": ctrl["measured_hz"], "views_tick_ms": views["tick_mean_ms"],
+            "backend_p50": h["latency"]["p50_ms"],
             "backend_p99": h["latency"]["p99_ms"],
             "relay_p50": relay.get("command_latency_p50_ms", -1),
             "relay_p99": relay.get("command_latency_p99_ms", -1),
@@ -92,7 +94,7 @@ class Sampler:
         for k, v in th1.items():
             out[f"thread_{k}"] = (v - self.th0.get(k, 0.0)) / dt * 100
         out["cpu_bench"] = (time.process_time() - self.own0) / dt * 100
-        for k in ("control_hz", *LATENCIES, "clients"):
+        for k in ("control_hz", "views_tick_ms", *LATENCIES, "clients"):
             vals = [r[k] for r in self.rows if r[k] >= 0]
             out[k] = statistics.median(vals) if vals else -1.0
         for k in ("backend_p99", "relay_p99"):
@@ -204,14 +206,15 @@ def main() -> None:
           f"latencies: medians of 1 s figures, worst 1 s p99 in brackets); load "
           f"{load0[0]:.2f} -> {load1[0]:.2f}")
     print("| phase | world msgs/s per reader (min / mean) | kB/s per reader | backend CPU "
-          "(web thread / station thread) | relay CPU | control Hz | backend vision->command "
-          "p50 / p99 | relay arrival->command p50 / p99 | bench's clients CPU |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "(web thread / station thread) | relay CPU | control Hz | views tick (ms) | backend "
+          "vision->command p50 / p99 | relay arrival->command p50 / p99 | bench's clients CPU |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name, _n, r in results:
         print(f"| {name} | {r['msgs_min']:.1f} / {r['msgs_mean']:.1f} | {r['kb_s']:.0f} | "
               f"{r['cpu_backend']:.1f} ({r.get('thread_web', 0):.1f} / "
               f"{r.get('thread_station', 0):.1f}) | {r['cpu_relay']:.1f} | "
-              f"{r['control_hz']:.0f} | {r['backend_p50']:.2f} / {r['backend_p99']:.2f} "
+              f"{r['control_hz']:.0f} | {r['views_tick_ms']:.2f} | "
+              f"{r['backend_p50']:.2f} / {r['backend_p99']:.2f} "
               f"({r['backend_p99_max']:.2f}) ms | {r['relay_p50']:.2f} / {r['relay_p99']:.2f} "
               f"({r['relay_p99_max']:.2f}) ms | {r['cpu_bench']:.1f} |")
     idle = [r for _, n, r in results if n == 0]
