@@ -18,6 +18,7 @@ and counted in ``repairs``."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import logging
 import math
@@ -34,10 +35,17 @@ from sslnet.ratelog import RateLimitedLog
 log = logging.getLogger("touchline.json")
 _ratelog = RateLimitedLog(log, interval_s=10.0)
 
-try:
-    import orjson
-except ImportError:  # pragma: no cover - the standard encoder alone: the same text, slower
-    orjson = None  # type: ignore[assignment]
+
+def _orjson() -> Any:
+    """The orjson module, or None where it is not installed (the standard encoder alone: the
+    same JSON, slower; a venv made before it became a dependency)."""
+    try:
+        return importlib.import_module("orjson")
+    except ImportError:  # pragma: no cover
+        return None
+
+
+orjson: Any = _orjson()
 
 #: numpy numbers as numbers (the standard encoder writes a numpy float64 as a float, the repair
 #: other numpy numbers; a numpy bool, which it made null, is a boolean here); dataclasses and
