@@ -23,6 +23,7 @@ from .params.store import ParamError, PresetNotFound, format_errors
 from .routes.deps import PUBLIC, refusal_before_body
 from .security import EdgeGuard
 from .station import Station
+from .wsfanout import ServerSendTap
 
 log = logging.getLogger("touchline.api")
 
@@ -55,6 +56,8 @@ def create_app(settings: Settings, station: Station | None = None,
     # host allowlist, Origin, cross-site requests and body limits, before any route
     app.add_middleware(EdgeGuard, bound_host=settings.host, allow_hosts=settings.allowed_hosts,
                        dev_origins=settings.allowed_origins)
+    # outermost: the server's own send of a websocket, for the fan-out (backend.wsfanout)
+    app.add_middleware(ServerSendTap)
 
     @app.exception_handler(RequestValidationError)
     async def validation_handler(req: Request, exc: RequestValidationError) -> JSONResponse:

@@ -5,8 +5,12 @@ geometry and detection decoders). Should something get past them (a decoder that
 value a processor computes), the world, health, referee and geometry must still reach the
 page: one bad value never answers 500 nor closes a websocket.
 
-``dumps`` tries the strict encoding first (no NaN, valid UTF-8); only when that fails does it
-walk the value and repair it: NaN/inf -> null, bytes -> text decoded with replacement
+``dumps`` tries the strict encoding first (no NaN, valid UTF-8): orjson where it is installed
+(a world message of 11 v 11 in ~25 us instead of ~400-600 us: the station writes one per
+websocket publication, 60 a second, on its own thread), which writes NaN/inf as null, then the
+standard encoder for what orjson refuses (integers beyond 64 bits, keys that are not text,
+nesting deeper than 254, lone surrogates, types it does not know); only when that fails too does
+it walk the value and repair it: NaN/inf -> null, bytes -> text decoded with replacement
 characters, lone surrogates -> U+FFFD, tuples and sets -> lists, non-string keys -> text,
 anything else (and anything nested deeper than ``MAX_DEPTH``, a cycle) -> null. A repair other
 than a non-finite number is logged once per kind of message (rate-limited) with where it was,
@@ -14,6 +18,7 @@ and counted in ``repairs``."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import logging
 import math
@@ -30,6 +35,25 @@ from sslnet.ratelog import RateLimitedLog
 log = logging.getLogger("touchline.json")
 _ratelog = RateLimitedLog(log, interval_s=10.0)
 
+
+def _orjson() -> Any:
+    """The orjson module, or None where it is not installed (the standard encoder alone: the
+    same JSON, slower; a venv made before it became a dependency)."""
+    try:
+        return importlib.import_module("orjson")
+    except ImportError:  # pragma: no cover
+        return None
+
+
+orjson: Any = _orjson()
+
+#: numpy numbers as numbers (the standard encoder writes a numpy float64 as a float, the repair
+#: other numpy numbers; a numpy bool, which it made null, is a boolean here); dataclasses and
+#: datetimes are refused as the standard encoder refuses them (then repaired)
+_ORJSON_OPTIONS = 0 if orjson is None else (
+    orjson.OPT_SERIALIZE_NUMPY | orjson.OPT_PASSTHROUGH_DATACLASS
+    | orjson.OPT_PASSTHROUGH_DATETIME)
+
 MAX_DEPTH = 64
 _SURROGATE = re.compile("[\ud800-\udfff]")
 
@@ -39,6 +63,12 @@ repairs: dict[str, int] = {}
 
 def dumps(obj: Any, what: str = "json") -> str:
     """``obj`` as compact JSON text that is strict (no NaN) and encodes as UTF-8."""
+    if orjson is not None:
+        try:
+            encoded: bytes = orjson.dumps(obj, option=_ORJSON_OPTIONS)
+            return encoded.decode("utf-8")
+        except (TypeError, ValueError, RecursionError):  # orjson.JSONEncodeError is a TypeError
+            pass
     try:
         text = json.dumps(obj, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
         text.encode("utf-8")  # lone surrogates would fail later, in the socket or response

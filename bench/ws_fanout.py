@@ -2,21 +2,32 @@
 loop (issue 11: 25 clients add <= 10 % of a core and never move the loop's numbers).
 
 Starts the real station (launcher --isolated) at full load (8 cameras x 75 Hz, division A,
-11 v 11, the "match" play) and measures, in phases of ``--seconds`` each: 0 clients, N reading
-clients, N clients of which ``--stalled`` stop reading. Per phase: CPU of every process (% of
-one core, /proc), world messages/s per reading client, the control processor's rate, the
-backend's vision -> command latency and the relay's arrival -> command p50 / p99. Prints
-numbers; not a test.
+11 v 11, the "match" play) and measures, in phases of ``--seconds`` each, ``--rounds`` times
+interleaved: 0 clients, N reading clients (A, B, A, B...); then N clients of which
+``--stalled`` stop reading. Per phase: CPU of every process (% of one core, /proc), the
+backend's CPU per thread (the web thread, the main one serving uvicorn, is where the fan-out
+is paid: the station thread's CPU moves with the game by several %, which would swamp a
+process-wide difference), world messages/s and bytes/s per reading client, the control
+processor's rate, the backend's vision -> command latency and the relay's arrival -> command
+p50 / p99 (medians of the 1 s figures the health shows, and the worst 1 s p99). The clients
+run in this process and only look at each message's type (no JSON parsing), so their own CPU
+disturbs the machine little. Prints numbers; not a test.
 
-    PYTHONPATH=. .venv/bin/python bench/ws_fanout.py [--clients 25] [--stalled 2] [--seconds 10]
+    PYTHONPATH=. .venv/bin/python bench/ws_fanout.py [--clients 25] [--stalled 2]
+        [--seconds 10] [--rounds 2] [--pyspy FILE]
+
+``--pyspy FILE``: a py-spy profile (raw, --threads) of the backend during the first
+N-client phase (py-spy at /tmp/pyspy or on PATH); its own sampling disturbs that phase.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
-import json
+import os
+import shutil
 import statistics
+import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -26,8 +37,10 @@ from websockets.asyncio.client import connect
 
 from bench.station_run import full_scale_args, start_station
 from sslnet.proc import process_cpu_s as cpu_s
+from sslnet.proc import thread_cpu_s
 
 ROOT = Path(__file__).resolve().parent.parent
+LATENCIES = ("backend_p50", "backend_p99", "relay_p50", "relay_p99")
 
 
 def health(url: str) -> dict[str, Any]:
@@ -35,8 +48,19 @@ def health(url: str) -> dict[str, Any]:
     return h
 
 
+def backend_threads(pid: int) -> dict[str, float]:
+    """CPU seconds of the backend's threads: the main thread (uvicorn's event loop: the web
+    side) as "web", the others by name (threads of one name summed)."""
+    out: dict[str, float] = {}
+    for (name, tid), sec in thread_cpu_s(pid).items():
+        key = "web" if tid == pid else name
+        out[key] = out.get(key, 0.0) + sec
+    return out
+
+
 class Sampler:
-    """CPU per process over a phase, and the loop's latency figures sampled once a second."""
+    """CPU per process and per backend thread over a phase, and the loop's latency figures
+    sampled once a second."""
 
     def __init__(self, url: str, pids: dict[str, int]) -> None:
         self.url, self.pids = url, pids
@@ -44,15 +68,19 @@ class Sampler:
 
     def start(self) -> None:
         self.c0 = {k: cpu_s(p) for k, p in self.pids.items()}
+        self.th0 = backend_threads(self.pids["backend"])
+        self.own0 = time.process_time()
         self.t0 = time.monotonic()
         self.rows = []
 
     def sample(self) -> None:
         h = health(self.url)
         ctrl = next(p for p in h["processors"] if p["name"] == "control")
+        views = next(p for p in h["processors"] if p["name"] == "views")
         relay = h["relay"] or {}
         self.rows.append({
-            "control_hz": ctrl["measured_hz"], "backend_p50": h["latency"]["p50_ms"],
+            "control_hz": ctrl["measured_hz"], "views_tick_ms": views["tick_mean_ms"],
+            "backend_p50": h["latency"]["p50_ms"],
             "backend_p99": h["latency"]["p99_ms"],
             "relay_p50": relay.get("command_latency_p50_ms", -1),
             "relay_p99": relay.get("command_latency_p99_ms", -1),
@@ -62,14 +90,27 @@ class Sampler:
     def result(self) -> dict[str, float]:
         dt = time.monotonic() - self.t0
         out = {f"cpu_{k}": (cpu_s(p) - self.c0[k]) / dt * 100 for k, p in self.pids.items()}
-        for k in ("control_hz", "backend_p50", "backend_p99", "relay_p50", "relay_p99",
-                  "clients"):
+        th1 = backend_threads(self.pids["backend"])
+        for k, v in th1.items():
+            out[f"thread_{k}"] = (v - self.th0.get(k, 0.0)) / dt * 100
+        out["cpu_bench"] = (time.process_time() - self.own0) / dt * 100
+        for k in ("control_hz", "views_tick_ms", *LATENCIES, "clients"):
             vals = [r[k] for r in self.rows if r[k] >= 0]
             out[k] = statistics.median(vals) if vals else -1.0
+        for k in ("backend_p99", "relay_p99"):
+            vals = [r[k] for r in self.rows if r[k] >= 0]
+            out[k + "_max"] = max(vals) if vals else -1.0
         return out
 
 
-async def reader(url: str, counts: list[int], i: int, stop: asyncio.Event,
+def world_message(data: str | bytes) -> bool:
+    """Whether a websocket message is a world update (its type only: nothing parsed)."""
+    if isinstance(data, str):
+        data = data[:24].encode()
+    return data.startswith(b'{"type":"world"')
+
+
+async def reader(url: str, counts: list[int], sizes: list[int], i: int, stop: asyncio.Event,
                  stall: bool) -> None:
     async with connect(url.replace("http", "ws") + "/api/ws", max_size=None,
                        compression=None) as ws:
@@ -77,17 +118,36 @@ async def reader(url: str, counts: list[int], i: int, stop: asyncio.Event,
             if stall:
                 await stop.wait()  # connected, never reads again
                 break
-            msg = json.loads(await ws.recv())
-            if msg["type"] == "world":
+            data = await ws.recv(decode=False)
+            sizes[i] += len(data)
+            if world_message(data):
                 counts[i] += 1
 
 
-async def phase(s: Sampler, n: int, stalled: int, seconds: float) -> dict[str, float]:
-    counts = [0] * n
+def pyspy_cmd() -> list[str] | None:
+    exe = Path("/tmp/pyspy/bin/py-spy")
+    if exe.exists():
+        return [str(exe)]
+    found = shutil.which("py-spy")
+    return [found] if found else None
+
+
+async def phase(s: Sampler, n: int, stalled: int, seconds: float,
+                pyspy_out: str | None = None) -> dict[str, float]:
+    counts, sizes = [0] * n, [0] * n
     stop = asyncio.Event()
-    tasks = [asyncio.create_task(reader(s.url, counts, i, stop, i < stalled)) for i in range(n)]
-    await asyncio.sleep(2.0)  # let buffers of stalled clients fill
-    base = list(counts)
+    tasks = [asyncio.create_task(reader(s.url, counts, sizes, i, stop, i < stalled))
+             for i in range(n)]
+    await asyncio.sleep(2.0)  # connected; the buffers of stalled clients fill
+    base, base_sizes = list(counts), list(sizes)
+    spy: subprocess.Popen[bytes] | None = None
+    cmd = pyspy_cmd() if pyspy_out else None
+    if pyspy_out and cmd:
+        env = dict(os.environ, PYTHONPATH="/tmp/pyspy")
+        spy = subprocess.Popen([*cmd, "record", "-p", str(s.pids["backend"]), "-d",
+                                str(int(seconds)), "-r", "200", "-f", "raw", "-o", pyspy_out,
+                                "--threads", "--nonblocking"], env=env,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     s.start()
     t_end = time.monotonic() + seconds
     while time.monotonic() < t_end:
@@ -95,12 +155,16 @@ async def phase(s: Sampler, n: int, stalled: int, seconds: float) -> dict[str, f
         await asyncio.to_thread(s.sample)
     r = s.result()
     rates = [(c - b) / seconds for c, b in zip(counts, base, strict=True)][stalled:]
+    bytes_s = [(c - b) / seconds for c, b in zip(sizes, base_sizes, strict=True)][stalled:]
     stop.set()
     for t in tasks:
         t.cancel()
     await asyncio.gather(*tasks, return_exceptions=True)
+    if spy is not None:
+        spy.wait(timeout=seconds + 30)
     r["msgs_min"] = min(rates) if rates else 0.0
     r["msgs_mean"] = sum(rates) / len(rates) if rates else 0.0
+    r["kb_s"] = sum(bytes_s) / len(bytes_s) / 1000 if bytes_s else 0.0
     return r
 
 
@@ -110,34 +174,75 @@ def main() -> None:
     ap.add_argument("--clients", type=int, default=25)
     ap.add_argument("--stalled", type=int, default=2)
     ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--rounds", type=int, default=2,
+                    help="interleaved pairs of phases (0 clients, N clients)")
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
+    ap.add_argument("--pyspy", default=None, metavar="FILE")
     a = ap.parse_args()
     station = start_station(full_scale_args(a.cameras, a.hz))
     proc, url, pids = station.proc, station.url, station.pids
+    load0 = os.getloadavg()
+    results: list[tuple[str, int, dict[str, float]]] = []
     try:
         time.sleep(5)
         s = Sampler(url, pids)
-        phases = [("0 clients", 0, 0), (f"{a.clients} reading", a.clients, 0),
-                  (f"{a.clients} ({a.stalled} stalled)", a.clients, a.stalled)]
-        results = [(name, asyncio.run(phase(s, n, st, a.seconds))) for name, n, st in phases]
+        plan: list[tuple[str, int, int]] = []
+        for _ in range(a.rounds):
+            plan += [("0 clients", 0, 0), (f"{a.clients} reading", a.clients, 0)]
+        if a.stalled:
+            plan.append((f"{a.clients} ({a.stalled} stalled)", a.clients, a.stalled))
+        spied = False
+        for name, n, st in plan:
+            spy = a.pyspy if n and not st and not spied else None
+            spied = spied or spy is not None
+            results.append((name, n, asyncio.run(phase(s, n, st, a.seconds, spy))))
     finally:
         proc.terminate()
         proc.wait(timeout=15)
+    load1 = os.getloadavg()
     print(f"websocket fan-out, {a.cameras} cameras x {a.hz:g} Hz, 11 v 11, match play, "
-          f"{a.seconds:g} s per phase (CPU in % of one core; latencies: medians of 1 s figures)")
-    print("| phase | world msgs/s per reader (min / mean) | backend CPU | relay CPU | "
-          "control Hz | backend vision->command p50 / p99 | relay arrival->command p50 / p99 |")
-    print("|---|---|---|---|---|---|---|")
-    for name, r in results:
-        print(f"| {name} | {r['msgs_min']:.1f} / {r['msgs_mean']:.1f} | "
-              f"{r['cpu_backend']:.1f} | {r['cpu_relay']:.1f} | {r['control_hz']:.0f} | "
-              f"{r['backend_p50']:.2f} / {r['backend_p99']:.2f} ms | "
-              f"{r['relay_p50']:.2f} / {r['relay_p99']:.2f} ms |")
-    base = results[0][1]
-    for name, r in results[1:]:
-        added = r["cpu_backend"] + r["cpu_relay"] - base["cpu_backend"] - base["cpu_relay"]
-        print(f"{name}: adds {added:+.1f} % of a core to relay + backend")
+          f"{a.seconds:g} s per phase, {a.rounds} interleaved rounds (CPU in % of one core; "
+          f"latencies: medians of 1 s figures, worst 1 s p99 in brackets); load "
+          f"{load0[0]:.2f} -> {load1[0]:.2f}")
+    print("| phase | world msgs/s per reader (min / mean) | kB/s per reader | backend CPU "
+          "(web thread / station thread) | relay CPU | control Hz | views tick (ms) | backend "
+          "vision->command p50 / p99 | relay arrival->command p50 / p99 | bench's clients CPU |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, _n, r in results:
+        print(f"| {name} | {r['msgs_min']:.1f} / {r['msgs_mean']:.1f} | {r['kb_s']:.0f} | "
+              f"{r['cpu_backend']:.1f} ({r.get('thread_web', 0):.1f} / "
+              f"{r.get('thread_station', 0):.1f}) | {r['cpu_relay']:.1f} | "
+              f"{r['control_hz']:.0f} | {r['views_tick_ms']:.2f} | "
+              f"{r['backend_p50']:.2f} / {r['backend_p99']:.2f} "
+              f"({r['backend_p99_max']:.2f}) ms | {r['relay_p50']:.2f} / {r['relay_p99']:.2f} "
+              f"({r['relay_p99_max']:.2f}) ms | {r['cpu_bench']:.1f} |")
+    idle = [r for _, n, r in results if n == 0]
+    reading = [r for name, n, r in results if n and "stalled" not in name]
+
+    def mean(rows: list[dict[str, float]], k: str) -> float:
+        return sum(r.get(k, 0.0) for r in rows) / len(rows)
+
+    if idle and reading:
+        web = [b.get("thread_web", 0) - i.get("thread_web", 0)
+               for i, b in zip(idle, reading, strict=False)]
+        both = [b["cpu_backend"] + b["cpu_relay"] - i["cpu_backend"] - i["cpu_relay"]
+                for i, b in zip(idle, reading, strict=False)]
+        per_msg = [w / 100 / max(b["msgs_mean"] * a.clients, 1e-9) * 1e6
+                   for w, b in zip(web, reading, strict=False)]
+        print(f"{a.clients} reading clients add to the web thread: "
+              + " / ".join(f"{x:+.1f}" for x in web) + " % of a core (per round; "
+              + " / ".join(f"{x:.0f}" for x in per_msg) + " us per world message and client); "
+              "to relay + backend: " + " / ".join(f"{x:+.1f}" for x in both) + " %")
+        print(f"relay arrival->command p99 without / with the clients (mean of the rounds' "
+              f"medians): {mean(idle, 'relay_p99'):.2f} / {mean(reading, 'relay_p99'):.2f} ms;"
+              f" p50 {mean(idle, 'relay_p50'):.2f} / {mean(reading, 'relay_p50'):.2f} ms")
+    for name, _n, r in results:
+        if "stalled" in name and idle:
+            both = (r["cpu_backend"] + r["cpu_relay"] - mean(idle, "cpu_backend")
+                    - mean(idle, "cpu_relay"))
+            print(f"{name}: adds {r['thread_web'] - mean(idle, 'thread_web'):+.1f} % of a core "
+                  f"to the web thread, {both:+.1f} % to relay + backend")
 
 
 if __name__ == "__main__":

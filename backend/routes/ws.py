@@ -1,5 +1,7 @@
 """The websocket ``/api/ws``: a snapshot, then every change of the station's published views.
-The station notifies; this loop never polls its state."""
+The station notifies; nothing polls its state. After the snapshot a client of the station's
+server is written by its loop's fan-out (``backend/wsfanout.py``); any other (a test client) is
+served here through ASGI."""
 
 from __future__ import annotations
 
@@ -7,8 +9,7 @@ import asyncio
 import contextlib
 import logging
 import time
-import weakref
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import replace
 
 from fastapi import APIRouter, WebSocket
@@ -18,6 +19,8 @@ from sslnet.ratelog import RateLimitedLog
 
 from ..jsonsafe import dumps
 from ..station import Station
+from ..viewhub import Views
+from ..wsfanout import STALLED_CLIENT_S, direct_socket, fanout_of
 from .deps import VIEWER, StationDep
 from .operators import ws_session
 
@@ -42,11 +45,6 @@ async def ws_endpoint(ws: WebSocket, st: StationDep) -> None:
         st.ws_clients -= 1
 
 
-#: a websocket client whose socket takes no message for this long is dropped (it reconnects
-#: and gets a snapshot): it no longer slows anyone, but it held its buffers for ever
-STALLED_CLIENT_S = 2.0
-
-
 class _Stalled(Exception):
     pass
 
@@ -66,55 +64,6 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
                         "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
 
 
-class _LoopWakeups:
-    """Wakes every websocket client of one event loop with one hand-over from the station
-    thread per publication (not one ``call_soon_threadsafe`` per client: 25 clients at 60 Hz
-    were 1500 self-pipe writes and loop wake-ups a second). Subscribed to the station's views
-    while it has a client."""
-
-    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop) -> None:
-        self.st, self.loop = st, loop
-        self.events: set[asyncio.Event] = set()
-        self._unsubscribe: Callable[[], None] | None = None
-        self._pending = False
-
-    def add(self, event: asyncio.Event) -> None:
-        self.events.add(event)
-        if self._unsubscribe is None:
-            self._unsubscribe = self.st.subscribe_views(self._notify)
-
-    def discard(self, event: asyncio.Event) -> None:
-        self.events.discard(event)
-        if not self.events and self._unsubscribe is not None:
-            self._unsubscribe()
-            self._unsubscribe = None
-
-    def _notify(self) -> None:  # on the station thread: only hand over to the web loop
-        if not self._pending:  # one hand-over in flight is enough: it wakes everyone
-            self._pending = True
-            self.loop.call_soon_threadsafe(self._wake)
-
-    def _wake(self) -> None:
-        self._pending = False
-        for event in self.events:
-            event.set()
-
-
-_wakeups: weakref.WeakKeyDictionary[Station, dict[asyncio.AbstractEventLoop, _LoopWakeups]] = (
-    weakref.WeakKeyDictionary())
-
-
-def _wakeups_of(st: Station) -> _LoopWakeups:
-    loop = asyncio.get_running_loop()
-    per_loop = _wakeups.setdefault(st, {})
-    for old in [x for x in per_loop if x.is_closed() and not per_loop[x].events]:
-        del per_loop[old]  # a loop that ended (tests start one per client)
-    w = per_loop.get(loop)
-    if w is None or w.loop.is_closed():
-        w = per_loop[loop] = _LoopWakeups(st, loop)
-    return w
-
-
 async def _serve_views(ws: WebSocket, st: Station) -> None:
     async def send(text: str) -> None:
         try:
@@ -125,8 +74,7 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
 
     closed = asyncio.Event()
     changed = asyncio.Event()
-    wakeups = _wakeups_of(st)
-    wakeups.add(changed)
+    fanout = fanout_of(st)
 
     async def receive() -> None:
         try:
@@ -138,6 +86,8 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
             closed.set()
             changed.set()
 
+    sock = direct_socket(ws.scope)
+    fanout.add(changed)  # publications from now on are not missed (and the views published)
     rx = asyncio.create_task(receive())
     try:
         await st.read(st.publish_views, True)  # fresh for this client (none may have been)
@@ -148,43 +98,59 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
             "params": {"version": params_version, "values": st.params.values()},
             "player": v.player,
         }, "snapshot"))
-        sent = v
-        next_world = time.monotonic()
-        while not closed.is_set():
-            await changed.wait()
-            changed.clear()
-            if closed.is_set() or ws.application_state != WebSocketState.CONNECTED:
-                break
-            if st.params.version != params_version:
-                params_version = st.params.version
-                await send(dumps({"type": "params", "version": params_version,
-                                          "values": st.params.values()}, "params"))
-            v = st.views
-            if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
-                await send(dumps({"type": "geometry", "geometry": v.geometry},
-                                         "geometry"))
-            if v.player_serial != sent.player_serial:
-                await send(v.player_json)
-            world_key = sent.world_key
-            if v.world_key != sent.world_key:
-                newest = v
-                now = time.monotonic()
-                if now < next_world:  # at most ws_max_hz: wait, then send the newest
-                    with contextlib.suppress(TimeoutError):
-                        await asyncio.wait_for(closed.wait(), next_world - now)
-                    if closed.is_set():
-                        break
-                    newest = st.views
-                    if newest.serial != v.serial:
-                        # what else changed while waiting (the player, geometry, health) is
-                        # sent on the next turn: only the world is taken from the newest views
-                        changed.set()
-                next_world = max(next_world, now) + 1.0 / st.params.current.stream.ws_max_hz
-                await send(newest.world_json)
-                world_key = newest.world_key
-            if v.health_mono != sent.health_mono:
-                await send(v.health_json)
-            sent = replace(v, world_key=world_key)
+        if sock is not None:  # from now on the fan-out writes every publication to it
+            client = fanout.add_direct(sock, v, params_version, closed)
+            fanout.discard(changed)
+            try:
+                await closed.wait()  # it closed, or the fan-out dropped it
+            finally:
+                fanout.discard_direct(client)
+            if client.stalled:
+                raise _Stalled
+        else:
+            await _serve_asgi(ws, st, send, v, params_version, closed, changed)
     finally:
-        wakeups.discard(changed)
+        fanout.discard(changed)
         rx.cancel()
+
+
+async def _serve_asgi(ws: WebSocket, st: Station, send: Callable[[str], Awaitable[None]],
+                      sent: Views, params_version: int, closed: asyncio.Event,
+                      changed: asyncio.Event) -> None:
+    """Sends every change of the views through ASGI, woken by its loop's fan-out (a server
+    whose connections cannot be written directly: the tests' client)."""
+    next_world = time.monotonic()
+    while not closed.is_set():
+        await changed.wait()
+        changed.clear()
+        if closed.is_set() or ws.application_state != WebSocketState.CONNECTED:
+            break
+        if st.params.version != params_version:
+            params_version = st.params.version
+            await send(dumps({"type": "params", "version": params_version,
+                              "values": st.params.values()}, "params"))
+        v = st.views
+        if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
+            await send(dumps({"type": "geometry", "geometry": v.geometry}, "geometry"))
+        if v.player_serial != sent.player_serial:
+            await send(v.player_json)
+        world_key = sent.world_key
+        if v.world_key != sent.world_key:
+            newest = v
+            now = time.monotonic()
+            if now < next_world:  # at most ws_max_hz: wait, then send the newest
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(closed.wait(), next_world - now)
+                if closed.is_set():
+                    break
+                newest = st.views
+                if newest.serial != v.serial:
+                    # what else changed while waiting (the player, geometry, health) is
+                    # sent on the next turn: only the world is taken from the newest views
+                    changed.set()
+            next_world = max(next_world, now) + 1.0 / st.params.current.stream.ws_max_hz
+            await send(newest.world_json)
+            world_key = newest.world_key
+        if v.health_mono != sent.health_mono:
+            await send(v.health_json)
+        sent = replace(v, world_key=world_key)

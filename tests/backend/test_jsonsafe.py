@@ -96,3 +96,25 @@ def test_the_response_renders_whatever_it_carries() -> None:
     r = SafeJSONResponse({"name": b"\xfe", "x": math.nan}, status_code=201, what="unit-test")
     assert r.status_code == 201 and r.media_type == "application/json"
     assert _strict(r.body.decode("utf-8")) == {"name": "\ufffd", "x": None}
+
+
+@given(_value)
+def test_orjson_and_the_standard_encoder_give_the_same_json(value: Any) -> None:
+    """orjson (where installed) writes what the standard encoder writes, repairs included:
+    what it refuses goes the standard way."""
+    pytest.importorskip("orjson")
+    fast = dumps(value, "test")
+    saved = jsonsafe.orjson
+    jsonsafe.orjson = None
+    try:
+        standard = dumps(value, "test")
+    finally:
+        jsonsafe.orjson = saved
+    assert _strict(fast) == _strict(standard)
+
+
+def test_numpy_numbers_are_numbers() -> None:
+    import numpy as np
+    out = _strict(dumps({"f64": np.float64(1.5), "nan64": np.float64("nan"),
+                         "i64": np.int64(-3), "f32": np.float32(0.5)}))
+    assert out == {"f64": 1.5, "nan64": None, "i64": -3, "f32": 0.5}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import itertools
 import json
 import os
 import socket
@@ -89,6 +90,9 @@ def test_stalled_client_does_not_slow_the_others_and_is_dropped(tmp_path) -> Non
         # machine still gives (the rate itself is measured in bench/ws_fanout.py)
         assert len(late) / 2.0 >= 5.0, f"only {len(late) / 2.0:.1f} new worlds/s"
         assert seqs == sorted(seqs)  # the latest only, in order
+        # uvicorn's connections are written by the fan-out directly (not through ASGI)
+        from backend.wsfanout import _fanouts
+        assert sum(f.writes for f in _fanouts[st].values()) >= len(seqs)
         # the stalled clients are dropped (their socket took nothing for 2 s): counted, and
         # their connections closed by the server (a read ends once their buffers are drained)
         deadline = time.monotonic() + 20
@@ -124,13 +128,13 @@ class _Views:
 
 
 def test_all_clients_of_a_loop_are_woken_by_one_hand_over_per_publication() -> None:
-    from backend.routes.ws import _LoopWakeups
+    from backend.wsfanout import LoopFanout
 
     views = _Views()
 
     async def run() -> None:
         loop = asyncio.get_running_loop()
-        w = _LoopWakeups(views, loop)  # type: ignore[arg-type]
+        w = LoopFanout(views, loop)  # type: ignore[arg-type]
         events = [asyncio.Event() for _ in range(25)]
         for e in events:
             w.add(e)
@@ -157,5 +161,195 @@ def test_all_clients_of_a_loop_are_woken_by_one_hand_over_per_publication() -> N
         for e in events:
             w.discard(e)
         assert not views.listeners  # the last client gone: unsubscribed
+
+    asyncio.run(run())
+
+
+# ---- the direct fan-out (backend.wsfanout.LoopFanout) with sockets and a station of its own
+
+
+class _Sock:
+    """A ``DirectSocket`` stand-in: what was written, and bytes it has not taken."""
+
+    def __init__(self) -> None:
+        self.writes: list[bytes] = []
+        self.pending = 0
+        self.closed = False
+
+    def open(self) -> bool:
+        return not self.closed
+
+    def buffered(self) -> int:
+        return self.pending
+
+    def write(self, data: bytes) -> None:
+        self.writes.append(data)
+
+
+class _Station(_Views):
+    """What the fan-out reads of a station: the views, the parameters."""
+
+    def __init__(self, hz: float = 50.0) -> None:
+        from types import SimpleNamespace
+
+        from backend.viewhub import Views
+        super().__init__()
+        self.views = Views()
+        values = {"x": 1}
+        self.params = SimpleNamespace(version=0, values=lambda: values,
+                                      current=SimpleNamespace(stream=SimpleNamespace(
+                                          ws_max_hz=hz)))
+
+    def publish(self, **changes) -> None:  # type: ignore[no-untyped-def]
+        from dataclasses import replace
+        self.views = replace(self.views, serial=self.views.serial + 1, **changes)
+        for listener in list(self.listeners):
+            listener()
+
+
+def _world(k: int) -> dict:  # type: ignore[type-arg]
+    return {"world_key": (k,), "world_json": json.dumps({"type": "world", "world": {"seq": k}})}
+
+
+def _frames(data: bytes) -> list[dict]:  # type: ignore[type-arg]
+    """The JSON messages of unmasked text frames."""
+    from websockets.frames import Frame
+    from websockets.streams import StreamReader
+    reader = StreamReader()
+    reader.feed_data(data)
+    out = []
+    while reader.buffer:
+        gen = Frame.parse(reader.read_exact, mask=False)
+        try:
+            next(gen)
+        except StopIteration as stop:
+            out.append(json.loads(stop.value.data))
+    return out
+
+
+def _fanout(st: _Station, n: int):  # type: ignore[no-untyped-def]
+    from backend.wsfanout import LoopFanout
+    loop = asyncio.get_running_loop()
+    f = LoopFanout(st, loop)  # type: ignore[arg-type]
+    socks = [_Sock() for _ in range(n)]
+    clients = [f.add_direct(s, st.views, st.params.version, asyncio.Event())  # type: ignore[arg-type]
+               for s in socks]
+    return f, socks, clients
+
+
+def test_one_publication_is_framed_once_and_written_to_every_client_in_one_pass() -> None:
+    async def run() -> None:
+        st = _Station(hz=1000.0)
+        f, socks, _ = _fanout(st, 25)
+        assert len(st.listeners) == 1
+        st.publish(**_world(1), health_json='{"type":"health","health":{}}', health_mono=5.0)
+        await asyncio.sleep(0)  # the hand-over runs
+        assert f.passes == 1
+        assert all(len(s.writes) == 1 for s in socks)
+        first = socks[0].writes[0]
+        assert all(s.writes[0] is first for s in socks)  # the same bytes, made once
+        assert [m["type"] for m in _frames(first)] == ["world", "health"]  # in one write
+        await asyncio.sleep(0.01)  # the next world's turn
+        for _ in range(3):  # three publications before the loop runs: one pass, the newest
+            st.publish(**_world(2))
+        await asyncio.sleep(0.05)
+        assert f.passes == 2
+        newest = [{"type": "world", "world": {"seq": 2}}]
+        assert [_frames(s.writes[-1]) for s in socks] == [newest] * 25
+
+    asyncio.run(run())
+
+
+def test_a_client_that_has_not_taken_its_bytes_is_skipped_then_gets_the_newest() -> None:
+    async def run() -> None:
+        st = _Station(hz=1000.0)
+        _f, (slow, fast), _ = _fanout(st, 2)
+        slow.pending = 1000
+        for k in (1, 2, 3):
+            st.publish(**_world(k))
+            await asyncio.sleep(0.01)
+        assert [_frames(w)[0]["world"]["seq"] for w in fast.writes] == [1, 2, 3]
+        assert slow.writes == []  # nothing queued behind what it holds
+        slow.pending = 0
+        st.publish(health_json='{"type":"health","health":{}}', health_mono=1.0)
+        await asyncio.sleep(0.01)
+        # it catches up with the newest world only (and what else changed)
+        assert [m["type"] for m in _frames(slow.writes[0])] == ["world", "health"]
+        assert _frames(slow.writes[0])[0]["world"]["seq"] == 3
+
+    asyncio.run(run())
+
+
+def test_a_client_that_takes_nothing_for_two_seconds_is_dropped(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from backend import wsfanout
+    clock = [100.0]
+    monkeypatch.setattr(wsfanout.time, "monotonic", lambda: clock[0])
+
+    async def run() -> None:
+        st = _Station(hz=1000.0)
+        f, (stuck, draining, ok), clients = _fanout(st, 3)
+        stuck.pending = draining.pending = 50_000
+        for k in range(1, 30):  # 2.8 s of publications, 0.1 s apart
+            clock[0] += 0.1
+            draining.pending -= 1000  # it takes a little at a time: not stalled
+            st.publish(**_world(k))
+            await asyncio.sleep(0)
+            if clock[0] - 100.0 < wsfanout.STALLED_CLIENT_S:
+                assert not clients[0].ended.is_set()
+        assert clients[0].stalled and clients[0].ended.is_set()
+        assert not clients[1].stalled and not clients[1].ended.is_set()
+        assert len(ok.writes) == 29
+        assert f.direct == clients[1:]
+        stuck.pending = 0
+        st.publish(**_world(99))
+        await asyncio.sleep(0)
+        assert stuck.writes == []  # dropped: never written again
+
+    asyncio.run(run())
+
+
+def test_worlds_go_out_at_most_at_ws_max_hz_the_newest_in_their_turn() -> None:
+    async def run() -> None:
+        st = _Station(hz=20.0)  # a turn every 50 ms
+        _f, (s,), _ = _fanout(st, 1)
+        loop = asyncio.get_running_loop()
+        stamps: list[float] = []
+        real_write = s.write
+
+        def write(data: bytes) -> None:
+            stamps.append(loop.time())
+            real_write(data)
+        s.write = write  # type: ignore[method-assign]
+        for k in range(1, 21):  # 200 Hz of new worlds for 0.1 s
+            st.publish(**_world(k))
+            await asyncio.sleep(0.005)
+        await asyncio.sleep(0.1)  # the last turn
+        seqs = [_frames(w)[0]["world"]["seq"] for w in s.writes]
+        assert 2 <= len(seqs) <= 4, seqs
+        assert seqs == sorted(seqs) and seqs[-1] == 20  # the newest goes in the last turn
+        gaps = [b - a for a, b in itertools.pairwise(stamps)]
+        assert min(gaps) >= 0.05 * (1 - 0.25) - 0.002, gaps
+
+    asyncio.run(run())
+
+
+def test_a_player_change_goes_out_while_the_world_waits_for_its_turn() -> None:
+    async def run() -> None:
+        st = _Station(hz=1.0)
+        f, (s,), _ = _fanout(st, 1)
+        st.publish(**_world(1))
+        await asyncio.sleep(0.01)
+        st.publish(**_world(2))
+        await asyncio.sleep(0.01)
+        st.publish(player_json='{"type":"player","player":{"error":"marker"}}', player_serial=1)
+        await asyncio.sleep(0.01)
+        assert [[m["type"] for m in _frames(w)] for w in s.writes] == [["world"], ["player"]]
+        st.params.version = 3  # type: ignore[attr-defined]
+        st.publish(**_world(3))
+        await asyncio.sleep(0.01)
+        assert _frames(s.writes[-1]) == [{"type": "params", "version": 3, "values": {"x": 1}}]
+        for c in list(f.direct):
+            f.discard_direct(c)
+        assert not st.listeners and f._world_timer is None  # the waiting world's timer too
 
     asyncio.run(run())
