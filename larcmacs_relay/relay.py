@@ -44,6 +44,7 @@ _NOBLOCK = int(zmq.NOBLOCK)
 _SNDMORE_NOBLOCK = int(zmq.SNDMORE | zmq.NOBLOCK)
 _EVENTS = int(zmq.EVENTS)
 _POLLIN = int(zmq.POLLIN)
+_TOPICS = {"vision": b"vision", "referee": b"referee", "tracker": b"tracker"}
 _STREAM_IDS = {
     "vision": touchline_pb2.STREAM_VISION,
     "referee": touchline_pb2.STREAM_REFEREE,
@@ -319,12 +320,15 @@ class Relay:
         decoded here (the backend decodes them once): per datagram only the size and
         emptiness checks, one Envelope and one ZeroMQ message."""
         counter = self.streams[name]
-        topic = name.encode()
+        topic = _TOPICS[name]
         stream = _STREAM_IDS[name]
         pub = self._pub
         max_bytes = self.config.max_datagram_bytes
         sources = self._sources
         seq = self._sequences[name]
+        tracker = name == "tracker"
+        compat_vision = self._compat_vision if name == "vision" else None
+        compat_referee = name == "referee" and self._compat_referee is not None
         try:
             for _ in range(MAX_BATCH):
                 try:
@@ -336,7 +340,7 @@ class Relay:
                     self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                     return
                 receive_ns = time.time_ns()
-                if name == "tracker" and self._own_tracker_uuids and self._own_echo(data):
+                if tracker and self._own_tracker_uuids and self._own_echo(data):
                     self.own_tracker_echoes += 1
                     continue
                 if len(data) > max_bytes:
@@ -372,9 +376,9 @@ class Relay:
                     payload=data,
                 )
                 self._publish2(pub, topic, env.SerializeToString())
-                if name == "vision" and self._compat_vision is not None:
-                    self._publish(self._compat_vision, [data])
-                elif name == "referee" and self._compat_referee is not None:
+                if compat_vision is not None:
+                    self._publish(compat_vision, [data])
+                elif compat_referee:
                     self._compat_referee_out(data, addr)
         finally:
             self._sequences[name] = seq
