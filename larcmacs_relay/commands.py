@@ -52,6 +52,19 @@ class CommandTable:
         entry.command, entry.arrival = command, now
         entry.state, entry.zero_since = RobotState.ACTIVE, 0.0
 
+    def update_all(self, commands: list[Command], now: float) -> None:
+        """``update(c, now)`` for each of ``commands`` in order (a command set's robots: one
+        call, not one per robot)."""
+        entries = self._entries
+        active = RobotState.ACTIVE
+        for command in commands:
+            entry = entries.get((command.team, command.id))
+            if entry is None:
+                self.update(command, now)
+                continue
+            entry.command, entry.arrival = command, now
+            entry.state, entry.zero_since = active, 0.0
+
     def stop_all(self, now: float) -> None:
         for entry in self._entries.values():
             entry.command = entry.command.zero()

@@ -14,6 +14,7 @@ import socket
 import time
 from collections import deque
 from collections.abc import Callable
+from typing import cast
 
 import zmq
 import zmq.asyncio
@@ -36,9 +37,14 @@ log = logging.getLogger("larcmacs_relay")
 
 MAX_DATAGRAM = 65536
 MAX_BATCH = 512
+#: at most this many robot commands kept by their bytes (_handle_native); then started afresh
+MAX_PARSED = 512
 # ZeroMQ flags as plain ints: pyzmq's IntFlag arithmetic costs more than the send it flags
 _NOBLOCK = int(zmq.NOBLOCK)
 _SNDMORE_NOBLOCK = int(zmq.SNDMORE | zmq.NOBLOCK)
+_EVENTS = int(zmq.EVENTS)
+_POLLIN = int(zmq.POLLIN)
+_TOPICS = {"vision": b"vision", "referee": b"referee", "tracker": b"tracker"}
 _STREAM_IDS = {
     "vision": touchline_pb2.STREAM_VISION,
     "referee": touchline_pb2.STREAM_REFEREE,
@@ -94,6 +100,13 @@ class Relay:
         self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
         #: each robot's last command and its encoded part of the sim output (_sim_part)
         self._sim_parts: dict[tuple[int, int], tuple[Command, bytes]] = {}
+        #: per team, the robots' commands of the last sim datagram and its bytes: a cycle
+        #: with the same command objects sends the same bytes
+        self._sim_out: dict[int, tuple[tuple[Command, ...], bytes]] = {}
+        #: valid robot commands by their serialized RobotCommand: a command set repeats most
+        #: robots' commands byte for byte, and the same bytes are the same command (the same
+        #: object, so the table and the output see at once that nothing changed)
+        self._parsed: dict[bytes, Command] = {}
         #: grsim output: the bound Robots_Status ports {"blue": port, "yellow": port}
         self.grsim_status_ports: dict[str, int] = {}
         self._referee_mapper = RefereeMapper(config.our_team)
@@ -307,12 +320,15 @@ class Relay:
         decoded here (the backend decodes them once): per datagram only the size and
         emptiness checks, one Envelope and one ZeroMQ message."""
         counter = self.streams[name]
-        topic = name.encode()
+        topic = _TOPICS[name]
         stream = _STREAM_IDS[name]
         pub = self._pub
         max_bytes = self.config.max_datagram_bytes
         sources = self._sources
         seq = self._sequences[name]
+        tracker = name == "tracker"
+        compat_vision = self._compat_vision if name == "vision" else None
+        compat_referee = name == "referee" and self._compat_referee is not None
         try:
             for _ in range(MAX_BATCH):
                 try:
@@ -324,7 +340,7 @@ class Relay:
                     self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                     return
                 receive_ns = time.time_ns()
-                if name == "tracker" and self._own_tracker_uuids and self._own_echo(data):
+                if tracker and self._own_tracker_uuids and self._own_echo(data):
                     self.own_tracker_echoes += 1
                     continue
                 if len(data) > max_bytes:
@@ -360,9 +376,9 @@ class Relay:
                     payload=data,
                 )
                 self._publish2(pub, topic, env.SerializeToString())
-                if name == "vision" and self._compat_vision is not None:
-                    self._publish(self._compat_vision, [data])
-                elif name == "referee" and self._compat_referee is not None:
+                if compat_vision is not None:
+                    self._publish(compat_vision, [data])
+                elif compat_referee:
                     self._compat_referee_out(data, addr)
         finally:
             self._sequences[name] = seq
@@ -405,8 +421,9 @@ class Relay:
     def _drain_commands(self, sub: zmq.Socket[bytes]) -> None:
         """Every message waiting on the command SUB, then one output decision for all of them
         (a burst of command sets is one cycle, not one each). The socket's FD is edge-
-        triggered: it is drained until EAGAIN, and after MAX_BATCH the rest is left for a
-        call_soon (its FD would not signal again)."""
+        triggered: it is drained until ZMQ_EVENTS has no POLLIN (or a receive finds nothing),
+        and after MAX_BATCH the rest is left for a call_soon (its FD would not signal
+        again)."""
         self._commands_changed = False
         try:
             for _ in range(MAX_BATCH):
@@ -419,6 +436,10 @@ class Relay:
                 except Exception as exc:  # never fatal: a bad message is an error, not a crash
                     self.streams["commands"].error("internal error", str(exc))
                     log.exception("command handling failed")
+                # ZMQ_EVENTS says whether another message waits: a receive that fails costs
+                # pyzmq an exception (twice the time of this question), once per wake-up
+                if not cast(int, sub.getsockopt(_EVENTS)) & _POLLIN:
+                    break
             else:
                 asyncio.get_running_loop().call_soon(self._drain_commands, sub)
         except zmq.ZMQError as exc:  # the socket closed under us (shutdown)
@@ -472,12 +493,19 @@ class Relay:
             return
         counter.packet(len(body), now)
         accepted: list[Command] = []
+        parsed = self._parsed
         for pc in cset.commands:
-            try:
-                c = codecs.command_from_proto(pc)
-            except CommandError as exc:
-                self._command_error("commands", str(exc), "bad command")
-                continue
+            key = pc.SerializeToString()
+            c = parsed.get(key)
+            if c is None:
+                try:
+                    c = codecs.command_from_proto(pc)
+                except CommandError as exc:  # not kept: counted every time it comes
+                    self._command_error("commands", str(exc), "bad command")
+                    continue
+                if len(parsed) >= MAX_PARSED:
+                    parsed.clear()
+                parsed[key] = c
             if self._box_team is not None and c.team != self._box_team:
                 # a robot-box datagram has no team: their robot 3 would be our robot 3
                 self._command_error(
@@ -493,8 +521,7 @@ class Relay:
             self._commands_changed = True
             log.warning("stop_all received: every known robot zeroed")
             return
-        for c in accepted:
-            self.table.update(c, now)
+        self.table.update_all(accepted, now)
         if accepted:
             self._commands_changed = True
         if cset.source_receive_time_ns > 0 and accepted:
@@ -761,7 +788,19 @@ class Relay:
                     continue
                 if cfg.output == "sim":
                     port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
-                    data = b"".join([self._sim_part(c) for c in cmds])
+                    robots = tuple(cmds)
+                    last = self._sim_out.get(team)
+                    if last is not None and last[0] == robots:  # the same objects: no __eq__
+                        data = last[1]
+                    else:
+                        parts = self._sim_parts
+                        chunks = []
+                        for c in cmds:  # _sim_part's first test inline (a call per robot)
+                            got = parts.get((team, c.id))
+                            chunks.append(got[1] if got is not None and got[0] is c
+                                          else self._sim_part(c))
+                        data = b"".join(chunks)
+                        self._sim_out[team] = (robots, data)
                     sent = self._send(data, (self._sim_host, port))
                 else:
                     data = codecs.encode_grsim_commands(
@@ -770,19 +809,24 @@ class Relay:
                     sent = self._send(data, (self._sim_host, cfg.grsim_port))
                 if sent:
                     sent_ns = time.time_ns()
+                    sent_team = self._sent[team]
                     for c in cmds:
-                        sent_team = self._sent[team]
                         n, _ = sent_team.get(c.id, (0, 0))
                         sent_team[c.id] = (n + 1, sent_ns)
 
     def _sim_part(self, c: Command) -> bytes:
         """Robot ``c``'s encoded part of the simulation protocol's RobotControl, kept while
         its command stays the same (the same object, or an equal one: a stop is made anew
-        in every cycle)."""
+        in every cycle, and a command set's robot commands are new objects whenever the
+        parsed commands were started afresh)."""
         key = (c.team, c.id)
         got = self._sim_parts.get(key)
-        if got is not None and (got[0] is c or got[0] == c):
-            return got[1]
+        if got is not None:
+            if got[0] is c:
+                return got[1]
+            if got[0] == c:  # kept with this object: the next cycle's test is ``is``
+                self._sim_parts[key] = (c, got[1])
+                return got[1]
         data = codecs.encode_sim_robot_command(c, self.config.chip_angle_deg)
         self._sim_parts[key] = (c, data)
         return data
