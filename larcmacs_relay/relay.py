@@ -11,6 +11,8 @@ import contextlib
 import logging
 import math
 import socket
+import struct
+import sys
 import time
 from collections import deque
 from collections.abc import Callable
@@ -36,6 +38,10 @@ from sslpb import ssl_simulation_control_pb2, touchline_pb2
 log = logging.getLogger("larcmacs_relay")
 
 MAX_DATAGRAM = 65536
+#: Linux's SO_TIMESTAMPNS (= SCM_TIMESTAMPNS; Python 3.11 has no name for it): the kernel
+#: stamps each datagram with its arrival time (CLOCK_REALTIME, as time.time_ns())
+_SO_TIMESTAMPNS = 35
+_TIMESPEC = struct.Struct("@qq")
 MAX_BATCH = 512
 #: at most this many robot commands kept by their bytes (_handle_native); then started afresh
 MAX_PARSED = 512
@@ -117,6 +123,10 @@ class Relay:
         self._compat_vision: zmq.Socket[bytes] | None = None
         self._compat_referee: zmq.Socket[bytes] | None = None
         self._udp_out: socket.socket | None = None
+        #: the simulator's answers arrive on ``_udp_out``; True while the loop watches it (the
+        #: output idle), False while the output cycles read it (see _watch_responses)
+        self._responses_watched = False
+        self._stamped = False  # the kernel stamps the answers' arrival
         self._referee_out: socket.socket | None = None
         self._tracker_out: socket.socket | None = None
         #: uuids of the tracked vision this relay sent: its own frames heard back on the
@@ -228,7 +238,8 @@ class Relay:
             udp.append(out)
             self._udp_out = out
             if cfg.output == "sim":
-                loop.add_reader(out.fileno(), self._drain_responses, out)
+                self._stamped = _stamp_arrivals(out)
+                self._watch_responses(True)
             elif cfg.output == "grsim":
                 for label, team, port in (
                         ("blue", codecs.TEAM_BLUE, cfg.grsim_status_blue_port),
@@ -730,6 +741,9 @@ class Relay:
         """One cycle and the next one's time: a period later, on the old schedule while it
         keeps up (no drift), and no wake-up at all when nothing was due (every robot idle:
         the next command kicks the output again)."""
+        out = self._udp_out
+        if self._stamped and out is not None:  # the answers that came since, before a send
+            self._drain_responses(out)  # (an answer's 'sent' is what went before it)
         try:
             sent = self.output_cycle(now)
         except Exception as exc:  # the schedule must survive a bad cycle: stops depend on it
@@ -737,6 +751,8 @@ class Relay:
             self.streams["output"].error("internal error", str(exc))
             log.exception("output cycle failed")
         self._last_cycle = now
+        if self._stamped:  # the cycles read the answers while they run, the loop once idle
+            self._watch_responses(not sent)
         if not sent:
             self._next_cycle = math.inf
             if self._timer is not None:
@@ -747,6 +763,24 @@ class Relay:
         due_at = self._next_cycle
         on_schedule = now + 0.0005 >= due_at and now - due_at < period
         self._arm(due_at + period if on_schedule else now + period)
+
+    def _watch_responses(self, watched: bool) -> None:
+        """The simulator answers every datagram of a cycle (about 330 a second at full
+        scale), and a loop wake-up per answer cost more than the answer: while the output
+        cycles run (at least ``output_rate_hz``), each cycle reads what came since, before it
+        sends, and the loop does not watch the socket; once the output is idle it watches it
+        again. The kernel's arrival stamps keep every answer's receive time exact; an answer
+        goes on at most one period later (the backend's feedback is held up to 20 ms anyway).
+        Without the stamps (not Linux) the loop always watches, as before."""
+        out = self._udp_out
+        if out is None or watched == self._responses_watched:
+            return
+        loop = asyncio.get_running_loop()
+        if watched:
+            loop.add_reader(out.fileno(), self._drain_responses, out)
+        else:
+            loop.remove_reader(out.fileno())
+        self._responses_watched = watched
 
     def output_cycle(self, now: float) -> bool:
         """One output cycle: send every due command (public for tests and benchmarks).
@@ -861,16 +895,20 @@ class Relay:
 
     def _drain_responses(self, sock: socket.socket) -> None:
         counter = self.streams["sim_responses"]
+        stamped = self._stamped
         while True:
             try:
-                data, addr = sock.recvfrom(MAX_DATAGRAM)
+                if stamped:
+                    data, anc, _flags, addr = sock.recvmsg(MAX_DATAGRAM, 64)
+                else:
+                    data, addr = sock.recvfrom(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:  # e.g. ICMP port unreachable reported on the socket
                 counter.error("socket error", str(exc))
                 self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
                 continue
-            receive_ns = time.time_ns()
+            receive_ns = _arrival_ns(anc) if stamped else time.time_ns()
             counter.packet(len(data))
             port = addr[1]
             team = (codecs.TEAM_BLUE if port == self.config.sim_blue_port else
@@ -1028,6 +1066,28 @@ class Relay:
         while True:
             await asyncio.sleep(self.config.stats_interval_s)
             self._publish(self._pub, [b"stats", self.stats().SerializeToString()])
+
+
+def _stamp_arrivals(sock: socket.socket) -> bool:
+    """Asks the kernel to stamp every datagram ``sock`` receives with its arrival time (Linux;
+    False where that is not to be had)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+    except OSError:
+        return False
+    return True
+
+
+def _arrival_ns(ancillary: list[tuple[int, int, bytes]]) -> int:
+    """A datagram's arrival (ns since the Unix epoch) from its SCM_TIMESTAMPNS; now if the
+    kernel gave none."""
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
+            sec, nsec = _TIMESPEC.unpack_from(data)
+            return int(sec) * 1_000_000_000 + int(nsec)
+    return time.time_ns()
 
 
 def _endpoint(sock: zmq.Socket[bytes] | zmq.asyncio.Socket) -> str:

@@ -149,3 +149,37 @@ async def test_repeated_answers_coalesced_a_change_at_once() -> None:
         assert got[-2].payload == yes and got[-2].sequence == first + 16
         assert got[-1].sequence == first + 17
         assert counter.packets == first + 17 and counter.errors == 0
+
+
+async def test_answers_read_by_the_output_cycles_with_the_kernels_arrival_time() -> None:
+    """While the output cycles run, the loop does not wake for each of the simulator's answers:
+    each cycle reads them before it sends, and an answer's receive time is the kernel's stamp
+    of its arrival (within the simulator's sendto), not the later time it was read; once the
+    output is idle, the loop watches the socket again."""
+    async with running_relay(feedback_interval_s=0.0) as h:
+        sub = h.subscriber(b"feedback")
+        pub = await connect_commands(h)
+        await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
+        _, _, addr = await recv_udp_from(h.sim_blue)
+        await wait_for(lambda: not h.relay._responses_watched, what="the cycles reading")
+        resp = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
+        resp.feedback.add(id=4, dribbler_ball_contact=True)
+        data = resp.SerializeToString()
+        env = None
+        spans: list[tuple[int, int]] = []
+        for _ in range(30):  # the ZeroMQ slow joiner: answer until the subscriber hears one
+            before = time.time_ns()
+            h.sim_blue.sendto(data, addr)
+            spans.append((before, time.time_ns()))
+            if await sub.poll(30):
+                env = await next_feedback(sub)
+                break
+        assert env is not None, "no feedback forwarded"
+        assert any(b <= env.receive_time_ns <= a for b, a in spans), (env.receive_time_ns, spans)
+        assert env.sent[0].last_sent_time_ns <= env.receive_time_ns
+        # the robot's command goes stale, then its zeros end: the output idles, the loop watches
+        await wait_for(lambda: h.relay._responses_watched, timeout=5.0,
+                       what="the loop watching again")
+        h.sim_blue.sendto(data, addr)
+        env = await next_feedback(sub)
+        assert env.payload == data
