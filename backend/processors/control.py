@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from domain.rules import kick_allowed
@@ -68,7 +68,7 @@ class ControlProcessor(Processor):
         self._sorted_keys: list[tuple[Team, int]] = []
         self._keys_of: tuple[int, str, bool] | None = None
         self._indexed: WorldState | None = None
-        self._robots: dict[tuple[Team, int], RobotState] = {}
+        self._index: Mapping[tuple[Team, int], int] = {}  # its robots' places by key
         self.internal: InternalRefereeProcessor | None = None
         #: whether commands for the other team may go out (the station says: a simulator
         #: output and the operator's safety.other_team_in_simulator); else they never do
@@ -166,13 +166,17 @@ class ControlProcessor(Processor):
             self._basis.clear()
         if world is not self._indexed:
             self._indexed = world
-            self._robots = {(r.team, r.id): r for r in world.robots}
-        robots, basis, step_t = self._robots, self._basis, self._step_t
+            index = world.index  # the world model's (one dict for many worlds)
+            self._index = (index if index is not None else
+                           {(r.team, r.id): i for i, r in enumerate(world.robots)})
+        index, world_robots = self._index, world.robots
+        basis, step_t = self._basis, self._step_t
         kick_ok = kick_allowed(command)
         refresh_s = self.refresh_s
         out: list[Command] = []
         for key in keys:
-            robot = robots.get(key)
+            i = index.get(key)
+            robot = None if i is None else world_robots[i]
             entry = targets[key]
             last_t = step_t.get(key)
             seen = robot is not None and robot.visible
