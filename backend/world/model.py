@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field, replace
+from typing import cast
 
 from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_filter
 from backend.filters.params import FilterKind, FilterSettings
@@ -130,9 +131,10 @@ class _Track:
     #: the velocity of the raw measurements (the ball's association reads it; robots have none:
     #: nothing reads theirs, and it cost two calls per detection)
     raw_vel: VelocityFit | None = None
-    #: the robot's state as the last snapshot built it, while it holds (no measurement or
-    #: filter change since, and not predicted): eight cameras see a robot in few frames
-    snap: RobotState | None = None
+    #: the object's state as the last snapshot built it, while it holds (no measurement or
+    #: filter change since, and not predicted): eight cameras see a robot in few frames, and
+    #: the ball in a frame of few. A robot's track holds a RobotState, the ball's a BallState
+    snap: RobotState | BallState | None = None
 
 
 @dataclass
@@ -572,7 +574,7 @@ class WorldModel:
                 oldest = tr.t_meas
             if age <= predict_after:
                 if tr.snap is not None:
-                    out.append(tr.snap)  # unchanged since the last snapshot
+                    out.append(cast(RobotState, tr.snap))  # unchanged since the last one
                 else:
                     out.append(self._seen_state(key, tr))
                 continue
@@ -611,13 +613,19 @@ class WorldModel:
         ball = None
         if self._ball is not None:
             tr = self._ball
-            if t_now - tr.t_meas > cfg.drop_timeout_s:
+            age = t_now - tr.t_meas
+            if age > cfg.drop_timeout_s:
                 self._ball = None
+            elif age <= cfg.predict_after_s and tr.snap is not None:
+                ball = cast(BallState, tr.snap)  # seen lately, nothing new since
             else:
                 x, y, vx, vy, predicted, lost = self._where(tr, t_now)
                 ball = BallState(x, y, vx, vy, tr.t_meas, not lost, self._cams(tr),
                                  raw_x=tr.raw.x, raw_y=tr.raw.y, predicted=predicted,
                                  lost=lost, filter=tr.kind)
+                # (seen lately: the state holds until the ball is measured again, as a
+                # robot's; predicted or lost, it moves with t_now)
+                tr.snap = ball if age <= cfg.predict_after_s else None
         frames = self._cameras
         if len(self._cam_order) != len(frames):  # a camera came (none ever goes)
             self._cam_order = sorted(frames)

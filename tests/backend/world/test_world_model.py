@@ -176,3 +176,24 @@ def test_the_index_of_a_world_finds_each_robot() -> None:
         plain = replace(w, index=None)
         for key in [("blue", 0), ("yellow", 5), ("yellow", 1), ("blue", 7)]:
             assert w.robot(*key) is plain.robot(*key)
+
+
+def test_the_ball_state_is_kept_while_nothing_new_came_and_moves_when_predicted() -> None:
+    m = WorldModel()
+    for k in range(10):
+        m.update(frame(0, 100.0 + 0.01 * k, balls=[RawBall(100.0 * k, 0.0, 0.9)]))
+    b = m.snapshot().ball
+    assert b is not None and not b.predicted
+    m.update(frame(1, 100.095, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))  # no ball
+    same = m.snapshot().ball
+    assert same is b  # seen lately, not measured since: the same state
+    m.update(frame(0, 100.1, balls=[RawBall(1000.0, 0.0, 0.9)]))
+    new = m.snapshot().ball
+    assert new is not b and new is not None and new.t_seen == 100.1
+    # not seen for longer than predict_after_s: extrapolated to the newest capture time
+    m.update(frame(1, 100.2, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))
+    p1 = m.snapshot().ball
+    m.update(frame(1, 100.21, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))
+    p2 = m.snapshot().ball
+    assert p1 is not None and p2 is not None and p1.predicted and p2.predicted
+    assert p2.x > p1.x > new.x
