@@ -143,7 +143,7 @@ class ControlProcessor(Processor):
         else:
             keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
             self._keys_of, self._sorted_keys = keys_of, keys
-        zero = LocalVelocity.zero()
+        zero = _ZERO
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s
         vision_age = self.vision_age_s(now)
@@ -171,6 +171,7 @@ class ControlProcessor(Processor):
                            {(r.team, r.id): i for i, r in enumerate(world.robots)})
         index, world_robots = self._index, world.robots
         basis, step_t = self._basis, self._step_t
+        motions = self.motion.robots
         kick_ok = kick_allowed(command)
         refresh_s = self.refresh_s
         out: list[Command] = []
@@ -186,7 +187,7 @@ class ControlProcessor(Processor):
                     continue  # nothing new for this robot: the relay repeats its command
             dt = tick_dt if last_t is None else min(0.1, now - last_t)
             step_t[key] = now
-            m = self.motion.get(key[0], key[1])
+            m = motions.get(key) or self.motion.get(key[0], key[1])
             if robot is None or not robot.visible:
                 m.step(_UNSEEN, entry.target, dt)  # zero, and restart when seen again
                 basis.pop(key, None)  # commanded zero again in every tick while not seen
@@ -244,3 +245,4 @@ class ControlProcessor(Processor):
 
 
 _UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
+_ZERO = LocalVelocity.zero()  # (frozen: one for every zero command)
