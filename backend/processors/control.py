@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from domain.rules import kick_allowed
@@ -68,7 +68,7 @@ class ControlProcessor(Processor):
         self._sorted_keys: list[tuple[Team, int]] = []
         self._keys_of: tuple[int, str, bool] | None = None
         self._indexed: WorldState | None = None
-        self._robots: dict[tuple[Team, int], RobotState] = {}
+        self._index: Mapping[tuple[Team, int], int] = {}  # its robots' places by key
         self.internal: InternalRefereeProcessor | None = None
         #: whether commands for the other team may go out (the station says: a simulator
         #: output and the operator's safety.other_team_in_simulator); else they never do
@@ -143,7 +143,7 @@ class ControlProcessor(Processor):
         else:
             keys = sorted(k for k in targets if k[0] == self.our_team or other_ok)
             self._keys_of, self._sorted_keys = keys_of, keys
-        zero = LocalVelocity.zero()
+        zero = _ZERO
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s
         vision_age = self.vision_age_s(now)
@@ -166,13 +166,18 @@ class ControlProcessor(Processor):
             self._basis.clear()
         if world is not self._indexed:
             self._indexed = world
-            self._robots = {(r.team, r.id): r for r in world.robots}
-        robots, basis, step_t = self._robots, self._basis, self._step_t
+            index = world.index  # the world model's (one dict for many worlds)
+            self._index = (index if index is not None else
+                           {(r.team, r.id): i for i, r in enumerate(world.robots)})
+        index, world_robots = self._index, world.robots
+        basis, step_t = self._basis, self._step_t
+        motions = self.motion.robots
         kick_ok = kick_allowed(command)
         refresh_s = self.refresh_s
         out: list[Command] = []
         for key in keys:
-            robot = robots.get(key)
+            i = index.get(key)
+            robot = None if i is None else world_robots[i]
             entry = targets[key]
             last_t = step_t.get(key)
             seen = robot is not None and robot.visible
@@ -182,7 +187,7 @@ class ControlProcessor(Processor):
                     continue  # nothing new for this robot: the relay repeats its command
             dt = tick_dt if last_t is None else min(0.1, now - last_t)
             step_t[key] = now
-            m = self.motion.get(key[0], key[1])
+            m = motions.get(key) or self.motion.get(key[0], key[1])
             if robot is None or not robot.visible:
                 m.step(_UNSEEN, entry.target, dt)  # zero, and restart when seen again
                 basis.pop(key, None)  # commanded zero again in every tick while not seen
@@ -240,3 +245,4 @@ class ControlProcessor(Processor):
 
 
 _UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
+_ZERO = LocalVelocity.zero()  # (frozen: one for every zero command)

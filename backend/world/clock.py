@@ -77,16 +77,22 @@ class CameraClocks:
             # no receive clock (frames fed by a program, not the relay): nothing to check
             return ClockVerdict(t_capture)
         d = receive_time_ns / 1e9 - t_capture
-        cam = self._cams.setdefault(camera_id, _Camera())
-        if cam.offset is None:
+        cam = self._cams.get(camera_id)
+        if cam is None:
+            cam = self._cams[camera_id] = _Camera()
+        off = cam.offset
+        if off is None:
             for off in [0.0, *(o.offset for o in self._cams.values() if o.offset is not None)]:
                 if self._fits(d, off):
                     cam.offset = off
                     cam.pending.clear()
                     return ClockVerdict(t_capture + off)
-        elif self._fits(d, cam.offset):
-            cam.pending.clear()
-            return ClockVerdict(t_capture + cam.offset)
+        else:
+            c = self.config
+            if -c.max_ahead_s <= d - off <= c.max_late_s:  # _fits, inline: every frame
+                if cam.pending:
+                    cam.pending.clear()
+                return ClockVerdict(t_capture + off)
         # out of range: dropped, unless the camera keeps saying the same (a new clock)
         c = self.config
         if cam.pending and not (max(cam.pending[0], d) - min(cam.pending[0], d)

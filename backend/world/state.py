@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from domain.teams import TEAMS as TEAMS
@@ -127,8 +128,15 @@ class WorldState:
     kicked_ball: KickedBall | None = None  # the kick in progress (backend.world.kick)
     other_balls: tuple[OtherBall, ...] = ()  # balls seen consistently besides the ball
     flying_balls: bool = False  # camera positions known: a chip's height is estimated
+    #: each robot's place in ``robots`` by (team, id), when the world model made this world
+    #: (else None): control looks its robots up in every world without a dict of its own
+    index: Mapping[tuple[Team, int], int] | None = field(default=None, repr=False,
+                                                          compare=False)
 
     def robot(self, team: Team, rid: int) -> RobotState | None:
+        if self.index is not None:
+            i = self.index.get((team, rid))
+            return None if i is None else self.robots[i]
         for r in self.robots:
             if r.team == team and r.id == rid:
                 return r

@@ -155,3 +155,27 @@ def test_the_relay_keeps_the_robots_a_partial_set_leaves_out() -> None:
     table.update(Command(TEAM_BLUE, 1, 0.5, 0.0, 0.0), 0.05)  # a partial set: A only
     assert [c.forward_mps for c in table.due(0.06)] == [0.5, -1.0]
     assert [c.forward_mps for c in table.due(0.12)] == [0.5, 0.0]  # B stale: zero
+
+
+async def test_control_finds_its_robots_through_the_world_index_as_without_it() -> None:
+    """A world from the world model carries each robot's place (``WorldState.index``):
+    control looks its robots up there; the same world without it commands the same robots
+    from the same states (robots missing, unseen and in another order than the keys)."""
+    a, b = Rig(), Rig()
+    states = [(robot(B, 10.0), robot(A, 20.0)), (robot(B, 40.0),),
+              (robot(A, 50.0, visible=False), robot(B, 60.0))]
+    for rs in states:
+        index = {(r.team, r.id): i for i, r in enumerate(rs)}
+        a.world.write(WorldState(0.0, 0, None, rs, index=index))
+        b.see(*rs)
+        ids_a, ids_b = ids(await a.tick()), ids(await b.tick())
+        assert ids_a == ids_b
+        assert {k: v[0] for k, v in a.c._basis.items()} == {k: v[0] for k, v in b.c._basis.items()}
+        for k in ids_a:  # stepped from the robot's own state
+            if k in a.c._basis:
+                assert (a.c._basis[k][0].team, a.c._basis[k][0].id) == k
+    # a wrong index would be seen: each robot stepped from the other's state
+    rs = (robot(A, 70.0), robot(B, 80.0))
+    a.world.write(WorldState(0.0, 0, None, rs, index={A: 1, B: 0}))
+    await a.tick()
+    assert a.c._basis[A][0] is rs[1]

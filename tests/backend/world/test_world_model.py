@@ -1,8 +1,10 @@
 import math
+from dataclasses import replace
+from itertools import pairwise
 
 from backend.filters import FilterSettings
 from backend.world.model import WorldModel
-from backend.world.state import CameraFrame, RawBall, RawRobot
+from backend.world.state import CameraFrame, RawBall, RawRobot, WorldState
 
 
 def frame(cam: int, t: float, robots=(), balls=(), n: int = 0) -> CameraFrame:  # type: ignore[no-untyped-def]
@@ -114,3 +116,84 @@ def test_robots_stay_sorted_when_one_is_dropped_and_another_comes() -> None:
     m.update(frame(0, 8.1, [RawRobot("blue", 9, 0, 0, 0, 1), RawRobot("blue", 3, 9, 0, 0, 1)]))
     assert [(r.team, r.id) for r in m.snapshot().robots] == [("blue", 3), ("blue", 9),
                                                              ("yellow", 0)]
+
+
+def _scene(m: WorldModel, steps: int, every: int = 1) -> list[WorldState]:
+    """Robots coming, seen by one or two of three cameras, one leaving the view (predicted,
+    lost, dropped) and coming back; a snapshot after every ``every`` frames."""
+    out = []
+    for k in range(steps):
+        t = 100.0 + k * 0.005
+        cam = k % 3
+        dets = [RawRobot("blue", i, 300.0 * i + 20.0 * t, 50.0 * cam, 0.1 * k, 0.9)
+                for i in range(4) if (i + k) % 3 != 0 or i == 0]
+        if k < 40 or k > 800:  # yellow 5 leaves for 3.8 s (predicted, lost, dropped) and comes back
+            dets.append(RawRobot("yellow", 5, -1000.0, 10.0 * cam, 0.0, 0.9))
+        if k > 300:  # a robot comes later
+            dets.append(RawRobot("yellow", 1, -2000.0, 0.0, 0.0, 0.9))
+        m.update(frame(cam, t, dets))
+        if k % every == 0:
+            out.append(m.snapshot())
+    return out
+
+
+def test_a_snapshot_builds_only_what_changed_and_equals_one_built_afresh() -> None:
+    """While every robot was seen lately, a snapshot copies the last one's robots and builds
+    those a camera saw since: the same world as the full pass over every robot (which
+    ``_states = None`` forces), with the unchanged robots' states shared."""
+    fast, full = WorldModel(), WorldModel()
+    orig = full.snapshot
+
+    def afresh(now: float | None = None) -> WorldState:
+        full._states = None
+        return orig(now)
+
+    full.snapshot = afresh  # type: ignore[method-assign]
+    for every in (1, 2):
+        a, b = _scene(fast, 900, every), _scene(full, 900, every)
+        assert a == b
+        assert any(r.predicted for w in a for r in w.robots)
+        assert any(r.lost for w in a for r in w.robots)
+        assert any(len(w.robots) == 5 for w in a) and any(len(w.robots) == 6 for w in a)
+        fast, full = WorldModel(), WorldModel()
+        orig = full.snapshot
+        full.snapshot = afresh  # type: ignore[method-assign]
+    shared = 0
+    worlds = _scene(WorldModel(), 200)
+    for w0, w1 in pairwise(worlds):
+        if len(w0.robots) == len(w1.robots):
+            shared += sum(r0 is r1 for r0, r1 in zip(w0.robots, w1.robots, strict=True))
+    assert shared > 0
+
+
+def test_the_index_of_a_world_finds_each_robot() -> None:
+    """``WorldState.index`` (the model's, read by control): every robot at its place, through
+    arrivals and departures; ``robot()`` answers the same with and without it."""
+    for w in _scene(WorldModel(), 900, 3):
+        assert w.index is not None and len(w.index) == len(w.robots)
+        for key, i in w.index.items():
+            assert (w.robots[i].team, w.robots[i].id) == key
+        plain = replace(w, index=None)
+        for key in [("blue", 0), ("yellow", 5), ("yellow", 1), ("blue", 7)]:
+            assert w.robot(*key) is plain.robot(*key)
+
+
+def test_the_ball_state_is_kept_while_nothing_new_came_and_moves_when_predicted() -> None:
+    m = WorldModel()
+    for k in range(10):
+        m.update(frame(0, 100.0 + 0.01 * k, balls=[RawBall(100.0 * k, 0.0, 0.9)]))
+    b = m.snapshot().ball
+    assert b is not None and not b.predicted
+    m.update(frame(1, 100.095, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))  # no ball
+    same = m.snapshot().ball
+    assert same is b  # seen lately, not measured since: the same state
+    m.update(frame(0, 100.1, balls=[RawBall(1000.0, 0.0, 0.9)]))
+    new = m.snapshot().ball
+    assert new is not b and new is not None and new.t_seen == 100.1
+    # not seen for longer than predict_after_s: extrapolated to the newest capture time
+    m.update(frame(1, 100.2, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))
+    p1 = m.snapshot().ball
+    m.update(frame(1, 100.21, [RawRobot("blue", 1, -3000.0, 0.0, 0.0, 0.9)]))
+    p2 = m.snapshot().ball
+    assert p1 is not None and p2 is not None and p1.predicted and p2.predicted
+    assert p2.x > p1.x > new.x

@@ -1,0 +1,257 @@
+"""Digests of what the world model and the hot path put out, to compare two versions of the code
+(a speed change must not change a bit of it). Not a test: prints one line per scenario; run it
+before and after a change and diff the output.
+
+Every world state (its repr: every float exactly) and its tracked-vision packet, of:
+- ``a1``/``a2``: bench/world_bench.py's frames (8 cameras, 22 robots and the ball in every frame,
+  false balls), each filter kind, a snapshot after every frame / every second frame;
+- ``b``: bench/pipeline_bench.py's frames (each camera its part of the field), two a snapshot;
+- ``c1``/``c3``/``cf``: fieldsim 11 v 11, division A, 8 cameras x 75 Hz, false detections,
+  robots driving, a chip (``cf``: a flat kick) and robots leaving the field; the camera
+  positions known (flight estimate); a snapshot after every frame / every third / every second;
+- ``d``: the recorded session of tests/data (the regression test's log), after every frame;
+- ``e``: the pipeline (vision ingest, world, control, command publisher, tracked vision) on
+  pipeline_bench's datagrams with a clock of its own: every world written, every command set,
+  every message sent to the relay, every tracked packet recorded.
+
+    PYTHONPATH=. .venv/bin/python bench/world_digest.py [a1 a2 b c1 c3 cf d e]
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import math
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import bench.pipeline_bench as pb
+import bench.world_bench as wb
+from backend.filters import FilterSettings
+from backend.world.decode import decode_detection, geometry_to_dict
+from backend.world.model import WorldModel
+from backend.world.state import CameraFrame, WorldState
+from backend.world.tracked import tracked_packet
+from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class Digest:
+    def __init__(self) -> None:
+        self.h = hashlib.sha256()
+        self.n = 0
+
+    def add(self, b: bytes) -> None:
+        self.h.update(b)
+        self.n += 1
+
+    def world(self, w: WorldState, n: int) -> None:
+        self.add(repr(w).encode())
+        self.add(tracked_packet(w, "u", n))
+
+    def __str__(self) -> str:
+        return f"{self.h.hexdigest()[:16]} ({self.n})"
+
+
+def decoded(datagrams: list[tuple[int, bytes]]) -> list[CameraFrame]:
+    out = []
+    for ns, raw in datagrams:
+        p = SSL_WrapperPacket()
+        p.ParseFromString(raw)
+        out.append(decode_detection(p.detection, ns))
+    return out
+
+
+def all_objects(every: int) -> str:
+    fs = wb.frames(3000)
+    out = {}
+    for kind in ("adaptive", "kalman", "raw", "median", "paper"):
+        d = Digest()
+        m = WorldModel(filters=FilterSettings(ball=kind, robot=kind))
+        for i, f in enumerate(fs):
+            m.update(f)
+            if i % every == 0:
+                d.world(m.snapshot(), i)
+        out[kind] = str(d)
+    return " ".join(f"{k} {v}" for k, v in out.items())
+
+
+def parts() -> str:
+    fs = decoded(pb.datagrams(4000, 1.7e9))
+    d, m = Digest(), WorldModel()
+    for i in range(0, len(fs), 2):
+        for f in fs[i:i + 2]:
+            m.update(f)
+        d.world(m.snapshot(), i)
+    return str(d)
+
+
+def fieldsim(every: int, chip: bool) -> str:
+    from fieldsim.config import SimConfig
+    from fieldsim.vision import Vision
+    from fieldsim.world import Team, World
+
+    t0 = 1_700_000_000.0
+    cfg = SimConfig(blue=11, yellow=11, seed=3, cameras=8, division="A", camera_hz=75.0,
+                    false_prob=0.05)
+    w = World(cfg)
+    v = Vision(cfg, w.geometry)
+    w.teleport_robot(Team.BLUE, 0, -2.0, 0.5, 0.0)
+    w.teleport_ball(-2.0 + cfg.robot_radius_m + cfg.ball_radius_m + 0.004, 0.5)
+    m = WorldModel()
+    m.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
+    d = Digest()
+    period = 1.0 / cfg.camera_hz
+    nxt = list(v.phases)
+    n = 0
+    while w.t < 6.0:
+        if 0.5 <= w.t < 0.52:
+            w.set_command(Team.BLUE, 0, 0.0, 0.0, 0.0, kick_speed=4.0,
+                          kick_angle=math.radians(50.0 if chip else 0.0))
+        for rid in range(1, 6):
+            w.set_command(Team.BLUE, rid, 1.0, 0.3, 1.0 if w.t % 2 < 1 else -1.0)
+        if 4.0 <= w.t < 4.5:  # two robots lifted off the field
+            for rid in (6, 7):
+                w.robots.pop((Team.YELLOW, rid), None)
+        w.step()
+        for k in range(len(nxt)):
+            while nxt[k] <= w.t:
+                tc = nxt[k]
+                nxt[k] += period
+                det = v.detect(k, w, t0 + tc, t0 + tc + 0.001, tc - w.t).detection
+                m.update(decode_detection(det, int((t0 + tc + 0.002) * 1e9)))
+                n += 1
+                if n % every == 0:
+                    d.world(m.snapshot(), n)
+    return f"{d} kicks {m.kicks.kicks} chips {m.flight.chips}"
+
+
+def recorded() -> str:
+    from ssllog.format import TYPE_VISION_2014
+    from ssllog.logfile import LogFile
+
+    log = LogFile.open(str(ROOT / "tests" / "data" / "fieldsim-2s.log.gz"),
+                       Path(tempfile.mkdtemp()))
+    d, m = Digest(), WorldModel()
+    for rec in log.records():
+        if rec.type != TYPE_VISION_2014:
+            continue
+        pkt = SSL_WrapperPacket()
+        pkt.ParseFromString(rec.payload)
+        if pkt.HasField("geometry"):
+            g = geometry_to_dict(pkt.geometry)
+            m.set_field(g["field_length"] / 2, g["field_width"] / 2, g["boundary_width"])
+        if pkt.HasField("detection"):
+            m.update(decode_detection(pkt.detection, rec.time_ns))
+            d.world(m.snapshot(), 1)
+    return str(d)
+
+
+class _Clock:
+    """``time`` for the modules of the pipeline: a monotonic and a wall clock of its own."""
+
+    def __init__(self) -> None:
+        self.t = 1000.0
+
+    def monotonic(self) -> float:
+        return self.t
+
+    def time_ns(self) -> int:
+        return int(self.t * 1e9)
+
+
+@contextmanager
+def _clock(clock: _Clock, *modules: ModuleType) -> Iterator[None]:
+    real = [m.time for m in modules]  # type: ignore[attr-defined]
+    for m in modules:
+        m.time = clock  # type: ignore[attr-defined]
+    try:
+        yield
+    finally:
+        for m, t in zip(modules, real, strict=True):
+            m.time = t  # type: ignore[attr-defined]
+
+
+def pipeline() -> str:
+    import backend.bus as busmod
+    import backend.processors.control as ctl
+    import backend.processors.publisher as pubmod
+    from backend import topics
+    from backend.bus import DataBus
+    from backend.processors import (
+        CommandPublisher,
+        ControlProcessor,
+        TrackerPublisher,
+        VisionIngest,
+        WorldProcessor,
+    )
+    from sslpb import touchline_pb2 as tl
+
+    clock = _Clock()
+    frames = pb.datagrams(3000, 1.7e9)
+    sent, rec, worlds, cmds = Digest(), Digest(), Digest(), Digest()
+    with _clock(clock, ctl, busmod, pubmod):
+        bus = DataBus({})
+        wire = pb.Wire()
+        wire.send_multipart = lambda fr, flags=0: sent.add(b"|".join(fr))  # type: ignore
+        vision, world = VisionIngest(bus), WorldProcessor(bus)
+        control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=1e9)
+        control.strategy_stale_s = 1e9
+        publisher = CommandPublisher(bus)
+        publisher.attach(wire)  # type: ignore[arg-type]
+        tracker = TrackerPublisher(bus, "uuid")
+        tracker.attach(wire)  # type: ignore[arg-type]
+        tracker.record = lambda t, k, b: rec.add(repr((t, k)).encode() + b)
+        wt, ct = bus.of(topics.WORLD), bus.of(topics.ROBOT_COMMANDS)
+        packets, target_topic = bus.of(topics.VISION_PACKETS), bus.of(topics.TARGETS)
+
+        async def run() -> None:
+            wseq = cseq = 0
+            for i in range(0, len(frames), 2):
+                clock.t += 1 / 300.0 if i % 6 else 1 / 450.0
+                if i % 30 < 2:
+                    target_topic.write(pb.targets(i))
+                for recv_ns, raw in frames[i:i + 2]:
+                    packets.write(tl.Envelope(stream=tl.STREAM_VISION, receive_time_ns=recv_ns,
+                                              sequence=i, source="bench", payload=raw))
+                for p in (vision, world, control, publisher, tracker):
+                    await p.tick()
+                for r in wt.records_after(wseq):
+                    worlds.add(repr(r.value).encode())
+                    wseq = r.seq
+                for c in ct.records_after(cseq):
+                    cs = c.value
+                    cmds.add(repr((cs.source_receive_time_ns, cs.commands, cs.stop_all)).encode())
+                    cseq = c.seq
+                cmds.add(repr(sorted(control.last_commands.items())).encode())
+
+        asyncio.run(run())
+    return f"worlds {worlds} commands {cmds} wire {sent} tracker-records {rec}"
+
+
+SCENARIOS: dict[str, Callable[[], Any]] = {
+    "a1": lambda: all_objects(1), "a2": lambda: all_objects(2), "b": parts,
+    "c1": lambda: fieldsim(1, True), "c3": lambda: fieldsim(3, True),
+    "cf": lambda: fieldsim(2, False), "d": recorded, "e": pipeline,
+}
+
+
+def main() -> None:
+    for name in sys.argv[1:] or list(SCENARIOS):
+        t0 = time.monotonic()
+        out = SCENARIOS[name]()
+        print(f"{name} {out}", file=sys.stdout, flush=True)
+        print(f"  ({time.monotonic() - t0:.0f} s)", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
