@@ -12,17 +12,19 @@ import os
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, NamedTuple, TypeVar
 
 if TYPE_CHECKING:
     from .topics import TopicSpec
 
 T = TypeVar("T")
+_monotonic = time.monotonic
 
 
-@dataclass(frozen=True, slots=True)
-class Record(Generic[T]):
+class Record(NamedTuple, Generic[T]):
+    """One record of a topic (a tuple: built in a call, not a frozen dataclass's three
+    ``object.__setattr__``; hundreds are written a second)."""
+
     seq: int
     time_mono: float  # time.monotonic() when written
     value: T
@@ -64,11 +66,12 @@ class Topic(Generic[T]):
         if self._check is not None and not isinstance(value, self._check):
             raise TypeError(f"topic {self.name!r} carries {self._check.__name__}, "
                             f"not {type(value).__name__}")
-        self._seq += 1
-        rec = Record(self._seq, time.monotonic(), value)
+        self._seq = seq = self._seq + 1
+        rec = Record(seq, _monotonic(), value)
         self._ring.append(rec)
-        for ev in self._waiters:
-            ev.set()
+        if self._waiters:
+            for ev in self._waiters:
+                ev.set()
         if self.on_write is not None:
             self.on_write()
         return rec

@@ -13,10 +13,11 @@ import logging
 import math
 import time
 from collections import deque
+from collections.abc import Callable, Coroutine, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from sslnet.rate import RateCounter
+from sslnet.rate import CountRate
 from sslnet.ratelog import RateLimitedLog
 
 from .bus import Topic
@@ -47,7 +48,9 @@ class OnTopic:
 
 
 class Processor:
-    """Base class. Subclasses implement ``tick``; ``setup``/``teardown`` are optional."""
+    """Base class. Subclasses implement ``step`` (work that never waits: a plain call, which
+    the runner makes in its pass without a coroutine) or ``tick`` (a coroutine, for work
+    that awaits); ``setup``/``teardown`` are optional."""
 
     name = "processor"
 
@@ -58,12 +61,24 @@ class Processor:
     async def setup(self) -> None:
         return None
 
-    async def tick(self) -> None:
+    def step(self) -> None:
+        """One tick as a plain call (a processor whose work never waits implements this)."""
         raise NotImplementedError
+
+    async def tick(self) -> None:
+        """One tick; by default the plain ``step``."""
+        self.step()
 
     async def wait_input(self) -> None:
         """For source processors (trigger None): wait until input is ready; not timed."""
         raise NotImplementedError
+
+    def watch_input(self, ready: Callable[[], None]) -> bool:
+        """For source processors: have ``ready`` called on the running loop whenever input
+        waits (a descriptor the loop watches), instead of a task waiting in ``wait_input``;
+        the runner then runs the tick and the pass inside that call. False (the default):
+        not supported, the runner's task waits in ``wait_input``."""
+        return False
 
     async def teardown(self) -> None:
         return None
@@ -79,53 +94,122 @@ class Processor:
         self.trigger = Every(hz)
 
 
+def plain_step(proc: Processor) -> Callable[[], None] | None:
+    """``proc.step`` when the processor implements its tick as ``step`` (and not ``tick``),
+    else None."""
+    cls = type(proc)
+    if cls.step is Processor.step or cls.tick is not Processor.tick:
+        return None
+    return proc.step
+
+
 class ProcessorStats:
+    """Cheap to keep (a run is an integer added and a duration appended), computed when read:
+    the rate from the count (``CountRate``), the mean and p99 from the last 512 durations."""
+
     def __init__(self) -> None:
-        self.rate = RateCounter(window_s=2.0)
-        self.ticks_ms: deque[float] = deque(maxlen=512)
+        self.rate = CountRate(window_s=2.0)
+        self.ticks_s: deque[float] = deque(maxlen=512)
         self.overruns = 0
         self.errors = 0
         self.last_error = ""
 
     def record(self, duration_s: float) -> None:
-        self.rate.add()
-        self.ticks_ms.append(duration_s * 1000.0)
+        self.rate.total += 1
+        self.ticks_s.append(duration_s)
+
+    @property
+    def ticks_ms(self) -> list[float]:
+        return [t * 1000.0 for t in self.ticks_s]
 
     def summary(self) -> dict[str, float]:
-        ticks = sorted(self.ticks_ms)
-        mean = sum(ticks) / len(ticks) if ticks else 0.0
-        p99 = ticks[min(len(ticks) - 1, int(0.99 * len(ticks)))] if ticks else 0.0
+        ticks = sorted(self.ticks_s)
+        mean = sum(ticks) / len(ticks) * 1000.0 if ticks else 0.0
+        p99 = ticks[min(len(ticks) - 1, int(0.99 * len(ticks)))] * 1000.0 if ticks else 0.0
         return {"measured_hz": self.rate.rate_hz(), "tick_mean_ms": mean, "tick_p99_ms": p99}
+
+
+class _Rest:
+    """Awaits the rest of a coroutine that suspended on its first step (its first yield is
+    handed on to the task, which resumes it as if it had been awaited from the start)."""
+
+    __slots__ = ("coro", "first")
+
+    def __init__(self, coro: Coroutine[Any, Any, None], first: Any) -> None:
+        self.coro, self.first = coro, first
+
+    def __await__(self) -> Generator[Any, Any, None]:
+        coro, out = self.coro, self.first
+        while True:
+            try:
+                got = yield out
+            except BaseException as exc:  # cancelled (or thrown into): the coroutine's turn
+                try:
+                    out = coro.throw(exc)
+                except StopIteration:
+                    return
+            else:
+                try:
+                    out = coro.send(got)
+                except StopIteration:
+                    return
+
+
+class _Link:
+    """A topic-triggered processor in the pass: its topic, the newest sequence number it has
+    seen, a run asked for by its max wait, the time of its last run."""
+
+    __slots__ = ("due", "last_run", "proc", "seen", "step", "topic", "trigger")
+
+    def __init__(self, proc: Processor, trigger: OnTopic) -> None:
+        self.proc = proc
+        self.trigger = trigger
+        self.topic = trigger.topic
+        self.seen = 0
+        self.due = True  # once at the start, like after new records
+        self.last_run = time.perf_counter()
+        self.step = plain_step(proc)
 
 
 class Runner:
     """Runs processors and stops them in reverse order.
 
-    **One pass per input.** A source processor (socket, log player) or a fixed-rate one runs
-    in its own task; when its tick is done, every processor triggered by a topic that got new
-    records runs at once, in the order they were added (the pipeline's order), again and again
-    until nothing new is left: one camera frame goes from the ZeroMQ socket through decoding,
-    the world model, control and the command publisher in one synchronous pass, without a
-    wake-up of the event loop between two stages. A topic written from outside a pass (an
-    operator's command between two ticks) starts a pass of its own, once per burst.
-    Topic-triggered processors with ``max_wait_s`` also run when nothing arrived for that
-    long (a task per processor sleeps until that deadline)."""
+    **One pass per input.** A source processor (socket, log player) or a fixed-rate one runs;
+    when its tick is done, every processor triggered by a topic that got new records runs at
+    once, in the order they were added (the pipeline's order), again and again until nothing
+    new is left: one camera frame goes from the ZeroMQ socket through decoding, the world
+    model, control and the command publisher in one synchronous pass. A source that signals
+    its input through the loop (``Processor.watch_input``: the relay's ZeroMQ descriptor) is
+    ticked and followed by its pass inside that callback, and a fixed-rate processor inside
+    a timer's: no task, no future, no second turn of the event loop per frame. Processors
+    implementing ``step`` are plain calls; a coroutine ``tick`` is stepped by hand and
+    finishes there unless it really waits (then it, and the rest of its pass, go on in a
+    task). A topic written from outside a pass (an operator's command between two ticks)
+    starts a pass of its own, once per burst. Topic-triggered processors with ``max_wait_s``
+    also run when nothing arrived for that long (a task per processor sleeps until that
+    deadline).
+
+    Stats are counters bumped in the pass (``ProcessorStats``); rates are computed when read.
+    """
 
     def __init__(self) -> None:
         self.processors: list[Processor] = []
         self._tasks: list[asyncio.Task[None]] = []
         self._errlog = RateLimitedLog(log, interval_s=10.0)
-        #: topic-triggered processors in pipeline order, with the sequence number of their
-        #: topic they have seen and the monotonic time of their last run
-        self._chained: list[Processor] = []
-        self._seen: dict[int, int] = {}
-        self._last_run: dict[int, float] = {}
-        self._due: set[int] = set()  # deadline runs asked for while a pass was going on
+        #: topic-triggered processors in pipeline order
+        self._links: list[_Link] = []
+        self._link_of: dict[int, _Link] = {}
         self._watched: set[int] = set()  # ids of the topics with a hook
         self._passing = False
         self._ticking = 0  # source and fixed-rate ticks under way (a pass follows each)
         self._pass_scheduled = False
         self._loop: asyncio.AbstractEventLoop | None = None
+        #: the task going on with a pass whose tick waited, and the sources that became
+        #: ready meanwhile (run when it is over)
+        self._later: asyncio.Task[None] | None = None
+        self._ready_after: list[Callable[[], None]] = []
+        #: the next timer of each fixed-rate processor
+        self._timers: dict[int, asyncio.Handle] = {}
 
     def add(self, proc: Processor) -> Processor:
         self.processors.append(proc)
@@ -136,20 +220,27 @@ class Runner:
         for proc in self.processors:
             await proc.setup()
             self._chain(proc)
+            if proc.trigger is None and proc.watch_input(self._source_ready(proc)):
+                continue  # ticked from the loop's callback: no task
+            if isinstance(proc.trigger, Every):
+                self._every(proc)  # a timer of the loop: no task
+                continue
             self._tasks.append(asyncio.create_task(self._loop_of(proc), name=proc.name))
         self._request_pass()
 
     def _chain(self, proc: Processor) -> None:
         """A topic-triggered processor joins the pass (in the order added)."""
         if isinstance(proc.trigger, OnTopic):
-            self._chained.append(proc)
-            self._seen[id(proc)] = 0
-            self._due.add(id(proc))  # once at the start, like after new records
-            self._last_run[id(proc)] = time.monotonic()
+            link = _Link(proc, proc.trigger)
+            self._links.append(link)
+            self._link_of[id(proc)] = link
             self._watch(proc.trigger.topic)
 
     async def stop(self) -> None:
         self._loop = None  # no pass is scheduled from here on
+        for timer in self._timers.values():
+            timer.cancel()
+        self._timers.clear()
         tasks = list(reversed(self._tasks))
         for task in tasks:
             task.cancel()
@@ -157,11 +248,11 @@ class Runner:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
         self._tasks.clear()
-        for proc in self._chained:
-            if isinstance(proc.trigger, OnTopic):
-                proc.trigger.topic.on_write = None
+        for link in self._links:
+            link.topic.on_write = None
         self._watched.clear()
-        self._chained.clear()
+        self._links.clear()
+        self._link_of.clear()
         for proc in reversed(self.processors):
             try:
                 await proc.teardown()
@@ -172,6 +263,16 @@ class Runner:
         if id(topic) not in self._watched:
             self._watched.add(id(topic))
             topic.on_write = self._written
+
+    def _relink(self, link: _Link) -> None:
+        """The processor's trigger changed (configure): its topic and max wait from now on."""
+        trig = link.proc.trigger
+        if not isinstance(trig, OnTopic):
+            raise RuntimeError(f"{link.proc.name}: a topic-triggered processor stays so")
+        if trig.topic is not link.topic:
+            link.seen = 0
+        link.trigger, link.topic = trig, trig.topic
+        self._watch(trig.topic)
 
     def _written(self) -> None:
         """A watched topic got a record: a pass follows the tick under way, if there is one;
@@ -189,58 +290,147 @@ class Runner:
     def _scheduled_pass(self) -> None:
         self._pass_scheduled = False
         if self._loop is not None:
-            task = self._loop.create_task(self._pass())
-            self._tasks.append(task)
-            task.add_done_callback(self._forget_task)
+            self._pass_now()
+
+    # ---- running a tick ----
+
+    def _failed(self, proc: Processor, exc: Exception) -> None:
+        proc.stats.errors += 1
+        proc.stats.last_error = f"{type(exc).__name__}: {exc}"
+        self._errlog.warning(proc.name, "processor %s tick failed: %s", proc.name,
+                             proc.stats.last_error)
+        log.debug("traceback", exc_info=True)
+
+    def _run_now(self, proc: Processor, step: Callable[[], None] | None,
+                 t0: float) -> Coroutine[Any, Any, None] | None:
+        """Runs one tick from ``t0`` (perf_counter) and records it. A coroutine tick that
+        waits is not finished here: the awaitable of its rest is returned (the caller awaits
+        it, then ``_recorded``)."""
+        try:
+            if step is not None:
+                step()
+            else:
+                coro = proc.tick()
+                try:
+                    first = coro.send(None)
+                except StopIteration:
+                    pass
+                else:
+                    return self._rest(proc, coro, first, t0)
+        except Exception as exc:
+            self._failed(proc, exc)
+        proc.stats.record(time.perf_counter() - t0)
+        return None
+
+    async def _rest(self, proc: Processor, coro: Coroutine[Any, Any, None], first: Any,
+                    t0: float) -> None:
+        try:
+            await _Rest(coro, first)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            self._failed(proc, exc)
+        proc.stats.record(time.perf_counter() - t0)
+
+    async def _run_once(self, proc: Processor) -> float:
+        """One timed tick of ``proc``, waiting for it if it waits."""
+        t0 = time.perf_counter()
+        rest = self._run_now(proc, plain_step(proc), t0)
+        if rest is not None:
+            await rest
+        return time.perf_counter() - t0
+
+    # ---- the pass ----
+
+    def _pass_now(self) -> None:
+        """Runs every topic-triggered processor whose topic has new records (or whose max
+        wait is up), in pipeline order, until none is left. One pass at a time: a pass asked
+        for during another is the other's next round. A tick that really waits hands the
+        rest of the pass to a task."""
+        if self._passing:
+            return
+        self._passing = True
+        clock = time.perf_counter
+        try:
+            again = True
+            while again:
+                again = False
+                for link in self._links:
+                    if link.proc.trigger is not link.trigger:
+                        self._relink(link)
+                    seq = link.topic._seq
+                    if seq == link.seen and not link.due:
+                        continue
+                    link.seen = seq
+                    link.due = False
+                    link.last_run = t0 = clock()
+                    rest = self._run_now(link.proc, link.step, t0)
+                    if rest is not None:  # the rest of the pass after this tick
+                        self._continue_later(rest)
+                        return
+                    again = True
+        except BaseException:
+            self._passing = False
+            raise
+        self._passing = False
+
+    def _continue_later(self, rest: Coroutine[Any, Any, None]) -> None:
+        """A tick of the pass waits: the pass (still ``_passing``) goes on in a task."""
+        async def go_on() -> None:
+            try:
+                await rest
+            finally:
+                self._passing = False
+            if self._loop is not None:
+                self._pass_now()
+            if not self._passing:
+                ready, self._ready_after = self._ready_after, []
+                for fn in ready:
+                    fn()
+
+        loop = self._loop or asyncio.get_running_loop()
+        task = loop.create_task(go_on())
+        self._later = task
+        self._tasks.append(task)
+        task.add_done_callback(self._forget_task)
 
     def _forget_task(self, task: asyncio.Task[None]) -> None:
         with contextlib.suppress(ValueError):
             self._tasks.remove(task)
 
     async def _pass(self) -> None:
-        """Runs every topic-triggered processor whose topic has new records (or whose max
-        wait is up), in pipeline order, until none is left. One pass at a time: a pass asked
-        for during another is the other's next round."""
-        if self._passing:
-            return
-        self._passing = True
-        try:
-            again = True
-            while again:
-                again = False
-                for proc in self._chained:
-                    trig = proc.trigger
-                    if not isinstance(trig, OnTopic):
-                        continue
-                    if trig.topic.on_write is None:  # the trigger changed topic (configure)
-                        self._watch(trig.topic)
-                    key = id(proc)
-                    seq = trig.topic.seq
-                    if seq == self._seen[key] and key not in self._due:
-                        continue
-                    self._seen[key] = seq
-                    self._due.discard(key)
-                    self._last_run[key] = time.monotonic()
-                    await self._run_once(proc)
-                    again = True
-        finally:
-            self._passing = False
+        """The pass, for a caller on a coroutine: returns when the pass (and a rest of it
+        in a task, if one of its ticks waited) is over."""
+        self._pass_now()
+        while self._passing and self._later is not None:  # a tick of it waits in a task
+            await asyncio.wait([self._later])
 
-    async def _run_once(self, proc: Processor) -> float:
-        t0 = time.perf_counter()
-        try:
-            await proc.tick()
-        except asyncio.CancelledError:
-            raise
-        except Exception as exc:
-            proc.stats.errors += 1
-            proc.stats.last_error = f"{type(exc).__name__}: {exc}"
-            self._errlog.warning(proc.name, "processor %s tick failed: %s", proc.name,
-                                 proc.stats.last_error)
-            log.debug("traceback", exc_info=True)
-        dt = time.perf_counter() - t0
-        proc.stats.record(dt)
-        return dt
+    # ---- sources and fixed-rate processors ----
+
+    def _source_ready(self, proc: Processor) -> Callable[[], None]:
+        """The callback a watched source calls when input waits: its tick, then the pass,
+        in this call."""
+        step = plain_step(proc)
+        clock = time.perf_counter
+
+        def ready() -> None:
+            if self._loop is None:  # stopped
+                return
+            if self._passing:  # the pass waits in a task: take the input after it
+                if ready not in self._ready_after:
+                    self._ready_after.append(ready)
+                return
+            self._ticking += 1
+            try:
+                rest = self._run_now(proc, step, clock())
+            finally:
+                self._ticking -= 1
+            if rest is not None:  # a source tick that waits: finished in a task
+                self._continue_later(rest)
+                return
+            self._pass_now()
+
+        return ready
 
     async def _tick_then_pass(self, proc: Processor) -> float:
         self._ticking += 1
@@ -256,28 +446,72 @@ class Runner:
             while True:
                 await proc.wait_input()
                 await self._tick_then_pass(proc)
-        if isinstance(proc.trigger, OnTopic):
-            await self._deadlines(proc)
-            return
-        next_t = time.monotonic()
-        while True:
+        await self._deadlines(proc)
+
+    def _every(self, proc: Processor) -> None:
+        """A fixed-rate processor on a timer of the loop (``call_at``): its tick and the pass
+        in the timer's callback. A tick that waits (the strategy's, for its worker thread)
+        finishes in a task, then the pass, then the next timer."""
+        loop = self._loop
+        assert loop is not None
+        clock = time.perf_counter
+        next_t = loop.time()
+
+        def schedule(period: float) -> None:
+            nonlocal next_t
+            if self._loop is None:
+                return
+            next_t += period
+            now = loop.time()
+            if next_t < now - period:  # fell far behind: don't burst to catch up
+                next_t = now
+            self._timers[id(proc)] = loop.call_at(next_t, fire)
+
+        def ticked(dt: float, period: float) -> None:
+            if dt > period:
+                proc.stats.overruns += 1
+            self._pass_now()
+            schedule(period)
+
+        def fire() -> None:
+            if self._loop is None:
+                return
+            if self._passing:  # a pass waits in a task: this tick after it
+                self._ready_after.append(fire)
+                return
             trig = proc.trigger
             if not isinstance(trig, Every):  # configured into another trigger: not supported
                 raise RuntimeError(f"{proc.name}: a fixed-rate processor stays fixed-rate")
             period = 1.0 / trig.hz
-            dt = await self._tick_then_pass(proc)
-            if dt > period:
-                proc.stats.overruns += 1
-            next_t += period
-            now = time.monotonic()
-            if next_t < now - period:  # fell far behind: don't burst to catch up
-                next_t = now
-            await asyncio.sleep(max(0.0, next_t - now))
+            t0 = clock()
+            self._ticking += 1
+            try:
+                rest = self._run_now(proc, plain_step(proc), t0)
+            finally:
+                if rest is None:
+                    self._ticking -= 1
+            if rest is None:
+                ticked(clock() - t0, period)
+                return
+
+            async def finish(rest: Coroutine[Any, Any, None]) -> None:
+                try:
+                    await rest
+                finally:
+                    self._ticking -= 1
+                if self._loop is not None:
+                    ticked(clock() - t0, period)
+
+            task = loop.create_task(finish(rest), name=proc.name)
+            self._tasks.append(task)
+            task.add_done_callback(self._forget_task)
+
+        self._timers[id(proc)] = loop.call_soon(fire)
 
     async def _deadlines(self, proc: Processor) -> None:
         """A topic-triggered processor with ``max_wait_s``: runs it when it has not run for
         that long (its input went quiet). Without a max wait there is nothing to do here."""
-        key = id(proc)
+        link = self._link_of[id(proc)]
         while True:
             trig = proc.trigger
             if not isinstance(trig, OnTopic):
@@ -285,13 +519,13 @@ class Runner:
             if trig.max_wait_s is None:
                 await asyncio.Event().wait()  # forever (cancelled at stop)
                 return
-            due = self._last_run[key] + trig.max_wait_s
-            now = time.monotonic()
+            due = link.last_run + trig.max_wait_s
+            now = time.perf_counter()
             if now < due:
                 await asyncio.sleep(due - now)
                 continue
-            self._due.add(key)
+            link.due = True
             if self._passing:  # the pass under way runs it in its next round
-                self._last_run[key] = now
+                link.last_run = now
                 continue
-            await self._pass()
+            self._pass_now()

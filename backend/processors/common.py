@@ -21,6 +21,7 @@ from ..bus import Reader
 from ..processor import Processor
 
 log = logging.getLogger("touchline.processors")
+_NOBLOCK, _MORE_NOBLOCK = int(zmq.NOBLOCK), int(zmq.SNDMORE | zmq.NOBLOCK)
 badlog = RateLimitedLog(log, interval_s=10.0)
 
 
@@ -34,6 +35,11 @@ class LatencyStage:
     def add_since(self, receive_time_ns: int) -> None:
         if receive_time_ns > 0:
             self.samples.append((time.time_ns() - receive_time_ns) / 1e6)
+
+    def add_at(self, now_ns: int, receive_time_ns: int) -> None:
+        """``add_since`` with the time already read (``time.time_ns()``)."""
+        if receive_time_ns > 0:
+            self.samples.append((now_ns - receive_time_ns) / 1e6)
 
     def summary(self) -> dict[str, float]:
         vals = sorted(self.samples)
@@ -89,6 +95,7 @@ class SocketProcessor(Processor):
         # drops at its high-water mark), so no future and no event-loop round per send
         self._out = zmq.Socket.shadow(sock.underlying) if isinstance(sock, zmq.Socket) \
             else sock
+        self._direct = isinstance(self._out, zmq.Socket)
 
     def send(self, frames: list[bytes]) -> None:
         """Sends ``frames`` now, without waiting (a PUB socket drops what it cannot queue)."""
@@ -96,11 +103,19 @@ class SocketProcessor(Processor):
             raise RuntimeError(f"{self.name}: no socket attached (the station attaches it "
                                "in start)")
         try:
-            self._out.send_multipart(frames, zmq.NOBLOCK)
+            if self._direct and len(frames) == 2:
+                # send_multipart's work without its checks and enum flags (an enum | int
+                # builds an enum member): 0.9 us for the two parts instead of 2.5
+                out = self._out
+                out.send(frames[0], _MORE_NOBLOCK)
+                out.send(frames[1], _NOBLOCK)
+            else:
+                self._out.send_multipart(frames, zmq.NOBLOCK)
         except zmq.Again:  # a full queue: like a PUB at its high-water mark, dropped
             self.dropped += 1
 
     dropped = 0
+    _direct = False
 
     @property
     def attached(self) -> bool:

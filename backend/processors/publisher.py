@@ -9,13 +9,16 @@ import zmq
 import zmq.asyncio
 
 from ssllog.format import TYPE_TL_COMMANDS
-from sslnet.rate import RateCounter
+from sslnet.rate import CountRate
 from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus, Reader
 from ..processor import OnTopic
 from .common import LatencyStage, SocketProcessor
+
+_CommandSet = tl.RobotCommandSet
+_BLUE, _YELLOW = tl.TEAM_BLUE, tl.TEAM_YELLOW
 
 
 class CommandPublisher(SocketProcessor):
@@ -33,7 +36,7 @@ class CommandPublisher(SocketProcessor):
         self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
         self.seq = 0
         self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
-        self.sent = RateCounter()
+        self.sent = CountRate()  # command sets sent (a count; its rate when read)
         self.estop = bus.of(topics.ESTOP)
         self.relay_stats = bus.of(topics.RELAY_STATS)
         #: called when the relay reports a latch this backend does not have
@@ -52,7 +55,7 @@ class CommandPublisher(SocketProcessor):
         self.record: Callable[[int, int, bytes], None] = lambda t, k, b: None
         self._was_muted = False
 
-    async def tick(self) -> None:
+    def step(self) -> None:
         if self.muted():
             self.reader.read_new()
             self.sim_reader.read_new()
@@ -61,45 +64,48 @@ class CommandPublisher(SocketProcessor):
                 self._was_muted = True
                 stop = tl.RobotCommandSet(created_time_ns=time.time_ns(), stop_all=True)
                 self.send([b"commands", stop.SerializeToString()])
-            await self._estop_latch()
-            await self._arming()
+            now = time.monotonic()
+            self._estop_latch(now)
+            self._arming(now)
             return
         self._was_muted = False
         for cs in self.reader.read_new():
             self.seq += 1
-            msg = tl.RobotCommandSet(
+            msg = _CommandSet(
                 created_time_ns=cs.created_time_ns,
                 source_receive_time_ns=cs.source_receive_time_ns,
                 sequence=self.seq,
                 stop_all=cs.stop_all,
             )
-            for c in cs.commands:
-                msg.commands.add(
-                    team=tl.TEAM_BLUE if c.team == "blue" else tl.TEAM_YELLOW,
-                    id=c.id,
-                    forward_mps=c.velocity.forward_mps,
-                    left_mps=c.velocity.left_mps,
-                    angular_radps=c.velocity.angular_radps,
-                    kick_speed_mps=c.kick_speed_mps,
-                    chip=c.chip,
-                    dribbler_rpm=c.dribbler_rpm,
-                )
+            add = msg.commands.add
+            for c in cs.commands:  # fields set one by one: cheaper than add(**fields)
+                m = add()
+                m.team = _BLUE if c.team == "blue" else _YELLOW
+                m.id = c.id
+                v = c.velocity
+                m.forward_mps = v.forward_mps
+                m.left_mps = v.left_mps
+                m.angular_radps = v.angular_radps
+                m.kick_speed_mps = c.kick_speed_mps
+                m.chip = c.chip
+                m.dribbler_rpm = c.dribbler_rpm
             raw = msg.SerializeToString()
             self.send([b"commands", raw])
-            self.record(time.time_ns(), TYPE_TL_COMMANDS, raw)
-            self.sent.add()
-            self.latency.add_since(cs.source_receive_time_ns)
+            now_ns = time.time_ns()
+            self.record(now_ns, TYPE_TL_COMMANDS, raw)
+            self.sent.total += 1
+            self.latency.add_at(now_ns, cs.source_receive_time_ns)
         for raw in self.sim_reader.read_new():
             self.send([b"sim", raw])
         for raw in self.referee_out_reader.read_new():
             self.send([b"referee-out", raw])
-        await self._estop_latch()
-        await self._arming()
+        now = time.monotonic()
+        self._estop_latch(now)
+        self._arming(now)
 
-    async def _arming(self) -> None:
+    def _arming(self, now: float) -> None:
         """The arming state to the relay on every change and every 0.5 s (a restarted relay
         starts disarmed and is re-armed only if this backend is armed)."""
-        now = time.monotonic()
         armed = self.armed()
         was, when = self._arming_sent
         if armed != was or now - when >= 0.5:
@@ -107,21 +113,20 @@ class CommandPublisher(SocketProcessor):
             self.send([b"arming", msg.SerializeToString()])
             self._arming_sent = (armed, now)
 
-    async def _estop_latch(self) -> None:
+    def _estop_latch(self, now: float) -> None:
         """Keeps the relay's latch in step: PRESS on a press and every 0.5 s while active
         (a relay that restarts, or a slow ZeroMQ join, gets it again); RELEASE only after an
         operator's release, repeated until the relay's stats say it is released (3 s at
         most). A latch the relay reports and this backend does not have is adopted."""
-        now = time.monotonic()
         active = bool(self.estop.latest_value())
         was, when = self._estop_sent
         if active and (not was or now - when >= 0.5):
-            await self._send_estop(tl.EmergencyStop.PRESS)
+            self._send_estop(tl.EmergencyStop.PRESS)
             self._estop_sent = (True, now)
             self._release_until = -1e9
             return
         if not active and was:  # the operator released it
-            await self._send_estop(tl.EmergencyStop.RELEASE)
+            self._send_estop(tl.EmergencyStop.RELEASE)
             self._estop_sent = (False, now)
             self._release_until = now + 3.0
             return
@@ -130,12 +135,12 @@ class CommandPublisher(SocketProcessor):
             return
         if now < self._release_until:  # not confirmed yet: say it again
             if now - when >= 0.1:
-                await self._send_estop(tl.EmergencyStop.RELEASE)
+                self._send_estop(tl.EmergencyStop.RELEASE)
                 self._estop_sent = (False, now)
         elif now - rs["received_mono"] < 1.5:  # fresh stats: the relay holds a latch we lack
             self.adopt_estop(str(rs.get("estop_by", "")))
 
-    async def _send_estop(self, action: int) -> None:
+    def _send_estop(self, action: int) -> None:
         msg = tl.EmergencyStop(action=action, time_ns=time.time_ns(),  # type: ignore[arg-type]
                                by=self.estop_by())
         self.send([b"estop", msg.SerializeToString()])

@@ -20,6 +20,9 @@ from .. import topics
 from ..bus import DataBus
 from .common import SocketProcessor, badlog
 
+_EVENTS, _POLLIN, _NOBLOCK = int(zmq.EVENTS), int(zmq.POLLIN), int(zmq.NOBLOCK)
+_ROUNDS = 8  # ticks (each with its pass) in one callback of the descriptor at most
+
 
 class RelayIngest(SocketProcessor):
     """Source: receives everything the relay publishes and puts it on the bus unchanged."""
@@ -34,7 +37,8 @@ class RelayIngest(SocketProcessor):
         self.referee_packets = bus.of(topics.REFEREE_PACKETS)
         self.relay_stats = bus.of(topics.RELAY_STATS)
         self.feedback_packets = bus.of(topics.FEEDBACK_PACKETS)
-        self.counters = {"zmq": StreamCounter("zmq")}
+        self._zmq = StreamCounter("zmq")
+        self.counters = {"zmq": self._zmq}
         #: False while a log is replayed: live datagrams are then not fed to the pipeline
         #: (they are still recorded)
         self.live: Callable[[], bool] = lambda: True
@@ -43,6 +47,8 @@ class RelayIngest(SocketProcessor):
         self._fd = -1
         self._fd_loop: asyncio.AbstractEventLoop | None = None
         self._waiter: asyncio.Future[None] | None = None
+        #: the runner's callback (``watch_input``): tick and pass when a message waits
+        self._ready: Callable[[], None] | None = None
 
     async def wait_input(self) -> None:
         """Until a message waits. Through the socket's own file descriptor, watched by the
@@ -54,7 +60,7 @@ class RelayIngest(SocketProcessor):
         if out is None:
             raise RuntimeError(f"{self.name}: no socket attached (the station attaches it "
                                "in start)")
-        if out.get(zmq.EVENTS) & zmq.POLLIN:
+        if out.get(_EVENTS) & _POLLIN:
             return
         loop = asyncio.get_running_loop()
         if self._fd_loop is not loop:
@@ -64,6 +70,18 @@ class RelayIngest(SocketProcessor):
             await self._waiter
         finally:
             self._waiter = None
+
+    def watch_input(self, ready: Callable[[], None]) -> bool:
+        """The runner's callback instead of ``wait_input``: the loop calls ``_fd_ready`` when
+        the descriptor signals, which calls ``ready`` (the tick and the pass, in that call)
+        while a message waits. No future, no task, no second turn of the loop per frame."""
+        if self._out is None:
+            return False
+        self._ready = ready
+        loop = asyncio.get_running_loop()
+        self._watch_fd(loop)
+        loop.call_soon(self._fd_ready)  # what came before the watch (no signal for it)
+        return True
 
     def _watch_fd(self, loop: asyncio.AbstractEventLoop) -> None:
         self._unwatch_fd()
@@ -79,32 +97,61 @@ class RelayIngest(SocketProcessor):
     def _fd_ready(self) -> None:
         # asking for the events also clears the descriptor (until the next change)
         try:
-            ready = self._out.get(zmq.EVENTS) & zmq.POLLIN
+            ready = self._out.get(_EVENTS) & _POLLIN
         except zmq.ZMQError:  # closed under us (shutdown): wake the waiter, recv says why
+            if self._ready is not None:
+                return  # watched by the runner: nothing to tick, it stops
             ready = True
+        if not ready:
+            return
+        if self._ready is not None:
+            # the tick and its pass, then again while a message waits (one that came during
+            # the pass): the descriptor is not to be trusted for it (a frame left there
+            # until the next one came, seen at 4 cameras x 60 Hz), as wait_input asks too.
+            # A few rounds, then the loop's next turn (timers, commands) before more
+            for _ in range(_ROUNDS):
+                self._ready()
+                if not self._out.get(_EVENTS) & _POLLIN:
+                    return
+            if self._fd_loop is not None:
+                self._fd_loop.call_soon(self._fd_ready)
+            return
         w = self._waiter
-        if ready and w is not None and not w.done():
+        if w is not None and not w.done():
             w.set_result(None)
 
     async def teardown(self) -> None:
+        self._ready = None
         self._unwatch_fd()
 
-    async def tick(self) -> None:
+    def step(self) -> None:
         # drain what is there through the plain socket (no future per message), at most what
         # the smallest ingest topic holds: the pass after this tick takes the lot through the
-        # pipeline before the next drain, so a burst is never overwritten on the bus unread
-        recv = self._out.recv_multipart
+        # pipeline before the next drain, so a burst is never overwritten on the bus unread.
+        # Called when a message waits: ``zmq.EVENTS`` after each message (each asks libzmq
+        # to take its commands: a system call), not before; not a recv until ``zmq.Again``
+        # (the same system call and an exception). Either re-arms the edge-triggered
+        # descriptor. Plain ints for the flags: an int & zmq.POLLIN builds an enum member
+        out = self._out
+        recv, get = out.recv_multipart, out.get
         limit = min(self.vision_packets.capacity, self.referee_packets.capacity,
                     self.feedback_packets.capacity)
+        handle = self._handle
         for _ in range(limit):
             try:
-                frames = recv(zmq.NOBLOCK)
+                frames = recv(_NOBLOCK)
             except zmq.Again:
                 return
-            self._handle(frames)
+            handle(frames)
+            if not get(_EVENTS) & _POLLIN:
+                return
+        if self._ready is not None and self._fd_loop is not None:
+            # more than a topic holds: the rest after this pass, in the loop's next turn
+            # (the descriptor will not signal what is already there)
+            self._fd_loop.call_soon(self._fd_ready)
 
     def _handle(self, frames: list[bytes]) -> None:
-        c = self.counters["zmq"]
+        c = self._zmq
         c.rate.add()
         if len(frames) != 2:
             c.error("bad frames", f"expected 2 frames, got {len(frames)}")

@@ -29,25 +29,27 @@ class VisionIngest(Processor):
         self._last_geometry_bytes = b""
         self._last_geometry_bad: list[str] = []  # its names that are not UTF-8
 
-    async def tick(self) -> None:
-        for env in read_counting_missed(self.reader, self.counter, "vision"):
-            self.counter.rate.add()
+    def step(self) -> None:
+        counter = self.counter
+        for env in read_counting_missed(self.reader, counter, "vision"):
+            counter.rate.add()
             pkt = SSL_WrapperPacket()
             reason = parse_into(pkt, env.payload)
             if reason is not None:
-                self.counter.error(*reason)
+                counter.error(*reason)
                 badlog.warning("vision", "bad vision packet from %s: %s", env.source,
-                                self.counter.last_error)
+                               counter.last_error)
                 continue
-            if not (pkt.HasField("detection") or pkt.HasField("geometry")):
-                self.counter.error(streams.NO_CONTENT, "SSL_WrapperPacket has neither "
-                                   "detection nor geometry")
+            has_detection, has_geometry = pkt.HasField("detection"), pkt.HasField("geometry")
+            if not (has_detection or has_geometry):
+                counter.error(streams.NO_CONTENT, "SSL_WrapperPacket has neither "
+                              "detection nor geometry")
                 badlog.warning("vision", "empty vision packet from %s", env.source)
                 continue
-            if pkt.HasField("detection"):
+            if has_detection:
                 self.detections.write(decode_detection(pkt.detection, env.receive_time_ns))
                 self.latency.add_since(env.receive_time_ns)
-            if pkt.HasField("geometry"):
+            if has_geometry:
                 raw = pkt.geometry.field.SerializeToString()
                 if raw != self._last_geometry_bytes:  # only a change goes on the bus
                     self._last_geometry_bytes = raw
@@ -55,6 +57,6 @@ class VisionIngest(Processor):
                     self.geometry.write(geometry_to_dict(pkt.geometry, self._last_geometry_bad))
                 if self._last_geometry_bad:  # used all the same, counted in every packet
                     bad = ", ".join(sorted(set(self._last_geometry_bad)))
-                    self.counter.error(streams.BAD_STRING, "not UTF-8: " + bad)
+                    counter.error(streams.BAD_STRING, "not UTF-8: " + bad)
                     badlog.warning("vision-string", "geometry from %s: not UTF-8 (%s); "
-                                    "decoded with replacement characters", env.source, bad)
+                                   "decoded with replacement characters", env.source, bad)

@@ -147,3 +147,56 @@ def test_set_rate_rejects_nonsense() -> None:
         p.set_rate(0.0)
     p.set_rate(50.0)
     assert isinstance(p.trigger, Every) and p.trigger.hz == 50.0
+
+
+class Stepper(Processor):
+    """A fixed-rate processor whose tick is a plain ``step``."""
+
+    name = "stepper"
+
+    def __init__(self, hz: float, dst: Topic[int]) -> None:
+        super().__init__(Every(hz))
+        self.dst = dst
+        self.tasks: set[object] = set()
+
+    def step(self) -> None:
+        self.tasks.add(asyncio.current_task())
+        self.dst.write(self.dst.seq + 1)
+
+
+class SlowWait(Processor):
+    """A fixed-rate tick that really waits (like the strategy's, for its worker thread)."""
+
+    name = "slow-wait"
+
+    def __init__(self, dst: Topic[int]) -> None:
+        super().__init__(Every(100.0))
+        self.dst = dst
+
+    async def tick(self) -> None:
+        await asyncio.sleep(0.015)  # longer than its 10 ms period
+        self.dst.write(self.dst.seq + 1)
+
+
+async def test_fixed_rate_ticks_run_on_loop_timers_and_their_pass_follows() -> None:
+    """A plain ``step`` at a fixed rate runs in a timer's callback (no task); a tick that
+    waits finishes in a task, overruns counted; each one's readers run in its pass."""
+    a: Topic[int] = Topic("a", 100)
+    b: Topic[int] = Topic("b", 100)
+    a_out: Topic[list[int]] = Topic("a-out", 100)
+    b_out: Topic[list[int]] = Topic("b-out", 100)
+    stepper, slow = Stepper(200.0, a), SlowWait(b)
+    r = Runner()
+    for p in (stepper, slow, Echo(a, a_out), Echo(b, b_out)):
+        r.add(p)
+    await r.start()
+    assert not any(t.get_name() == "stepper" for t in asyncio.all_tasks())
+    await _until(lambda: stepper.stats.rate.total >= 40 and slow.stats.rate.total >= 5)
+    await r.stop()
+    assert stepper.tasks == {None}
+    assert slow.stats.overruns >= 4
+    assert slow.stats.summary()["tick_mean_ms"] >= 15.0
+    echoed_a = [x for rec in a_out.records_after(0) for x in rec.value]
+    echoed_b = [x for rec in b_out.records_after(0) for x in rec.value]
+    assert echoed_a == list(range(1, len(echoed_a) + 1)) and len(echoed_a) >= 39
+    assert echoed_b == list(range(1, len(echoed_b) + 1)) and len(echoed_b) >= 4

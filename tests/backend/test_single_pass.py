@@ -147,3 +147,131 @@ async def test_the_pass_never_suspends() -> None:
     assert sent and sent[-1].source_receive_time_ns > 0
     assert sent[-1].commands[0].id == 3
     assert len(wire.of(b"tracker-out")) >= 1
+
+
+class Signalled(Processor):
+    """A source that signals its input through the loop, like the relay ingest's ZeroMQ
+    descriptor: the runner ticks it (and runs the pass) inside the loop's callback."""
+
+    name = "signalled"
+
+    def __init__(self, bus: DataBus) -> None:
+        super().__init__(None)
+        self.packets = bus.of(topics.VISION_PACKETS)
+        self.queue: asyncio.Queue[bytes] = asyncio.Queue()
+        self.seq = 0
+        self.ready: Any = None
+        self.tasks: list[Any] = []  # the task of each step (None: a plain callback)
+
+    def watch_input(self, ready: Any) -> bool:
+        self.ready = ready
+        return True
+
+    def step(self) -> None:
+        self.tasks.append(asyncio.current_task())
+        while not self.queue.empty():
+            self.seq += 1
+            self.packets.write(tl.Envelope(stream=tl.STREAM_VISION, receive_time_ns=time.time_ns(),
+                                           sequence=self.seq, source="test",
+                                           payload=self.queue.get_nowait()))
+
+
+async def test_a_signalled_frame_becomes_commands_inside_the_loops_callback() -> None:
+    """No task and no future per frame: the loop's callback (the descriptor's, here called
+    soon) runs the source's step and the whole pass; the processors with a plain ``step``
+    (vision ingest, command publisher) are called without a coroutine."""
+    bus, _, procs, wire = pipeline()
+    source = Signalled(bus)
+    procs[0] = source
+    runner = Runner()
+    for p in procs:
+        runner.add(p)
+    await runner.start()
+    try:
+        assert source.ready is not None
+        assert not any(t.get_name() == "signalled" for t in asyncio.all_tasks())
+        loop = asyncio.get_running_loop()
+        for n in range(1, 4):
+            source.queue.put_nowait(frame(n, 100.0 * n, camera=n % 2))
+            loop.call_soon(source.ready)
+            for _ in range(2000):  # bounded: the callback runs in the loop's next turn
+                await asyncio.sleep(0.001)
+                if source.stats.rate.total >= n:
+                    break
+    finally:
+        await runner.stop()
+    moving = [(tl.RobotCommandSet.FromString(b), task) for t, b, task in wire.sent
+              if t == b"commands"]
+    fed = [(cs, task) for cs, task in moving if cs.source_receive_time_ns > 0]
+    assert len(fed) >= 3 and all(task == "" for _, task in fed)  # outside any task
+    assert fed[-1][0].commands[0].id == 3
+    assert source.tasks == [None, None, None]
+    assert source.stats.rate.total == 3 and procs[1].stats.rate.total >= 3
+
+
+class Waits(Processor):
+    """A topic-triggered processor whose tick really waits for the loop."""
+
+    name = "waits"
+
+    def __init__(self, src: Any, dst: Any, log: list[str]) -> None:
+        from backend.processor import OnTopic
+
+        super().__init__(OnTopic(src))
+        from backend.bus import Reader
+
+        self.reader = Reader(src)
+        self.dst, self.log = dst, log
+
+    async def tick(self) -> None:
+        vals = self.reader.read_new()
+        if vals:
+            self.log.append(f"waits {vals}")
+            await asyncio.sleep(0.01)
+            self.dst.write(vals[-1])
+            self.log.append("waited")
+
+
+class After(Processor):
+    name = "after"
+
+    def __init__(self, src: Any, log: list[str]) -> None:
+        from backend.bus import Reader
+        from backend.processor import OnTopic
+
+        super().__init__(OnTopic(src))
+        self.reader = Reader(src)
+        self.log = log
+
+    def step(self) -> None:
+        vals = self.reader.read_new()
+        if vals:
+            self.log.append(f"after {vals}")
+
+
+async def test_a_tick_that_waits_hands_the_rest_of_the_pass_to_a_task() -> None:
+    """The pass is plain calls, but a coroutine tick that really waits is not cut short:
+    the processors after it run once it is done, in order, and input signalled meanwhile
+    is taken after that pass."""
+    from backend.bus import Topic
+
+    a: Topic[int] = Topic("a", 8)
+    b: Topic[int] = Topic("b", 8)
+    log: list[str] = []
+    waits, after = Waits(a, b, log), After(b, log)
+    runner = Runner()
+    runner.add(waits)
+    runner.add(after)
+    await runner.start()
+    try:
+        a.write(1)
+        a.write(2)  # written together: one run sees both
+        for _ in range(2000):  # bounded
+            await asyncio.sleep(0.001)
+            if "after [2]" in log:
+                break
+        await runner._pass()  # nothing left: returns at once
+    finally:
+        await runner.stop()
+    assert log == ["waits [1, 2]", "waited", "after [2]"]
+    assert waits.stats.rate.total >= 1 and waits.stats.summary()["tick_mean_ms"] >= 5.0

@@ -54,3 +54,21 @@ def test_rate_counter_is_exact_when_read_and_keeps_at_most_two_windows() -> None
     assert rc.total == 3000
     assert rc.rate_hz(2.9995) == 1000.0  # the events at 2.000 .. 2.999 s
     assert rc.rate_hz(3.5) == 500.0
+
+
+def test_count_rate_is_computed_when_read_from_the_counts_of_earlier_reads() -> None:
+    """``CountRate``: counting is an integer add; the rate read is the count since the
+    newest earlier read at least a window old, over that time (the start before any)."""
+    from sslnet.rate import CountRate
+
+    cr = CountRate(window_s=1.0, now=0.0)
+    assert cr.rate_hz(0.0) == 0.0  # nothing counted, no time passed
+    for k in range(1, 3001):  # 1000 events a second for 3 s, read every 0.25 s
+        cr.total += 1
+        if k % 250 == 0:
+            assert cr.rate_hz(k / 1000.0) == 1000.0
+    assert len(cr._marks) <= 10  # a few marks a window, not one per read
+    cr.add(500)  # 500 more in the next second
+    assert cr.rate_hz(4.0) == 500.0  # the marks at 3.0 s: 500 events in 1 s
+    assert cr.rate_hz(14.0) == 0.0  # read long after: the mean since the last read
+    assert cr.total == 3500
