@@ -85,7 +85,11 @@ export async function startTokenStation(
     { cwd: root, env: { ...process.env, PYTHONUNBUFFERED: "1" }, stdio: ["ignore", "pipe", "pipe"] },
   );
   const loginUrl = await new Promise<string>((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error("the station printed no login URL")), 80_000);
+    const timer = setTimeout(() => {
+      // not left running behind a failed test (the launcher stops its children with it)
+      proc.kill("SIGTERM");
+      reject(new Error("the station printed no login URL"));
+    }, 80_000);
     let url = "";
     let buf = "";
     proc.stdout?.on("data", (chunk: Buffer) => {
