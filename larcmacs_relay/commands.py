@@ -43,24 +43,19 @@ class CommandTable:
     _order: list[tuple[int, int]] = field(default_factory=list)
 
     def update(self, command: Command, now: float) -> None:
-        key = (command.team, command.id)
-        entry = self._entries.get(key)
-        if entry is None:
-            self._entries[key] = _Entry(command, now)
-            self._order = sorted(self._entries)
-            return
-        entry.command, entry.arrival = command, now
-        entry.state, entry.zero_since = RobotState.ACTIVE, 0.0
+        self.update_all([command], now)
 
     def update_all(self, commands: list[Command], now: float) -> None:
-        """``update(c, now)`` for each of ``commands`` in order (a command set's robots: one
-        call, not one per robot)."""
+        """Each of ``commands`` in order becomes its robot's command (a command set's robots:
+        one call, not one per robot)."""
         entries = self._entries
         active = RobotState.ACTIVE
         for command in commands:
-            entry = entries.get((command.team, command.id))
+            key = (command.team, command.id)
+            entry = entries.get(key)
             if entry is None:
-                self.update(command, now)
+                entries[key] = _Entry(command, now)
+                self._order = sorted(entries)
                 continue
             entry.command, entry.arrival = command, now
             entry.state, entry.zero_since = active, 0.0

@@ -11,7 +11,6 @@ import contextlib
 import logging
 import math
 import socket
-import struct
 import sys
 import time
 from collections import deque
@@ -29,6 +28,7 @@ from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
 from larcmacs_relay.feedback import FeedbackGate, HeldAnswer
 from sslnet import proc, streams
+from sslnet.kerneltime import enable_kernel_timestamps, kernel_time_ns
 from sslnet.multicast import open_multicast_receiver, open_multicast_sender, open_udp_server
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
@@ -38,10 +38,6 @@ from sslpb import ssl_simulation_control_pb2, touchline_pb2
 log = logging.getLogger("larcmacs_relay")
 
 MAX_DATAGRAM = 65536
-#: Linux's SO_TIMESTAMPNS (= SCM_TIMESTAMPNS; Python 3.11 has no name for it): the kernel
-#: stamps each datagram with its arrival time (CLOCK_REALTIME, as time.time_ns())
-_SO_TIMESTAMPNS = 35
-_TIMESPEC = struct.Struct("@qq")
 MAX_BATCH = 512
 #: at most this many robot commands kept by their bytes (_handle_native); then started afresh
 MAX_PARSED = 512
@@ -827,13 +823,7 @@ class Relay:
                     if last is not None and last[0] == robots:  # the same objects: no __eq__
                         data = last[1]
                     else:
-                        parts = self._sim_parts
-                        chunks = []
-                        for c in cmds:  # _sim_part's first test inline (a call per robot)
-                            got = parts.get((team, c.id))
-                            chunks.append(got[1] if got is not None and got[0] is c
-                                          else self._sim_part(c))
-                        data = b"".join(chunks)
+                        data = b"".join([self._sim_part(c) for c in cmds])
                         self._sim_out[team] = (robots, data)
                     sent = self._send(data, (self._sim_host, port))
                 else:
@@ -908,7 +898,7 @@ class Relay:
                 counter.error("socket error", str(exc))
                 self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
                 continue
-            receive_ns = _arrival_ns(anc) if stamped else time.time_ns()
+            receive_ns = (kernel_time_ns(anc) if stamped else None) or time.time_ns()
             counter.packet(len(data))
             port = addr[1]
             team = (codecs.TEAM_BLUE if port == self.config.sim_blue_port else
@@ -1074,20 +1064,10 @@ def _stamp_arrivals(sock: socket.socket) -> bool:
     if not sys.platform.startswith("linux"):
         return False
     try:
-        sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+        enable_kernel_timestamps(sock)
     except OSError:
         return False
     return True
-
-
-def _arrival_ns(ancillary: list[tuple[int, int, bytes]]) -> int:
-    """A datagram's arrival (ns since the Unix epoch) from its SCM_TIMESTAMPNS; now if the
-    kernel gave none."""
-    for level, kind, data in ancillary:
-        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
-            sec, nsec = _TIMESPEC.unpack_from(data)
-            return int(sec) * 1_000_000_000 + int(nsec)
-    return time.time_ns()
 
 
 def _endpoint(sock: zmq.Socket[bytes] | zmq.asyncio.Socket) -> str:
