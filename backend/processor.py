@@ -388,11 +388,15 @@ class Runner:
                 for fn in ready:
                     fn()
 
-        loop = self._loop or asyncio.get_running_loop()
-        task = loop.create_task(go_on())
-        self._later = task
+        self._later = self._spawn(self._loop or asyncio.get_running_loop(), go_on())
+
+    def _spawn(self, loop: asyncio.AbstractEventLoop, coro: Coroutine[Any, Any, None],
+               name: str | None = None) -> asyncio.Task[None]:
+        """A task of the runner's (cancelled at stop, forgotten when done)."""
+        task = loop.create_task(coro, name=name)
         self._tasks.append(task)
         task.add_done_callback(self._forget_task)
+        return task
 
     def _forget_task(self, task: asyncio.Task[None]) -> None:
         with contextlib.suppress(ValueError):
@@ -502,9 +506,7 @@ class Runner:
                 if self._loop is not None:
                     ticked(clock() - t0, period)
 
-            task = loop.create_task(finish(rest), name=proc.name)
-            self._tasks.append(task)
-            task.add_done_callback(self._forget_task)
+            self._spawn(loop, finish(rest), proc.name)
 
         self._timers[id(proc)] = loop.call_soon(fire)
 

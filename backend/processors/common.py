@@ -33,8 +33,7 @@ class LatencyStage:
         self.samples: deque[float] = deque(maxlen=maxlen)
 
     def add_since(self, receive_time_ns: int) -> None:
-        if receive_time_ns > 0:
-            self.samples.append((time.time_ns() - receive_time_ns) / 1e6)
+        self.add_at(time.time_ns(), receive_time_ns)
 
     def add_at(self, now_ns: int, receive_time_ns: int) -> None:
         """``add_since`` with the time already read (``time.time_ns()``)."""
