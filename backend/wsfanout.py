@@ -61,6 +61,18 @@ class ServerSendTap:
         await self.app(scope, receive, send)
 
 
+def params_message(st: Station) -> str:
+    """The "params" message: the parameters' version and values."""
+    params = st.params
+    return dumps({"type": "params", "version": params.version, "values": params.values()},
+                 "params")
+
+
+def geometry_message(v: Views) -> str:
+    """The "geometry" message of ``v``."""
+    return dumps({"type": "geometry", "geometry": v.geometry}, "geometry")
+
+
 def text_frame(text: str) -> bytes:
     """A server's websocket text frame (unmasked, unfragmented, no extension) of ``text``: the
     same bytes for every client."""
@@ -218,11 +230,9 @@ class LoopFanout:
         elif kind == "player":
             text = v.player_json
         elif kind == "geometry":
-            text = dumps({"type": "geometry", "geometry": v.geometry}, "geometry")
+            text = geometry_message(v)
         else:
-            params = self.st.params
-            text = dumps({"type": "params", "version": params.version,
-                          "values": params.values()}, "params")
+            text = params_message(self.st)
         return text_frame(text)
 
     def fan_out(self, world_turn: bool = False) -> None:

@@ -20,7 +20,13 @@ from sslnet.ratelog import RateLimitedLog
 from ..jsonsafe import dumps
 from ..station import Station
 from ..viewhub import Views
-from ..wsfanout import STALLED_CLIENT_S, direct_socket, fanout_of
+from ..wsfanout import (
+    STALLED_CLIENT_S,
+    direct_socket,
+    fanout_of,
+    geometry_message,
+    params_message,
+)
 from .deps import VIEWER, StationDep
 from .operators import ws_session
 
@@ -127,11 +133,10 @@ async def _serve_asgi(ws: WebSocket, st: Station, send: Callable[[str], Awaitabl
             break
         if st.params.version != params_version:
             params_version = st.params.version
-            await send(dumps({"type": "params", "version": params_version,
-                              "values": st.params.values()}, "params"))
+            await send(params_message(st))
         v = st.views
         if v.geometry_seq != sent.geometry_seq and v.geometry is not None:
-            await send(dumps({"type": "geometry", "geometry": v.geometry}, "geometry"))
+            await send(geometry_message(v))
         if v.player_serial != sent.player_serial:
             await send(v.player_json)
         world_key = sent.world_key
