@@ -5,6 +5,9 @@ datagrams a second), division A, 11 v 11.
 - **floor** (bench/floor/floor.py): the bare minimum of the same path from the same libraries,
   in two processes like the relay and the backend: UDP receive, ZeroMQ hop, protobuf parse, a
   trivial command per robot, ZeroMQ hop, RobotControl encode, UDP send.
+- **floor + the paper's algorithms** (``floor.py bridge --algorithms``): the same with the
+  paper's per-frame filters and speed control in the bridge, as plain and tight as Python
+  allows: what any CPython station pays for them at this load.
 - **Touchline**: the launcher's relay and backend (recording on, tracked vision out), the
   "match" play.
 It prints each side's CPU (% of one core, from /proc over ``--seconds``) and the latency from a
@@ -40,7 +43,8 @@ PY = sys.executable
 
 
 def sim_args(a: argparse.Namespace) -> list[str]:
-    return ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
+    return ["--division", "A", "--blue", str(a.robots), "--yellow", str(a.robots), "--cameras",
+            str(a.cameras),
             "--camera-hz", str(a.hz)]
 
 
@@ -52,7 +56,7 @@ def measure(pids: dict[str, int], seconds: float) -> dict[str, float]:
     return {k: (cpu_s(p) - c0[k]) / dt * 100 for k, p in pids.items()}
 
 
-def floor(a: argparse.Namespace) -> dict[str, Any]:
+def floor(a: argparse.Namespace, algorithms: bool = False) -> dict[str, Any]:
     p = Ports.isolated(None)
     pub, sub = f"tcp://127.0.0.1:{p.http + 1}", f"tcp://127.0.0.1:{p.http + 2}"
     procs = {
@@ -66,7 +70,7 @@ def floor(a: argparse.Namespace) -> dict[str, Any]:
                                    "--out", f"127.0.0.1:{p.sim_blue}"], cwd=ROOT,
                                   stdout=subprocess.PIPE, text=True),
         "backend": subprocess.Popen([PY, "bench/floor/floor.py", "bridge", "--pub", sub, "--sub",
-                                     pub], cwd=ROOT),
+                                     pub, *(["--algorithms"] if algorithms else [])], cwd=ROOT),
     }
     try:
         time.sleep(a.warmup)
@@ -92,7 +96,7 @@ def thread_cpu_by_name(pid: int) -> dict[str, float]:
 def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
     """Touchline's row; ``browser``: with headless Chromium showing the page meanwhile (its
     own CPU apart: only the relay's and the backend's count)."""
-    station = start_station(full_scale_args(a.cameras, a.hz, a.relay_arg))
+    station = start_station(full_scale_args(a.cameras, a.hz, a.relay_arg, a.robots))
     proc, pids, url = station.proc, station.pids, station.url
     page: subprocess.Popen[str] | None = None
     try:
@@ -139,6 +143,9 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=5.0)
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
+    ap.add_argument("--robots", type=int, default=11,
+                    help="robots a team (11: the goal's load; 1: the same frames with almost no "
+                         "robot in them, the framework's own cost)")
     ap.add_argument("--relay-arg", action="append", default=[],
                     help="an argument for Touchline's relay (repeat it), e.g. --min-gap=0")
     ap.add_argument("--no-floor", action="store_true", help="Touchline's row only")
@@ -156,7 +163,8 @@ def main() -> None:
             if v >= 0.05))
         return
     f = floor(a)
-    rows = [("floor", f), ("Touchline", t)]
+    rows = [("floor", f), ("floor + the paper's algorithms in plain Python", floor(a, True)),
+            ("Touchline", t)]
     if a.browser:
         rows.append(("Touchline, one browser", touchline(a, browser=True)))
     print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz, division A, 11 v 11, "

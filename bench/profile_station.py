@@ -26,6 +26,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from bench.station_run import full_scale_args  # noqa: E402
 
 
 def wait_for_file(path: Path, timeout_s: float) -> None:
@@ -41,6 +44,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
+    ap.add_argument("--robots", type=int, default=11, help="robots a team")
     ap.add_argument("--out", default=None, help="default /tmp/touchline-<part>.prof")
     ap.add_argument("--top", type=int, default=30)
     ap.add_argument("--clock", choices=["wall", "cpu"], default="wall",
@@ -49,10 +53,8 @@ def main() -> None:
     a = ap.parse_args()
     out = Path(a.out or f"/tmp/touchline-{a.part}.prof")
     out.unlink(missing_ok=True)
-    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", str(a.cameras),
-           "--camera-hz", str(a.hz)]
-    args = [sys.executable, "-m", "launcher", "--isolated", *(f"--sim-arg={x}" for x in sim),
-            "--backend-arg=--set", "--backend-arg=strategy.play=match"]
+    args = [sys.executable, "-m", "launcher", "--isolated",
+            *full_scale_args(a.cameras, a.hz, robots=a.robots)]
     env = dict(os.environ, TOUCHLINE_PROFILE_CLOCK=a.clock)
     if a.part == "backend":
         env.update(TOUCHLINE_PROFILE=str(out), TOUCHLINE_PROFILE_AFTER="5",

@@ -12,13 +12,23 @@ no strategy). The relay prints the latency of vision arrival -> command datagram
 when it gets SIGTERM.
 
     python bench/floor/floor.py relay --vision GROUP:PORT --pub EP --sub EP --out HOST:PORT
-    python bench/floor/floor.py bridge --pub EP --sub EP
+    python bench/floor/floor.py bridge --pub EP --sub EP [--algorithms]
+
+``--algorithms`` adds the paper's per-frame work to the bridge, written as plainly and as
+tightly as Python allows (no event loop, no bus, no objects beyond one per tracked object):
+for every robot and ball detection the median filter (window 5) and the weighted average
+(0.05 new / 0.95 previous) on x, y and the orientation, a velocity from the filtered
+positions; for each robot of our team seen, the trapezoid's V = sqrt(2aS) towards a target,
+turned into the robot's frame. Not Touchline's algorithms (no camera merging, no adaptive
+filters, no kick or flight estimate, no tracked vision out): the least of them, so that its
+row says what any CPython station pays for the paper's algorithms at this load.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import socket
 import struct
@@ -79,6 +89,70 @@ def relay(a: argparse.Namespace) -> None:
                       "p99_ms": lat[int(0.99 * len(lat))] if lat else -1}), flush=True)
 
 
+def _median(v: list[float]) -> float:
+    s = sorted(v)
+    h = len(s) // 2
+    return s[h] if len(s) % 2 else 0.5 * (s[h - 1] + s[h])
+
+
+class _Track:
+    """One object's median (window 5) and weighted average, per coordinate."""
+
+    __slots__ = ("fo", "fx", "fy", "os", "t", "vx", "vy", "xs", "ys")
+
+    def __init__(self) -> None:
+        self.xs: list[float] = []
+        self.ys: list[float] = []
+        self.os: list[float] = []
+        self.fx = self.fy = self.fo = self.t = self.vx = self.vy = 0.0
+
+    def update(self, t: float, x: float, y: float, o: float) -> None:
+        xs, ys, os_ = self.xs, self.ys, self.os
+        xs.append(x)
+        ys.append(y)
+        if os_:  # the orientation unwrapped next to the last one
+            o = os_[-1] + (o - os_[-1] + math.pi) % (2 * math.pi) - math.pi
+        os_.append(o)
+        if len(xs) > 5:
+            del xs[0], ys[0], os_[0]
+        mx, my, mo = _median(xs), _median(ys), _median(os_)
+        if self.t == 0.0:
+            self.fx, self.fy, self.fo, self.t = mx, my, mo, t
+            return
+        fx = 0.05 * mx + 0.95 * self.fx
+        fy = 0.05 * my + 0.95 * self.fy
+        dt = t - self.t
+        if dt > 0:
+            self.vx, self.vy = (fx - self.fx) / dt, (fy - self.fy) / dt
+        self.fx, self.fy, self.fo, self.t = fx, fy, 0.05 * mo + 0.95 * self.fo, t
+
+
+def _algorithms(pkt: SSL_WrapperPacket, tracks: dict[tuple[int, int], _Track],
+                cset: tl.RobotCommandSet) -> None:
+    det = pkt.detection
+    t = det.t_capture
+    for team, robots in ((0, det.robots_blue), (1, det.robots_yellow)):
+        for r in robots:
+            key = (team, r.robot_id)
+            tr = tracks.get(key)
+            if tr is None:
+                tr = tracks[key] = _Track()
+            tr.update(t, r.x, r.y, r.orientation)
+    for b in det.balls:
+        tr = tracks.get((2, 0))
+        if tr is None:
+            tr = tracks[(2, 0)] = _Track()
+        tr.update(t, b.x, b.y, 0.0)
+    for r in det.robots_blue:
+        tr = tracks[(0, r.robot_id)]
+        dx, dy = 1000.0 * (r.robot_id % 4) - tr.fx, 800.0 * (r.robot_id // 4) - tr.fy
+        s = math.hypot(dx, dy)
+        v = min(2.0, math.sqrt(2 * 3.0 * s / 1000.0)) / s if s > 1.0 else 0.0
+        c, si = math.cos(tr.fo), math.sin(tr.fo)
+        cset.commands.add(team=tl.TEAM_BLUE, id=r.robot_id, forward_mps=v * (c * dx + si * dy),
+                          left_mps=v * (c * dy - si * dx), angular_radps=-2.0 * tr.fo)
+
+
 def bridge(a: argparse.Namespace) -> None:
     ctx = zmq.Context()
     sub = ctx.socket(zmq.SUB)
@@ -87,6 +161,7 @@ def bridge(a: argparse.Namespace) -> None:
     pub = ctx.socket(zmq.PUB)
     pub.connect(a.pub)
     seq = 0
+    tracks: dict[tuple[int, int], _Track] = {}
     while True:
         body = sub.recv()
         (recv_ns,) = HEAD.unpack_from(body)
@@ -96,8 +171,11 @@ def bridge(a: argparse.Namespace) -> None:
         seq += 1
         cset = tl.RobotCommandSet(created_time_ns=time.time_ns(),
                                   source_receive_time_ns=recv_ns, sequence=seq)
-        for r in pkt.detection.robots_blue:
-            cset.commands.add(team=tl.TEAM_BLUE, id=r.robot_id)
+        if a.algorithms:
+            _algorithms(pkt, tracks, cset)
+        else:
+            for r in pkt.detection.robots_blue:
+                cset.commands.add(team=tl.TEAM_BLUE, id=r.robot_id)
         pub.send(cset.SerializeToString())
 
 
@@ -112,6 +190,8 @@ def main() -> None:
     b = sp.add_parser("bridge")
     b.add_argument("--pub", required=True)
     b.add_argument("--sub", required=True)
+    b.add_argument("--algorithms", action="store_true",
+                   help="the paper's per-frame algorithms in plain Python (see above)")
     a = ap.parse_args()
     relay(a) if a.role == "relay" else bridge(a)
 
