@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterable
+from itertools import islice
 from typing import Protocol
 
 from domain.angles import wrap_angle
@@ -61,43 +63,99 @@ class PositionFilter(Protocol):
 
 class VelocityFit:
     """Velocity as the slope of a least-squares line through the points of the last
-    ``window_s`` seconds (at least the last two points)."""
+    ``window_s`` seconds (at least the last two points).
 
-    __slots__ = ("_pts", "window_s")
+    The same sums as ``sum(... for p in sel)`` in the same order (a float sum in another order
+    changes bits), in two plain loops (six generators cost twice as much). While the times
+    never went back (the world model's always), the window is the points from ``_lo`` on (a
+    point once out of it stays out: the newest time only grows), found without a pass over
+    them all; and a velocity is computed once per point added or replaced."""
+
+    __slots__ = ("_lo", "_mono", "_pts", "_v", "_w")
 
     def __init__(self, window_s: float = 0.1, max_points: int = 48) -> None:
-        self.window_s = window_s
+        self._w = window_s
         self._pts: deque[tuple[float, float, float]] = deque(maxlen=max_points)
+        #: the times never went back since the last clear (NaN counts as going back)
+        self._mono = True
+        #: while they did not: no point before this index is in the window
+        self._lo = 0
+        self._v: Vec | None = None  # the velocity, until the points change
+
+    @property
+    def window_s(self) -> float:
+        return self._w  # (fixed: the window's start and the velocity are kept)
 
     def add(self, t: float, x: float, y: float) -> None:
-        self._pts.append((t, x, y))
+        pts = self._pts
+        if pts:
+            if not t >= pts[-1][0]:
+                self._mono = False
+            if len(pts) == pts.maxlen and self._lo:  # the oldest goes
+                self._lo -= 1
+        pts.append((t, x, y))
+        self._v = None
 
     def replace_last(self, x: float, y: float) -> None:
         if self._pts:
             t = self._pts[-1][0]
             self._pts[-1] = (t, x, y)
+            self._v = None
 
     def clear(self) -> None:
         self._pts.clear()
+        self._mono = True
+        self._lo = 0
+        self._v = None
 
     def velocity(self) -> Vec:
+        v = self._v
+        if v is not None:
+            return v
         pts = self._pts
-        if len(pts) < 2:
+        n = len(pts)
+        if n < 2:
             return (0.0, 0.0)
         t_end = pts[-1][0]
-        sel = [p for p in pts if t_end - p[0] <= self.window_s]
-        if len(sel) < 2:
-            sel = [pts[-2], pts[-1]]
-        n = len(sel)
-        tm = sum(p[0] for p in sel) / n
-        xm = sum(p[1] for p in sel) / n
-        ym = sum(p[2] for p in sel) / n
-        stt = sum((p[0] - tm) ** 2 for p in sel)
-        if stt < 1e-9:
-            return (0.0, 0.0)
-        vx = sum((p[0] - tm) * (p[1] - xm) for p in sel) / stt
-        vy = sum((p[0] - tm) * (p[2] - ym) for p in sel) / stt
-        return (vx, vy)
+        w = self._w
+        sel: Iterable[tuple[float, float, float]]
+        if self._mono:
+            # the window is a suffix: the times do not decrease, nor does t_end - t along it
+            lo = self._lo
+            while lo < n and not t_end - pts[lo][0] <= w:
+                lo += 1
+            self._lo = lo
+            if n - lo < 2:
+                sel, n = (pts[-2], pts[-1]), 2
+            elif lo:
+                sel = list(islice(pts, lo, None))
+                n -= lo
+            else:
+                sel = pts
+        else:
+            sel = [p for p in pts if t_end - p[0] <= w]
+            if len(sel) < 2:
+                sel = [pts[-2], pts[-1]]
+            n = len(sel)
+        # sum() of floats: 0 + the first, then each in order; so are these (** 2, not d * d:
+        # the same pow)
+        tm = xm = ym = 0.0
+        for t, x, y in sel:
+            tm += t
+            xm += x
+            ym += y
+        tm /= n
+        xm /= n
+        ym /= n
+        stt = sx = sy = 0.0
+        for t, x, y in sel:
+            d = t - tm
+            stt += d ** 2
+            sx += d * (x - xm)
+            sy += d * (y - ym)
+        v = (0.0, 0.0) if stt < 1e-9 else (sx / stt, sy / stt)
+        self._v = v
+        return v
 
 
 class MedianWeighted:
