@@ -300,3 +300,43 @@ def test_every_param_has_default_bounds_unit_step_description() -> None:
             assert "unit" in prop and "step" in prop, name
             assert prop.get("description"), name
     FilterSettings.model_validate_json(FilterSettings().model_dump_json())
+
+
+@pytest.mark.parametrize("kind", FILTER_KINDS)
+def test_the_filters_have_an_estimate_exactly_while_they_have_a_time(kind: str) -> None:
+    """What lets AngleFilter skip asking them whether they forgot the object."""
+    for angle in (False, True):
+        f = make_filter(kind, angle=angle)  # type: ignore[arg-type]
+        assert f.estimate() is None and f.t_last is None
+        for i, x in enumerate([0.0, 1.0, 500.0, 2.0, -3000.0, 3.0]):
+            f.update(i * DT + (5.0 if i == 3 else 0.0), x, 0.0)  # a gap, jumps
+            assert f.estimate() is not None and f.t_last is not None
+            f.revise(x + 1.0, 0.0)
+            assert f.estimate() is not None and f.t_last is not None
+        f.reset()
+        assert f.estimate() is None and f.t_last is None
+
+
+class _Forgetful(RawFilter):
+    """A filter that forgets the object while keeping its time (not one of this package's)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.forgot = False
+
+    def estimate(self) -> tuple[float, float] | None:
+        return None if self.forgot else super().estimate()
+
+
+def test_angle_filter_does_not_unwrap_against_an_object_its_filter_forgot() -> None:
+    inner = _Forgetful()
+    f = AngleFilter(inner)
+    for i in range(3):  # turning past +pi: unwrapped beyond it
+        f.update(i * DT, wrap_angle(3.0 + 0.1 * i))
+    assert inner.last_median is not None and inner.last_median[0] > math.pi
+    inner.forgot = True
+    f.update(3 * DT, -3.0)
+    assert inner.last_median[0] == pytest.approx(-3.0)  # taken as it is
+    inner.forgot = False
+    f.update(4 * DT, -2.9)
+    assert inner.last_median[0] == pytest.approx(-2.9)  # unwrapped against -3.0
