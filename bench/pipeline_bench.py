@@ -14,7 +14,7 @@ included) and the share of one core at 600 frames a second, in total and per pro
 share of the wall clock of the ticks).
 
     PYTHONPATH=. .venv/bin/python bench/pipeline_bench.py [--frames 6000] [--per-pass 2]
-        [--reps 5] [--only N]
+        [--reps 5] [--only N] [--filter KIND]
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from backend import topics
 from backend.bus import DataBus
 from backend.control.goto import Target
+from backend.filters import FILTER_KINDS, FilterKind, FilterSettings
 from backend.messages import TargetEntry
 from backend.processor import Processor
 from backend.processors import (
@@ -103,10 +104,12 @@ def targets(k: int) -> dict[tuple[str, int], TargetEntry]:
 
 
 async def run(frames: list[tuple[int, bytes]], per_pass: int, warmup: int,
-              gap_s: float = 0.0) -> dict[str, float]:
+              gap_s: float = 0.0, kind: FilterKind | None = None) -> dict[str, float]:
     bus = DataBus({})
     wire = Wire()
     vision, world = VisionIngest(bus), WorldProcessor(bus)
+    if kind is not None:
+        world.model.configure(FilterSettings(ball=kind, robot=kind))
     control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=1e9)
     control.strategy_stale_s = 1e9  # the targets are written below, not by a strategy
     publisher = CommandPublisher(bus)
@@ -156,6 +159,8 @@ def main() -> None:
                     "under valgrind --tool=callgrind, the difference of two such runs is the "
                     "instruction count of the frames between, which the machine's load does "
                     "not change")
+    ap.add_argument("--filter", choices=FILTER_KINDS, default=None,
+                    help="every object's filter kind (default: the station's default)")
     a = ap.parse_args()
     warmup = 600
     frames = datagrams(a.frames + warmup, time.time())
@@ -163,13 +168,14 @@ def main() -> None:
         frames = frames[:warmup + a.only]
     best: dict[str, float] | None = None
     for _ in range(a.reps):
-        r = asyncio.run(run(frames, a.per_pass, warmup, a.gap_ms / 1000.0))
+        r = asyncio.run(run(frames, a.per_pass, warmup, a.gap_ms / 1000.0, a.filter))
         if best is None or sum(r.values()) < sum(best.values()):
             best = r
     assert best is not None
     total = sum(best.values())
     rate = CAMERAS * HZ
     gap = f", {a.gap_ms:g} ms sleep after each" if a.gap_ms > 0 else ""
+    gap += f", filter {a.filter}" if a.filter else ""
     print(f"{a.frames} frames, {a.per_pass} a pass{gap}: {total:.1f} us CPU a frame, "
           f"{total * rate / 1e4:.1f} % of a core at {rate:g} frames/s")
     for name, us in best.items():

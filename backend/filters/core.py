@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterable
+from itertools import islice
 from typing import Protocol
 
 from domain.angles import wrap_angle
@@ -31,13 +33,6 @@ from .params import (
 Vec = tuple[float, float]
 #: (wrap_angle's constants, for the angle filter's step)
 _PI, _TAU = math.pi, 2.0 * math.pi
-
-
-def _median(vals: list[float]) -> float:
-    s = sorted(vals)
-    n = len(s)
-    h = n // 2
-    return s[h] if n % 2 else 0.5 * (s[h - 1] + s[h])
 
 
 class PositionFilter(Protocol):
@@ -61,43 +56,99 @@ class PositionFilter(Protocol):
 
 class VelocityFit:
     """Velocity as the slope of a least-squares line through the points of the last
-    ``window_s`` seconds (at least the last two points)."""
+    ``window_s`` seconds (at least the last two points).
 
-    __slots__ = ("_pts", "window_s")
+    The same sums as ``sum(... for p in sel)`` in the same order (a float sum in another order
+    changes bits), in two plain loops (six generators cost twice as much). While the times
+    never went back (the world model's always), the window is the points from ``_lo`` on (a
+    point once out of it stays out: the newest time only grows), found without a pass over
+    them all; and a velocity is computed once per point added or replaced."""
+
+    __slots__ = ("_lo", "_mono", "_pts", "_v", "_w")
 
     def __init__(self, window_s: float = 0.1, max_points: int = 48) -> None:
-        self.window_s = window_s
+        self._w = window_s
         self._pts: deque[tuple[float, float, float]] = deque(maxlen=max_points)
+        #: the times never went back since the last clear (NaN counts as going back)
+        self._mono = True
+        #: while they did not: no point before this index is in the window
+        self._lo = 0
+        self._v: Vec | None = None  # the velocity, until the points change
+
+    @property
+    def window_s(self) -> float:
+        return self._w  # (fixed: the window's start and the velocity are kept)
 
     def add(self, t: float, x: float, y: float) -> None:
-        self._pts.append((t, x, y))
+        pts = self._pts
+        if pts:
+            if not t >= pts[-1][0]:
+                self._mono = False
+            if len(pts) == pts.maxlen and self._lo:  # the oldest goes
+                self._lo -= 1
+        pts.append((t, x, y))
+        self._v = None
 
     def replace_last(self, x: float, y: float) -> None:
         if self._pts:
             t = self._pts[-1][0]
             self._pts[-1] = (t, x, y)
+            self._v = None
 
     def clear(self) -> None:
         self._pts.clear()
+        self._mono = True
+        self._lo = 0
+        self._v = None
 
     def velocity(self) -> Vec:
+        v = self._v
+        if v is not None:
+            return v
         pts = self._pts
-        if len(pts) < 2:
+        n = len(pts)
+        if n < 2:
             return (0.0, 0.0)
         t_end = pts[-1][0]
-        sel = [p for p in pts if t_end - p[0] <= self.window_s]
-        if len(sel) < 2:
-            sel = [pts[-2], pts[-1]]
-        n = len(sel)
-        tm = sum(p[0] for p in sel) / n
-        xm = sum(p[1] for p in sel) / n
-        ym = sum(p[2] for p in sel) / n
-        stt = sum((p[0] - tm) ** 2 for p in sel)
-        if stt < 1e-9:
-            return (0.0, 0.0)
-        vx = sum((p[0] - tm) * (p[1] - xm) for p in sel) / stt
-        vy = sum((p[0] - tm) * (p[2] - ym) for p in sel) / stt
-        return (vx, vy)
+        w = self._w
+        sel: Iterable[tuple[float, float, float]]
+        if self._mono:
+            # the window is a suffix: the times do not decrease, nor does t_end - t along it
+            lo = self._lo
+            while lo < n and not t_end - pts[lo][0] <= w:
+                lo += 1
+            self._lo = lo
+            if n - lo < 2:
+                sel, n = (pts[-2], pts[-1]), 2
+            elif lo:
+                sel = list(islice(pts, lo, None))
+                n -= lo
+            else:
+                sel = pts
+        else:
+            sel = [p for p in pts if t_end - p[0] <= w]
+            if len(sel) < 2:
+                sel = [pts[-2], pts[-1]]
+            n = len(sel)
+        # sum() of floats: 0 + the first, then each in order; so are these (** 2, not d * d:
+        # the same pow)
+        tm = xm = ym = 0.0
+        for t, x, y in sel:
+            tm += t
+            xm += x
+            ym += y
+        tm /= n
+        xm /= n
+        ym /= n
+        stt = sx = sy = 0.0
+        for t, x, y in sel:
+            d = t - tm
+            stt += d ** 2
+            sx += d * (x - xm)
+            sy += d * (y - ym)
+        v = (0.0, 0.0) if stt < 1e-9 else (sx / stt, sy / stt)
+        self._v = v
+        return v
 
 
 class MedianWeighted:
@@ -108,7 +159,8 @@ class MedianWeighted:
 
     __slots__ = (
         "_est",
-        "_hist",
+        "_hx",
+        "_hy",
         "_last_median",
         "_prev_est",
         "_t",
@@ -127,7 +179,9 @@ class MedianWeighted:
         self.w_new = w_new
         self.gap_s = gap_s
         self.jump = jump
-        self._hist: deque[Vec] = deque(maxlen=window)
+        # the last measurements, per coordinate (each sorted as it is for its median)
+        self._hx: deque[float] = deque(maxlen=window)
+        self._hy: deque[float] = deque(maxlen=window)
         self._est: Vec | None = None
         self._prev_est: Vec | None = None
         self._t: float | None = None
@@ -143,13 +197,21 @@ class MedianWeighted:
         return self._last_median
 
     def reset(self) -> None:
-        self._hist.clear()
+        self._hx.clear()
+        self._hy.clear()
         self._est = self._prev_est = self._t = self._last_median = None
         self._vel.clear()
 
     def _step(self, prev: Vec | None) -> Vec:
-        h = self._hist
-        m = h[0] if len(h) == 1 else (_median([p[0] for p in h]), _median([p[1] for p in h]))
+        hx = self._hx
+        n = len(hx)
+        if n == 1:
+            m = (hx[0], self._hy[0])
+        else:  # the median of each coordinate
+            sx, sy = sorted(hx), sorted(self._hy)
+            h = n // 2
+            m = ((sx[h], sy[h]) if n % 2
+                 else (0.5 * (sx[h - 1] + sx[h]), 0.5 * (sy[h - 1] + sy[h])))
         self._last_median = m
         if prev is None or self.w_new >= 1.0:
             est = m
@@ -166,19 +228,22 @@ class MedianWeighted:
     def update(self, t_s: float, x: float, y: float) -> Vec:
         if self._t is not None and t_s - self._t > self.gap_s:
             self.reset()
-        self._hist.append((x, y))
-        self._prev_est = self._est
-        self._t = t_s if self._t is None else max(self._t, t_s)
-        est = self._step(self._prev_est)
+        self._hx.append(x)
+        self._hy.append(y)
+        self._prev_est = prev = self._est
+        t = self._t
+        self._t = t_s if t is None or t_s > t else t  # (max(t, t_s))
+        est = self._step(prev)
         m = self._last_median
         assert m is not None
         self._vel.add(t_s, m[0], m[1])
         return est
 
     def revise(self, x: float, y: float) -> Vec:
-        if not self._hist or self._t is None:
+        if not self._hx or self._t is None:
             return self.update(0.0, x, y)
-        self._hist[-1] = (x, y)
+        self._hx[-1] = x
+        self._hy[-1] = y
         est = self._step(self._prev_est)
         m = self._last_median
         assert m is not None
@@ -372,10 +437,13 @@ class AngleFilter:
     previous one (so a turn through +-pi is continuous), filtered as the x coordinate, and the
     estimate wrapped back to [-pi, pi)."""
 
-    __slots__ = ("_u", "_u_before", "inner")
+    __slots__ = ("_forgets", "_u", "_u_before", "inner")
 
     def __init__(self, inner: PositionFilter) -> None:
         self.inner = inner
+        #: the inner filter may have no estimate while it has a time (forgot the object);
+        #: this module's filters have both or neither, so they are not asked (per frame)
+        self._forgets = type(inner) not in _KEEP_BOTH
         self._u: float | None = None  # unwrapped last measurement
         self._u_before: float | None = None  # unwrapped measurement before the last
 
@@ -394,13 +462,15 @@ class AngleFilter:
     def _unwrap(self, ref: float | None, a: float) -> float:
         return a if ref is None else ref + wrap_angle(a - ref)
 
-    # update and revise run for every robot in every camera frame: wrap_angle and _unwrap are
-    # written out in them (the same arithmetic: a call costs more than the expression)
+    # update, revise and estimate run for every robot in every camera frame: wrap_angle and
+    # _unwrap are written out in them (the same arithmetic: a call costs more than the
+    # expression)
 
     def update(self, t_s: float, a: float) -> float:
         inner = self.inner
         ref = self._u
-        if ref is not None and inner.estimate() is None and inner.t_last is not None:
+        if (ref is not None and self._forgets and inner.estimate() is None
+                and inner.t_last is not None):
             ref = None  # the inner filter forgot the object: no unwrapping against it
         self._u_before = ref
         u = a if ref is None else ref + ((a - ref + _PI) % _TAU - _PI)
@@ -415,14 +485,20 @@ class AngleFilter:
 
     def estimate(self) -> float | None:
         e = self.inner.estimate()
-        return None if e is None else wrap_angle(e[0])
+        return None if e is None else (e[0] + _PI) % _TAU - _PI
 
     def rate(self) -> float:
         return self.inner.velocity()[0]
 
     def predict(self, t_s: float) -> float | None:
         p = self.inner.predict(t_s)
-        return None if p is None else wrap_angle(p[0])
+        return None if p is None else (p[0] + _PI) % _TAU - _PI
+
+
+#: the filters whose ``estimate()`` is None exactly while their ``t_last`` is (before the
+#: first measurement and after a reset)
+_KEEP_BOTH: frozenset[type] = frozenset({
+    MedianWeighted, RawFilter, MedianFilter, PaperFilter, KalmanCV, AdaptiveIMM, AdaptiveIMM1D})
 
 
 AnyParams = RawParams | MedianParams | PaperParams | KalmanParams | AdaptiveParams

@@ -21,6 +21,7 @@ from backend.filters import (
     PaperFilter,
     PaperParams,
     RawFilter,
+    VelocityFit,
     make_filter,
 )
 from domain.angles import wrap_angle
@@ -180,6 +181,60 @@ def test_velocity_of_the_median_filters_is_the_line_fit() -> None:
         assert vx == pytest.approx(800.0, rel=1e-6) and vy == pytest.approx(-300.0, rel=1e-6)
 
 
+def _line_fit(pts: list[tuple[float, float, float]], window_s: float) -> tuple[float, float]:
+    """VelocityFit's velocity as it was written first (the sums over the selection in order)."""
+    if len(pts) < 2:
+        return (0.0, 0.0)
+    t_end = pts[-1][0]
+    sel = [p for p in pts if t_end - p[0] <= window_s]
+    if len(sel) < 2:
+        sel = [pts[-2], pts[-1]]
+    n = len(sel)
+    tm = sum(p[0] for p in sel) / n
+    xm = sum(p[1] for p in sel) / n
+    ym = sum(p[2] for p in sel) / n
+    stt = sum((p[0] - tm) ** 2 for p in sel)
+    if stt < 1e-9:
+        return (0.0, 0.0)
+    return (sum((p[0] - tm) * (p[1] - xm) for p in sel) / stt,
+            sum((p[0] - tm) * (p[2] - ym) for p in sel) / stt)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    steps=st.lists(st.tuples(st.sampled_from(["add", "add", "add", "replace", "velocity",
+                                              "clear"]),
+                             st.floats(0.0, 0.08) | st.floats(-0.05, 0.0) | st.just(0.0),
+                             st.floats(-3000, 3000), st.floats(-3000, 3000)),
+                   max_size=80),
+    window_s=st.sampled_from([0.1, 0.02, 0.05]), max_points=st.sampled_from([4, 16, 48]),
+    start=st.floats(0.0, 2e9),
+)
+def test_velocity_fit_is_bit_equal_to_the_plain_line_fit(
+        steps: list[tuple[str, float, float, float]], window_s: float, max_points: int,
+        start: float) -> None:
+    """The window kept from one call to the next, the sums by C: the same floats to the bit
+    (the times going forward, standing still and, after a negative step, back)."""
+    fit = VelocityFit(window_s, max_points)
+    ref: list[tuple[float, float, float]] = []
+    t = start
+    for op, dt, x, y in steps:
+        if op == "add":
+            t += dt
+            fit.add(t, x, y)
+            ref = [*ref, (t, x, y)][-max_points:]
+        elif op == "replace":
+            fit.replace_last(x, y)
+            if ref:
+                ref[-1] = (ref[-1][0], x, y)
+        elif op == "clear":
+            fit.clear()
+            ref = []
+        got, want = fit.velocity(), _line_fit(ref, window_s)
+        assert [math.copysign(1.0, v) for v in got] == [math.copysign(1.0, v) for v in want]
+        assert got == want
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     kind=st.sampled_from(FILTER_KINDS),
@@ -245,3 +300,43 @@ def test_every_param_has_default_bounds_unit_step_description() -> None:
             assert "unit" in prop and "step" in prop, name
             assert prop.get("description"), name
     FilterSettings.model_validate_json(FilterSettings().model_dump_json())
+
+
+@pytest.mark.parametrize("kind", FILTER_KINDS)
+def test_the_filters_have_an_estimate_exactly_while_they_have_a_time(kind: str) -> None:
+    """What lets AngleFilter skip asking them whether they forgot the object."""
+    for angle in (False, True):
+        f = make_filter(kind, angle=angle)  # type: ignore[arg-type]
+        assert f.estimate() is None and f.t_last is None
+        for i, x in enumerate([0.0, 1.0, 500.0, 2.0, -3000.0, 3.0]):
+            f.update(i * DT + (5.0 if i == 3 else 0.0), x, 0.0)  # a gap, jumps
+            assert f.estimate() is not None and f.t_last is not None
+            f.revise(x + 1.0, 0.0)
+            assert f.estimate() is not None and f.t_last is not None
+        f.reset()
+        assert f.estimate() is None and f.t_last is None
+
+
+class _Forgetful(RawFilter):
+    """A filter that forgets the object while keeping its time (not one of this package's)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.forgot = False
+
+    def estimate(self) -> tuple[float, float] | None:
+        return None if self.forgot else super().estimate()
+
+
+def test_angle_filter_does_not_unwrap_against_an_object_its_filter_forgot() -> None:
+    inner = _Forgetful()
+    f = AngleFilter(inner)
+    for i in range(3):  # turning past +pi: unwrapped beyond it
+        f.update(i * DT, wrap_angle(3.0 + 0.1 * i))
+    assert inner.last_median is not None and inner.last_median[0] > math.pi
+    inner.forgot = True
+    f.update(3 * DT, -3.0)
+    assert inner.last_median[0] == pytest.approx(-3.0)  # taken as it is
+    inner.forgot = False
+    f.update(4 * DT, -2.9)
+    assert inner.last_median[0] == pytest.approx(-2.9)  # unwrapped against -3.0
