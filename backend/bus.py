@@ -127,12 +127,22 @@ class Reader(Generic[T]):
 
     def read_new(self) -> list[T]:
         topic = self.topic
-        if topic._seq == self.cursor:  # nothing new (most readers, most passes)
+        seq = topic._seq
+        if seq == self.cursor:  # nothing new (most readers, most passes)
             return []
         ring = topic._ring
-        if ring and ring[-1].seq == self.cursor + 1:  # just one: a record per pass
-            self.cursor += 1
-            return [ring[-1].value]
+        n = seq - self.cursor
+        if 0 < n <= len(ring):
+            # none evicted: the ring holds consecutive records up to ``seq`` (a write appends
+            # the next number, eviction takes the oldest, ``clear`` empties it), so the new
+            # ones are its last n; taken by index (a record or two per pass: without
+            # read_new_records' generator and lists, 1.7 -> ~0.5 us for two)
+            self.cursor = seq
+            if n == 1:
+                return [ring[-1].value]
+            if n == 2:
+                return [ring[-2].value, ring[-1].value]
+            return [ring[i].value for i in range(-n, 0)]
         return [r.value for r in self.read_new_records()]
 
     def read_new_records(self) -> list[Record[T]]:

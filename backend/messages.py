@@ -4,14 +4,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from .contract import TargetSource
 from .control.goto import LocalVelocity, Target
 from .world.state import Team
 
 
-@dataclass(frozen=True, slots=True)
-class Command:
+class Command(NamedTuple):
+    """One robot's command (a tuple: built in one call, not a frozen dataclass's six
+    ``object.__setattr__``; one per robot a camera saw, hundreds a second). Read by name."""
+
     team: Team
     id: int
     velocity: LocalVelocity
@@ -20,8 +23,9 @@ class Command:
     dribbler_rpm: float = 0.0
 
 
-@dataclass(frozen=True, slots=True)
-class CommandSet:
+class CommandSet(NamedTuple):
+    """One control tick's commands (a tuple, as ``Command``)."""
+
     created_time_ns: int
     source_receive_time_ns: int
     commands: tuple[Command, ...]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from domain.angles import wrap_angle
 
@@ -17,8 +18,10 @@ class Target:
     orientation: float | None  # rad, None: keep the current heading
 
 
-@dataclass(frozen=True, slots=True)
-class LocalVelocity:
+class LocalVelocity(NamedTuple):
+    """A command in the robot's frame (a tuple: built in one call, not a frozen dataclass's
+    three ``object.__setattr__``; one per robot step). Read by name."""
+
     forward_mps: float
     left_mps: float
     angular_radps: float

@@ -28,7 +28,6 @@ from backend.control.goto import (
     GoToController,
     LocalVelocity,
     Target,
-    global_to_local,
     set_last_velocity,
 )
 from backend.control.params import (
@@ -38,7 +37,6 @@ from backend.control.params import (
     ControlSettings,
 )
 from backend.control.profile import ProfilePoint, Trapezoid
-from domain.angles import wrap_angle
 
 # Phase codes in telemetry()["phase"] (floats so that telemetry stays dict[str, float]).
 PHASE_IDLE = 0
@@ -160,8 +158,6 @@ class LineController:
         return self._vx, self._vy
 
     def step(self, state: RobotMotionState, target: Target, dt_s: float) -> LocalVelocity:
-        # (_clamp(dt_s, 0.0, 0.1), inline: every robot a camera saw, 600 frames a second)
-        dt = (0.0 if dt_s < 0.0 else 0.1 if dt_s > 0.1 else dt_s) if math.isfinite(dt_s) else 0.0
         if not state.visible:
             # hold/zero; when seen again the move restarts from where the robot is then
             self._vx = self._vy = 0.0
@@ -169,7 +165,18 @@ class LineController:
             self._lost = True
             self._phase = PHASE_LOST
             return LocalVelocity.zero()
-        px, py = state.x_mm / 1000.0, state.y_mm / 1000.0
+        return self.step_at(state.x_mm, state.y_mm, state.orientation_rad, target, dt_s)
+
+    def step_at(self, x_mm: float, y_mm: float, heading: float, target: Target,
+                dt_s: float) -> LocalVelocity:
+        """``step`` for a robot seen at (``x_mm``, ``y_mm``) with ``heading`` (rad), without a
+        RobotMotionState. The blocked detection, the limiter, the heading controller and the
+        rotation into the robot's frame are written inline (every robot a camera saw, 600
+        frames a second): the same arithmetic as their own functions, in the same order."""
+        # (_clamp(dt_s, 0.0, 0.1), inline)
+        dt = (0.0 if dt_s < 0.0 else 0.1 if dt_s > 0.1 else dt_s) if math.isfinite(dt_s) else 0.0
+        params = self.params
+        px, py = x_mm / 1000.0, y_mm / 1000.0
         if self._target is None or self._lost:
             self._start(px, py, target)
         elif target is not self._target and target != self._target:  # (same: no compare)
@@ -191,15 +198,29 @@ class LineController:
         self._prev_x = x
         self._x, self._lat = x, lat
         dist_b = math.hypot(self._bx - px, self._by - py)
-        if self._detect_blocked(px, py, dt):
-            self.restarts += 1
-            self._on_blocked(px, py)
-            ux, uy = self._ux, self._uy
-            rx, ry = px - self._ax, py - self._ay
-            x = rx * ux + ry * uy
-            lat = -rx * uy + ry * ux
-            self._x, self._lat, self._prev_x = x, lat, x
-        tol = self.params.limits.position_tolerance_mm / 1000.0
+        # blocked: commanded to move, not moving for blocked_time_s (the profile restarts)
+        a1 = params.algorithm1
+        self._blocked_now = False
+        if (math.hypot(self._vx, self._vy) <= a1.blocked_speed_mps or self._holding
+                or math.hypot(px - self._block_px, py - self._block_py) * 1000.0
+                > a1.blocked_move_mm):  # not commanded to move, holding, or moving
+            self._block_t = 0.0
+            self._block_px, self._block_py = px, py
+        else:
+            self._block_t += dt
+            if self._block_t > a1.blocked_time_s:
+                self._block_t = 0.0
+                self._block_px, self._block_py = px, py
+                self._blocked_now = True
+                self.restarts += 1
+                self._on_blocked(px, py)
+                ux, uy = self._ux, self._uy
+                rx, ry = px - self._ax, py - self._ay
+                x = rx * ux + ry * uy
+                lat = -rx * uy + ry * ux
+                self._x, self._lat, self._prev_x = x, lat, x
+        lim = params.limits
+        tol = lim.position_tolerance_mm / 1000.0
         if self._holding:
             if dist_b > 2.0 * tol:
                 self._holding = False
@@ -207,19 +228,42 @@ class LineController:
             self._holding = True
         # always run the algorithm (Algorithm 1 keeps integrating u and refining C while it
         # holds: at rest the ratio distance / integral(u) is free of the latency bias)
-        vx, vy = self._command(px, py, x, lat, state.orientation_rad, dt)
+        vx, vy = self._command(px, py, x, lat, heading, dt)
         if self._holding:
             along = self._hold_speed(dt)
             vx, vy = self._ux * along, self._uy * along
             self._phase = PHASE_HOLD
         if self._blocked_now:
             self._phase = PHASE_BLOCKED
-        vx, vy = self._limit(vx, vy, dt)
+        # the limiter: max speed, max change of the velocity vector per second
+        s = math.hypot(vx, vy)
+        if s > lim.max_speed_mps:
+            vx, vy = vx * lim.max_speed_mps / s, vy * lim.max_speed_mps / s
+        dvx, dvy = vx - self._vx, vy - self._vy
+        dv = math.hypot(dvx, dvy)
+        max_dv = lim.max_accel_mps2 * dt
+        if dv > max_dv:
+            k = max_dv / dv
+            vx, vy = self._vx + dvx * k, self._vy + dvy * k
+        self._vx, self._vy = vx, vy
         self._cmd_along = vx * ux + vy * uy
-        omega = self._heading(target, state.orientation_rad)
+        # the heading: a P controller (wrap_angle and _clamp inline)
+        if target.orientation is None:
+            self._heading_err = 0.0
+            omega = 0.0
+        else:
+            hp = params.heading
+            err = (target.orientation - heading + math.pi) % (2.0 * math.pi) - math.pi
+            self._heading_err = err
+            if abs(err) <= hp.tolerance_rad:
+                omega = 0.0
+            else:
+                wmax = lim.max_angular_radps
+                omega = hp.kp_per_s * err
+                omega = -wmax if omega < -wmax else wmax if omega > wmax else omega
         self._t += dt
-        fwd, left = global_to_local(vx, vy, state.orientation_rad)
-        return LocalVelocity(fwd, left, omega)
+        c, sn = math.cos(heading), math.sin(heading)  # global_to_local, inline
+        return LocalVelocity(vx * c + vy * sn, -vx * sn + vy * c, omega)
 
     def telemetry(self) -> dict[str, float]:
         ref = self._reference()
@@ -273,7 +317,8 @@ class LineController:
     ) -> tuple[float, float]:
         along = self._along(x, dt)
         lp = self.params.lateral
-        side = _clamp(-lp.kp_per_s * lat, -lp.max_mps, lp.max_mps) * self._lateral_scale()
+        side, hi = -lp.kp_per_s * lat, lp.max_mps  # (_clamp(side, -hi, hi), inline)
+        side = (-hi if side < -hi else hi if side > hi else side) * self._lateral_scale()
         ux, uy = self._ux, self._uy
         return ux * along - uy * side, uy * along + ux * side
 
@@ -329,53 +374,6 @@ class LineController:
 
     def _on_start_moved(self) -> None:
         pass
-
-    def _detect_blocked(self, px: float, py: float, dt: float) -> bool:
-        p = self.params.algorithm1
-        self._blocked_now = False
-        commanded = math.hypot(self._vx, self._vy)
-        if commanded <= p.blocked_speed_mps or self._holding:
-            self._block_t = 0.0
-            self._block_px, self._block_py = px, py
-            return False
-        if math.hypot(px - self._block_px, py - self._block_py) * 1000.0 > p.blocked_move_mm:
-            self._block_t = 0.0
-            self._block_px, self._block_py = px, py
-            return False
-        self._block_t += dt
-        if self._block_t > p.blocked_time_s:
-            self._block_t = 0.0
-            self._block_px, self._block_py = px, py
-            self._blocked_now = True
-            return True
-        return False
-
-    def _limit(self, vx: float, vy: float, dt: float) -> tuple[float, float]:
-        lim = self.params.limits
-        s = math.hypot(vx, vy)
-        if s > lim.max_speed_mps:
-            vx, vy = vx * lim.max_speed_mps / s, vy * lim.max_speed_mps / s
-        dvx, dvy = vx - self._vx, vy - self._vy
-        dv = math.hypot(dvx, dvy)
-        max_dv = lim.max_accel_mps2 * dt
-        if dv > max_dv:
-            k = max_dv / dv
-            vx, vy = self._vx + dvx * k, self._vy + dvy * k
-        self._vx, self._vy = vx, vy
-        return vx, vy
-
-    def _heading(self, target: Target, heading: float) -> float:
-        if target.orientation is None:
-            self._heading_err = 0.0
-            return 0.0
-        hp = self.params.heading
-        err = wrap_angle(target.orientation - heading)
-        self._heading_err = err
-        if abs(err) <= hp.tolerance_rad:
-            return 0.0
-        lim = self.params.limits.max_angular_radps
-        return _clamp(hp.kp_per_s * err, -lim, lim)
-
 
 class Algorithm1(LineController):
     """Trapezoid reference + online C estimate + feedback K (paper eq. 3)."""
@@ -457,10 +455,13 @@ class Algorithm2(LineController):
         p = self.params.algorithm2
         s = self._length - x
         v = math.copysign(math.sqrt(2.0 * p.a_mps2 * abs(s)), s)
-        v = _clamp(v, -p.v_mps, p.v_mps)
+        # (_clamp to [-v, v], then to [last - step, last + step], inline)
+        hi = p.v_mps
+        v = -hi if v < -hi else hi if v > hi else v
         last = self._cmd_along  # the only state: the speed sent last step
         step = p.w_mps2 * dt
-        v = _clamp(v, last - step, last + step)
+        lo, hi = last - step, last + step
+        v = lo if v < lo else hi if v > hi else v
         if abs(v - last) < 1e-12:
             self._phase = PHASE_CRUISE if abs(v) > 0.0 else PHASE_SETTLE
         elif abs(v) > abs(last):
@@ -558,6 +559,11 @@ class RobotMotion:
 
     def step(self, state: RobotMotionState, target: Target, dt_s: float) -> LocalVelocity:
         return self._ctrl.step(state, target, dt_s)
+
+    def step_at(self, x_mm: float, y_mm: float, heading: float, target: Target,
+                dt_s: float) -> LocalVelocity:
+        """``step`` for a robot seen there (LineController.step_at)."""
+        return self._ctrl.step_at(x_mm, y_mm, heading, target, dt_s)
 
     def telemetry(self) -> dict[str, float]:
         return self._ctrl.telemetry()

@@ -23,10 +23,23 @@ def referee_limits(
     placement is limited (the safe side). ``max_speed_mps``: the strategy's own cap for this
     robot, whatever the command.
     """
+    return capped(velocity, min(command_cap_mps(command, our_team, stop_speed_mps),
+                                max_speed_mps))
+
+
+def command_cap_mps(command: str | None, our_team: str | None = None,
+                    stop_speed_mps: float = STOP_SPEED_MPS) -> float:
+    """The speed cap of ``referee_limits`` for ``command``, before the robot's own cap: the
+    same for every robot (control takes it once per tick). 0: stop; infinity: none."""
     cap = speed_limit_mps(command, our_team)
     if 0.0 < cap < math.inf:
         cap = min(cap, stop_speed_mps)
-    cap = min(cap, max_speed_mps)
+    return cap
+
+
+def capped(velocity: LocalVelocity, cap: float) -> LocalVelocity:
+    """``velocity`` with its speed at most ``cap`` (direction and angular speed kept; the same
+    object when within it); zero for a cap of 0 or less."""
     if cap <= 0.0:
         return LocalVelocity.zero()
     s = math.hypot(velocity.forward_mps, velocity.left_mps)

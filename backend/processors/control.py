@@ -15,7 +15,7 @@ from ..control.follow import next_waypoint
 from ..control.goto import LocalVelocity
 from ..control.motion import PHASE_NAMES, MotionBank, RobotMotionState
 from ..control.params import ALGORITHMS, ControlSettings
-from ..control.referee_limits import referee_limits
+from ..control.referee_limits import capped, command_cap_mps
 from ..messages import Command, CommandSet, TargetEntry
 from ..params.model import StationParams
 from ..processor import OnTopic, Processor
@@ -56,10 +56,11 @@ class ControlProcessor(Processor):
         #: a robot is stepped again when its world state (the world model reuses a robot's
         #: state object until a camera sees it again) or its target changed, when the
         #: referee command changed, or after ``refresh_s`` without a step; in between the
-        #: relay repeats its last command. Per robot: the (state, target) of its last command
-        #: and the monotonic time of its last step (its controller's dt)
+        #: relay repeats its last command. Per robot: the (state, target, monotonic time) of
+        #: its last command while it is seen, and the monotonic time of its last step seen or
+        #: not (its controller's dt)
         self.refresh_s = 0.02
-        self._basis: dict[tuple[Team, int], tuple[RobotState, TargetEntry]] = {}
+        self._basis: dict[tuple[Team, int], tuple[RobotState, TargetEntry, float]] = {}
         self._step_t: dict[tuple[Team, int], float] = {}
         self._command: str | None = None
         self._keys: list[tuple[Team, int]] = []
@@ -173,18 +174,18 @@ class ControlProcessor(Processor):
         basis, step_t = self._basis, self._step_t
         motions = self.motion.robots
         kick_ok = kick_allowed(command)
+        cmd_cap = command_cap_mps(command, self.our_team, self.stop_speed_mps)
         refresh_s = self.refresh_s
         out: list[Command] = []
         for key in keys:
             i = index.get(key)
             robot = None if i is None else world_robots[i]
             entry = targets[key]
+            b = basis.get(key)  # (its time is the robot's step_t: both written in its step)
+            if (b is not None and b[0] is robot and now - b[2] < refresh_s and robot.visible
+                    and (b[1] is entry or b[1] == entry)):
+                continue  # nothing new for this robot: the relay repeats its command
             last_t = step_t.get(key)
-            seen = robot is not None and robot.visible
-            if seen and last_t is not None and now - last_t < refresh_s:
-                b = basis.get(key)
-                if b is not None and b[0] is robot and (b[1] is entry or b[1] == entry):
-                    continue  # nothing new for this robot: the relay repeats its command
             dt = tick_dt if last_t is None else min(0.1, now - last_t)
             step_t[key] = now
             m = motions.get(key) or self.motion.get(key[0], key[1])
@@ -193,16 +194,17 @@ class ControlProcessor(Processor):
                 basis.pop(key, None)  # commanded zero again in every tick while not seen
                 out.append(Command(key[0], key[1], zero))
                 continue
-            basis[key] = (robot, entry)
-            vel = m.step(RobotMotionState(robot.x, robot.y, robot.orientation),
-                         next_waypoint(entry, robot.x, robot.y), dt)
-            vel = referee_limits(
-                vel, command, our_team=self.our_team, stop_speed_mps=self.stop_speed_mps,
-                max_speed_mps=math.inf if entry.max_speed_mps is None else entry.max_speed_mps)
-            out.append(Command(key[0], key[1], vel,
-                               kick_speed_mps=entry.kick_speed_mps if kick_ok else 0.0,
-                               chip=entry.chip and kick_ok,
-                               dribbler_rpm=entry.dribbler_rpm))
+            basis[key] = (robot, entry, now)
+            x, y = robot.x, robot.y
+            # (next_waypoint's own first test inline: most targets have no path)
+            aim = entry.target if len(entry.path) <= 1 else next_waypoint(entry, x, y)
+            vel = m.step_at(x, y, robot.orientation, aim, dt)
+            # referee_limits: the command's cap (once per tick), then the robot's own
+            cap = entry.max_speed_mps
+            vel = capped(vel, cmd_cap if cap is None else min(cmd_cap, cap))
+            out.append(Command(key[0], key[1], vel,  # (fields in order: no keywords)
+                               entry.kick_speed_mps if kick_ok else 0.0,
+                               entry.chip and kick_ok, entry.dribbler_rpm))
         if keys != self._keys:  # robots no longer commanded leave the table
             self._keys = keys
             kept = set(keys)

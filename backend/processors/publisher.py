@@ -71,24 +71,24 @@ class CommandPublisher(SocketProcessor):
         self._was_muted = False
         for cs in self.reader.read_new():
             self.seq += 1
-            msg = _CommandSet(
-                created_time_ns=cs.created_time_ns,
-                source_receive_time_ns=cs.source_receive_time_ns,
-                sequence=self.seq,
-                stop_all=cs.stop_all,
-            )
+            msg = _CommandSet()  # fields set one by one: cheaper than keywords (as below)
+            msg.created_time_ns = cs.created_time_ns
+            msg.source_receive_time_ns = cs.source_receive_time_ns
+            msg.sequence = self.seq
+            msg.stop_all = cs.stop_all
             add = msg.commands.add
-            for c in cs.commands:  # fields set one by one: cheaper than add(**fields)
-                m = add()
-                m.team = _BLUE if c.team == "blue" else _YELLOW
-                m.id = c.id
-                v = c.velocity
-                m.forward_mps = v.forward_mps
-                m.left_mps = v.left_mps
-                m.angular_radps = v.angular_radps
-                m.kick_speed_mps = c.kick_speed_mps
-                m.chip = c.chip
-                m.dribbler_rpm = c.dribbler_rpm
+            # each Command (and its LocalVelocity) unpacked as the tuple it is, in its fields'
+            # order: one step instead of a read by name per field
+            for team, rid, (fwd, left, ang), kick, chip, drib in cs.commands:
+                m = add()  # fields set one by one: cheaper than add(**fields)
+                m.team = _BLUE if team == "blue" else _YELLOW
+                m.id = rid
+                m.forward_mps = fwd
+                m.left_mps = left
+                m.angular_radps = ang
+                m.kick_speed_mps = kick
+                m.chip = chip
+                m.dribbler_rpm = drib
             raw = msg.SerializeToString()
             self.send([b"commands", raw])
             now_ns = time.time_ns()

@@ -131,17 +131,24 @@ class RelayIngest(SocketProcessor):
         # Called when a message waits: ``zmq.EVENTS`` after each message (each asks libzmq
         # to take its commands: a system call), not before; not a recv until ``zmq.Again``
         # (the same system call and an exception). Either re-arms the edge-triggered
-        # descriptor. Plain ints for the flags: an int & zmq.POLLIN builds an enum member
+        # descriptor. Plain ints for the flags: an int & zmq.POLLIN builds an enum member.
+        # A message's parts as recv_multipart's bytes, but each part's ``more`` read from the
+        # part itself (recv_multipart asks the socket for ZMQ_RCVMORE after each part: a
+        # ``get``, which looks the option up in an enum: ~0.8 us a message of two parts)
         out = self._out
-        recv, get = out.recv_multipart, out.get
+        recv, get = out.recv, out.get
         limit = min(self.vision_packets.capacity, self.referee_packets.capacity,
                     self.feedback_packets.capacity)
         handle = self._handle
         for _ in range(limit):
             try:
-                frames = recv(_NOBLOCK)
+                part = recv(_NOBLOCK, copy=False)
             except zmq.Again:
                 return
+            frames = [part.bytes]
+            while part.more:
+                part = recv(_NOBLOCK, copy=False)
+                frames.append(part.bytes)
             handle(frames)
             if not get(_EVENTS) & _POLLIN:
                 return

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from domain.teams import TEAMS as TEAMS
 from domain.teams import Team as Team
@@ -63,8 +64,10 @@ class OtherBall:
     detections: int  # consistent detections so far
 
 
-@dataclass(frozen=True, slots=True)
-class RawRobot:
+class RawRobot(NamedTuple):
+    """One robot detection of a camera frame (a tuple: built in one call, not a frozen
+    dataclass's six ``object.__setattr__``; thousands are decoded a second). Read by name."""
+
     team: Team
     id: int
     x: float
@@ -73,8 +76,9 @@ class RawRobot:
     confidence: float
 
 
-@dataclass(frozen=True, slots=True)
-class RawBall:
+class RawBall(NamedTuple):
+    """One ball detection of a camera frame (a tuple, as ``RawRobot``)."""
+
     x: float
     y: float
     confidence: float

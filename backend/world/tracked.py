@@ -42,6 +42,7 @@ MM = 0.001  # m per mm
 #: a lost robot is left out of the frame once it has not been seen for this long (s)
 LOST_ROBOT_SENT_S = 0.5
 _TEAM: dict[Team, PbTeam.ValueType] = {"yellow": YELLOW, "blue": BLUE}
+_TEAM_INT: dict[str, int] = {k: int(v) for k, v in _TEAM.items()}
 
 
 def _visibility(visible: bool, predicted: bool, lost: bool) -> float:
@@ -163,13 +164,16 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
         parts.append(_len(0x1A, _vec3(0x0A, o.x * MM, o.y * MM, 0.0) + b"\x1d" + _ONE))
     pack = _ROBOT.pack
     t = world.t_capture
+    team_int = _TEAM_INT
     for r in world.robots:
-        if r.lost and t - r.t_seen > LOST_ROBOT_SENT_S:  # _sent(), inline: every tick
+        # _sent(), team_enum() and _visibility(), inline: every robot of every tick
+        lost = r.lost
+        if lost and t - r.t_seen > LOST_ROBOT_SENT_S:
             continue
-        parts.append(pack(0x22, 45, 0x0A, 4, 0x08, r.id & 0x7F, 0x10, int(team_enum(r.team)),
+        parts.append(pack(0x22, 45, 0x0A, 4, 0x08, r.id & 0x7F, 0x10, team_int[r.team],
                           0x12, 10, 0x0D, r.x * MM, 0x15, r.y * MM, 0x1D, r.orientation,
                           0x22, 10, 0x0D, r.vx * MM, 0x15, r.vy * MM, 0x2D, r.omega,
-                          0x35, _visibility(r.visible, r.predicted, r.lost)))
+                          0x35, 0.0 if lost or not r.visible else 0.5 if r.predicted else 1.0))
     k = world.kicked_ball
     if k is not None:
         kick = (_vec2(0x0A, k.start_x * MM, k.start_y * MM)

@@ -1,3 +1,5 @@
+import random
+
 import pytest
 
 from backend import topics
@@ -98,3 +100,28 @@ def test_resize_keeps_newest() -> None:
     t.resize(2)
     assert [r.value for r in t.records_after(0)] == [3, 4]
     assert t.capacity == 2
+
+
+def test_read_new_takes_the_same_records_as_read_new_records() -> None:
+    """read_new's by-index path (none evicted) against read_new_records, through writes of
+    one to many records between reads, evictions, clears and resizes."""
+    rng = random.Random(5)
+    topic: Topic[int] = Topic("t", 8)
+    fast, ref = Reader(topic), Reader(topic)
+    value = 0
+    for step in range(3000):
+        op = rng.random()
+        if op < 0.02:
+            topic.clear()
+        elif op < 0.04:
+            topic.resize(rng.randint(1, 12))
+        else:
+            for _ in range(rng.choice([0, 1, 1, 2, 2, 3, 5, 9, 20])):
+                value += 1
+                topic.write(value)
+        if rng.random() < 0.7:
+            got = fast.read_new()
+            want = [r.value for r in ref.read_new_records()]
+            assert got == want, step
+            assert (fast.cursor, fast.missed) == (ref.cursor, ref.missed), step
+    assert fast.missed > 0  # evictions happened and were counted

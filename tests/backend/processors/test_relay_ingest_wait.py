@@ -174,3 +174,42 @@ async def test_a_message_that_arrives_during_the_pass_is_taken_right_after_it() 
         ctx.destroy(linger=0)
         sync_ctx.destroy(linger=0)
     assert chain.seqs == list(range(1000, 1031))
+
+
+def test_each_message_is_read_whole_and_a_message_not_of_two_parts_is_counted() -> None:
+    """The parts of a message are read one by one (each part says whether more follow): a
+    message of one or three parts is counted and dropped, the messages around it are put on
+    the bus whole and in order."""
+    ctx = zmq.Context()
+    pub, sub = ctx.socket(zmq.PUB), ctx.socket(zmq.SUB)
+    try:
+        for s in (pub, sub):
+            s.setsockopt(zmq.LINGER, 0)
+        pub.bind("inproc://relay-ingest-parts")
+        sub.connect("inproc://relay-ingest-parts")
+        sub.setsockopt(zmq.SUBSCRIBE, b"")
+        bus = DataBus({})
+        ingest = RelayIngest(bus)
+        ingest.attach(sub)  # type: ignore[arg-type]
+        packets = bus.of(topics.VISION_PACKETS)
+        for _ in range(200):  # the subscription joins (inproc: at once, bounded all the same)
+            pub.send_multipart([b"vision", envelope(0)])
+            if sub.poll(10):
+                break
+        sub.recv_multipart()
+        while sub.poll(0):  # what the join left
+            sub.recv_multipart()
+        pub.send_multipart([b"vision", envelope(1)])
+        pub.send_multipart([b"vision"])
+        pub.send_multipart([b"vision", envelope(2), b"extra"])
+        pub.send_multipart([b"vision", envelope(3)])
+        assert sub.poll(1000)
+        ingest.step()
+        got = [e.sequence for e in Reader(packets, from_start=True).read_new()]
+        assert got == [1, 3]
+        assert ingest._zmq.by_reason == {"bad frames": 2}
+        assert ingest._zmq.packets == 4
+    finally:
+        pub.close()
+        sub.close()
+        ctx.term()
