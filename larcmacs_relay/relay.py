@@ -325,7 +325,8 @@ class Relay:
         MAX_BATCH in a row it yields to the loop (the reader is level-triggered and comes back
         at once), so a flood cannot starve the command output. Vision and referee are not
         decoded here (the backend decodes them once): per datagram only the size and
-        emptiness checks, one Envelope and one ZeroMQ message."""
+        emptiness checks, its receive time, one Envelope and one ZeroMQ message; the stream's
+        packets are counted once per wake-up (one clock read, not one per datagram)."""
         counter = self.streams[name]
         topic = _TOPICS[name]
         stream = _STREAM_IDS[name]
@@ -334,61 +335,86 @@ class Relay:
         sources = self._sources
         seq = self._sequences[name]
         tracker = name == "tracker"
+        # vision and referee: only an empty datagram is refused (check_forwarded), tested here
+        forwarded = validate is codecs.check_forwarded
         compat_vision = self._compat_vision if name == "vision" else None
         compat_referee = name == "referee" and self._compat_referee is not None
+        recvfrom = sock.recvfrom
+        time_ns = time.time_ns
+        envelope = touchline_pb2.Envelope
+        send = pub.send if pub is not None else None
+        n = nbytes = 0
         try:
             for _ in range(MAX_BATCH):
                 try:
-                    data, addr = sock.recvfrom(MAX_DATAGRAM)
+                    data, addr = recvfrom(MAX_DATAGRAM)
                 except (BlockingIOError, InterruptedError):
                     return
                 except OSError as exc:
                     counter.error("receive failed", str(exc))
                     self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                     return
-                receive_ns = time.time_ns()
-                if tracker and self._own_tracker_uuids and self._own_echo(data):
-                    self.own_tracker_echoes += 1
+                receive_ns = time_ns()
+                size = len(data)
+                if forwarded and data and size <= max_bytes:
+                    pass  # the common case: nothing more to check
+                elif not self._input_ok(data, addr, name, validate, counter, tracker):
                     continue
-                if len(data) > max_bytes:
-                    reason: str | None = f"{len(data)} bytes, more than {max_bytes}"
-                    kind = streams.OVERSIZED
-                else:
-                    try:
-                        reason = validate(data)
-                    except Exception as exc:  # a decoder surprise must not kill the reader
-                        reason = f"validation failed: {exc!r}"
-                    kind = codecs.classify(reason, data) if reason is not None else ""
-                if reason is not None:
-                    counter.error(kind, reason)
-                    self._ratelog.warning(
-                        f"{name}-bad",
-                        "dropped malformed %s datagram from %s:%d: %s",
-                        name,
-                        addr[0],
-                        addr[1],
-                        reason,
-                    )
-                    continue
-                counter.packet(len(data))
+                n += 1
+                nbytes += size
                 seq += 1
                 source = sources.get(addr)
                 if source is None:
                     source = self._source(addr)
-                env = touchline_pb2.Envelope(
-                    stream=stream,
-                    receive_time_ns=receive_ns,
-                    sequence=seq,
-                    source=source,
-                    payload=data,
-                )
-                self._publish2(pub, topic, env.SerializeToString())
+                if send is not None:
+                    body = envelope(stream=stream, receive_time_ns=receive_ns, sequence=seq,
+                                    source=source, payload=data).SerializeToString()
+                    try:  # a PUB queues a multipart message whole or not at all
+                        send(topic, _SNDMORE_NOBLOCK)
+                        send(body, _NOBLOCK)
+                    except zmq.Again:
+                        self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message "
+                                              "dropped")
                 if compat_vision is not None:
                     self._publish(compat_vision, [data])
                 elif compat_referee:
                     self._compat_referee_out(data, addr)
         finally:
             self._sequences[name] = seq
+            if n:
+                counter.packets_at(n, nbytes, time.monotonic())
+
+    def _input_ok(self, data: bytes, addr: tuple[str, int], name: str,
+                  validate: Callable[[bytes], str | None], counter: StreamCounter,
+                  tracker: bool) -> bool:
+        """The checks of an input datagram beyond the common case (a tracker's, an own tracked
+        frame heard back, an empty or oversized one): False when it is not forwarded (an echo
+        is counted apart, a bad one as an error by reason, and logged)."""
+        if tracker and self._own_tracker_uuids and self._own_echo(data):
+            self.own_tracker_echoes += 1
+            return False
+        max_bytes = self.config.max_datagram_bytes
+        if len(data) > max_bytes:
+            reason: str | None = f"{len(data)} bytes, more than {max_bytes}"
+            kind = streams.OVERSIZED
+        else:
+            try:
+                reason = validate(data)
+            except Exception as exc:  # a decoder surprise must not kill the reader
+                reason = f"validation failed: {exc!r}"
+            kind = codecs.classify(reason, data) if reason is not None else ""
+        if reason is None:
+            return True
+        counter.error(kind, reason)
+        self._ratelog.warning(
+            f"{name}-bad",
+            "dropped malformed %s datagram from %s:%d: %s",
+            name,
+            addr[0],
+            addr[1],
+            reason,
+        )
+        return False
 
     def _compat_referee_out(self, data: bytes, addr: tuple[str, int]) -> None:
         ref, why = codecs.parse_referee(data)
@@ -408,18 +434,6 @@ class Relay:
             return
         try:
             sock.send_multipart(frames, flags=_NOBLOCK)
-        except zmq.Again:
-            self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
-
-    def _publish2(self, sock: zmq.Socket[bytes] | None, topic: bytes, body: bytes) -> None:
-        """``_publish(sock, [topic, body])`` without send_multipart's list and flag
-        arithmetic (the vision path's once-per-datagram call). A PUB socket queues a
-        multipart message whole or not at all, so the topic frame cannot go out alone."""
-        if sock is None:
-            return
-        try:
-            sock.send(topic, _SNDMORE_NOBLOCK)
-            sock.send(body, _NOBLOCK)
         except zmq.Again:
             self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
 
