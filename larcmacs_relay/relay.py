@@ -102,11 +102,11 @@ class Relay:
         #: per team: commands sent to each robot and the wall clock (ns) of the last one,
         #: forwarded with every answer (the backend's round trip and losses)
         self._sent: dict[int, SentLog] = {t: SentLog() for t in codecs.TEAMS}
-        #: each robot's last command and its encoded part of the sim output (_sim_part)
-        self._sim_parts: dict[tuple[int, int], tuple[Command, bytes]] = {}
-        #: per team, the robots' commands of the last sim datagram, its bytes and the robots'
-        #: ids: a cycle with the same command objects sends the same bytes
-        self._sim_out: dict[int, tuple[tuple[Command, ...], bytes, tuple[int, ...]]] = {}
+        #: per team, the robots' commands of the last sim datagram, its bytes, the robots'
+        #: ids and each one's encoded part: a cycle with the same command objects sends the
+        #: same bytes, and a robot's part is kept while its command is the same object
+        self._sim_out: dict[int, tuple[tuple[Command, ...], bytes, tuple[int, ...],
+                                       list[bytes]]] = {}
         #: the sim output of the table's version ``_plan_version`` (every team's datagram,
         #: its address and robots): while the table is unchanged a cycle only sends it
         self._plan: list[_Planned] = []
@@ -863,6 +863,8 @@ class Relay:
         """Each team's RobotControl datagram of ``due`` (sorted by team, id), its address and
         its robots' ids; a team's bytes are reused while its commands are the same objects."""
         cfg = self.config
+        encode = codecs.encode_sim_robot_command
+        angle = cfg.chip_angle_deg
         plan: list[_Planned] = []
         blue = [c for c in due if c.team == codecs.TEAM_BLUE]
         yellow = [c for c in due if c.team != codecs.TEAM_BLUE] if len(blue) < len(due) else []
@@ -872,33 +874,21 @@ class Relay:
                 continue
             robots = tuple(cmds)
             last = self._sim_out.get(team)
-            if last is not None and last[0] == robots:  # the same objects: no __eq__
+            if last is not None and last[0] == robots:  # the same objects (or equal ones)
                 data, ids = last[1], last[2]
             else:
-                data = b"".join([self._sim_part(c) for c in cmds])
-                ids = tuple(c.id for c in cmds)
+                if last is not None and len(last[0]) == len(robots):
+                    parts = [p if c is o else encode(c, angle)
+                             for c, o, p in zip(robots, last[0], last[3], strict=True)]
+                else:
+                    parts = [encode(c, angle) for c in robots]
+                data = b"".join(parts)
+                ids = tuple([c.id for c in robots])
                 if last is not None and last[2] == ids:
                     ids = last[2]  # the same robots: the sent log sees it by identity
-                self._sim_out[team] = (robots, data, ids)
+                self._sim_out[team] = (robots, data, ids, parts)
             plan.append((team, data, (self._sim_host, port), ids))
         return plan
-
-    def _sim_part(self, c: Command) -> bytes:
-        """Robot ``c``'s encoded part of the simulation protocol's RobotControl, kept while
-        its command stays the same (the same object, or an equal one: a stop is made anew
-        in every cycle, and a command set's robot commands are new objects whenever the
-        parsed commands were started afresh)."""
-        key = (c.team, c.id)
-        got = self._sim_parts.get(key)
-        if got is not None:
-            if got[0] is c:
-                return got[1]
-            if got[0] == c:  # kept with this object: the next cycle's test is ``is``
-                self._sim_parts[key] = (c, got[1])
-                return got[1]
-        data = codecs.encode_sim_robot_command(c, self.config.chip_angle_deg)
-        self._sim_parts[key] = (c, data)
-        return data
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
