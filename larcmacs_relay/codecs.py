@@ -232,10 +232,28 @@ def encode_sim_robot_control(commands: list[Command], chip_angle_deg: float) -> 
     return msg.SerializeToString()
 
 
+#: one robot's part of RobotControl as protobuf writes it (every field set, proto2: present
+#: even when 0): robot_commands (1, 36 bytes) { id (1, varint < 128), move_command (2, 17) {
+#: local_velocity (2, 15) { forward (1), left (2), angular (3) } }, kick_speed (3),
+#: kick_angle (4), dribbler_speed (5) }, the floats as 32-bit little-endian
+_SIM_PART = struct.Struct("<9BfBfBfBfBfBf")
+
+
 def encode_sim_robot_command(command: Command, chip_angle_deg: float) -> bytes:
     """One robot's part of ``encode_sim_robot_control``: RobotControl has the one repeated
     field, so the parts of several robots, joined, are the message of all of them (byte for
-    byte). The relay keeps each robot's part while its command stays the same."""
+    byte). The relay keeps each robot's part while its command stays the same. Written by
+    struct (a tenth of the time of a message built and serialized; the same bytes, tested);
+    a value beyond float32 or an id beyond one varint byte goes through protobuf."""
+    c = command
+    if 0 <= c.id < 128:
+        angle = chip_angle_deg if (c.chip and c.kick_speed_mps > 0) else 0.0
+        try:
+            return _SIM_PART.pack(0x0A, 36, 0x08, c.id, 0x12, 17, 0x12, 15, 0x0D, c.forward_mps,
+                                  0x15, c.left_mps, 0x1D, c.angular_radps, 0x1D,
+                                  c.kick_speed_mps, 0x25, angle, 0x2D, c.dribbler_rpm)
+        except OverflowError:  # float32 has no such value: protobuf makes it infinite
+            pass
     return encode_sim_robot_control([command], chip_angle_deg)
 
 

@@ -27,6 +27,52 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+#: what the relay had sent to a team's robots at one moment (SentLog.snapshot): the counts
+#: before the current run, the run's robots, its datagrams and the last one's time (ns)
+SentSnapshot = tuple[dict[int, tuple[int, int]], tuple[int, ...], int, int]
+
+
+class SentLog:
+    """Commands sent to one team's robots: per robot the datagrams that carried it and the
+    wall clock (ns) of the last one. A cycle's datagram carries the same robots as the one
+    before nearly always, so a send is counted in a run (the robots, how many datagrams, the
+    last one's time: no per-robot update per cycle); a datagram with other robots folds the
+    run into the counts. Read (``items``) only when an answer is forwarded."""
+
+    __slots__ = ("_base", "_ids", "_last_ns", "_run")
+
+    def __init__(self) -> None:
+        #: the counts before the run {id: (count, last ns)}: never changed once made (a
+        #: snapshot keeps it), a fold makes a new one
+        self._base: dict[int, tuple[int, int]] = {}
+        self._ids: tuple[int, ...] = ()
+        self._run = 0
+        self._last_ns = 0
+
+    def sent(self, ids: tuple[int, ...], now_ns: int) -> None:
+        """A datagram with robots ``ids`` went out at wall clock ``now_ns``."""
+        if ids is not self._ids and ids != self._ids:
+            if self._run:
+                self._base = sent_items(self.snapshot())
+            self._ids, self._run = ids, 0
+        self._run += 1
+        self._last_ns = now_ns
+
+    def snapshot(self) -> SentSnapshot:
+        return self._base, self._ids, self._run, self._last_ns
+
+
+def sent_items(snapshot: SentSnapshot) -> dict[int, tuple[int, int]]:
+    """{id: (datagrams sent, last one's wall clock ns)} of a SentLog snapshot."""
+    base, ids, run, last_ns = snapshot
+    if not run:
+        return base
+    out = dict(base)
+    for i in ids:
+        got = out.get(i)
+        out[i] = ((got[0] if got is not None else 0) + run, last_ns)
+    return out
+
 
 @dataclass(slots=True)
 class HeldAnswer:
@@ -36,8 +82,9 @@ class HeldAnswer:
     addr: tuple[str, int]
     receive_ns: int
     sequence: int
-    #: what the relay had sent to the team's robots when it arrived {id: (count, last ns)}
-    sent: dict[int, tuple[int, int]]
+    #: what the relay had sent to the team's robots when it arrived (``sent_items`` of it:
+    #: {id: (count, last ns)})
+    sent: SentSnapshot
 
 
 class FeedbackGate:

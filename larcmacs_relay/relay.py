@@ -26,7 +26,7 @@ from larcmacs_relay.codecs import Command, CommandError
 from larcmacs_relay.commands import CommandTable, RobotState
 from larcmacs_relay.compat import RefereeMapper, decode_command_matrix
 from larcmacs_relay.config import RelayConfig
-from larcmacs_relay.feedback import FeedbackGate, HeldAnswer
+from larcmacs_relay.feedback import FeedbackGate, HeldAnswer, SentLog, sent_items
 from sslnet import proc, streams
 from sslnet.kerneltime import enable_kernel_timestamps, kernel_time_ns
 from sslnet.multicast import open_multicast_receiver, open_multicast_sender, open_udp_server
@@ -47,6 +47,8 @@ _SNDMORE_NOBLOCK = int(zmq.SNDMORE | zmq.NOBLOCK)
 _EVENTS = int(zmq.EVENTS)
 _POLLIN = int(zmq.POLLIN)
 _TOPICS = {"vision": b"vision", "referee": b"referee", "tracker": b"tracker"}
+#: one team's datagram of an output cycle: team, bytes, address, its robots' ids
+_Planned = tuple[int, bytes, tuple[str, int], tuple[int, ...]]
 _STREAM_IDS = {
     "vision": touchline_pb2.STREAM_VISION,
     "referee": touchline_pb2.STREAM_REFEREE,
@@ -97,14 +99,18 @@ class Relay:
         #: for a held answer
         self._gates: dict[tuple[int, int], FeedbackGate] = {}
         self._gate_timers: dict[tuple[int, int], asyncio.TimerHandle] = {}
-        #: per (team, id): commands sent and the wall clock (ns) of the last one, forwarded
-        #: with every answer (the backend's round trip and losses)
-        self._sent: dict[int, dict[int, tuple[int, int]]] = {t: {} for t in codecs.TEAMS}
-        #: each robot's last command and its encoded part of the sim output (_sim_part)
-        self._sim_parts: dict[tuple[int, int], tuple[Command, bytes]] = {}
-        #: per team, the robots' commands of the last sim datagram and its bytes: a cycle
-        #: with the same command objects sends the same bytes
-        self._sim_out: dict[int, tuple[tuple[Command, ...], bytes]] = {}
+        #: per team: commands sent to each robot and the wall clock (ns) of the last one,
+        #: forwarded with every answer (the backend's round trip and losses)
+        self._sent: dict[int, SentLog] = {t: SentLog() for t in codecs.TEAMS}
+        #: per team, the robots' commands of the last sim datagram, its bytes, the robots'
+        #: ids and each one's encoded part: a cycle with the same command objects sends the
+        #: same bytes, and a robot's part is kept while its command is the same object
+        self._sim_out: dict[int, tuple[tuple[Command, ...], bytes, tuple[int, ...],
+                                       list[bytes]]] = {}
+        #: the sim output of the table's version ``_plan_version`` (every team's datagram,
+        #: its address and robots): while the table is unchanged a cycle only sends it
+        self._plan: list[_Planned] = []
+        self._plan_version = -1
         #: valid robot commands by their serialized RobotCommand: a command set repeats most
         #: robots' commands byte for byte, and the same bytes are the same command (the same
         #: object, so the table and the output see at once that nothing changed)
@@ -325,7 +331,8 @@ class Relay:
         MAX_BATCH in a row it yields to the loop (the reader is level-triggered and comes back
         at once), so a flood cannot starve the command output. Vision and referee are not
         decoded here (the backend decodes them once): per datagram only the size and
-        emptiness checks, one Envelope and one ZeroMQ message."""
+        emptiness checks, its receive time, one Envelope and one ZeroMQ message; the stream's
+        packets are counted once per wake-up (one clock read, not one per datagram)."""
         counter = self.streams[name]
         topic = _TOPICS[name]
         stream = _STREAM_IDS[name]
@@ -334,61 +341,86 @@ class Relay:
         sources = self._sources
         seq = self._sequences[name]
         tracker = name == "tracker"
+        # vision and referee: only an empty datagram is refused (check_forwarded), tested here
+        forwarded = validate is codecs.check_forwarded
         compat_vision = self._compat_vision if name == "vision" else None
         compat_referee = name == "referee" and self._compat_referee is not None
+        recvfrom = sock.recvfrom
+        time_ns = time.time_ns
+        envelope = touchline_pb2.Envelope
+        send = pub.send if pub is not None else None
+        n = nbytes = 0
         try:
             for _ in range(MAX_BATCH):
                 try:
-                    data, addr = sock.recvfrom(MAX_DATAGRAM)
+                    data, addr = recvfrom(MAX_DATAGRAM)
                 except (BlockingIOError, InterruptedError):
                     return
                 except OSError as exc:
                     counter.error("receive failed", str(exc))
                     self._ratelog.warning(f"{name}-recv", "%s receive failed: %s", name, exc)
                     return
-                receive_ns = time.time_ns()
-                if tracker and self._own_tracker_uuids and self._own_echo(data):
-                    self.own_tracker_echoes += 1
+                receive_ns = time_ns()
+                size = len(data)
+                if forwarded and data and size <= max_bytes:
+                    pass  # the common case: nothing more to check
+                elif not self._input_ok(data, addr, name, validate, counter, tracker):
                     continue
-                if len(data) > max_bytes:
-                    reason: str | None = f"{len(data)} bytes, more than {max_bytes}"
-                    kind = streams.OVERSIZED
-                else:
-                    try:
-                        reason = validate(data)
-                    except Exception as exc:  # a decoder surprise must not kill the reader
-                        reason = f"validation failed: {exc!r}"
-                    kind = codecs.classify(reason, data) if reason is not None else ""
-                if reason is not None:
-                    counter.error(kind, reason)
-                    self._ratelog.warning(
-                        f"{name}-bad",
-                        "dropped malformed %s datagram from %s:%d: %s",
-                        name,
-                        addr[0],
-                        addr[1],
-                        reason,
-                    )
-                    continue
-                counter.packet(len(data))
+                n += 1
+                nbytes += size
                 seq += 1
                 source = sources.get(addr)
                 if source is None:
                     source = self._source(addr)
-                env = touchline_pb2.Envelope(
-                    stream=stream,
-                    receive_time_ns=receive_ns,
-                    sequence=seq,
-                    source=source,
-                    payload=data,
-                )
-                self._publish2(pub, topic, env.SerializeToString())
+                if send is not None:
+                    body = envelope(stream=stream, receive_time_ns=receive_ns, sequence=seq,
+                                    source=source, payload=data).SerializeToString()
+                    try:  # a PUB queues a multipart message whole or not at all
+                        send(topic, _SNDMORE_NOBLOCK)
+                        send(body, _NOBLOCK)
+                    except zmq.Again:
+                        self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message "
+                                              "dropped")
                 if compat_vision is not None:
                     self._publish(compat_vision, [data])
                 elif compat_referee:
                     self._compat_referee_out(data, addr)
         finally:
             self._sequences[name] = seq
+            if n:
+                counter.packets_at(n, nbytes, time.monotonic())
+
+    def _input_ok(self, data: bytes, addr: tuple[str, int], name: str,
+                  validate: Callable[[bytes], str | None], counter: StreamCounter,
+                  tracker: bool) -> bool:
+        """The checks of an input datagram beyond the common case (a tracker's, an own tracked
+        frame heard back, an empty or oversized one): False when it is not forwarded (an echo
+        is counted apart, a bad one as an error by reason, and logged)."""
+        if tracker and self._own_tracker_uuids and self._own_echo(data):
+            self.own_tracker_echoes += 1
+            return False
+        max_bytes = self.config.max_datagram_bytes
+        if len(data) > max_bytes:
+            reason: str | None = f"{len(data)} bytes, more than {max_bytes}"
+            kind = streams.OVERSIZED
+        else:
+            try:
+                reason = validate(data)
+            except Exception as exc:  # a decoder surprise must not kill the reader
+                reason = f"validation failed: {exc!r}"
+            kind = codecs.classify(reason, data) if reason is not None else ""
+        if reason is None:
+            return True
+        counter.error(kind, reason)
+        self._ratelog.warning(
+            f"{name}-bad",
+            "dropped malformed %s datagram from %s:%d: %s",
+            name,
+            addr[0],
+            addr[1],
+            reason,
+        )
+        return False
 
     def _compat_referee_out(self, data: bytes, addr: tuple[str, int]) -> None:
         ref, why = codecs.parse_referee(data)
@@ -408,18 +440,6 @@ class Relay:
             return
         try:
             sock.send_multipart(frames, flags=_NOBLOCK)
-        except zmq.Again:
-            self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
-
-    def _publish2(self, sock: zmq.Socket[bytes] | None, topic: bytes, body: bytes) -> None:
-        """``_publish(sock, [topic, body])`` without send_multipart's list and flag
-        arithmetic (the vision path's once-per-datagram call). A PUB socket queues a
-        multipart message whole or not at all, so the topic frame cannot go out alone."""
-        if sock is None:
-            return
-        try:
-            sock.send(topic, _SNDMORE_NOBLOCK)
-            sock.send(body, _NOBLOCK)
         except zmq.Again:
             self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message dropped")
 
@@ -788,8 +808,9 @@ class Relay:
         if self.estop_latched or not self.armed:
             # the latch and the arming are enforced here, where every command path meets:
             # only zeros leave (the stops of robots commanded before, for the hold time)
-            due = [c.zero() for c in due]
-        self._send_commands(due)
+            self._send_commands([c.zero() for c in due])
+        else:
+            self._send_commands(due, self.table.version)
         if self._pending_latency_ns:
             sent_ns = time.time_ns()
             for src in self._pending_latency_ns:
@@ -797,8 +818,10 @@ class Relay:
             self._pending_latency_ns.clear()
         return True
 
-    def _send_commands(self, due: list[Command]) -> None:
-        """Encode and send ``due`` on the configured output."""
+    def _send_commands(self, due: list[Command], version: int | None = None) -> None:
+        """Encode and send ``due`` on the configured output. ``version``: the command table's
+        version ``due`` is of (its commands are the same objects while it stays the same),
+        None for commands made for this call (stops)."""
         cfg = self.config
         if cfg.output == "robot-box":
             for c in due:
@@ -811,49 +834,61 @@ class Relay:
                     ),
                     (self._box_host, cfg.robot_box_port),
                 )
+            return
+        if cfg.output == "sim":
+            if version is None or version != self._plan_version:
+                self._plan = self._sim_plan(due)
+                self._plan_version = -1 if version is None else version
+            plan = self._plan
         else:
-            for team in codecs.TEAMS:
-                cmds = [c for c in due if c.team == team]
-                if not cmds:
-                    continue
-                if cfg.output == "sim":
-                    port = cfg.sim_blue_port if team == codecs.TEAM_BLUE else cfg.sim_yellow_port
-                    robots = tuple(cmds)
-                    last = self._sim_out.get(team)
-                    if last is not None and last[0] == robots:  # the same objects: no __eq__
-                        data = last[1]
-                    else:
-                        data = b"".join([self._sim_part(c) for c in cmds])
-                        self._sim_out[team] = (robots, data)
-                    sent = self._send(data, (self._sim_host, port))
-                else:
-                    data = codecs.encode_grsim_commands(
-                        cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg
-                    )
-                    sent = self._send(data, (self._sim_host, cfg.grsim_port))
-                if sent:
-                    sent_ns = time.time_ns()
-                    sent_team = self._sent[team]
-                    for c in cmds:
-                        n, _ = sent_team.get(c.id, (0, 0))
-                        sent_team[c.id] = (n + 1, sent_ns)
+            plan = self._grsim_plan(due)
+        for team, data, addr, ids in plan:
+            if self._send(data, addr):
+                self._sent[team].sent(ids, time.time_ns())
 
-    def _sim_part(self, c: Command) -> bytes:
-        """Robot ``c``'s encoded part of the simulation protocol's RobotControl, kept while
-        its command stays the same (the same object, or an equal one: a stop is made anew
-        in every cycle, and a command set's robot commands are new objects whenever the
-        parsed commands were started afresh)."""
-        key = (c.team, c.id)
-        got = self._sim_parts.get(key)
-        if got is not None:
-            if got[0] is c:
-                return got[1]
-            if got[0] == c:  # kept with this object: the next cycle's test is ``is``
-                self._sim_parts[key] = (c, got[1])
-                return got[1]
-        data = codecs.encode_sim_robot_command(c, self.config.chip_angle_deg)
-        self._sim_parts[key] = (c, data)
-        return data
+    def _grsim_plan(self, due: list[Command]) -> list[_Planned]:
+        """Each team's grSim_Packet of ``due`` (a timestamp in each: nothing reused)."""
+        cfg = self.config
+        plan: list[_Planned] = []
+        for team in codecs.TEAMS:
+            cmds = [c for c in due if c.team == team]
+            if cmds:
+                data = codecs.encode_grsim_commands(
+                    cmds, team == codecs.TEAM_YELLOW, time.time(), cfg.chip_angle_deg)
+                plan.append((team, data, (self._sim_host, cfg.grsim_port),
+                             tuple(c.id for c in cmds)))
+        return plan
+
+    def _sim_plan(self, due: list[Command]) -> list[_Planned]:
+        """Each team's RobotControl datagram of ``due`` (sorted by team, id), its address and
+        its robots' ids; a team's bytes are reused while its commands are the same objects."""
+        cfg = self.config
+        encode = codecs.encode_sim_robot_command
+        angle = cfg.chip_angle_deg
+        plan: list[_Planned] = []
+        blue = [c for c in due if c.team == codecs.TEAM_BLUE]
+        yellow = [c for c in due if c.team != codecs.TEAM_BLUE] if len(blue) < len(due) else []
+        for team, cmds, port in ((codecs.TEAM_BLUE, blue, cfg.sim_blue_port),
+                                 (codecs.TEAM_YELLOW, yellow, cfg.sim_yellow_port)):
+            if not cmds:
+                continue
+            robots = tuple(cmds)
+            last = self._sim_out.get(team)
+            if last is not None and last[0] == robots:  # the same objects (or equal ones)
+                data, ids = last[1], last[2]
+            else:
+                if last is not None and len(last[0]) == len(robots):
+                    parts = [p if c is o else encode(c, angle)
+                             for c, o, p in zip(robots, last[0], last[3], strict=True)]
+                else:
+                    parts = [encode(c, angle) for c in robots]
+                data = b"".join(parts)
+                ids = tuple([c.id for c in robots])
+                if last is not None and last[2] == ids:
+                    ids = last[2]  # the same robots: the sent log sees it by identity
+                self._sim_out[team] = (robots, data, ids, parts)
+            plan.append((team, data, (self._sim_host, port), ids))
+        return plan
 
     def last_word(self) -> None:
         """On every shutdown the relay can see (SIGTERM, SIGINT, an exception): zero velocity,
@@ -971,7 +1006,7 @@ class Relay:
         """One valid answer: onto the PUB now, or held (feedback.py) and sent by a timer
         unless a newer one goes first."""
         now = time.monotonic()
-        sent = self._sent[gate.team]
+        sent = self._sent[gate.team].snapshot()
         key = (gate.kind, gate.team)
         if gate.arrive(data, now):
             held = gate.held
@@ -984,7 +1019,7 @@ class Relay:
             self._publish_feedback(gate, HeldAnswer(data, addr, receive_ns, gate.answers, sent))
             gate.forwarded(data, now)
             return
-        gate.hold(HeldAnswer(data, addr, receive_ns, gate.answers, dict(sent)))
+        gate.hold(HeldAnswer(data, addr, receive_ns, gate.answers, sent))
         if key not in self._gate_timers:
             loop = asyncio.get_running_loop()
             self._gate_timers[key] = loop.call_at(self._loop_time(gate.flush_at),
@@ -1010,7 +1045,7 @@ class Relay:
             source=self._source(a.addr),
             payload=a.data,
             sent=[touchline_pb2.RobotSent(id=rid, commands_sent=n, last_sent_time_ns=t)
-                  for rid, (n, t) in sorted(a.sent.items())],
+                  for rid, (n, t) in sorted(sent_items(a.sent).items())],
         )
         self._publish(self._pub, [b"feedback", env.SerializeToString()])
 

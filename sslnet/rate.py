@@ -27,6 +27,18 @@ class RateCounter:
         if times[0] < t - 2.0 * self.window_s:
             self._trim(t)
 
+    def add_many(self, n: int, now: float) -> None:
+        """``n`` events at ``now`` (a reader's batch of datagrams counted once per wake-up:
+        one clock read and one call, not one per datagram); the same as ``add(now)`` n times."""
+        if n <= 0:
+            return
+        self.total += n
+        self.last_time = now
+        times = self._times
+        times.extend([now] * n)
+        if times[0] < now - 2.0 * self.window_s:
+            self._trim(now)
+
     def _trim(self, now: float) -> None:
         cutoff = now - self.window_s
         times = self._times

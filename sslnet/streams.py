@@ -49,6 +49,11 @@ class StreamCounter:
         self.rate.add(now)
         self.bytes += size
 
+    def packets_at(self, n: int, size: int, now: float) -> None:
+        """``n`` packets of ``size`` bytes in all, counted at ``now`` (one call per batch)."""
+        self.rate.add_many(n, now)
+        self.bytes += size
+
     def error(self, reason: str, detail: str = "", n: int = 1) -> None:
         """Count ``n`` errors of ``reason`` (one of REASONS, or another short name)."""
         self.errors += n

@@ -56,6 +56,24 @@ def test_rate_counter_is_exact_when_read_and_keeps_at_most_two_windows() -> None
     assert rc.rate_hz(3.5) == 500.0
 
 
+def test_rate_counter_add_many_is_add_repeated() -> None:
+    """``add_many(n, t)`` (a reader's batch counted once) reads the same as ``add(t)`` n times:
+    total, rate, the last time and the trimming of old events."""
+    from sslnet.rate import RateCounter
+
+    one, many = RateCounter(window_s=1.0), RateCounter(window_s=1.0)
+    for k in range(400):
+        t = k / 100.0
+        n = k % 4  # 0..3 events a batch
+        for _ in range(n):
+            one.add(t)
+        many.add_many(n, t)
+        assert (many.total, many.last_time) == (one.total, one.last_time)
+        assert len(many._times) == len(one._times)
+    assert many.rate_hz(4.2) == one.rate_hz(4.2) > 0
+    assert many.age_s(4.5) == one.age_s(4.5)
+
+
 def test_count_rate_is_computed_when_read_from_the_counts_of_earlier_reads() -> None:
     """``CountRate``: counting is an integer add; the rate read is the count since the
     newest earlier read at least a window old, over that time (the start before any)."""
