@@ -333,28 +333,32 @@ class WorldModel:
         extra = cfg.field_boundary_mm + cfg.field_margin_mm  # _on_field, inlined
         lx, ly = cfg.field_half_length_mm + extra, cfg.field_half_width_mm + extra
         robots = self._robots
+        cam, max_objects = frame.camera_id, cfg.max_objects
+        measure, dirty = self._measure, self._dirty  # (per detection: locals)
         for det in frame.robots:
-            key = (det.team, det.id)
+            team = det.team
+            key = (team, det.id)
             if key in seen:  # a duplicate id in one frame: keep the first
                 continue
-            if not (abs(det.x) <= lx and abs(det.y) <= ly):
-                self._reject("object out of field", f"{det.team} {det.id} at "
-                             f"({det.x:.0f}, {det.y:.0f})")
+            x, y = det.x, det.y
+            if not (abs(x) <= lx and abs(y) <= ly):
+                self._reject("object out of field", f"{team} {det.id} at ({x:.0f}, {y:.0f})")
                 continue
-            per_team[det.team] += 1
-            if per_team[det.team] > cfg.max_objects:
-                self._reject("too many objects", f"camera {frame.camera_id}: more than "
-                             f"{cfg.max_objects} {det.team} robots")
+            n = per_team[team] + 1
+            per_team[team] = n
+            if n > max_objects:
+                self._reject("too many objects", f"camera {cam}: more than "
+                             f"{max_objects} {team} robots")
                 break
             seen.add(key)
             tr = robots.get(key)
             if tr is None:
-                tr = self._new_track(self._settings.robot_kind(det.team, det.id), True)
+                tr = self._new_track(self._settings.robot_kind(team, det.id), True)
                 robots[key] = tr
             if tr.snap is None:
-                self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation)
-            elif self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation):
-                self._dirty.append(key)  # (its snapshot state was reset: built again)
+                measure(tr, t, cam, x, y, det.orientation)
+            elif measure(tr, t, cam, x, y, det.orientation):
+                dirty.append(key)  # (its snapshot state was reset: built again)
         self._update_ball(frame)
         return True
 
