@@ -35,7 +35,9 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import islice
 
 import numpy as np
 
@@ -174,6 +176,10 @@ class FlightTracker:
         self.config = config or FlightConfig()
         self.cameras: dict[int, CameraPose] = {}
         self._obs: deque[tuple[float, int, float, float]] = deque(maxlen=512)
+        self._n_obs = 0  # detections observed so far (the next one's number)
+        #: the numbers of the detections in ``_obs`` earlier than the one before them (the
+        #: cameras of one instant come in any order); none: ``_obs`` is in time order
+        self._back: deque[int] = deque()
         self._flight: Flight | None = None
         self._tried_kick: float | None = None  # start time of the kick given up on
         self._last_t0 = -math.inf  # the start of the last flight (a launch is tried once)
@@ -192,15 +198,20 @@ class FlightTracker:
 
     def reset(self) -> None:
         self._obs.clear()
+        self._back.clear()
         self._flight = None
 
     def observe(self, t: float, cam: int, x: float, y: float) -> None:
         """A ball detection (mm) of camera ``cam`` taken as the ball, as the camera saw it."""
         if cam not in self.cameras:
             return
-        self._obs.append((t, cam, x, y))
-        while t - self._obs[0][0] > self.config.keep_s:
-            self._obs.popleft()
+        obs = self._obs
+        if obs and t < obs[-1][0]:
+            self._back.append(self._n_obs)
+        self._n_obs += 1
+        obs.append((t, cam, x, y))
+        while t - obs[0][0] > self.config.keep_s:
+            obs.popleft()
 
     # -- geometry --------------------------------------------------------------------------
 
@@ -273,12 +284,33 @@ class FlightTracker:
         if not obs:
             return None
         within = cfg.recognise_within_s  # (once: this runs on every new ball detection)
-        recent = [o for o in obs if t_now - o[0] <= within]
-        if len(recent) < cfg.min_samples:
+        back = self._back
+        first = self._n_obs - len(obs)  # the number of the oldest detection kept
+        while back and back[0] <= first:
+            back.popleft()  # (the detection before it is gone)
+        recent: Sequence[tuple[float, int, float, float]]
+        if back:
+            recent = [o for o in obs if t_now - o[0] <= within]
+            lo = 0
+        else:
+            # in time order: the recent ones are the detections from the first within
+            # ``within`` of t_now on (t_now - t only falls along them), found by bisection;
+            # the list is made only past the common case (a ball at rest, or none launched)
+            lo, hi = 0, len(obs)
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if t_now - obs[mid][0] <= within:
+                    hi = mid
+                else:
+                    lo = mid + 1
+            recent = obs  # (from lo on)
+        if len(recent) - lo < cfg.min_samples:
             return None
-        x0, y0 = recent[0][2], recent[0][3]
+        x0, y0 = recent[lo][2], recent[lo][3]
         if math.hypot(recent[-1][2] - x0, recent[-1][3] - y0) < cfg.launch_mm:
             return None  # still there (the common case: cheap)
+        if lo:
+            recent = list(islice(obs, lo, None))
         rest = [o for o in recent if o[0] - recent[0][0] <= cfg.rest_s]
         if len(rest) < 3 or rest[-1][0] - rest[0][0] < cfg.rest_s / 2:
             return None

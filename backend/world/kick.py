@@ -60,35 +60,54 @@ class KickConfig:
 Sample = tuple[float, float, float]  # t, x, y
 
 
-def _slope(pts: Sequence[Sample]) -> tuple[float, float] | None:
+def _fit(pts: Sequence[Sample]) -> tuple[float, float, float, float, float] | None:
+    """The means of t, x, y and the least-squares slopes: (tm, xm, ym, vx, vy), or None.
+
+    The sums as ``sum(... for p in pts)`` made them, in the same order (a float sum in another
+    order changes bits), in two plain loops: the kick detector fits a line for every ball
+    measurement, and six generators cost twice as much."""
     n = len(pts)
     if n < 2:
         return None
-    tm = sum(p[0] for p in pts) / n
-    stt = sum((p[0] - tm) ** 2 for p in pts)
+    tm = xm = ym = 0.0
+    for t, x, y in pts:
+        tm += t
+        xm += x
+        ym += y
+    tm /= n
+    xm /= n
+    ym /= n
+    stt = sx = sy = 0.0
+    for t, x, y in pts:
+        d = t - tm
+        stt += d ** 2
+        sx += d * (x - xm)
+        sy += d * (y - ym)
     if stt < 1e-10:
         return None
-    xm = sum(p[1] for p in pts) / n
-    ym = sum(p[2] for p in pts) / n
-    return (sum((p[0] - tm) * (p[1] - xm) for p in pts) / stt,
-            sum((p[0] - tm) * (p[2] - ym) for p in pts) / stt)
+    return tm, xm, ym, sx / stt, sy / stt
+
+
+def _slope(pts: Sequence[Sample]) -> tuple[float, float] | None:
+    f = _fit(pts)
+    return None if f is None else (f[3], f[4])
 
 
 def _line(pts: Sequence[Sample]) -> tuple[Sample, tuple[float, float], float] | None:
     """Least-squares line through the points: ((t_last, x, y) on it, velocity, rms residual)."""
-    v = _slope(pts)
-    if v is None:
+    f = _fit(pts)
+    if f is None:
         return None
+    tm, xm, ym, vx, vy = f
     n = len(pts)
-    tm = sum(p[0] for p in pts) / n
-    xm = sum(p[1] for p in pts) / n
-    ym = sum(p[2] for p in pts) / n
-    ss = sum((p[1] - xm - v[0] * (p[0] - tm)) ** 2 + (p[2] - ym - v[1] * (p[0] - tm)) ** 2
-             for p in pts)
+    ss = 0.0
+    for t, x, y in pts:
+        d = t - tm
+        ss += (x - xm - vx * d) ** 2 + (y - ym - vy * d) ** 2
     # residual per point, both axes; n - 2 degrees of freedom per axis
     rms = math.sqrt(ss / max(1, 2 * (n - 2))) if n > 2 else 0.0
     t = pts[-1][0]
-    return (t, xm + v[0] * (t - tm), ym + v[1] * (t - tm)), v, rms
+    return (t, xm + vx * (t - tm), ym + vy * (t - tm)), (vx, vy), rms
 
 
 def fit_rolling(pts: Sequence[Sample], decel: float,
@@ -108,14 +127,11 @@ def fit_rolling(pts: Sequence[Sample], decel: float,
     t0 = pts[0][0]
     corr = [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
              p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
-    w = _slope(corr)
-    if w is None:
+    f = _fit(corr)
+    if f is None:
         return None
-    k = len(corr)
-    tm = sum(c[0] for c in corr) / k
-    x0 = sum(c[1] for c in corr) / k - w[0] * tm
-    y0 = sum(c[2] for c in corr) / k - w[1] * tm
-    return (t0, x0, y0), w
+    tm, xm, ym, wx, wy = f
+    return (t0, xm - wx * tm, ym - wy * tm), (wx, wy)
 
 
 def stop_of(x: float, y: float, vx: float, vy: float, t: float,

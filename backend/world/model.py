@@ -103,12 +103,9 @@ class WorldModelConfig:
     flight: FlightConfig = field(default_factory=FlightConfig)
 
 
-@dataclass(slots=True)
-class _Meas:
-    t: float
-    x: float
-    y: float
-    o: float
+#: one merged measurement: [t, x, y, orientation] (a list, not an object: one is made per
+#: detection at a new instant, and the instant's is changed in place when a camera adds to it)
+_Meas = list[float]
 
 
 @dataclass
@@ -118,8 +115,9 @@ class _Track:
     pos: PositionFilter
     ang: AngleFilter | None
     t_meas: float = -math.inf  # capture time of the latest measurement instant
-    raw: _Meas = field(default_factory=lambda: _Meas(0.0, 0.0, 0.0, 0.0))
-    # running sums of the detections at the current instant
+    raw: _Meas = field(default_factory=lambda: [0.0, 0.0, 0.0, 0.0])
+    # running sums of the detections at the current instant (ss and sc, of the orientation's
+    # sine and cosine, from the second detection on: few objects get one)
     n: int = 0
     sx: float = 0.0
     sy: float = 0.0
@@ -215,10 +213,10 @@ class WorldModel:
         self._states = None
         tr.pos = make_filter(kind, params)
         tr.ang = AngleFilter(make_filter(kind, params, angle=True)) if tr.ang else None
-        for m in tr.history:
-            tr.pos.update(m.t, m.x, m.y)
+        for t, x, y, o in tr.history:
+            tr.pos.update(t, x, y)
             if tr.ang is not None:
-                tr.ang.update(m.t, m.o)
+                tr.ang.update(t, o)
 
     # -- measurements ----------------------------------------------------------------------
 
@@ -229,17 +227,19 @@ class WorldModel:
             tr.snap = None
             # another camera at the same instant: one measurement, the mean (the sums in
             # locals: this runs for every object each further camera sees)
-            n, ang, sx, sy = tr.n, tr.ang, tr.sx, tr.sy
+            n, ang, sx, sy, raw = tr.n, tr.ang, tr.sx, tr.sy, tr.raw
             pair = n == 1 and ang is not None  # a robot seen by a second camera: compare
             if pair:
                 (first,) = tr.instant_cams
                 fx, fy = sx, sy
+            if n == 1:  # (raw: the first detection still)
+                ss, sc = math.sin(raw[3]) + math.sin(o), math.cos(raw[3]) + math.cos(o)
+            else:
+                ss, sc = tr.ss + math.sin(o), tr.sc + math.cos(o)
             tr.instant_cams.add(cam)
             n += 1
             sx += x
             sy += y
-            ss = tr.ss + math.sin(o)
-            sc = tr.sc + math.cos(o)
             tr.n, tr.sx, tr.sy, tr.ss, tr.sc = n, sx, sy, ss, sc
             mx, my = sx / n, sy / n
             mo = math.atan2(ss, sc)
@@ -253,8 +253,7 @@ class WorldModel:
                 ang.revise(mo)
             # the instant's measurement (also the history's last: changed in place, not
             # rebuilt)
-            raw = tr.raw
-            raw.x, raw.y, raw.o = mx, my, mo
+            raw[1], raw[2], raw[3] = mx, my, mo
             if tr.raw_vel is not None:
                 tr.raw_vel.replace_last(mx, my)
             tr.cam_seen[cam] = t
@@ -264,13 +263,12 @@ class WorldModel:
         tr.snap = None
         tr.t_meas = t
         tr.n, tr.sx, tr.sy = 1, x, y
-        tr.ss, tr.sc = math.sin(o), math.cos(o)
         tr.instant_cams = {cam}
         tr.pos.update(t, x, y)
         if tr.ang is not None:
             tr.ang.update(t, o)
-        tr.raw = _Meas(t, x, y, o)
-        tr.history.append(tr.raw)
+        tr.raw = raw = [t, x, y, o]
+        tr.history.append(raw)
         if tr.raw_vel is not None:
             tr.raw_vel.add(t, x, y)
         tr.cam_seen[cam] = t
@@ -335,28 +333,32 @@ class WorldModel:
         extra = cfg.field_boundary_mm + cfg.field_margin_mm  # _on_field, inlined
         lx, ly = cfg.field_half_length_mm + extra, cfg.field_half_width_mm + extra
         robots = self._robots
+        cam, max_objects = frame.camera_id, cfg.max_objects
+        measure, dirty = self._measure, self._dirty  # (per detection: locals)
         for det in frame.robots:
-            key = (det.team, det.id)
+            team = det.team
+            key = (team, det.id)
             if key in seen:  # a duplicate id in one frame: keep the first
                 continue
-            if not (abs(det.x) <= lx and abs(det.y) <= ly):
-                self._reject("object out of field", f"{det.team} {det.id} at "
-                             f"({det.x:.0f}, {det.y:.0f})")
+            x, y = det.x, det.y
+            if not (abs(x) <= lx and abs(y) <= ly):
+                self._reject("object out of field", f"{team} {det.id} at ({x:.0f}, {y:.0f})")
                 continue
-            per_team[det.team] += 1
-            if per_team[det.team] > cfg.max_objects:
-                self._reject("too many objects", f"camera {frame.camera_id}: more than "
-                             f"{cfg.max_objects} {det.team} robots")
+            n = per_team[team] + 1
+            per_team[team] = n
+            if n > max_objects:
+                self._reject("too many objects", f"camera {cam}: more than "
+                             f"{max_objects} {team} robots")
                 break
             seen.add(key)
             tr = robots.get(key)
             if tr is None:
-                tr = self._new_track(self._settings.robot_kind(det.team, det.id), True)
+                tr = self._new_track(self._settings.robot_kind(team, det.id), True)
                 robots[key] = tr
             if tr.snap is None:
-                self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation)
-            elif self._measure(tr, t, frame.camera_id, det.x, det.y, det.orientation):
-                self._dirty.append(key)  # (its snapshot state was reset: built again)
+                measure(tr, t, cam, x, y, det.orientation)
+            elif measure(tr, t, cam, x, y, det.orientation):
+                dirty.append(key)  # (its snapshot state was reset: built again)
         self._update_ball(frame)
         return True
 
@@ -416,13 +418,13 @@ class WorldModel:
         ground = [self.flight.ground(t, cam, b.x, b.y) if flying else (b.x, b.y)
                   for b in cands]
         if same_instant:
-            ref: tuple[float, float] = (bt.raw.x, bt.raw.y)
+            ref: tuple[float, float] = (bt.raw[1], bt.raw[2])
             gate = cfg.ball_gate_slack_mm
             if not flying and self.kicks.kick is not None:
                 gate += cfg.ball_camera_disparity_mm  # perhaps rising, not yet recognised
         else:
             vx, vy = bt.raw_vel.velocity() if bt.raw_vel is not None else (0.0, 0.0)
-            ref = (bt.raw.x + vx * dt, bt.raw.y + vy * dt)
+            ref = (bt.raw[1] + vx * dt, bt.raw[2] + vy * dt)
             gate = self._gate(dt) if dt <= cfg.ball_assoc_window_s else -1.0
         best_i, best_d2 = -1, gate * gate if gate >= 0 else -1.0
         for i, (gx, gy) in enumerate(ground):
@@ -485,7 +487,7 @@ class WorldModel:
         """x, y, vx, vy, predicted, lost."""
         cfg = self.config
         age = t_now - tr.t_meas
-        est = tr.pos.estimate() or (tr.raw.x, tr.raw.y)
+        est = tr.pos.estimate() or (tr.raw[1], tr.raw[2])
         vx, vy = tr.pos.velocity()
         if age <= cfg.predict_after_s:
             return est[0], est[1], vx, vy, False, False
@@ -512,10 +514,10 @@ class WorldModel:
     def _seen_state(self, key: tuple[Team, int], tr: _Track) -> RobotState:
         """A robot seen within ``predict_after_s``: its state, kept in ``tr.snap`` until a
         camera sees it again (eight cameras see a robot in few frames)."""
-        raw = tr.raw
-        est = tr.pos.estimate() or (raw.x, raw.y)
+        _, rx, ry, ro = tr.raw
+        est = tr.pos.estimate() or (rx, ry)
         vx, vy = tr.pos.velocity()
-        o, omega = raw.o, 0.0
+        o, omega = ro, 0.0
         ang = tr.ang
         if ang is not None:
             eo = ang.estimate()
@@ -529,7 +531,7 @@ class WorldModel:
         else:
             seen_by = self._cams(tr)
         state = RobotState(key[0], key[1], est[0], est[1], o, vx, vy, omega, tr.t_meas,
-                           True, seen_by, raw.x, raw.y, raw.o, False, False, tr.kind)
+                           True, seen_by, rx, ry, ro, False, False, tr.kind)
         tr.snap = state
         return state
 
@@ -581,11 +583,12 @@ class WorldModel:
             all_seen = False
             x, y, vx, vy, predicted, lost = self._where(tr, t_now)
             ang = tr.ang
-            o = tr.raw.o
+            _, rx, ry, ro = tr.raw
+            o = ro
             omega = 0.0
             if ang is not None:
                 eo = ang.estimate()
-                o = eo if eo is not None else tr.raw.o
+                o = eo if eo is not None else ro
                 if not lost:
                     omega = ang.rate()
                 if predicted:
@@ -593,7 +596,7 @@ class WorldModel:
                     o = po if po is not None else o
             state = RobotState(
                 key[0], key[1], x, y, o, vx, vy, omega, tr.t_meas, not lost, self._cams(tr),
-                raw_x=tr.raw.x, raw_y=tr.raw.y, raw_orientation=tr.raw.o,
+                raw_x=rx, raw_y=ry, raw_orientation=ro,
                 predicted=predicted, lost=lost, filter=tr.kind)
             tr.snap = None
             out.append(state)
@@ -629,7 +632,7 @@ class WorldModel:
             else:
                 x, y, vx, vy, predicted, lost = self._where(tr, t_now)
                 ball = BallState(x, y, vx, vy, tr.t_meas, not lost, self._cams(tr),
-                                 raw_x=tr.raw.x, raw_y=tr.raw.y, predicted=predicted,
+                                 raw_x=tr.raw[1], raw_y=tr.raw[2], predicted=predicted,
                                  lost=lost, filter=tr.kind)
                 # (seen lately: the state holds until the ball is measured again, as a
                 # robot's; predicted or lost, it moves with t_now)
@@ -645,10 +648,10 @@ class WorldModel:
             # the measurements the kick detector has not had (the history's newest: its
             # times only grow)
             fed = self._kick_fed_t
-            for m in reversed(self._ball.history):
-                if m.t <= fed:
+            for mt, mx, my, _ in reversed(self._ball.history):
+                if mt <= fed:
                     break
-                new.append((m.t, m.x, m.y))
+                new.append((mt, mx, my))
             if new:
                 new.reverse()
                 self._kick_fed_t = new[-1][0]

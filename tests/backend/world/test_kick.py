@@ -189,3 +189,77 @@ def test_a_still_ball_with_noisy_vision_in_front_of_a_robot_is_not_kicked() -> N
         det = KickDetector()
         feed(det, noisy(ts, [(0.0, 0.0)] * len(ts), sigma=sigma, seed=int(sigma)), (KICKER,))
         assert det.kicks == 0, sigma
+
+
+def _ref_slope(pts: list[tuple[float, float, float]]) -> tuple[float, float] | None:
+    """The line fit as it was written first (sums over generators)."""
+    n = len(pts)
+    if n < 2:
+        return None
+    tm = sum(p[0] for p in pts) / n
+    stt = sum((p[0] - tm) ** 2 for p in pts)
+    if stt < 1e-10:
+        return None
+    xm = sum(p[1] for p in pts) / n
+    ym = sum(p[2] for p in pts) / n
+    return (sum((p[0] - tm) * (p[1] - xm) for p in pts) / stt,
+            sum((p[0] - tm) * (p[2] - ym) for p in pts) / stt)
+
+
+def _ref_line(pts: list[tuple[float, float, float]]) -> object:
+    v = _ref_slope(pts)
+    if v is None:
+        return None
+    n = len(pts)
+    tm = sum(p[0] for p in pts) / n
+    xm = sum(p[1] for p in pts) / n
+    ym = sum(p[2] for p in pts) / n
+    ss = sum((p[1] - xm - v[0] * (p[0] - tm)) ** 2 + (p[2] - ym - v[1] * (p[0] - tm)) ** 2
+             for p in pts)
+    rms = math.sqrt(ss / max(1, 2 * (n - 2))) if n > 2 else 0.0
+    t = pts[-1][0]
+    return (t, xm + v[0] * (t - tm), ym + v[1] * (t - tm)), v, rms
+
+
+def _ref_rolling(pts: list[tuple[float, float, float]], decel: float,
+                 u: tuple[float, float] | None) -> object:
+    if len(pts) < 2:
+        return None
+    if u is None:
+        s = _ref_slope(pts)
+        if s is None:
+            return None
+        n = math.hypot(*s)
+        if n < 1e-9:
+            return None
+        u = (s[0] / n, s[1] / n)
+    t0 = pts[0][0]
+    corr = [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
+             p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+    w = _ref_slope(corr)
+    if w is None:
+        return None
+    k = len(corr)
+    tm = sum(c[0] for c in corr) / k
+    return (t0, sum(c[1] for c in corr) / k - w[0] * tm,
+            sum(c[2] for c in corr) / k - w[1] * tm), w
+
+
+def test_the_line_fits_are_bit_equal_to_the_plain_sums() -> None:
+    """The fits sum in plain loops: the same floats, to the bit, as the generators did."""
+    from backend.world import kick
+
+    rng = random.Random(11)
+    for _ in range(2000):
+        n = rng.randint(0, 12)
+        t0 = rng.uniform(0.0, 2e9)
+        pts = [(t0 + rng.uniform(0.0, 0.2), rng.uniform(-6000, 6000), rng.uniform(-4500, 4500))
+               for _ in range(n)]
+        if rng.random() < 0.5:
+            pts.sort()
+        if rng.random() < 0.1 and pts:  # a still ball: every point at one time
+            pts = [(pts[0][0], x, y) for _, x, y in pts]
+        assert kick._slope(pts) == _ref_slope(pts)
+        assert kick._line(pts) == _ref_line(pts)
+        u = None if rng.random() < 0.5 else (0.6, -0.8)
+        assert kick.fit_rolling(pts, 400.0, u) == _ref_rolling(pts, 400.0, u)
