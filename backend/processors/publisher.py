@@ -71,11 +71,12 @@ class CommandPublisher(SocketProcessor):
         self._was_muted = False
         for cs in self.reader.read_new():
             self.seq += 1
-            msg = _CommandSet()  # fields set one by one: cheaper than keywords (as below)
-            msg.created_time_ns = cs.created_time_ns
-            msg.source_receive_time_ns = cs.source_receive_time_ns
-            msg.sequence = self.seq
-            msg.stop_all = cs.stop_all
+            msg = _CommandSet(
+                created_time_ns=cs.created_time_ns,
+                source_receive_time_ns=cs.source_receive_time_ns,
+                sequence=self.seq,
+                stop_all=cs.stop_all,
+            )
             add = msg.commands.add
             # each Command (and its LocalVelocity) unpacked as the tuple it is, in its fields'
             # order: one step instead of a read by name per field

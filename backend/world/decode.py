@@ -31,9 +31,10 @@ def decode_detection(frame: SSL_DetectionFrame, receive_time_ns: int) -> CameraF
     team: Team
     for team, dets in (("yellow", frame.robots_yellow), ("blue", frame.robots_blue)):
         for d in dets:
-            if not d.HasField("robot_id"):
+            rid = d.robot_id  # 0 when not sent (proto2): only a 0 asks whether it was
+            if not rid and not d.HasField("robot_id"):
                 continue
-            rid, x, y = d.robot_id, d.x, d.y
+            x, y = d.x, d.y
             if rid > 15 or x - x or y - y:
                 continue
             ori = d.orientation  # 0.0 when not sent (proto2, no default)
