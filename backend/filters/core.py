@@ -54,6 +54,30 @@ class PositionFilter(Protocol):
     def reset(self) -> None: ...
 
 
+def line_sums(pts: Iterable[tuple[float, float, float]],
+              n: int) -> tuple[float, float, float, float, float, float]:
+    """Of ``n`` points (t, x, y): the means tm, xm, ym and the sums of (t - tm) ** 2,
+    (t - tm) * (x - xm) and (t - tm) * (y - ym), the least-squares slopes' parts (VelocityFit,
+    the kick detector). The sums as ``sum(... for p in pts)`` made them, in the same order (a
+    float sum in another order changes bits: 0 + the first, then each in order; ** 2, not
+    d * d: the same pow), in two plain loops (six generators cost twice as much)."""
+    tm = xm = ym = 0.0
+    for t, x, y in pts:
+        tm += t
+        xm += x
+        ym += y
+    tm /= n
+    xm /= n
+    ym /= n
+    stt = sx = sy = 0.0
+    for t, x, y in pts:
+        d = t - tm
+        stt += d ** 2
+        sx += d * (x - xm)
+        sy += d * (y - ym)
+    return tm, xm, ym, stt, sx, sy
+
+
 class VelocityFit:
     """Velocity as the slope of a least-squares line through the points of the last
     ``window_s`` seconds (at least the last two points).
@@ -130,22 +154,7 @@ class VelocityFit:
             if len(sel) < 2:
                 sel = [pts[-2], pts[-1]]
             n = len(sel)
-        # sum() of floats: 0 + the first, then each in order; so are these (** 2, not d * d:
-        # the same pow)
-        tm = xm = ym = 0.0
-        for t, x, y in sel:
-            tm += t
-            xm += x
-            ym += y
-        tm /= n
-        xm /= n
-        ym /= n
-        stt = sx = sy = 0.0
-        for t, x, y in sel:
-            d = t - tm
-            stt += d ** 2
-            sx += d * (x - xm)
-            sy += d * (y - ym)
+        _, _, _, stt, sx, sy = line_sums(sel, n)
         v = (0.0, 0.0) if stt < 1e-9 else (sx / stt, sy / stt)
         self._v = v
         return v

@@ -33,6 +33,7 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from ..filters.core import line_sums
 from .state import BallState, KickedBall, RobotState, Team
 
 __all__ = ["KickConfig", "KickDetector", "KickedBall", "fit_rolling", "stop_of"]
@@ -61,28 +62,12 @@ Sample = tuple[float, float, float]  # t, x, y
 
 
 def _fit(pts: Sequence[Sample]) -> tuple[float, float, float, float, float] | None:
-    """The means of t, x, y and the least-squares slopes: (tm, xm, ym, vx, vy), or None.
-
-    The sums as ``sum(... for p in pts)`` made them, in the same order (a float sum in another
-    order changes bits), in two plain loops: the kick detector fits a line for every ball
-    measurement, and six generators cost twice as much."""
+    """The means of t, x, y and the least-squares slopes: (tm, xm, ym, vx, vy), or None (the
+    kick detector fits a line for every ball measurement: the sums of ``line_sums``)."""
     n = len(pts)
     if n < 2:
         return None
-    tm = xm = ym = 0.0
-    for t, x, y in pts:
-        tm += t
-        xm += x
-        ym += y
-    tm /= n
-    xm /= n
-    ym /= n
-    stt = sx = sy = 0.0
-    for t, x, y in pts:
-        d = t - tm
-        stt += d ** 2
-        sx += d * (x - xm)
-        sy += d * (y - ym)
+    tm, xm, ym, stt, sx, sy = line_sums(pts, n)
     if stt < 1e-10:
         return None
     return tm, xm, ym, sx / stt, sy / stt
