@@ -309,13 +309,32 @@ class FlightTracker:
         x0, y0 = recent[lo][2], recent[lo][3]
         if math.hypot(recent[-1][2] - x0, recent[-1][3] - y0) < cfg.launch_mm:
             return None  # still there (the common case: cheap)
+        rest_s, rest_mm = cfg.rest_s, cfg.rest_mm
+        if back:
+            rest = [o for o in recent if o[0] - recent[0][0] <= rest_s]
+            if len(rest) < 3 or rest[-1][0] - rest[0][0] < rest_s / 2:
+                return None
+            if any(math.hypot(o[2] - x0, o[3] - y0) > rest_mm for o in rest):
+                return None
+        else:
+            # in time order: the detections within rest_s of the first recent one are the
+            # first ones; each within rest_mm of it, or no rest (the same tests as above in
+            # one loop that stops at the first one away: a ball on the move, the common case
+            # here, costs a few detections read, not lists of the last half second)
+            t_first = t_last = recent[lo][0]
+            n = 0
+            for o in islice(obs, lo, None):
+                t = o[0]
+                if t - t_first > rest_s:
+                    break
+                if math.hypot(o[2] - x0, o[3] - y0) > rest_mm:
+                    return None
+                n += 1
+                t_last = t
+            if n < 3 or t_last - t_first < rest_s / 2:
+                return None
         if lo:
             recent = list(islice(obs, lo, None))
-        rest = [o for o in recent if o[0] - recent[0][0] <= cfg.rest_s]
-        if len(rest) < 3 or rest[-1][0] - rest[0][0] < cfg.rest_s / 2:
-            return None
-        if any(math.hypot(o[2] - x0, o[3] - y0) > cfg.rest_mm for o in rest):
-            return None
         t0 = max(o[0] for o in recent if math.hypot(o[2] - x0, o[3] - y0) <= cfg.rest_mm)
         if t0 <= self._last_t0 + cfg.rest_s:
             return None  # the launch of the flight just followed

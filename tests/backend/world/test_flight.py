@@ -270,8 +270,9 @@ def _ref_launch(ft: FlightTracker, t_now: float) -> float | None:
 
 def test_launch_from_rest_finds_the_recent_detections_as_a_full_pass_did() -> None:
     """The recent detections by bisection while they are in time order, by a pass when a
-    camera's came late: the same answer either way (balls at rest, launched, cameras of one
-    instant out of order)."""
+    camera's came late, and the rest test in one loop that stops at the first detection away:
+    the same answer either way (balls at rest, launched, cameras of one instant out of
+    order)."""
     import random
 
     rng = random.Random(5)
