@@ -121,7 +121,7 @@ class ControlProcessor(Processor):
         self._basis.clear()
         self.trigger = OnTopic(self.world, max_wait_s=params.processors.control_max_wait_s)
 
-    async def tick(self) -> None:
+    def step(self) -> None:
         now = time.monotonic()
         tick_dt = min(0.1, now - self._last_tick)
         self._last_tick = now

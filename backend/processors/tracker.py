@@ -57,7 +57,7 @@ class TrackerPublisher(SocketProcessor):
         """Whether tracked vision goes to the relay now."""
         return self.publish and (self.publish_in_replay or not self.replaying())
 
-    async def tick(self) -> None:
+    def step(self) -> None:
         worlds = self.reader.read_new()
         if not worlds:
             return

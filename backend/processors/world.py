@@ -91,7 +91,7 @@ class WorldProcessor(Processor):
         fc.decel_mm_s2 = k.decel_mps2 * 1000.0
         self.model.configure(params.filters)
 
-    async def tick(self) -> None:
+    def step(self) -> None:
         missed = self.reader.missed
         frames = self.reader.read_new()
         if self.reader.missed > missed:  # overwritten before merged: counted, like the ingest's
