@@ -19,6 +19,9 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 _monotonic = time.monotonic
+#: a record made as the tuple it is (``Record(...)`` goes through the named tuple's
+#: ``__new__``, a Python function: 0.42 against 0.20 us, three or four writes a camera frame)
+_tuple_new = tuple.__new__
 
 
 class Record(NamedTuple, Generic[T]):
@@ -67,7 +70,7 @@ class Topic(Generic[T]):
             raise TypeError(f"topic {self.name!r} carries {self._check.__name__}, "
                             f"not {type(value).__name__}")
         self._seq = seq = self._seq + 1
-        rec = Record(seq, _monotonic(), value)
+        rec: Record[T] = _tuple_new(Record, (seq, _monotonic(), value))
         self._ring.append(rec)
         if self._waiters:
             for ev in self._waiters:
