@@ -38,6 +38,8 @@ from backend.control.params import (
 )
 from backend.control.profile import ProfilePoint, Trapezoid
 
+_tuple_new = tuple.__new__
+
 # Phase codes in telemetry()["phase"] (floats so that telemetry stays dict[str, float]).
 PHASE_IDLE = 0
 PHASE_ACCELERATE = 1
@@ -263,7 +265,8 @@ class LineController:
                 omega = -wmax if omega < -wmax else wmax if omega > wmax else omega
         self._t += dt
         c, sn = math.cos(heading), math.sin(heading)  # global_to_local, inline
-        return LocalVelocity(vx * c + vy * sn, -vx * sn + vy * c, omega)
+        # (the tuple made as such: without the named tuple's __new__, a Python call)
+        return _tuple_new(LocalVelocity, (vx * c + vy * sn, -vx * sn + vy * c, omega))
 
     def telemetry(self) -> dict[str, float]:
         ref = self._reference()

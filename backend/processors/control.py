@@ -202,9 +202,9 @@ class ControlProcessor(Processor):
             # referee_limits: the command's cap (once per tick), then the robot's own
             cap = entry.max_speed_mps
             vel = capped(vel, cmd_cap if cap is None else min(cmd_cap, cap))
-            out.append(Command(key[0], key[1], vel,  # (fields in order: no keywords)
-                               entry.kick_speed_mps if kick_ok else 0.0,
-                               entry.chip and kick_ok, entry.dribbler_rpm))
+            out.append(_tuple_new(Command, (  # (the tuple itself: no __new__ call)
+                key[0], key[1], vel, entry.kick_speed_mps if kick_ok else 0.0,
+                entry.chip and kick_ok, entry.dribbler_rpm)))
         if keys != self._keys:  # robots no longer commanded leave the table
             self._keys = keys
             kept = set(keys)
@@ -219,7 +219,8 @@ class ControlProcessor(Processor):
             last[(c.team, c.id)] = c
         self.last_commands = last
         self._telemetry_cache = None
-        self.commands.write(CommandSet(created, world.receive_time_ns, tuple(out)))
+        self.commands.write(_tuple_new(CommandSet, (created, world.receive_time_ns, tuple(out),
+                                                    False)))
 
     def _reset(self) -> None:
         """Every controller back to its start (a stop): the next commands are computed afresh
@@ -247,4 +248,7 @@ class ControlProcessor(Processor):
 
 
 _UNSEEN = RobotMotionState(0.0, 0.0, 0.0, visible=False)
+#: named tuples of the per-frame path made as the tuples they are (``Command(...)`` calls
+#: the named tuple's ``__new__``, a Python function: about 0.2 us more)
+_tuple_new = tuple.__new__
 _ZERO = LocalVelocity.zero()  # (frozen: one for every zero command)
