@@ -42,20 +42,19 @@ class Topic(Generic[T]):
         self.name = name
         self._check = check  # with DataBus(check_types=True): every record's type
         self._ring: deque[Record[T]] = deque(maxlen=capacity)
+        #: the ring's size (a plain attribute, not a property: the relay ingest reads three
+        #: in every tick)
+        self.capacity = capacity
         self._seq = 0
         self._waiters: list[asyncio.Event] = []
         #: called after every write (the processor runner: a pass runs what reads this topic)
         self.on_write: Callable[[], None] | None = None
 
-    @property
-    def capacity(self) -> int:
-        assert self._ring.maxlen is not None
-        return self._ring.maxlen
-
     def resize(self, capacity: int) -> None:
         if capacity < 1:
             raise ValueError(f"topic {self.name!r}: capacity must be >= 1, got {capacity}")
         self._ring = deque(self._ring, maxlen=capacity)
+        self.capacity = capacity
 
     @property
     def seq(self) -> int:
