@@ -505,11 +505,22 @@ class WorldModel:
         w = self.config.camera_window_s
         t = tr.t_meas
         seen = tr.cam_seen
-        stale = [c for c, tc in seen.items() if t - tc > w]
-        if stale:
+        # (plain loops, no comprehensions: each is a call of its own, and this runs for every
+        # robot state built while two cameras see it)
+        stale: list[int] | None = None
+        for c, tc in seen.items():
+            if t - tc > w:
+                if stale is None:
+                    stale = [c]
+                else:
+                    stale.append(c)
+        if stale is not None:
             for c in stale:
                 del seen[c]
-        return tuple(sorted([c for c in seen if c >= 0]))
+        cams = sorted(seen)
+        if cams and cams[0] < 0:  # (a ball's recovered detections: no camera of their own)
+            return tuple([c for c in cams if c >= 0])
+        return tuple(cams)
 
     def _seen_state(self, key: tuple[Team, int], tr: _Track) -> RobotState:
         """A robot seen within ``predict_after_s``: its state, kept in ``tr.snap`` until a
