@@ -47,12 +47,10 @@ several times faster than small matrices, and this runs for every object in ever
 The state is one list of floats, unpacked at the start of a step and replaced by a new list at
 its end: one bytecode instead of twenty attribute reads, and the list before the step is kept
 as it is, so ``revise`` (a second camera at the same instant) costs nothing until it is used.
-``revise`` is the correction itself from the step's predictions (``update`` has a copy of it,
-written out: the call and the unpacking of the predictions cost about a tenth of the
-correction, 3 steps a camera frame; the test that a revise with the step's own measurement
-changes nothing, bit for bit, keeps the copies alike) and, right after an accepted correction,
-does not restore the state before the step (the correction overwrites all of it; a rejected
-measurement restores it first): with eight cameras a robot is revised about five times per step.
+``revise`` is the correction itself (``update`` passes it its predictions: a call costs about a
+tenth of the correction) and, right after an accepted correction, does not restore the state
+before the step (the correction overwrites all of it; a rejected measurement restores it
+first): with eight cameras a robot is revised about five times per step.
 """
 
 from __future__ import annotations
@@ -441,103 +439,31 @@ class AdaptiveIMM:
                 (1.0 - lp) * (cap + r) * ism / lp)
         else:
             cpri = None
-        xpx = x1x + v1x * dt
-        xpy = x1y + v1y * dt
-        sp1 = (1.0 - g) * p0
-        ap1 = (1.0 - k0) * ap
-        bp1 = (1.0 - k0) * bp
-        cp1 = cp - k1 * bp
-        # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
-        cr = cm * ss / (cs * sm) if cs > 1e-300 else 1e300
-        rho1 = rho * rho_keep
-        w = _sqrt(ism)
-        if cache:
-            self._pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x,
-                         v1y, ap, bp, cp, iss, ism, gs2, gm2, vchk, g, sp1, k0, k1, ap1, bp1,
-                         cp1, cr, rho1, w, cpri, lam)
-        else:
-            self._pri = None
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0,
+               x1x + v1x * dt, x1y + v1y * dt, v1x, v1y, ap, bp, cp,
+               iss, ism, gs2, gm2, vchk, g, (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap,
+               (1.0 - k0) * bp, cp - k1 * bp,
+               # prior odds moving / still x the ratio of the Gaussians' normalisations (2-D)
+               cm * ss / (cs * sm) if cs > 1e-300 else 1e300, rho * rho_keep,
+               _sqrt(ism), cpri, lam)
+        self._pri = pri if cache else None
         self._pri_h = self._h
-        # -- the correction: ``revise``'s, written out here (a copy of its body from its
-        # predictions on, with the same names; see the module doc: keep the two alike)
-        nsx = zx - x0x
-        nsy = zy - x0y
-        nmx = zx - xpx
-        nmy = zy - xpy
-        d2s = (nsx * nsx + nsy * nsy) * iss
-        d2m = (nmx * nmx + nmy * nmy) * ism
-        vx = v1x + k1 * nmx
-        vy = v1y + k1 * nmy
-        if d2s > gs2 and (d2m > gm2 or (vchk and vx * vx + vy * vy > self.max_speed2)):
-            if cpri is None:
-                return self._rejected(t, dt, zx, zy, [
-                    t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
-                    ux, uy, cs * x0x + cm * xpx, cs * x0y + cm * xpy,
-                    xpx, xpy, v1x, v1y, ap, bp, cp, lam])
-            cpx, cpy, cvx, cvy, cap, cbp, ccp, _, _, _, _, _, _, lp, _ = cpri
-            mox = lp * cpx + (1.0 - lp) * xpx
-            moy = lp * cpy + (1.0 - lp) * xpy
-            return self._rejected(t, dt, zx, zy, [
-                t, ta, cs, r, q, age, rho, x0x, x0y, p0, ap, xpx, xpy, v1x, v1y, bp, cp,
-                ux, uy, cs * x0x + cm * mox, cs * x0y + cm * moy,
-                cpx, cpy, cvx, cvy, cap, cbp, ccp, lp])
-        # -- model probabilities: the Gaussian likelihood ratio still / moving
-        e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
-        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        # the noise estimates learn from this measurement at the next step (once per instant,
-        # however often a second camera revises it)
-        self._book = (t, zx, zy, d2m, nmx, nmy, w)
-        if self._pend is not None or self._far is not None or self._backup is not None:
-            self._pend = self._far = self._backup = None
-        # -- corrections
-        sx = x0x + g * nsx
-        sy = x0y + g * nsy
-        mx = xpx + k0 * nmx
-        my = xpy + k0 * nmy
-        # cruise / moving: the likelihood ratio; a cruise model all but ruled out (a maneuver)
-        # rests, then restarts from the moving one (what an IMM's mixing would do, for less)
-        if cpri is not None:
-            cpx, cpy, cvx, cvy, _, _, _, isc, kc0, kc1, ca1, cb1, cc1, lp, crc = cpri
-            ncx = zx - cpx
-            ncy = zy - cpy
-            e = 0.5 * ((ncx * ncx + ncy * ncy) * isc - d2m)
-            lam = 1.0 / (1.0 + crc * _exp(e if e < 700.0 else 700.0))
-            if lam > _C_FLOOR:
-                if lam > 0.999:
-                    lam = 0.999
-                cx = cpx + kc0 * ncx
-                cy = cpy + kc0 * ncy
-                w = 1.0 - mu
-                ex = mu * sx + w * (lam * cx + (1.0 - lam) * mx)
-                ey = mu * sy + w * (lam * cy + (1.0 - lam) * my)
-                self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp1, ap1, mx, my, vx, vy, bp1, cp1,
-                          ux, uy, ex, ey, cx, cy, cvx + kc1 * ncx, cvy + kc1 * ncy, ca1, cb1,
-                          cc1, lam]
-                self._pure = True
-                return (ex, ey)
-            lam = -(t + self.c_rest)
-        w = 1.0 - mu
-        ex = mu * sx + w * mx
-        ey = mu * sy + w * my
-        self.S = [t, t, mu, r, q, age, rho1, sx, sy, sp1, ap1, mx, my, vx, vy, bp1, cp1, ux, uy,
-                  ex, ey, mx, my, vx, vy, ap1, bp1, cp1, lam]
-        self._pure = True
-        return (ex, ey)
+        return self.revise(zx, zy, pri)
 
-
-    def revise(self, zx: float, zy: float) -> Vec:
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
         """A second camera's measurement at the last step's instant instead of the last one:
-        the measurement against the step's predictions again (the correction of ``update``,
-        which has a copy of it)."""
-        pri = self._pri
-        if pri is None or pri[0] != self.S[0]:  # no predictions of this step
-            return self._redo(zx, zy)
-        if not self._pure:
-            self._restore()
-        # (else the correction overwrites all the step changed after its predictions, and
-        # restores the state before the step itself if it rejects the measurement: a
-        # second camera's revise, the common case, costs the correction alone)
+        the measurement against the step's predictions again. ``pri``: update's own
+        predictions (the step's second half: one function for both, since a call costs about
+        a tenth of the correction, and this runs for every object each camera sees)."""
+        if pri is None:
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:  # no predictions of this step
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
+            # (else the correction overwrites all the step changed after its predictions, and
+            # restores the state before the step itself if it rejects the measurement: a
+            # second camera's revise, the common case, costs the correction alone)
         (t, ta, dt, cs, cm, r, q, age, rho, ux, uy, x0x, x0y, p0, xpx, xpy, v1x, v1y, ap, bp,
          cp, iss, ism, gs2, gm2, vchk, g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w, cpri,
          lam) = pri
@@ -936,51 +862,22 @@ class AdaptiveIMM1D(AdaptiveIMM):
         k0 = ap * ism
         k1 = bp * ism
         g = p0 * iss
-        xp = x1 + v1 * dt
-        gs2 = g2 if cs >= 0.05 else -1.0
-        gm2 = g2 if cm >= 0.05 else -1.0
-        sp1 = (1.0 - g) * p0
-        ap1 = (1.0 - k0) * ap
-        bp1 = (1.0 - k0) * bp
-        cp1 = cp - k1 * bp
-        cr = cm * _sqrt(ss * ism) / cs if cs > 1e-300 else 1e300
-        rho1 = rho * rho_keep
-        w = _sqrt(ism)
-        if cache:
-            self._pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss,
-                         ism, gs2, gm2, g, sp1, k0, k1, ap1, bp1, cp1, cr, rho1, w)
-        else:
-            self._pri = None
+        pri = (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, x1 + v1 * dt, v1, ap, bp, cp,
+               iss, ism, g2 if cs >= 0.05 else -1.0, g2 if cm >= 0.05 else -1.0, g,
+               (1.0 - g) * p0, k0, k1, (1.0 - k0) * ap, (1.0 - k0) * bp, cp - k1 * bp,
+               cm * _sqrt(ss * ism) / cs if cs > 1e-300 else 1e300, rho * rho_keep,
+               _sqrt(ism))
+        self._pri = pri if cache else None
         self._pri_h = self._h
-        # -- the correction: ``revise``'s, written out (as in 2-D)
-        ns = zx - x0
-        nm = zx - xp
-        d2s = ns * ns * iss
-        d2m = nm * nm * ism
-        if d2s > gs2 and d2m > gm2:
-            return self._rejected(t, dt, zx, 0.0, [
-                t, ta, cs, r, q, age, rho, x0, 0.0, p0, ap, xp, 0.0, v1, 0.0, bp, cp, ux, 0.0,
-                cs * x0 + cm * xp, 0.0])
-        e = 0.5 * (d2s - d2m)
-        mu = 1.0 / (1.0 + cr * _exp(e if e < 700.0 else 700.0))
-        mu = 1e-6 if mu < 1e-6 else (1.0 - 1e-6 if mu > 1.0 - 1e-6 else mu)
-        self._book = (t, zx, 0.0, d2m, nm, 0.0, w)
-        if self._pend is not None or self._far is not None or self._backup is not None:
-            self._pend = self._far = self._backup = None
-        sx = x0 + g * ns
-        mx = xp + k0 * nm
-        ex = mu * sx + (1.0 - mu) * mx
-        self.S = [t, t, mu, r, q, age, rho1, sx, 0.0, sp1, ap1, mx, 0.0, v1 + k1 * nm, 0.0, bp1,
-                  cp1, ux, 0.0, ex, 0.0]
-        self._pure = True
-        return (ex, 0.0)
+        return self.revise(zx, 0.0, pri)
 
-    def revise(self, zx: float, zy: float) -> Vec:
-        pri = self._pri  # as in 2-D
-        if pri is None or pri[0] != self.S[0]:
-            return self._redo(zx, zy)
-        if not self._pure:
-            self._restore()
+    def revise(self, zx: float, zy: float, pri: tuple[Any, ...] | None = None) -> Vec:
+        if pri is None:  # as in 2-D
+            pri = self._pri
+            if pri is None or pri[0] != self.S[0]:
+                return self._redo(zx, zy)
+            if not self._pure:
+                self._restore()
         (t, ta, dt, cs, cm, r, q, age, rho, ux, x0, p0, xp, v1, ap, bp, cp, iss, ism, gs2, gm2,
          g, sp, k0, k1, ap1, bp1, cp1, cr, rho1, w) = pri
         ns = zx - x0

@@ -4,7 +4,6 @@ algorithm, not a timing)."""
 
 from __future__ import annotations
 
-import copy
 import math
 import random
 import statistics
@@ -310,43 +309,3 @@ def test_the_orientation_filter_takes_three_aligned_far_headings() -> None:
     f.update(63 / 60.0, 2.3, 0.0)
     assert abs(f.estimate_fast()[0] - 2.3) < 0.01
     assert abs(f.velocity()[0] - 6.0) < 0.5
-
-
-@pytest.mark.parametrize("cls", [AdaptiveIMM, AdaptiveIMM1D])
-@pytest.mark.parametrize("seed", [1, 2, 3])
-def test_update_corrects_as_revise_does_bit_for_bit(cls: type[AdaptiveIMM], seed: int) -> None:
-    """``update`` has a written-out copy of ``revise``'s correction: a step with a measurement
-    and a step with another one revised to it must come out the same, to the bit (estimate,
-    velocity, state; outliers, kicks and a placed ball included, so the gate's rejections
-    and the jumps are in it), and the two filters go on alike."""
-    rng = random.Random(seed)
-    a, b = cls(), cls()
-    t, x, y, vx, vy = 0.0, 0.0, 0.0, 0.0, 0.0
-    rejected = checked = 0
-    for i in range(3000):
-        t += rng.choice([1 / 75, 1 / 150, 1 / 600])
-        if i % 400 == 200:  # kicked
-            vx, vy = rng.uniform(-5000, 5000), rng.uniform(-5000, 5000)
-        elif i % 400 == 300:
-            vx = vy = 0.0
-        x, y = x + vx / 150, y + vy / 150
-        if i % 997 == 500:  # placed elsewhere
-            x, y = rng.uniform(-4000, 4000), rng.uniform(-3000, 3000)
-        zx, zy = x + rng.gauss(0, 5), y + rng.gauss(0, 5)
-        if rng.random() < 0.05:  # an outlier
-            zx, zy = zx + rng.uniform(-2000, 2000), zy + rng.uniform(-2000, 2000)
-        ox, oy = zx + rng.choice([0.0, 3.0, 300.0]), zy - rng.choice([0.0, 3.0, 300.0])
-        if a.dims == 1:
-            zy = oy = 0.0
-        before = a.rejected
-        got = a.update(t, zx, zy)
-        rejected += a.rejected > before
-        b.update(t, ox, oy)
-        if b._backup is not None:  # the other one jumped: revised, the step's a jump's
-            b = copy.deepcopy(a)  # (its own kind of revise, not the correction's copy)
-            continue
-        assert b.revise(zx, zy) == got
-        assert b.S == a.S and b.velocity() == a.velocity() and b.predict(t + 0.01) == \
-            a.predict(t + 0.01)
-        checked += 1
-    assert rejected > 50 and checked > 2500
