@@ -40,6 +40,7 @@ rectangle shrunk by ``EPS_MM`` (touching a boundary is allowed; the slack absorb
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 from collections.abc import Sequence
@@ -210,8 +211,8 @@ def field_bounds(field: Field, margin: float = 0.0) -> Bounds:
 class _Inflated:
     """Obstacles grown by the clearance, as flat arrays for the vectorised tests."""
 
-    __slots__ = ("bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "rects", "rects_in",
-                 "rhalf", "rmid")
+    __slots__ = ("bhi", "blo", "bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "rects",
+                 "rects_in", "rhalf", "rmid")
 
     def __init__(self, obstacles: Obstacles, clearance: float, bounds: Bounds | None) -> None:
         _check_clearance(clearance)
@@ -233,6 +234,10 @@ class _Inflated:
             np.vstack([self.cx, self.cy]), np.vstack([self.cy, -self.cx]),
             np.vstack([self.rmid[:, 1], -self.rmid[:, 0]])])
         self.bounds = _check_bounds(bounds) if bounds is not None else obstacles.bounds
+        if self.bounds is not None:
+            x0, y0, x1, y1 = self.bounds
+            self.blo: Array = np.array([x0 - EPS_MM, y0 - EPS_MM])
+            self.bhi: Array = np.array([x1 + EPS_MM, y1 + EPS_MM])
 
     def points_free(self, p: Array) -> NDArray[np.bool_]:
         """(T, 2) points -> (T,) outside every obstacle (boundary allowed) and in bounds."""
@@ -246,10 +251,7 @@ class _Inflated:
             r = self.rects_in
             ok &= ~((x > r[:, 0]) & (x < r[:, 2]) & (y > r[:, 1]) & (y < r[:, 3])).any(axis=1)
         if self.bounds is not None:
-            x0, y0, x1, y1 = self.bounds
-            e = EPS_MM
-            ok &= ((p[:, 0] >= x0 - e) & (p[:, 0] <= x1 + e)
-                   & (p[:, 1] >= y0 - e) & (p[:, 1] <= y1 + e))
+            ok &= ((p >= self.blo) & (p <= self.bhi)).all(axis=1)
         return ok
 
     def segments_blocked(self, ax: Array, ay: Array, bx: Array, by: Array) -> NDArray[np.bool_]:
@@ -260,20 +262,28 @@ class _Inflated:
         (separating axes). Bounds are not tested: with both ends in the rectangular bounds
         the whole segment is in."""
         dx, dy = bx - ax, by - ay
-        hit = np.zeros(len(ax), dtype=bool)
+        n = len(ax)
         k, nr = len(self.cr), len(self.rects_in)
         if not k and not nr:
-            return hit
+            return np.zeros(n, dtype=bool)
         # one product gives, per obstacle column, d.c and d x c (c: centre) for all segments
-        pc = np.column_stack([dx, dy]) @ self.cmat  # (P, 2K + L)
-        dd = dx * dx + dy * dy
+        d2 = np.empty((n, 2))
+        d2[:, 0] = dx
+        d2[:, 1] = dy
+        pc = d2 @ self.cmat  # (P, 2K + L)
+        ddc = (dx * dx + dy * dy)[:, None]
+        crs = (dx * ay - dy * ax)[:, None]
+        hit = np.zeros(n, dtype=bool)
         if k:
             proj = pc[:, :k] - (dx * ax + dy * ay)[:, None]
-            cr = pc[:, k:2 * k] - (dx * ay - dy * ax)[:, None]
-            hit = np.asarray(((cr * cr < self.cr2 * dd[:, None]) & (proj > 0.0)
-                              & (proj < dd[:, None])).any(axis=1))
+            cr = pc[:, k:2 * k] - crs
+            cr *= cr
+            blk = cr < self.cr2 * ddc
+            blk &= proj > 0.0
+            blk &= proj < ddc
+            hit = np.asarray(blk.any(axis=1))
         if nr:
-            c = pc[:, 2 * k:] - (dx * ay - dy * ax)[:, None]
+            c = pc[:, 2 * k:] - crs
             adx, ady = np.abs(dx)[:, None], np.abs(dy)[:, None]
             w = adx * self.rhalf[:, 1] + ady * self.rhalf[:, 0]
             over = ((np.abs((ax + bx)[:, None] * 0.5 - self.rmid[:, 0])
@@ -420,20 +430,25 @@ def _nearest_free(p: Array, inf: _Inflated) -> Array | None:
     if q is not None and dq <= _exit_bound(p, inf) + pad + 1e-6:
         return np.asarray(q, dtype=np.float64)
     corners: list[Array] = [] if q is None else [q[None, :]]
+    # q (free, first in the list, so it wins ties) is dq from p: only boundaries that come
+    # within dq of p can hold a crossing that is nearer (or as near), so the others are left
+    # out (``_near_p``); the crossings kept are computed as before and keep their order
+    cxy, rp, xs, ys = _near_p(p, dq, inf.cxy, rp, xs, ys)
     k = len(rp)
     if k > 1:
-        i, j = np.triu_indices(k, 1)
-        q1, q2 = circle_circle_intersection(inf.cxy[i], rp[i], inf.cxy[j], rp[j])
+        i, j = _pairs(k)
+        q1, q2 = circle_circle_intersection(cxy[i], rp[i], cxy[j], rp[j])
         corners += [q1, q2]
-    if len(xs):
+    if len(xs) and len(ys):
         gx, gy = np.meshgrid(xs, ys)
         corners.append(np.column_stack([gx.ravel(), gy.ravel()]))
-        if k:  # circles against the vertical and horizontal lines
-            for lines, axis in ((xs, 0), (ys, 1)):
-                off = lines[None, :] - inf.cxy[:, axis:axis + 1]  # (K, X)
+    if k:  # circles against the vertical and horizontal lines
+        for lines, axis in ((xs, 0), (ys, 1)):
+            if len(lines):
+                off = lines[None, :] - cxy[:, axis:axis + 1]  # (K, X)
                 h2 = rp[:, None] ** 2 - off * off
                 h = np.sqrt(np.where(h2 >= 0.0, h2, np.nan))
-                along = inf.cxy[:, 1 - axis:2 - axis]
+                along = cxy[:, 1 - axis:2 - axis]
                 for sgn in (1.0, -1.0):
                     pts = np.empty((*off.shape, 2))
                     pts[..., axis] = lines[None, :]
@@ -441,6 +456,34 @@ def _nearest_free(p: Array, inf: _Inflated) -> Array | None:
                     corners.append(pts.reshape(-1, 2))
     q, _ = best_of(corners)
     return None if q is None else np.asarray(q, dtype=np.float64)
+
+
+#: slack (mm) of ``_near_p``'s test, far above the rounding of a crossing's position
+NEAR_SLACK_MM = 1.0
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(k: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """``np.triu_indices(k, 1)``, made once per k (read-only: shared between calls)."""
+    i, j = np.triu_indices(k, 1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
+
+
+def _near_p(p: Array, dist: float, cxy: Array, rp: Array, xs: Array, ys: Array,
+            ) -> tuple[Array, Array, Array, Array]:
+    """The circles (centres ``cxy``, radii ``rp``), vertical lines ``xs`` and horizontal
+    lines ``ys`` that come within ``dist`` (+ ``NEAR_SLACK_MM``) of ``p``, in their order:
+    a point on a circle is at least | |c p| - r | from p, one on a line |x - p_x| (or
+    |y - p_y|). ``dist`` = inf keeps all of them."""
+    lim = dist + NEAR_SLACK_MM
+    if not math.isfinite(lim):
+        return cxy, rp, xs, ys
+    e = np.hypot(cxy[:, 0] - p[0], cxy[:, 1] - p[1])
+    keep = np.abs(e - rp) <= lim
+    return (cxy[keep], rp[keep], xs[np.abs(xs - p[0]) <= lim],
+            ys[np.abs(ys - p[1]) <= lim])
 
 
 def nearest_free_point(p: ArrayLike, obstacles: Obstacles, clearance: float, *,

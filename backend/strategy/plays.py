@@ -451,7 +451,7 @@ class Strategy:
                 p = clamp_to_field(p, fs, inside=R * 0.5)  # the goal line is its place
             elif it.role != "placer":
                 p = clamp_to_field(p, fs)
-            res[rid] = replace(it, x=p[0], y=p[1])
+            res[rid] = it.moved(p[0], p[1])
         return res
 
 
