@@ -92,6 +92,8 @@ NODE_PAD_MM = 1.0
 MOVE_PAD_MM = 1e-4
 #: a segment may come this much (mm) inside an inflated obstacle without counting as blocked
 EPS_MM = 1e-7
+#: ``_Inflated.points_free`` tests up to this many points in plain floats
+SMALL_T = 4
 
 
 def _as_rows(a: ArrayLike | None, width: int, what: str) -> Array:
@@ -111,7 +113,10 @@ def _as_rows(a: ArrayLike | None, width: int, what: str) -> Array:
 def _check_bounds(b: ArrayLike | None) -> Bounds | None:
     if b is None:
         return None
-    x0, y0, x1, y1 = (float(v) for v in np.asarray(b, dtype=np.float64).reshape(4))
+    if isinstance(b, tuple) and len(b) == 4 and all(type(v) is float for v in b):
+        x0, y0, x1, y1 = b  # the navigation's (what the conversion below gives)
+    else:
+        x0, y0, x1, y1 = (float(v) for v in np.asarray(b, dtype=np.float64).reshape(4))
     if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or x0 > x1 or y0 > y1:
         raise ValueError(f"bounds must be finite (xmin, ymin, xmax, ymax), got {b}")
     return (x0, y0, x1, y1)
@@ -143,6 +148,18 @@ class Obstacles:
         object.__setattr__(self, "circles", c)
         object.__setattr__(self, "rects", r)
         object.__setattr__(self, "bounds", _check_bounds(self.bounds))
+
+    @classmethod
+    def trusted(cls, circles: Array, rects: Array) -> Obstacles:
+        """Obstacles from arrays the caller has checked already: float64 circles (K, 3) and
+        rects (L, 4), finite, radii >= 0, min <= max (what ``__post_init__`` checks); no
+        bounds. For the navigation, which checks the tick's arrays once instead of each
+        robot's share of them at every tick."""
+        obs = object.__new__(cls)
+        object.__setattr__(obs, "circles", circles)
+        object.__setattr__(obs, "rects", rects)
+        object.__setattr__(obs, "bounds", None)
+        return obs
 
     @classmethod
     def build(cls, *, robots: ArrayLike | None = None, robot_radius: float = ROBOT_RADIUS_MM,
@@ -211,8 +228,8 @@ def field_bounds(field: Field, margin: float = 0.0) -> Bounds:
 class _Inflated:
     """Obstacles grown by the clearance, as flat arrays for the vectorised tests."""
 
-    __slots__ = ("bhi", "blo", "bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "rects",
-                 "rects_in", "rhalf", "rmid")
+    __slots__ = ("bhi", "blo", "bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "plain",
+                 "rects", "rects_in", "rhalf", "rmid")
 
     def __init__(self, obstacles: Obstacles, clearance: float, bounds: Bounds | None) -> None:
         _check_clearance(clearance)
@@ -234,6 +251,9 @@ class _Inflated:
             np.vstack([self.cx, self.cy]), np.vstack([self.cy, -self.cx]),
             np.vstack([self.rmid[:, 1], -self.rmid[:, 0]])])
         self.bounds = _check_bounds(bounds) if bounds is not None else obstacles.bounds
+        #: the circles, rectangles and bounds box as Python floats, made on first use
+        self.plain: tuple[list[tuple[float, float, float]], list[list[float]],
+                          tuple[float, float, float, float] | None] | None = None
         if self.bounds is not None:
             x0, y0, x1, y1 = self.bounds
             self.blo: Array = np.array([x0 - EPS_MM, y0 - EPS_MM])
@@ -241,6 +261,8 @@ class _Inflated:
 
     def points_free(self, p: Array) -> NDArray[np.bool_]:
         """(T, 2) points -> (T,) outside every obstacle (boundary allowed) and in bounds."""
+        if len(p) <= SMALL_T:
+            return np.array([self._free(x, y) for x, y in p.tolist()], dtype=bool)
         x, y = p[:, 0:1], p[:, 1:2]
         ok = np.ones(len(p), dtype=bool)
         if len(self.cr):
@@ -253,6 +275,27 @@ class _Inflated:
         if self.bounds is not None:
             ok &= ((p >= self.blo) & (p <= self.bhi)).all(axis=1)
         return ok
+
+    def _free(self, x: float, y: float) -> bool:
+        """``points_free`` for one point in plain floats: the same operations, element by
+        element (numpy's per-call cost is most of it for a few points)."""
+        if self.plain is None:
+            b = self.bounds
+            box = None if b is None else (b[0] - EPS_MM, b[1] - EPS_MM, b[2] + EPS_MM,
+                                          b[3] + EPS_MM)  # blo, bhi
+            self.plain = (list(zip(self.cx.tolist(), self.cy.tolist(), self.cr2.tolist(),
+                                   strict=True)), self.rects_in.tolist(), box)
+        circles, rects, box = self.plain
+        for cx, cy, r2 in circles:
+            dx, dy = x - cx, y - cy
+            if dx * dx + dy * dy < r2:
+                return False
+        for x0, y0, x1, y1 in rects:
+            if x > x0 and x < x1 and y > y0 and y < y1:
+                return False
+        if box is not None:
+            return box[0] <= x <= box[2] and box[1] <= y <= box[3]
+        return True
 
     def segments_blocked(self, ax: Array, ay: Array, bx: Array, by: Array) -> NDArray[np.bool_]:
         """(P,) segments (ax, ay) -> (bx, by) that enter an obstacle, for free end points
@@ -318,6 +361,10 @@ def _rect_entry(ax: float, ay: float, bx: float, by: float,
 
 
 def _point(p: ArrayLike, what: str) -> Array:
+    if isinstance(p, tuple) and len(p) == 2 and type(p[0]) is float and type(p[1]) is float:
+        if not (math.isfinite(p[0]) and math.isfinite(p[1])):
+            raise ValueError(f"{what} must be a finite point (x, y), got {p!r}")
+        return np.array(p)  # the navigation's (x, y): what the conversion below gives
     a = np.asarray(p, dtype=np.float64).reshape(-1)
     if a.shape != (2,) or not np.isfinite(a).all():
         raise ValueError(f"{what} must be a finite point (x, y), got {p!r}")

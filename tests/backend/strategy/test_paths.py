@@ -657,3 +657,27 @@ def test_pairs_are_triu_indices_and_read_only() -> None:
         assert i.tolist() == ri.tolist() and j.tolist() == rj.tolist()
         with pytest.raises(ValueError):
             i[0] = 1
+
+
+@given(scenes(), st.lists(pt, min_size=1, max_size=paths.SMALL_T), st.floats(0.0, 150.0))
+@settings(max_examples=300, deadline=None)
+def test_points_free_in_plain_floats_is_the_numpy_test(scene: tuple[Obstacles, float],
+                                                       pts: list[tuple[float, float]],
+                                                       clearance: float) -> None:
+    obs, _ = scene
+    inf = paths._Inflated(obs, clearance, None)
+    few = np.array(pts, dtype=np.float64)
+    # past SMALL_T points the numpy test runs: the same points, padded with copies
+    many = np.vstack([few] * (paths.SMALL_T + 1))
+    assert inf.points_free(few).tolist() == inf.points_free(many)[:len(pts)].tolist()
+    assert inf.points_free(few).dtype == np.bool_
+
+
+def test_trusted_obstacles_are_the_checked_ones() -> None:
+    c = np.array([[0.0, 0.0, 150.0], [500.0, 10.0, 150.0]])
+    r = np.array([[-100.0, -50.0, 100.0, 50.0]])
+    a, b = Obstacles(c, r), Obstacles.trusted(c, r)
+    assert (a.circles == b.circles).all() and (a.rects == b.rects).all()
+    assert a.bounds is None and b.bounds is None
+    assert plan_path((-1000.0, 0.0), (1000.0, 0.0), a, 90.0) \
+        == plan_path((-1000.0, 0.0), (1000.0, 0.0), b, 90.0)
