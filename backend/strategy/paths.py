@@ -247,9 +247,15 @@ class _Inflated:
         self.rmid: Array = (self.rects_in[:, :2] + self.rects_in[:, 2:]) * 0.5
         self.rhalf: Array = (self.rects_in[:, 2:] - self.rects_in[:, :2]) * 0.5
         # columns: centres for d.c, centres for d x c, rectangle centres for d x m
-        self.cmat: Array = np.hstack([
-            np.vstack([self.cx, self.cy]), np.vstack([self.cy, -self.cx]),
-            np.vstack([self.rmid[:, 1], -self.rmid[:, 0]])])
+        k = len(c)
+        cmat = np.empty((2, 2 * k + len(self.rmid)))
+        cmat[0, :k] = self.cx
+        cmat[1, :k] = self.cy
+        cmat[0, k:2 * k] = self.cy
+        np.negative(self.cx, out=cmat[1, k:2 * k])
+        cmat[0, 2 * k:] = self.rmid[:, 1]
+        np.negative(self.rmid[:, 0], out=cmat[1, 2 * k:])
+        self.cmat: Array = cmat
         self.bounds = _check_bounds(bounds) if bounds is not None else obstacles.bounds
         #: the circles, rectangles and bounds box as Python floats, made on first use
         self.plain: tuple[list[tuple[float, float, float]], list[list[float]],
@@ -724,7 +730,8 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
     h = np.hypot(x - g[0], y - g[1])
     best = np.full(v, np.inf)
     best[0] = 0.0
-    expanded_at = np.full(v, np.inf)  # cost of each node when it was last expanded
+    expanded_at = [math.inf] * v  # cost of each node when it was last expanded
+    hl = h.tolist()
     parent = np.full(v, -1, dtype=np.int64)
     heap: list[tuple[float, int]] = [(float(h[0]), 0)]
     while heap:
@@ -736,7 +743,7 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
                 heap.clear()
                 break
             bu = float(best[u])
-            if bu < expanded_at[u] and f <= bu + h[u]:  # else a stale entry
+            if bu < expanded_at[u] and f <= bu + hl[u]:  # else a stale entry
                 batch.append(u)
                 expanded_at[u] = bu
         if not batch:
