@@ -210,7 +210,7 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             if rect_arr is None:  # shared by the robots allowed the same areas: read-only
                 rect_arr = rect_rows[key] = np.array(rects, dtype=np.float64).reshape(-1, 4)
                 rect_arr.flags.writeable = False
-            if checked and _valid_rows(circles[len(circles) - len(ball_disc):]):
+            if checked and all(_finite(*d) and d[2] >= 0.0 for d in ball_disc):
                 obstacles = Obstacles.trusted(circles, rect_arr)
             else:
                 obstacles = Obstacles(circles=circles, rects=rect_arr)
