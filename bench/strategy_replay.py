@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import gc
 import math
 import os
 import pickle
@@ -74,29 +75,42 @@ def load(path: str) -> list[Any]:
 
 
 def run(ticks: list[Any], reuse: bool, prof: cProfile.Profile | None = None,
-        ) -> tuple[list[float], float, list[dict[int, Any]]]:
+        ) -> tuple[list[float], float, list[dict[int, Any]], list[float]]:
+    """Wall time per tick (ms), CPU s in all, the moves, CPU time per tick (ms)."""
     core = StrategyCore()
     core.reuse_paths = reuse
     times: list[float] = []
+    cpus: list[float] = []
     moves: list[dict[int, Any]] = []
     c0 = time.thread_time()
     for prep, keeper in ticks:
         t0 = time.perf_counter()
+        u0 = time.thread_time()
         if prof is not None:
             m = prof.runcall(core.decide, prep, keeper)
         else:
             m = core.decide(prep, keeper)
+        cpus.append((time.thread_time() - u0) * 1000.0)
         times.append((time.perf_counter() - t0) * 1000.0)
         moves.append(m)
-    return times, time.thread_time() - c0, moves
+    return times, time.thread_time() - c0, moves, cpus
 
 
-def summary(name: str, times: list[float], cpu_s: float, game_s: float) -> None:
-    ts = sorted(times)
-    p99 = ts[min(len(ts) - 1, int(0.99 * len(ts)))]
-    print(f"{name:>10}: {len(ts)} ticks, median {statistics.median(ts):.2f} ms, p99 {p99:.2f}"
-          f" ms, max {ts[-1]:.2f} ms; {cpu_s / game_s * 100:.2f} % of a core over "
-          f"{game_s:.1f} s of game")
+def _stats(v: list[float]) -> tuple[float, float, float, int]:
+    """Median, p99, max and the tick of the max."""
+    s = sorted(v)
+    worst = max(range(len(v)), key=v.__getitem__)
+    return statistics.median(s), s[min(len(s) - 1, int(0.99 * len(s)))], s[-1], worst
+
+
+def summary(name: str, times: list[float], cpu_s: float, game_s: float,
+            cpus: list[float]) -> None:
+    med, p99, top, worst = _stats(times)
+    cmed, cp99, ctop, cworst = _stats(cpus)
+    print(f"{name:>10}: {len(times)} ticks, median {med:.2f} ms, p99 {p99:.2f} ms, max "
+          f"{top:.2f} ms (tick {worst}); {cpu_s / game_s * 100:.2f} % of a core over "
+          f"{game_s:.1f} s of game\n{'':>10}  CPU time per tick (load-independent): median "
+          f"{cmed:.2f} ms, p99 {cp99:.2f} ms, max {ctop:.2f} ms (tick {cworst})")
 
 
 def _dist(a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -128,13 +142,18 @@ def replay(a: argparse.Namespace) -> None:
     ticks = load(a.inp)
     if not ticks:
         raise SystemExit(f"no ticks in {a.inp}")
+    # the recording is ~90k objects: a full collection that a tick's allocations trigger
+    # would walk them all (a 50-80 ms "tick" that is the benchmark's own heap, not the
+    # strategy's work), so they are moved out of the collector's sight first
+    gc.collect()
+    gc.freeze()
     game_s = ticks[-1][0].inp.t - ticks[0][0].inp.t
     prof = cProfile.Profile() if a.profile else None
-    times, cpu, moves = run(ticks, True, prof)
-    summary("reuse", times, cpu, game_s)
+    times, cpu, moves, cpus = run(ticks, True, prof)
+    summary("reuse", times, cpu, game_s, cpus)
     if a.compare:
-        t2, c2, m2 = run(ticks, False)
-        summary("no reuse", t2, c2, game_s)
+        t2, c2, m2, u2 = run(ticks, False)
+        summary("no reuse", t2, c2, game_s, u2)
         compare(m2, moves)
     if prof is not None:
         st = pstats.Stats(prof)

@@ -94,6 +94,13 @@ class Intent:
     own_defense_ok: bool = False  # the keeper may enter our defence area
     their_defense_ok: bool = False  # our ball placer may enter theirs (the game is stopped)
 
+    def moved(self, x: float, y: float) -> Intent:
+        """This intent with its target at (x, y): ``dataclasses.replace(self, x=x, y=y)``
+        without the cost of ``replace`` (it runs for every robot at every tick)."""
+        return Intent(self.role, x, y, self.orientation, self.kick_speed_mps, self.chip,
+                      self.dribbler, self.max_speed_mps, self.plan, self.avoid_ball_mm,
+                      self.own_defense_ok, self.their_defense_ok)
+
 
 @dataclass(frozen=True, slots=True)
 class Move:

@@ -14,6 +14,7 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from domain.field import Field
 
@@ -116,6 +117,11 @@ def _finite(*v: float) -> bool:
     return all(math.isfinite(x) for x in v)
 
 
+def _valid_rows(c: NDArray[np.float64]) -> bool:
+    """Circles (K, 3) as ``Obstacles`` takes them: finite, radii >= 0."""
+    return bool(np.isfinite(c).all() and (c[:, 2] >= 0.0).all())
+
+
 def _inside(p: tuple[float, float], r: Sequence[float], g: float) -> bool:
     return r[0] - g <= p[0] <= r[2] + g and r[1] - g <= p[1] <= r[3] + g
 
@@ -154,15 +160,22 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             extra_circles.append([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, r])
     bounds = (-fs.half_length - 150.0, -fs.half_width - 150.0,
               fs.half_length + 150.0, fs.half_width + 150.0)
+    extra_arr = np.array(extra_circles, dtype=np.float64).reshape(-1, 3)
     out: dict[int, Move] = {}
     searched: set[int] = set()
     mine = [idx for idx, (kind, bot) in enumerate(everyone)
             if kind == "o" and bot.id in intents]
+    # the tick's arrays, checked once: each robot's obstacles are rows of them (its ball disc
+    # aside), so they need no check of their own (else Obstacles checks, and refuses, as it
+    # always did)
+    rect_rows: dict[tuple[bool, bool], NDArray[np.float64]] = {}
+    checked = _valid_rows(all_circles) and _valid_rows(extra_arr) \
+        and all(_finite(*r) and r[0] <= r[2] and r[1] <= r[3] for r in (their_def, own_def))
     clear: dict[int, bool] = {}
     if memory is not None and mine:
         # the straight test against the robots and the corridor for all our robots in one
         # numpy pass (each robot's own ball disc, areas and bounds follow in plain floats)
-        common = np.vstack([all_circles, np.array(extra_circles).reshape(-1, 3)])
+        common = np.concatenate([all_circles, extra_arr])
         ends = np.array([[everyone[i][1].x, everyone[i][1].y,
                           intents[everyone[i][1].id].x, intents[everyone[i][1].id].y]
                          for i in mine], dtype=np.float64)
@@ -190,12 +203,17 @@ def navigate(intents: dict[int, Intent], ours: Sequence[Bot], theirs: Sequence[B
             # finite goes to plan_path, which refuses it as before)
             pts = (goal,)
         elif plan:
-            circles = np.delete(all_circles, idx, axis=0)
-            extra = extra_circles + ball_disc
-            if extra:
-                circles = np.vstack([circles, np.array(extra, dtype=np.float64)])
-            obstacles = Obstacles(circles=circles,
-                                  rects=np.array(rects, dtype=np.float64).reshape(-1, 4))
+            circles = np.concatenate([all_circles[:idx], all_circles[idx + 1:], extra_arr,
+                                      np.array(ball_disc, dtype=np.float64).reshape(-1, 3)])
+            key = (it.their_defense_ok, it.own_defense_ok)
+            rect_arr = rect_rows.get(key)
+            if rect_arr is None:  # shared by the robots allowed the same areas: read-only
+                rect_arr = rect_rows[key] = np.array(rects, dtype=np.float64).reshape(-1, 4)
+                rect_arr.flags.writeable = False
+            if checked and all(_finite(*d) and d[2] >= 0.0 for d in ball_disc):
+                obstacles = Obstacles.trusted(circles, rect_arr)
+            else:
+                obstacles = Obstacles(circles=circles, rects=rect_arr)
             if memory is None:
                 res = plan_path(bot.xy, goal, obstacles, R, bounds=bounds)
                 pts = tuple(res.points) if res.points else (goal,)

@@ -40,6 +40,7 @@ rectangle shrunk by ``EPS_MM`` (touching a boundary is allowed; the slack absorb
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 from collections.abc import Sequence
@@ -91,6 +92,8 @@ NODE_PAD_MM = 1.0
 MOVE_PAD_MM = 1e-4
 #: a segment may come this much (mm) inside an inflated obstacle without counting as blocked
 EPS_MM = 1e-7
+#: ``_Inflated.points_free`` tests up to this many points in plain floats
+SMALL_T = 4
 
 
 def _as_rows(a: ArrayLike | None, width: int, what: str) -> Array:
@@ -110,7 +113,10 @@ def _as_rows(a: ArrayLike | None, width: int, what: str) -> Array:
 def _check_bounds(b: ArrayLike | None) -> Bounds | None:
     if b is None:
         return None
-    x0, y0, x1, y1 = (float(v) for v in np.asarray(b, dtype=np.float64).reshape(4))
+    if isinstance(b, tuple) and len(b) == 4 and all(type(v) is float for v in b):
+        x0, y0, x1, y1 = b  # the navigation's (what the conversion below gives)
+    else:
+        x0, y0, x1, y1 = (float(v) for v in np.asarray(b, dtype=np.float64).reshape(4))
     if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or x0 > x1 or y0 > y1:
         raise ValueError(f"bounds must be finite (xmin, ymin, xmax, ymax), got {b}")
     return (x0, y0, x1, y1)
@@ -142,6 +148,18 @@ class Obstacles:
         object.__setattr__(self, "circles", c)
         object.__setattr__(self, "rects", r)
         object.__setattr__(self, "bounds", _check_bounds(self.bounds))
+
+    @classmethod
+    def trusted(cls, circles: Array, rects: Array) -> Obstacles:
+        """Obstacles from arrays the caller has checked already: float64 circles (K, 3) and
+        rects (L, 4), finite, radii >= 0, min <= max (what ``__post_init__`` checks); no
+        bounds. For the navigation, which checks the tick's arrays once instead of each
+        robot's share of them at every tick."""
+        obs = object.__new__(cls)
+        object.__setattr__(obs, "circles", circles)
+        object.__setattr__(obs, "rects", rects)
+        object.__setattr__(obs, "bounds", None)
+        return obs
 
     @classmethod
     def build(cls, *, robots: ArrayLike | None = None, robot_radius: float = ROBOT_RADIUS_MM,
@@ -210,8 +228,8 @@ def field_bounds(field: Field, margin: float = 0.0) -> Bounds:
 class _Inflated:
     """Obstacles grown by the clearance, as flat arrays for the vectorised tests."""
 
-    __slots__ = ("bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "rects", "rects_in",
-                 "rhalf", "rmid")
+    __slots__ = ("bhi", "blo", "bounds", "cmat", "cr", "cr2", "cx", "cxy", "cy", "plain",
+                 "rects", "rects_in", "rhalf", "rmid")
 
     def __init__(self, obstacles: Obstacles, clearance: float, bounds: Bounds | None) -> None:
         _check_clearance(clearance)
@@ -229,13 +247,28 @@ class _Inflated:
         self.rmid: Array = (self.rects_in[:, :2] + self.rects_in[:, 2:]) * 0.5
         self.rhalf: Array = (self.rects_in[:, 2:] - self.rects_in[:, :2]) * 0.5
         # columns: centres for d.c, centres for d x c, rectangle centres for d x m
-        self.cmat: Array = np.hstack([
-            np.vstack([self.cx, self.cy]), np.vstack([self.cy, -self.cx]),
-            np.vstack([self.rmid[:, 1], -self.rmid[:, 0]])])
+        k = len(c)
+        cmat = np.empty((2, 2 * k + len(self.rmid)))
+        cmat[0, :k] = self.cx
+        cmat[1, :k] = self.cy
+        cmat[0, k:2 * k] = self.cy
+        np.negative(self.cx, out=cmat[1, k:2 * k])
+        cmat[0, 2 * k:] = self.rmid[:, 1]
+        np.negative(self.rmid[:, 0], out=cmat[1, 2 * k:])
+        self.cmat: Array = cmat
         self.bounds = _check_bounds(bounds) if bounds is not None else obstacles.bounds
+        #: the circles, rectangles and bounds box as Python floats, made on first use
+        self.plain: tuple[list[tuple[float, float, float]], list[list[float]],
+                          tuple[float, float, float, float] | None] | None = None
+        if self.bounds is not None:
+            x0, y0, x1, y1 = self.bounds
+            self.blo: Array = np.array([x0 - EPS_MM, y0 - EPS_MM])
+            self.bhi: Array = np.array([x1 + EPS_MM, y1 + EPS_MM])
 
     def points_free(self, p: Array) -> NDArray[np.bool_]:
         """(T, 2) points -> (T,) outside every obstacle (boundary allowed) and in bounds."""
+        if len(p) <= SMALL_T:
+            return np.array([self._free(x, y) for x, y in p.tolist()], dtype=bool)
         x, y = p[:, 0:1], p[:, 1:2]
         ok = np.ones(len(p), dtype=bool)
         if len(self.cr):
@@ -246,11 +279,29 @@ class _Inflated:
             r = self.rects_in
             ok &= ~((x > r[:, 0]) & (x < r[:, 2]) & (y > r[:, 1]) & (y < r[:, 3])).any(axis=1)
         if self.bounds is not None:
-            x0, y0, x1, y1 = self.bounds
-            e = EPS_MM
-            ok &= ((p[:, 0] >= x0 - e) & (p[:, 0] <= x1 + e)
-                   & (p[:, 1] >= y0 - e) & (p[:, 1] <= y1 + e))
+            ok &= ((p >= self.blo) & (p <= self.bhi)).all(axis=1)
         return ok
+
+    def _free(self, x: float, y: float) -> bool:
+        """``points_free`` for one point in plain floats: the same operations, element by
+        element (numpy's per-call cost is most of it for a few points)."""
+        if self.plain is None:
+            b = self.bounds
+            box = None if b is None else (b[0] - EPS_MM, b[1] - EPS_MM, b[2] + EPS_MM,
+                                          b[3] + EPS_MM)  # blo, bhi
+            self.plain = (list(zip(self.cx.tolist(), self.cy.tolist(), self.cr2.tolist(),
+                                   strict=True)), self.rects_in.tolist(), box)
+        circles, rects, box = self.plain
+        for cx, cy, r2 in circles:
+            dx, dy = x - cx, y - cy
+            if dx * dx + dy * dy < r2:
+                return False
+        for x0, y0, x1, y1 in rects:
+            if x > x0 and x < x1 and y > y0 and y < y1:
+                return False
+        if box is not None:
+            return box[0] <= x <= box[2] and box[1] <= y <= box[3]
+        return True
 
     def segments_blocked(self, ax: Array, ay: Array, bx: Array, by: Array) -> NDArray[np.bool_]:
         """(P,) segments (ax, ay) -> (bx, by) that enter an obstacle, for free end points
@@ -260,20 +311,28 @@ class _Inflated:
         (separating axes). Bounds are not tested: with both ends in the rectangular bounds
         the whole segment is in."""
         dx, dy = bx - ax, by - ay
-        hit = np.zeros(len(ax), dtype=bool)
+        n = len(ax)
         k, nr = len(self.cr), len(self.rects_in)
         if not k and not nr:
-            return hit
+            return np.zeros(n, dtype=bool)
         # one product gives, per obstacle column, d.c and d x c (c: centre) for all segments
-        pc = np.column_stack([dx, dy]) @ self.cmat  # (P, 2K + L)
-        dd = dx * dx + dy * dy
+        d2 = np.empty((n, 2))
+        d2[:, 0] = dx
+        d2[:, 1] = dy
+        pc = d2 @ self.cmat  # (P, 2K + L)
+        ddc = (dx * dx + dy * dy)[:, None]
+        crs = (dx * ay - dy * ax)[:, None]
+        hit = np.zeros(n, dtype=bool)
         if k:
             proj = pc[:, :k] - (dx * ax + dy * ay)[:, None]
-            cr = pc[:, k:2 * k] - (dx * ay - dy * ax)[:, None]
-            hit = np.asarray(((cr * cr < self.cr2 * dd[:, None]) & (proj > 0.0)
-                              & (proj < dd[:, None])).any(axis=1))
+            cr = pc[:, k:2 * k] - crs
+            cr *= cr
+            blk = cr < self.cr2 * ddc
+            blk &= proj > 0.0
+            blk &= proj < ddc
+            hit = np.asarray(blk.any(axis=1))
         if nr:
-            c = pc[:, 2 * k:] - (dx * ay - dy * ax)[:, None]
+            c = pc[:, 2 * k:] - crs
             adx, ady = np.abs(dx)[:, None], np.abs(dy)[:, None]
             w = adx * self.rhalf[:, 1] + ady * self.rhalf[:, 0]
             over = ((np.abs((ax + bx)[:, None] * 0.5 - self.rmid[:, 0])
@@ -308,6 +367,10 @@ def _rect_entry(ax: float, ay: float, bx: float, by: float,
 
 
 def _point(p: ArrayLike, what: str) -> Array:
+    if isinstance(p, tuple) and len(p) == 2 and type(p[0]) is float and type(p[1]) is float:
+        if not (math.isfinite(p[0]) and math.isfinite(p[1])):
+            raise ValueError(f"{what} must be a finite point (x, y), got {p!r}")
+        return np.array(p)  # the navigation's (x, y): what the conversion below gives
     a = np.asarray(p, dtype=np.float64).reshape(-1)
     if a.shape != (2,) or not np.isfinite(a).all():
         raise ValueError(f"{what} must be a finite point (x, y), got {p!r}")
@@ -420,20 +483,25 @@ def _nearest_free(p: Array, inf: _Inflated) -> Array | None:
     if q is not None and dq <= _exit_bound(p, inf) + pad + 1e-6:
         return np.asarray(q, dtype=np.float64)
     corners: list[Array] = [] if q is None else [q[None, :]]
+    # q (free, first in the list, so it wins ties) is dq from p: only boundaries that come
+    # within dq of p can hold a crossing that is nearer (or as near), so the others are left
+    # out (``_near_p``); the crossings kept are computed as before and keep their order
+    cxy, rp, xs, ys = _near_p(p, dq, inf.cxy, rp, xs, ys)
     k = len(rp)
     if k > 1:
-        i, j = np.triu_indices(k, 1)
-        q1, q2 = circle_circle_intersection(inf.cxy[i], rp[i], inf.cxy[j], rp[j])
+        i, j = _pairs(k)
+        q1, q2 = circle_circle_intersection(cxy[i], rp[i], cxy[j], rp[j])
         corners += [q1, q2]
-    if len(xs):
+    if len(xs) and len(ys):
         gx, gy = np.meshgrid(xs, ys)
         corners.append(np.column_stack([gx.ravel(), gy.ravel()]))
-        if k:  # circles against the vertical and horizontal lines
-            for lines, axis in ((xs, 0), (ys, 1)):
-                off = lines[None, :] - inf.cxy[:, axis:axis + 1]  # (K, X)
+    if k:  # circles against the vertical and horizontal lines
+        for lines, axis in ((xs, 0), (ys, 1)):
+            if len(lines):
+                off = lines[None, :] - cxy[:, axis:axis + 1]  # (K, X)
                 h2 = rp[:, None] ** 2 - off * off
                 h = np.sqrt(np.where(h2 >= 0.0, h2, np.nan))
-                along = inf.cxy[:, 1 - axis:2 - axis]
+                along = cxy[:, 1 - axis:2 - axis]
                 for sgn in (1.0, -1.0):
                     pts = np.empty((*off.shape, 2))
                     pts[..., axis] = lines[None, :]
@@ -441,6 +509,34 @@ def _nearest_free(p: Array, inf: _Inflated) -> Array | None:
                     corners.append(pts.reshape(-1, 2))
     q, _ = best_of(corners)
     return None if q is None else np.asarray(q, dtype=np.float64)
+
+
+#: slack (mm) of ``_near_p``'s test, far above the rounding of a crossing's position
+NEAR_SLACK_MM = 1.0
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(k: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """``np.triu_indices(k, 1)``, made once per k (read-only: shared between calls)."""
+    i, j = np.triu_indices(k, 1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
+
+
+def _near_p(p: Array, dist: float, cxy: Array, rp: Array, xs: Array, ys: Array,
+            ) -> tuple[Array, Array, Array, Array]:
+    """The circles (centres ``cxy``, radii ``rp``), vertical lines ``xs`` and horizontal
+    lines ``ys`` that come within ``dist`` (+ ``NEAR_SLACK_MM``) of ``p``, in their order:
+    a point on a circle is at least | |c p| - r | from p, one on a line |x - p_x| (or
+    |y - p_y|). ``dist`` = inf keeps all of them."""
+    lim = dist + NEAR_SLACK_MM
+    if not math.isfinite(lim):
+        return cxy, rp, xs, ys
+    e = np.hypot(cxy[:, 0] - p[0], cxy[:, 1] - p[1])
+    keep = np.abs(e - rp) <= lim
+    return (cxy[keep], rp[keep], xs[np.abs(xs - p[0]) <= lim],
+            ys[np.abs(ys - p[1]) <= lim])
 
 
 def nearest_free_point(p: ArrayLike, obstacles: Obstacles, clearance: float, *,
@@ -634,7 +730,8 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
     h = np.hypot(x - g[0], y - g[1])
     best = np.full(v, np.inf)
     best[0] = 0.0
-    expanded_at = np.full(v, np.inf)  # cost of each node when it was last expanded
+    expanded_at = [math.inf] * v  # cost of each node when it was last expanded
+    hl = h.tolist()
     parent = np.full(v, -1, dtype=np.int64)
     heap: list[tuple[float, int]] = [(float(h[0]), 0)]
     while heap:
@@ -646,7 +743,7 @@ def _astar(inf: _Inflated, s: Array, g: Array, graph: _Graph, limit: float,
                 heap.clear()
                 break
             bu = float(best[u])
-            if bu < expanded_at[u] and f <= bu + h[u]:  # else a stale entry
+            if bu < expanded_at[u] and f <= bu + hl[u]:  # else a stale entry
                 batch.append(u)
                 expanded_at[u] = bu
         if not batch:

@@ -154,8 +154,9 @@ class Strategy:
         ids = sorted(bots)
         xy = np.array([bots[i].xy for i in ids], dtype=np.float64)
         sxy = np.array([s.xy for s in slots], dtype=np.float64).reshape(-1, 2)
-        extra = np.zeros((len(ids), len(slots)))
+        extra = None  # no extra cost: the same as zeros (a distance + 0.0 is itself)
         if self._set_piece_kicker in bots and inp.t < self._kicker_banned_until:
+            extra = np.zeros((len(ids), len(slots)))
             r = ids.index(self._set_piece_kicker)
             for k, s in enumerate(slots):
                 if s.role == "attacker":
@@ -451,7 +452,7 @@ class Strategy:
                 p = clamp_to_field(p, fs, inside=R * 0.5)  # the goal line is its place
             elif it.role != "placer":
                 p = clamp_to_field(p, fs)
-            res[rid] = replace(it, x=p[0], y=p[1])
+            res[rid] = it.moved(p[0], p[1])
         return res
 
 

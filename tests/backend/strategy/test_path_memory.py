@@ -112,3 +112,17 @@ def test_the_pause_comes_between_two_robots() -> None:
     moves = navigate(intents, ours, [], None, FS, Frame(1), 60.0, 120.0, memory=PathMemory(),
                      pause=lambda: calls.append(len(calls)))
     assert len(moves) == 4 and len(calls) == 3
+
+
+def test_a_robot_at_no_finite_position_is_refused_as_before() -> None:
+    """The tick's obstacles are checked once; one that is not finite still makes a search
+    refuse (Obstacles' own check), with or without the memory."""
+    import math
+
+    import pytest
+
+    bad = Bot(8, math.nan, 0.0, 0.0)
+    for mem in (PathMemory(), None):
+        with pytest.raises(ValueError, match="finite"):
+            navigate({ME.id: GOAL}, [ME], [OTHER, bad], None, FS, Frame(1), 60.0, 120.0,
+                     memory=mem)

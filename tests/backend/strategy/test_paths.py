@@ -613,3 +613,71 @@ def test_straight_tests_for_many_robots_agree_with_plan_paths(
         got = bool(ok[i]) and straight_clear_of_rest(
             s, g, obs.circles[split:].tolist(), obs.rects.tolist(), clearance, obs.bounds)
         assert got == ref
+
+
+def _keep_all(p: object, dist: float, cxy: np.ndarray, rp: np.ndarray, xs: np.ndarray,
+              ys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    return cxy, rp, xs, ys
+
+
+@given(scenes(), st.data())
+@settings(max_examples=300, deadline=None)
+def test_leaving_out_far_boundaries_changes_no_nearest_free_point(
+        scene: tuple[Obstacles, float], data: st.DataObject) -> None:
+    """``_near_p`` only drops crossings farther than the best projection: the same answer,
+    bit for bit, as with every boundary's crossings."""
+    obs, clearance = scene
+    p = data.draw(inside_points(obs, clearance))
+    fast = nearest_free_point(p, obs, clearance)
+    with patch.object(paths, "_near_p", _keep_all):
+        slow = nearest_free_point(p, obs, clearance)
+    assert fast == slow
+
+
+def test_near_p_keeps_what_comes_within_the_distance_in_order() -> None:
+    cxy = np.array([[0.0, 0.0], [1000.0, 0.0], [0.0, 300.0], [5000.0, 5000.0]])
+    rp = np.array([100.0, 100.0, 100.0, 100.0])
+    xs = np.array([-50.0, 400.0, 30.0])
+    ys = np.array([900.0, -20.0])
+    c, r, x, y = paths._near_p(np.array([0.0, 0.0]), 150.0, cxy, rp, xs, ys)
+    # circle 0: p at its centre, boundary 100 away; circle 2: boundary 200 away; the others
+    # farther; lines 50 and 30 away in x, 20 in y
+    assert c.tolist() == [[0.0, 0.0]] and r.tolist() == [100.0]
+    assert x.tolist() == [-50.0, 30.0] and y.tolist() == [-20.0]
+    c, r, x, y = paths._near_p(np.array([0.0, 0.0]), 250.0, cxy, rp, xs, ys)
+    assert c.tolist() == [[0.0, 0.0], [0.0, 300.0]]
+    every = paths._near_p(np.array([0.0, 0.0]), math.inf, cxy, rp, xs, ys)
+    assert all(a is b for a, b in zip(every, (cxy, rp, xs, ys), strict=True))
+
+
+def test_pairs_are_triu_indices_and_read_only() -> None:
+    for k in (2, 5, 23):
+        i, j = paths._pairs(k)
+        ri, rj = np.triu_indices(k, 1)
+        assert i.tolist() == ri.tolist() and j.tolist() == rj.tolist()
+        with pytest.raises(ValueError):
+            i[0] = 1
+
+
+@given(scenes(), st.lists(pt, min_size=1, max_size=paths.SMALL_T), st.floats(0.0, 150.0))
+@settings(max_examples=300, deadline=None)
+def test_points_free_in_plain_floats_is_the_numpy_test(scene: tuple[Obstacles, float],
+                                                       pts: list[tuple[float, float]],
+                                                       clearance: float) -> None:
+    obs, _ = scene
+    inf = paths._Inflated(obs, clearance, None)
+    few = np.array(pts, dtype=np.float64)
+    # past SMALL_T points the numpy test runs: the same points, padded with copies
+    many = np.vstack([few] * (paths.SMALL_T + 1))
+    assert inf.points_free(few).tolist() == inf.points_free(many)[:len(pts)].tolist()
+    assert inf.points_free(few).dtype == np.bool_
+
+
+def test_trusted_obstacles_are_the_checked_ones() -> None:
+    c = np.array([[0.0, 0.0, 150.0], [500.0, 10.0, 150.0]])
+    r = np.array([[-100.0, -50.0, 100.0, 50.0]])
+    a, b = Obstacles(c, r), Obstacles.trusted(c, r)
+    assert (a.circles == b.circles).all() and (a.rects == b.rects).all()
+    assert a.bounds is None and b.bounds is None
+    assert plan_path((-1000.0, 0.0), (1000.0, 0.0), a, 90.0) \
+        == plan_path((-1000.0, 0.0), (1000.0, 0.0), b, 90.0)

@@ -422,3 +422,21 @@ def test_our_kicker_goes_round_the_ball_to_its_spot_behind_it(kind: str, ball: B
     assert pts[-1][0] < ball.x
     closest = min(_seg_dist(ball.xy, a, b) for a, b in itertools.pairwise(pts))
     assert closest >= CONTACT_MM, closest
+
+
+def test_intent_moved_is_replace_of_x_and_y() -> None:
+    """``Intent.moved`` lists every field by hand: a field added to ``Intent`` and not to
+    ``moved`` would be dropped silently (this test then fails)."""
+    import dataclasses
+
+    odd: dict[str, object] = {"role": "r", "x": 1.0, "y": 2.0}
+    for f in dataclasses.fields(Intent):
+        if f.name in odd:
+            continue
+        # a value different from the default, of the field's kind
+        d = f.default
+        odd[f.name] = (not d) if isinstance(d, bool) else 7.5 if isinstance(d, float) else 0.25
+    it = Intent(**odd)  # type: ignore[arg-type]
+    assert all(getattr(it, k) != f.default for f in dataclasses.fields(Intent)
+               for k in [f.name] if f.default is not dataclasses.MISSING)
+    assert it.moved(-3.0, 4.0) == dataclasses.replace(it, x=-3.0, y=4.0)

@@ -8,6 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from backend.geometry import goalkeeper_target
 from backend.strategy.model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot
 from backend.strategy.roles import (
     attacker,
@@ -15,6 +16,7 @@ from backend.strategy.roles import (
     defender_points,
     goalkeeper,
     in_own_defense,
+    keeper_y,
     kick_ball,
     push_out_of_capsule,
     push_out_of_circle,
@@ -141,3 +143,19 @@ def test_push_helpers_move_points_out_exactly_to_the_radius() -> None:
     assert math.isclose(q[1], 650.0) and math.isclose(q[0], 500.0)
     far = (3000.0, 3000.0)
     assert push_out_of_capsule(far, (0.0, 0.0), (1000.0, 0.0), 650.0) == far
+
+
+@settings(max_examples=400, deadline=None)
+@given(bx=st.floats(-7000, 7000), by=st.floats(-5000, 5000),
+       vx=st.one_of(st.just(0.0), st.floats(-8000, 8000), st.floats(-1e-300, 1e-300)),
+       vy=st.floats(-8000, 8000), min_speed=st.sampled_from([0.0, 100.0, 300.0]),
+       margin=st.sampled_from([0.0, 45.0, 900.0]))
+def test_keeper_y_is_goalkeeper_target_bit_for_bit(bx: float, by: float, vx: float, vy: float,
+                                                   min_speed: float, margin: float) -> None:
+    gx = -FS.half_length + R + 30.0
+    want = goalkeeper_target((bx, by), (vx, vy), gx, FS.goal_width, margin=margin,
+                             min_speed=min_speed)
+    got = keeper_y(bx, by, vx, vy, gx, FS.goal_width, margin, min_speed)
+    assert float(want[0]) == gx
+    assert math.copysign(1.0, got) == math.copysign(1.0, float(want[1]))
+    assert got.hex() == float(want[1]).hex()
