@@ -450,14 +450,21 @@ class Relay:
         (a burst of command sets is one cycle, not one each). The socket's FD is edge-
         triggered: it is drained until ZMQ_EVENTS has no POLLIN (or a receive finds nothing),
         and after MAX_BATCH the rest is left for a call_soon (its FD would not signal
-        again)."""
+        again). A message's parts are recv_multipart's bytes, but each part's ``more`` is read
+        from the part itself: recv_multipart asks the socket for ZMQ_RCVMORE after each part,
+        a ``get`` that looks the option up in an enum (two a command set)."""
         self._commands_changed = False
+        recv, get = sub.recv, sub.get
         try:
             for _ in range(MAX_BATCH):
                 try:
-                    frames = sub.recv_multipart(_NOBLOCK)
+                    part = recv(_NOBLOCK, copy=False)
                 except zmq.Again:
                     break
+                frames = [part.bytes]
+                while part.more:  # a message's parts come together: they are all there
+                    part = recv(_NOBLOCK, copy=False)
+                    frames.append(part.bytes)
                 try:
                     self._handle_native(frames)
                 except Exception as exc:  # never fatal: a bad message is an error, not a crash
@@ -465,7 +472,7 @@ class Relay:
                     log.exception("command handling failed")
                 # ZMQ_EVENTS says whether another message waits: a receive that fails costs
                 # pyzmq an exception (twice the time of this question), once per wake-up
-                if not cast(int, sub.getsockopt(_EVENTS)) & _POLLIN:
+                if not cast(int, get(_EVENTS)) & _POLLIN:
                     break
             else:
                 asyncio.get_running_loop().call_soon(self._drain_commands, sub)
@@ -481,23 +488,8 @@ class Relay:
                                 "bad frames")
             return
         topic, body = frames
-        if topic == b"sim":
-            self._handle_sim_command(body)
-            return
-        if topic == b"referee-out":
-            self._handle_referee_out(body)
-            return
-        if topic == b"tracker-out":
-            self._handle_tracker_out(body)
-            return
-        if topic == b"estop":
-            self._handle_estop(body, now)
-            return
-        if topic == b"arming":
-            self._handle_arming(body, now)
-            return
-        if topic != b"commands":
-            self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
+        if topic != b"commands":  # the others come a few times a second at most (tracked
+            self._handle_other(topic, body, now)  # vision: once a world tick)
             return
         counter = self.streams["commands"]
         if self.estop_latched:
@@ -553,6 +545,21 @@ class Relay:
             self._commands_changed = True
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
+
+    def _handle_other(self, topic: bytes, body: bytes, now: float) -> None:
+        """A message on the command SUB other than a command set."""
+        if topic == b"tracker-out":
+            self._handle_tracker_out(body)
+        elif topic == b"sim":
+            self._handle_sim_command(body)
+        elif topic == b"referee-out":
+            self._handle_referee_out(body)
+        elif topic == b"estop":
+            self._handle_estop(body, now)
+        elif topic == b"arming":
+            self._handle_arming(body, now)
+        else:
+            self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
 
     def _handle_estop(self, body: bytes, now: float) -> None:
         msg = touchline_pb2.EmergencyStop()
