@@ -4,7 +4,9 @@ No subprocess, no other load: a ``Relay`` that is not running gets its sockets b
 (loopback UDP in, a ZeroMQ PUB with a SUB drained outside the timing, loopback UDP out) and
 its handlers are called directly inside an event loop, so the CPU time (thread time) per
 vision datagram, per command set with its output cycle, and per simulator answer read in a
-cycle is measured without the machine's other work in it. Run it for a before/after of a
+cycle is measured without the machine's other work in it; and a command set as the station
+sends it (about 3 robots, new values) read from a real ZeroMQ SUB by the relay's reader, with
+its cycle. Run it for a before/after of a
 change to the relay's per-datagram code (``--before DIR``: the larcmacs_relay package from
 DIR, e.g. ``git archive main larcmacs_relay | tar -x -C DIR``), A and B alternated.
 
@@ -57,6 +59,23 @@ def command_sets(n: int) -> list[bytes]:
         for i in range(11):
             v = 0.1 * (seq % 10) if seq % 2 or i == seq % 11 else 0.5
             cset.commands.add(team=tl.TEAM_BLUE, id=i, forward_mps=v)
+        out.append(cset.SerializeToString())
+    return out
+
+
+def live_sets(n: int) -> list[bytes]:
+    """Command sets as the station sends them at full scale (bench/profile_station.py --part
+    relay: about 3 commands a set, most of them with new values): blue robots 3 at a time
+    out of 11 in turn, each with speeds never sent before."""
+    from sslpb import touchline_pb2 as tl
+
+    out = []
+    for seq in range(n):
+        cset = tl.RobotCommandSet(source_receive_time_ns=time.time_ns(), sequence=seq)
+        for j in range(3):
+            i = (3 * seq + j) % 11
+            cset.commands.add(team=tl.TEAM_BLUE, id=i, forward_mps=1e-4 * seq,
+                              left_mps=-2e-5 * seq, angular_radps=0.5)
         out.append(cset.SerializeToString())
     return out
 
@@ -136,6 +155,33 @@ async def measure(n: int, batch: int) -> dict[str, float]:
     drain_sim()
     set_us = spent / n * 1e6
 
+    # a command set as the station sends it (live_sets), read from the relay's SUB as the
+    # loop's reader does (its frames, whether another waits), handled, and its cycle
+    csub = ctx.socket(zmq.SUB)
+    csub.setsockopt(zmq.SUBSCRIBE, b"commands")
+    cport = csub.bind_to_random_port("tcp://127.0.0.1")
+    cpub = ctx.socket(zmq.PUB)
+    cpub.connect(f"tcp://127.0.0.1:{cport}")
+    events, pollin = int(zmq.EVENTS), int(zmq.POLLIN)
+    time.sleep(0.1)
+    csub.get(events)  # the SUB takes the connection and sends its subscription
+    time.sleep(0.2)  # the subscription reaches the PUB
+    spent = 0.0
+    for k, body in enumerate(live_sets(n)):
+        cpub.send_multipart([b"commands", body])
+        deadline = time.monotonic() + 5.0
+        while not csub.get(events) & pollin:  # arrived (outside the timing)
+            if time.monotonic() > deadline:
+                raise RuntimeError("a command set did not arrive in 5 s")
+        t0 = time.thread_time()
+        r._drain_commands(csub)
+        spent += time.thread_time() - t0
+        if k % 256 == 0:
+            drain_sim()
+            await asyncio.sleep(0)
+    drain_sim()
+    sub_set_us = spent / n * 1e6
+
     # the timer's cycle: nothing new, the same commands again
     spent = 0.0
     for k in range(n):
@@ -177,7 +223,7 @@ async def measure(n: int, batch: int) -> dict[str, float]:
         s.close()
     ctx.destroy(linger=0)
     return {"vision_us": vision_us, "set_and_cycle_us": set_us, "repeat_cycle_us": cycle_us,
-            "answer_us": answer_us}
+            "answer_us": answer_us, "sub_set_us": sub_set_us}
 
 
 def child(n: int, batch: int) -> None:
@@ -216,13 +262,15 @@ def main() -> None:
             results[name].append(run_variant(root, a.n, a.batch))
     print(f"relay in-process, CPU us per unit (thread time), {a.n} each, vision {a.batch} "
           f"datagrams per wake-up, medians of {a.rounds}")
-    print("| variant | vision datagram | command set + cycle | repeat cycle | sim answer |")
-    print("|---|---|---|---|---|")
+    print("| variant | vision datagram | command set + cycle | repeat cycle | sim answer | "
+          "station-like set from the SUB + cycle |")
+    print("|---|---|---|---|---|---|")
     for name, rs in results.items():
         def med(k: str, rs: list[dict[str, Any]] = rs) -> float:
             return statistics.median(x[k] for x in rs)
         print(f"| {name} | {med('vision_us'):.2f} | {med('set_and_cycle_us'):.2f} | "
-              f"{med('repeat_cycle_us'):.2f} | {med('answer_us'):.2f} |")
+              f"{med('repeat_cycle_us'):.2f} | {med('answer_us'):.2f} | "
+              f"{med('sub_set_us'):.2f} |")
 
 
 if __name__ == "__main__":

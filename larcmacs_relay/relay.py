@@ -46,7 +46,12 @@ _NOBLOCK = int(zmq.NOBLOCK)
 _SNDMORE_NOBLOCK = int(zmq.SNDMORE | zmq.NOBLOCK)
 _EVENTS = int(zmq.EVENTS)
 _POLLIN = int(zmq.POLLIN)
+#: a frame sent by libzmq's binding itself: pyzmq's Socket.send is a Python layer over it (for
+#: routing ids and groups, which a PUB has not), a call and keywords more per frame
+_SEND_FRAME = zmq.backend.Socket.send
 _TOPICS = {"vision": b"vision", "referee": b"referee", "tracker": b"tracker"}
+#: the stock event loops' clock: time.monotonic itself (uvloop's is not)
+_MONOTONIC_LOOP_TIME = asyncio.BaseEventLoop.time
 #: one team's datagram of an output cycle: team, bytes, address, its robots' ids
 _Planned = tuple[int, bytes, tuple[str, int], tuple[int, ...]]
 _STREAM_IDS = {
@@ -86,6 +91,7 @@ class Relay:
         if config.compat:
             names.append("compat_commands")
         self.streams = {n: StreamCounter(n) for n in names}
+        self._output = self.streams["output"]
         self.cycles = RateCounter()
         self.ready = asyncio.Event()
         self.pub_address = ""
@@ -98,7 +104,12 @@ class Relay:
         #: the feedback forwarding rule per (kind, team) (feedback.py) and each one's timer
         #: for a held answer
         self._gates: dict[tuple[int, int], FeedbackGate] = {}
-        self._gate_timers: dict[tuple[int, int], asyncio.TimerHandle] = {}
+        #: the simulator's answer streams by the port they come from (blue's port first: the
+        #: same port for both is blue's, as it was), each one's gate once it has answered
+        self._sim_teams = {config.sim_yellow_port: codecs.TEAM_YELLOW,
+                           config.sim_blue_port: codecs.TEAM_BLUE}
+        self._sim_gates: dict[int, FeedbackGate] = {}
+        self._gate_timers: dict[FeedbackGate, asyncio.TimerHandle] = {}
         #: per team: commands sent to each robot and the wall clock (ns) of the last one,
         #: forwarded with every answer (the backend's round trip and losses)
         self._sent: dict[int, SentLog] = {t: SentLog() for t in codecs.TEAMS}
@@ -140,6 +151,9 @@ class Relay:
         #: robot idle, nothing to send, no wake-up), and the one timer armed for it
         self._last_cycle = -math.inf
         self._next_cycle = math.inf
+        self._period = 1.0 / config.output_rate_hz
+        #: the running loop once it is known to keep time.monotonic (the stock loops)
+        self._monotonic_loop: asyncio.AbstractEventLoop | None = None
         self._timer: asyncio.TimerHandle | None = None
         self._commands_changed = False
         #: "host:port" of each datagram source seen (bounded): one string, not one per datagram
@@ -348,7 +362,7 @@ class Relay:
         recvfrom = sock.recvfrom
         time_ns = time.time_ns
         envelope = touchline_pb2.Envelope
-        send = pub.send if pub is not None else None
+        send = _SEND_FRAME
         n = nbytes = 0
         try:
             for _ in range(MAX_BATCH):
@@ -372,12 +386,12 @@ class Relay:
                 source = sources.get(addr)
                 if source is None:
                     source = self._source(addr)
-                if send is not None:
+                if pub is not None:
                     body = envelope(stream=stream, receive_time_ns=receive_ns, sequence=seq,
                                     source=source, payload=data).SerializeToString()
                     try:  # a PUB queues a multipart message whole or not at all
-                        send(topic, _SNDMORE_NOBLOCK)
-                        send(body, _NOBLOCK)
+                        send(pub, topic, _SNDMORE_NOBLOCK)
+                        send(pub, body, _NOBLOCK)
                     except zmq.Again:
                         self._ratelog.warning("pub-full", "ZeroMQ PUB queue full, message "
                                               "dropped")
@@ -450,14 +464,21 @@ class Relay:
         (a burst of command sets is one cycle, not one each). The socket's FD is edge-
         triggered: it is drained until ZMQ_EVENTS has no POLLIN (or a receive finds nothing),
         and after MAX_BATCH the rest is left for a call_soon (its FD would not signal
-        again)."""
+        again). A message's parts are recv_multipart's bytes, but each part's ``more`` is read
+        from the part itself: recv_multipart asks the socket for ZMQ_RCVMORE after each part,
+        a ``get`` that looks the option up in an enum (two a command set)."""
         self._commands_changed = False
+        recv, get = sub.recv, sub.get
         try:
             for _ in range(MAX_BATCH):
                 try:
-                    frames = sub.recv_multipart(_NOBLOCK)
+                    part = recv(_NOBLOCK, copy=False)
                 except zmq.Again:
                     break
+                frames = [part.bytes]
+                while part.more:  # a message's parts come together: they are all there
+                    part = recv(_NOBLOCK, copy=False)
+                    frames.append(part.bytes)
                 try:
                     self._handle_native(frames)
                 except Exception as exc:  # never fatal: a bad message is an error, not a crash
@@ -465,7 +486,7 @@ class Relay:
                     log.exception("command handling failed")
                 # ZMQ_EVENTS says whether another message waits: a receive that fails costs
                 # pyzmq an exception (twice the time of this question), once per wake-up
-                if not cast(int, sub.getsockopt(_EVENTS)) & _POLLIN:
+                if not cast(int, get(_EVENTS)) & _POLLIN:
                     break
             else:
                 asyncio.get_running_loop().call_soon(self._drain_commands, sub)
@@ -481,23 +502,8 @@ class Relay:
                                 "bad frames")
             return
         topic, body = frames
-        if topic == b"sim":
-            self._handle_sim_command(body)
-            return
-        if topic == b"referee-out":
-            self._handle_referee_out(body)
-            return
-        if topic == b"tracker-out":
-            self._handle_tracker_out(body)
-            return
-        if topic == b"estop":
-            self._handle_estop(body, now)
-            return
-        if topic == b"arming":
-            self._handle_arming(body, now)
-            return
-        if topic != b"commands":
-            self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
+        if topic != b"commands":  # the others come a few times a second at most (tracked
+            self._handle_other(topic, body, now)  # vision: once a world tick)
             return
         counter = self.streams["commands"]
         if self.estop_latched:
@@ -553,6 +559,21 @@ class Relay:
             self._commands_changed = True
         if cset.source_receive_time_ns > 0 and accepted:
             self._pending_latency_ns.append(cset.source_receive_time_ns)
+
+    def _handle_other(self, topic: bytes, body: bytes, now: float) -> None:
+        """A message on the command SUB other than a command set."""
+        if topic == b"tracker-out":
+            self._handle_tracker_out(body)
+        elif topic == b"sim":
+            self._handle_sim_command(body)
+        elif topic == b"referee-out":
+            self._handle_referee_out(body)
+        elif topic == b"estop":
+            self._handle_estop(body, now)
+        elif topic == b"arming":
+            self._handle_arming(body, now)
+        else:
+            self._command_error("commands", f"unknown topic {topic[:32]!r}", "unknown topic")
 
     def _handle_estop(self, body: bytes, now: float) -> None:
         msg = touchline_pb2.EmergencyStop()
@@ -732,17 +753,22 @@ class Relay:
         nothing (a cycle ran since) several times per period at one set per camera frame."""
         self._next_cycle = t
         timer = self._timer
-        when = self._loop_time(t)
+        loop = asyncio.get_running_loop()
+        when = t if loop is self._monotonic_loop else self._loop_time(t)
         if timer is not None:
             if abs(timer.when() - when) <= 0.0005:
                 return
             timer.cancel()
-        self._timer = asyncio.get_running_loop().call_at(when, self._on_timer)
+        self._timer = loop.call_at(when, self._on_timer)
 
-    @staticmethod
-    def _loop_time(t: float) -> float:
+    def _loop_time(self, t: float) -> float:
         """Monotonic ``t`` on the loop's clock (asyncio's is time.monotonic, uvloop's not)."""
         loop = asyncio.get_running_loop()
+        if loop is self._monotonic_loop:
+            return t
+        if type(loop).time is _MONOTONIC_LOOP_TIME:  # the stock loops: t itself, from now on
+            self._monotonic_loop = loop
+            return t
         return loop.time() + (t - time.monotonic())
 
     def _on_timer(self) -> None:
@@ -775,7 +801,7 @@ class Relay:
                 self._timer.cancel()
                 self._timer = None
             return
-        period = 1.0 / self.config.output_rate_hz
+        period = self._period
         due_at = self._next_cycle
         on_schedule = now + 0.0005 >= due_at and now - due_at < period
         self._arm(due_at + period if on_schedule else now + period)
@@ -842,9 +868,21 @@ class Relay:
             plan = self._plan
         else:
             plan = self._grsim_plan(due)
+        out = self._udp_out
+        if out is None:
+            return
+        n = nbytes = 0
         for team, data, addr, ids in plan:
-            if self._send(data, addr):
-                self._sent[team].sent(ids, time.time_ns())
+            try:
+                out.sendto(data, addr)
+            except OSError as exc:
+                self._send_failed(addr, exc)
+                continue
+            self._sent[team].sent(ids, time.time_ns())
+            n += 1
+            nbytes += len(data)
+        if n:  # one count a cycle (the output stream's clock: the cycle's, not one each)
+            self._output.packets_at(n, nbytes, time.monotonic())
 
     def _grsim_plan(self, due: list[Command]) -> list[_Planned]:
         """Each team's grSim_Packet of ``due`` (a timestamp in each: nothing reused)."""
@@ -906,64 +944,75 @@ class Relay:
                     self.config.last_word_repeats)
 
     def _send(self, data: bytes, addr: tuple[str, int]) -> bool:
-        counter = self.streams["output"]
         if self._udp_out is None:
             return False
         try:
             self._udp_out.sendto(data, addr)
         except OSError as exc:
-            counter.error("send failed", f"to {addr[0]}:{addr[1]}: {exc}")
-            self._ratelog.warning("output-send", "send to %s:%d failed: %s", *addr, exc)
+            self._send_failed(addr, exc)
             return False
-        counter.packet(len(data))
+        self._output.packet(len(data))
         return True
 
+    def _send_failed(self, addr: tuple[str, int], exc: OSError) -> None:
+        self._output.error("send failed", f"to {addr[0]}:{addr[1]}: {exc}")
+        self._ratelog.warning("output-send", "send to %s:%d failed: %s", *addr, exc)
+
     def _drain_responses(self, sock: socket.socket) -> None:
+        """The simulator's answers waiting on ``sock``: each one checked (a repeat of the last
+        valid bytes is not parsed again) and forwarded (feedback.py); the stream's packets
+        counted once per call."""
         counter = self.streams["sim_responses"]
         stamped = self._stamped
-        while True:
-            try:
-                if stamped:
-                    data, anc, _flags, addr = sock.recvmsg(MAX_DATAGRAM, 64)
+        gates = self._sim_gates
+        packets = nbytes = 0
+        try:
+            while True:
+                try:
+                    if stamped:
+                        data, anc, _flags, addr = sock.recvmsg(MAX_DATAGRAM, 64)
+                    else:
+                        data, addr = sock.recvfrom(MAX_DATAGRAM)
+                except (BlockingIOError, InterruptedError):
+                    return
+                except OSError as exc:  # e.g. ICMP port unreachable reported on the socket
+                    counter.error("socket error", str(exc))
+                    self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
+                    continue
+                receive_ns = (kernel_time_ns(anc) if stamped else None) or time.time_ns()
+                packets += 1
+                nbytes += len(data)
+                gate = gates.get(addr[1])  # the team's answers (a gate made at the first)
+                if gate is None and addr[1] in self._sim_teams:
+                    gate = gates[addr[1]] = self._gate(touchline_pb2.FEEDBACK_SIM_RESPONSE,
+                                                       self._sim_teams[addr[1]])
+                if gate is None:  # the control port's SimulatorResponse: errors only
+                    n, reason = codecs.count_response_errors(data)
+                    kind = None if n == 0 or reason.startswith("simulator error") else \
+                        codecs.classify(reason, data)
                 else:
-                    data, addr = sock.recvfrom(MAX_DATAGRAM)
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError as exc:  # e.g. ICMP port unreachable reported on the socket
-                counter.error("socket error", str(exc))
-                self._ratelog.warning("sim-resp-os", "simulator socket error: %s", exc)
-                continue
-            receive_ns = (kernel_time_ns(anc) if stamped else None) or time.time_ns()
-            counter.packet(len(data))
-            port = addr[1]
-            team = (codecs.TEAM_BLUE if port == self.config.sim_blue_port else
-                    codecs.TEAM_YELLOW if port == self.config.sim_yellow_port else None)
-            gate: FeedbackGate | None = None
-            if team is None:  # the control port's SimulatorResponse: errors only
-                n, reason = codecs.count_response_errors(data)
-                kind = None if n == 0 or reason.startswith("simulator error") else \
-                    codecs.classify(reason, data)
-            else:
-                gate = self._gate(touchline_pb2.FEEDBACK_SIM_RESPONSE, team)
-                checked = gate.checked
-                if checked is not None and checked[0] == data:  # a repeat: said the same
-                    n, reason, kind = checked[1], checked[2], None
-                else:
-                    n, reason, kind = codecs.check_robot_control_response(data)
-                    if kind is None:
-                        gate.checked = (data, n, reason)
-            if kind is not None:
-                counter.error(kind, reason)
-                self._ratelog.warning("sim-resp-bad", "bad answer from the simulator at "
-                                      "%s:%d: %s", addr[0], addr[1], reason)
-                continue
-            if n:
-                counter.error("simulator error", reason, n)
-                self._ratelog.warning(
-                    "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
-                )
-            if gate is not None:
-                self._forward_feedback(gate, data, addr, receive_ns)
+                    checked = gate.checked
+                    if checked is not None and checked[0] == data:  # a repeat: said the same
+                        n, reason, kind = checked[1], checked[2], None
+                    else:
+                        n, reason, kind = codecs.check_robot_control_response(data)
+                        if kind is None:
+                            gate.checked = (data, n, reason)
+                if kind is not None:
+                    counter.error(kind, reason)
+                    self._ratelog.warning("sim-resp-bad", "bad answer from the simulator at "
+                                          "%s:%d: %s", addr[0], addr[1], reason)
+                    continue
+                if n:
+                    counter.error("simulator error", reason, n)
+                    self._ratelog.warning(
+                        "sim-resp", "simulator at %s:%d reports: %s", addr[0], addr[1], reason
+                    )
+                if gate is not None:
+                    self._forward_feedback(gate, data, addr, receive_ns)
+        finally:
+            if packets:
+                counter.packets_at(packets, nbytes, time.monotonic())
 
     def _drain_grsim_status(self, sock: socket.socket, team: int) -> None:
         """grSim's Robots_Status datagrams of one team, validated and forwarded unchanged."""
@@ -1007,27 +1056,26 @@ class Relay:
         unless a newer one goes first."""
         now = time.monotonic()
         sent = self._sent[gate.team].snapshot()
-        key = (gate.kind, gate.team)
         if gate.arrive(data, now):
             held = gate.held
             if held is not None:
                 if held.data != data:  # the answers before a change first
                     self._publish_feedback(gate, held)
-                timer = self._gate_timers.pop(key, None)
+                timer = self._gate_timers.pop(gate, None)
                 if timer is not None:  # nothing held any more: no wake-up for it
                     timer.cancel()
             self._publish_feedback(gate, HeldAnswer(data, addr, receive_ns, gate.answers, sent))
             gate.forwarded(data, now)
             return
         gate.hold(HeldAnswer(data, addr, receive_ns, gate.answers, sent))
-        if key not in self._gate_timers:
+        if gate not in self._gate_timers:  # (a gate is its stream: its timer by identity)
             loop = asyncio.get_running_loop()
-            self._gate_timers[key] = loop.call_at(self._loop_time(gate.flush_at),
+            self._gate_timers[gate] = loop.call_at(self._loop_time(gate.flush_at),
                                                   self._flush_feedback, gate)
 
     def _flush_feedback(self, gate: FeedbackGate) -> None:
         """A held answer is due (no newer one came to take its place): it goes on."""
-        self._gate_timers.pop((gate.kind, gate.team), None)
+        self._gate_timers.pop(gate, None)
         held = gate.held
         if held is None:
             return

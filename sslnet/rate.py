@@ -35,7 +35,10 @@ class RateCounter:
         self.total += n
         self.last_time = now
         times = self._times
-        times.extend([now] * n)
+        if n == 1:  # the common batch (no list to extend from)
+            times.append(now)
+        else:
+            times.extend([now] * n)
         if times[0] < now - 2.0 * self.window_s:
             self._trim(now)
 

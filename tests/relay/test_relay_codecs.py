@@ -254,6 +254,35 @@ def test_command_validation() -> None:
             codecs.command_from_proto(bad)
 
 
+F32_MAX = struct.unpack("<f", b"\xff\xff\x7f\x7f")[0]  # the largest finite float32
+F32_TINY = struct.unpack("<f", b"\x01\x00\x00\x00")[0]  # the smallest denormal
+
+
+def test_command_validation_of_every_float_field() -> None:
+    """Each float field refused when it is a NaN or an infinity of either sign (the others
+    finite), accepted at float32's extremes (the fields are float); the command carries every
+    field as sent, is a Command, and equals one made by its constructor."""
+    fields = ("forward_mps", "left_mps", "angular_radps", "kick_speed_mps", "dribbler_rpm")
+    for name in fields:
+        for bad in (math.nan, math.inf, -math.inf):
+            pc = touchline_pb2.RobotCommand(team=YELLOW, id=7, **{name: bad})
+            with pytest.raises(CommandError, match="non-finite"):
+                codecs.command_from_proto(pc)
+        for good in (F32_MAX, F32_TINY, -F32_MAX, -0.0):
+            if name == "kick_speed_mps" and good < 0:
+                continue
+            c = codecs.command_from_proto(touchline_pb2.RobotCommand(team=YELLOW, id=7,
+                                                                     **{name: good}))
+            assert getattr(c, name) == good and type(c) is Command
+            assert c == Command(YELLOW, 7, **{name: good})
+    pc = touchline_pb2.RobotCommand(team=BLUE, id=15, forward_mps=1.5, left_mps=-0.25,
+                                    angular_radps=2.0, kick_speed_mps=3.0, chip=True,
+                                    dribbler_rpm=900.0)
+    c = codecs.command_from_proto(pc)
+    assert c == Command(BLUE, 15, 1.5, -0.25, 2.0, 3.0, True, 900.0, None)
+    assert c.zero() == Command(BLUE, 15) and type(c.zero()) is Command and c.zero().is_zero
+
+
 def test_command_table_stale_hold_and_stop_all() -> None:
     t = CommandTable(timeout_s=0.1, hold_time_s=1.0)
     c = Command(BLUE, 2, forward_mps=1.0)

@@ -333,6 +333,36 @@ async def test_bad_commands_rejected_and_counted() -> None:
             await recv_udp(h.sim_blue, timeout=0.2)
 
 
+async def test_messages_of_one_or_three_parts_are_counted_and_those_around_them_whole() -> None:
+    """A message on the command SUB must be [topic, body]: one of one part or of three is an
+    error ("bad frames") and is not used; the messages before and after it are read whole and
+    in order (a part left over would be taken for the next message's topic)."""
+    async with running_relay() as h:
+        pub = await connect_commands(h)
+        counter = h.relay.streams["commands"]
+        packets = counter.packets
+
+        def cmd(v: float) -> list[bytes]:
+            return command_set(touchline_pb2.RobotCommand(team=BLUE, id=1, forward_mps=v))
+
+        await pub.send_multipart(cmd(0.125))
+        await pub.send_multipart([b"commands"])
+        await pub.send_multipart(cmd(0.25))
+        await pub.send_multipart([b"commands", cmd(9.0)[1], cmd(8.0)[1]])
+        await pub.send_multipart(cmd(0.375))
+        await wait_for(lambda: counter.packets >= packets + 3, what="three command sets")
+        await wait_for(lambda: counter.by_reason.get("bad frames", 0) >= 2, what="two errors")
+        speeds = []
+        while not speeds or speeds[-1] != 0.375:
+            data, _ = await recv_udp(h.sim_blue)
+            speeds.append(ssl_simulation_robot_control_pb2.RobotControl.FromString(data)
+                          .robot_commands[0].move_command.local_velocity.forward)
+        # in order (one cycle may cover several sets: a speed can be skipped, never undone)
+        assert set(speeds) <= {0.125, 0.25, 0.375} and speeds == sorted(speeds)
+        assert counter.packets == packets + 3
+        assert counter.by_reason == {"bad frames": 2}
+
+
 async def test_sim_topic_forwarded_and_responses_counted() -> None:
     async with running_relay() as h:
         pub = await connect_commands(h)
