@@ -121,6 +121,7 @@ class StrategyCore:
             kick_speed_mps=params.kick_speed_mps, pass_speed_mps=params.pass_speed_mps,
             stop_distance_mm=params.stop_distance_mm,
             defense_margin_mm=params.defense_margin_mm,
+            robot_margin_mm=params.robot_margin_mm,
             placement_speed_mps=params.placement_speed_mps,
             keeper_min_speed_mmps=params.keeper_min_speed_mmps,
             formation_period_s=params.formation_period_s)

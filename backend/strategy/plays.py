@@ -75,6 +75,7 @@ class Tuning:
     pass_speed_mps: float = 3.0
     stop_distance_mm: float = 650.0
     defense_margin_mm: float = 120.0
+    robot_margin_mm: float = 60.0
     placement_speed_mps: float = 0.8
     keeper_min_speed_mmps: float = 300.0
     formation_period_s: float = 5.0
@@ -275,7 +276,7 @@ class Strategy:
             slots.append(Slot("attacker", "attacker", ball.xy, att_make))
         elif n_att:
             n_sup += n_att
-        dpts = defender_points(n_def, ball, fs, tu.defense_margin_mm)
+        dpts = defender_points(n_def, ball, fs, tu.defense_margin_mm, tu.robot_margin_mm)
         if play == "simple":
             spts = [(-0.3 * fs.field_length, -0.25 * fs.field_width),
                     (-0.3 * fs.field_length, 0.25 * fs.field_width),

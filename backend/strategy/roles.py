@@ -149,10 +149,17 @@ def attacker(ball: Ball, robot: Bot | None, blockers: Sequence[tuple[float, floa
     return kick_ball(ball, aim, speed, role, robot, max_speed_mps=max_speed_mps)
 
 
-def defender_points(n: int, ball: Ball | None, fs: Field,
-                    margin: float) -> list[tuple[float, float]]:
+#: the gap (mm) between two defenders' spots beyond what path planning keeps between robots
+DEFENDER_GAP_MM = 20.0
+
+
+def defender_points(n: int, ball: Ball | None, fs: Field, margin: float,
+                    robot_margin_mm: float = 60.0) -> list[tuple[float, float]]:
     """``n`` spots side by side on the line from our goal centre to the ball, just outside
-    our defence area (grown by ``margin`` and a robot radius)."""
+    our defence area (grown by ``margin`` and a robot radius). Neighbours stand
+    2 R + ``robot_margin_mm`` + ``DEFENDER_GAP_MM`` apart: path planning keeps a robot's
+    centre R + ``robot_margin_mm`` + R from every other robot's, so each defender's spot is
+    free of its neighbours' (closer, both would escape and plan again on every tick)."""
     if n <= 0:
         return []
     g = (-fs.half_length, 0.0)
@@ -168,9 +175,10 @@ def defender_points(n: int, ball: Ball | None, fs: Field,
     t = min(tx, ty) + 10.0
     cx, cy = g[0] + u[0] * t, g[1] + u[1] * t
     perp = (-u[1], u[0])
+    spacing = 2.0 * R + robot_margin_mm + DEFENDER_GAP_MM
     pts = []
     for k in range(n):
-        off = (k - (n - 1) / 2.0) * (2.0 * R + 40.0)
+        off = (k - (n - 1) / 2.0) * spacing
         px, py = cx + perp[0] * off, cy + perp[1] * off
         pts.append(_push_out_of_rect(px, py, (x0, y0, x1, y1), grow + 5.0, u))
     return pts

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 from backend.geometry import goalkeeper_target
 from backend.strategy.model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot
+from backend.strategy.paths import Obstacles, point_is_free
 from backend.strategy.roles import (
     attacker,
     best_shot,
@@ -134,6 +135,21 @@ def test_defenders_stand_outside_the_defence_area_between_ball_and_goal() -> Non
             for b in pts:
                 if a is not b:
                     assert math.dist(a, b) >= 2 * R
+
+
+@given(bx=st.floats(-4400.0, 4400.0), by=st.floats(-2900.0, 2900.0),
+       n=st.integers(2, 5), robot_margin=st.sampled_from([0.0, 60.0, 150.0]))
+@settings(max_examples=60, deadline=None)
+def test_each_defender_spot_is_free_of_its_neighbours_for_the_path_planner(
+        bx: float, by: float, n: int, robot_margin: float) -> None:
+    # the planner's own test (navigation: every other robot a disc of R + margin, the robot
+    # a point grown by R): a spot inside a neighbour's disc makes both escape and plan again
+    # on every tick (2 R + 40 mm apart did, with the default margin of 60 mm)
+    pts = defender_points(n, Ball(bx, by), FS, 120.0, robot_margin)
+    for i, p in enumerate(pts):
+        others = Obstacles.build(robots=[q for j, q in enumerate(pts) if j != i],
+                                 robot_radius=R + robot_margin)
+        assert point_is_free(p, others, R)
 
 
 def test_push_helpers_move_points_out_exactly_to_the_radius() -> None:
