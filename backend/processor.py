@@ -155,6 +155,27 @@ class _Rest:
                     return
 
 
+class _Waiting:
+    """A coroutine tick that waits: its coroutine, suspended on its first yield, and what
+    it yielded; its processor and the time it began. ``Runner._finish`` finishes it in a
+    task, made only when that task runs: a task cancelled before it ran (the runner
+    stopped in between) left a coroutine never awaited, and the tick open until collected.
+    """
+
+    __slots__ = ("coro", "first", "proc", "t0")
+
+    def __init__(self, proc: Processor, coro: Coroutine[Any, Any, None], first: Any,
+                 t0: float) -> None:
+        self.proc, self.coro, self.first, self.t0 = proc, coro, first, t0
+
+    def close_if_cancelled(self, task: asyncio.Task[None]) -> None:
+        """The done callback of the task that was to finish it: cancelled before it ran,
+        the tick's coroutine is closed now (GeneratorExit where it waits). Once the task
+        ran, the tick got the cancellation and is over: closing it again does nothing."""
+        if task.cancelled():
+            self.coro.close()
+
+
 class _Link:
     """A topic-triggered processor in the pass: its topic, the newest sequence number it has
     seen, a run asked for by its max wait, the time of its last run."""
@@ -305,10 +326,10 @@ class Runner:
         log.debug("traceback", exc_info=True)
 
     def _run_now(self, proc: Processor, step: Callable[[], None] | None,
-                 t0: float) -> Coroutine[Any, Any, None] | None:
+                 t0: float) -> _Waiting | None:
         """Runs one tick from ``t0`` (perf_counter) and records it. A coroutine tick that
-        waits is not finished here: the awaitable of its rest is returned (the caller awaits
-        it, then ``_recorded``)."""
+        waits is not finished here: it is returned (the caller awaits ``_finish`` of it, or
+        has a task do so)."""
         try:
             if step is not None:
                 step()
@@ -319,29 +340,30 @@ class Runner:
                 except StopIteration:
                     pass
                 else:
-                    return self._rest(proc, coro, first, t0)
+                    return _Waiting(proc, coro, first, t0)
         except Exception as exc:
             self._failed(proc, exc)
         self._t_end = t1 = time.perf_counter()
         proc.stats.record(t1 - t0)
         return None
 
-    async def _rest(self, proc: Processor, coro: Coroutine[Any, Any, None], first: Any,
-                    t0: float) -> None:
+    async def _finish(self, waiting: _Waiting) -> None:
+        """The rest of a tick that waited, recorded like one that did not."""
+        proc = waiting.proc
         try:
-            await _Rest(coro, first)
+            await _Rest(waiting.coro, waiting.first)
         except asyncio.CancelledError:
             raise
         except Exception as exc:
             self._failed(proc, exc)
-        proc.stats.record(time.perf_counter() - t0)
+        proc.stats.record(time.perf_counter() - waiting.t0)
 
     async def _run_once(self, proc: Processor) -> float:
         """One timed tick of ``proc``, waiting for it if it waits."""
         t0 = time.perf_counter()
-        rest = self._run_now(proc, plain_step(proc), t0)
-        if rest is not None:
-            await rest
+        waiting = self._run_now(proc, plain_step(proc), t0)
+        if waiting is not None:
+            await self._finish(waiting)
         return time.perf_counter() - t0
 
     # ---- the pass ----
@@ -397,11 +419,11 @@ class Runner:
             raise
         self._passing = False
 
-    def _continue_later(self, rest: Coroutine[Any, Any, None]) -> None:
+    def _continue_later(self, rest: _Waiting) -> None:
         """A tick of the pass waits: the pass (still ``_passing``) goes on in a task."""
         async def go_on() -> None:
             try:
-                await rest
+                await self._finish(rest)
             finally:
                 self._passing = False
             if self._loop is not None:
@@ -411,14 +433,18 @@ class Runner:
                 for fn in ready:
                     fn()
 
-        self._later = self._spawn(self._loop or asyncio.get_running_loop(), go_on())
+        self._later = self._spawn(self._loop or asyncio.get_running_loop(), go_on(),
+                                  waiting=rest)
 
     def _spawn(self, loop: asyncio.AbstractEventLoop, coro: Coroutine[Any, Any, None],
-               name: str | None = None) -> asyncio.Task[None]:
-        """A task of the runner's (cancelled at stop, forgotten when done)."""
+               name: str | None = None, waiting: _Waiting | None = None) -> asyncio.Task[None]:
+        """A task of the runner's (cancelled at stop, forgotten when done). ``waiting``: the
+        tick it finishes, closed if the task is cancelled before it ran."""
         task = loop.create_task(coro, name=name)
         self._tasks.append(task)
         task.add_done_callback(self._forget_task)
+        if waiting is not None:
+            task.add_done_callback(waiting.close_if_cancelled)
         return task
 
     def _forget_task(self, task: asyncio.Task[None]) -> None:
@@ -521,15 +547,15 @@ class Runner:
                 ticked(clock() - t0, period)
                 return
 
-            async def finish(rest: Coroutine[Any, Any, None]) -> None:
+            async def finish(rest: _Waiting) -> None:
                 try:
-                    await rest
+                    await self._finish(rest)
                 finally:
                     self._ticking -= 1
                 if self._loop is not None:
                     ticked(clock() - t0, period)
 
-            self._spawn(loop, finish(rest), proc.name)
+            self._spawn(loop, finish(rest), proc.name, waiting=rest)
 
         self._timers[id(proc)] = loop.call_soon(fire)
 

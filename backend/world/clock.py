@@ -19,6 +19,18 @@ model is close to the receive clock and a far-off value cannot become "the lates
   already (one vision PC, one clock).
 * A single frame far from its camera's clock (a byte flip in ``t_capture``, a frame from the
   future) is dropped and counted; it changes nothing.
+* A clock that drifts slowly against ours is followed, as real SSL trackers follow each
+  camera's offset: grSim stamps its simulated time, which runs at least 2 % slower than the
+  wall clock (1/60 s per 17 ms timer tick; 3-6 % on a busy machine, unevenly), so its offset
+  grew by 20-60 ms a second and its frames left the window every 10-25 s (dropped until a
+  re-synchronisation, each camera onto an offset of its own). Per clock (the
+  cameras sharing an offset move together: their times stay exactly comparable) the least
+  delay of its frames is taken per block of ``follow_block_s``; while the greater of the last
+  two blocks' least delays (one odd frame does not count) is outside ``[-follow_ahead_s,
+  follow_late_s]``, the offset's rate of change is corrected by what is outside, up to
+  ``follow_max_rate`` (the offset a linear function of the capture time: no jump). A clock
+  whose frames stay inside (one that agrees with ours, or was learnt and does not drift)
+  never moves: its times are as before.
 
 Pure code: no I/O, no wall clock (the receive time comes with the frame)."""
 
@@ -33,6 +45,10 @@ class ClockConfig:
     max_ahead_s: float = 0.1  # a capture this much after its expected time is out of range
     max_late_s: float = 0.5  # a capture this much before it (latency, a stuck frame): out
     resync_frames: int = 8  # consecutive out-of-range frames agreeing: the camera's new clock
+    follow_block_s: float = 0.25  # a clock's least delay is taken per block this long
+    follow_late_s: float = 0.05  # a least delay above this: the clock runs slow, followed
+    follow_ahead_s: float = 0.01  # one below minus this: the clock runs fast, followed
+    follow_max_rate: float = 0.2  # the fastest drift followed (s/s); faster: re-synchronised
 
 
 @dataclass
@@ -45,9 +61,29 @@ class ClockVerdict:
 
 
 @dataclass
+class _Clock:
+    """One capture clock (a vision PC, a simulator), shared by the cameras on it: the offset
+    (receive - capture, s) at capture time ``anchor`` is ``base``, changing by ``rate`` s/s."""
+
+    base: float
+    rate: float = 0.0
+    anchor: float = 0.0
+    block_end: float = -math.inf  # receive time (s) the current block ends
+    block_min: float = math.inf  # least delay (d - offset) of the block so far
+    last_min: float = math.inf  # least delay of the block before
+
+    def offset(self, t_capture: float) -> float:
+        return self.base + self.rate * (t_capture - self.anchor) if self.rate else self.base
+
+
+@dataclass
 class _Camera:
-    offset: float | None = None  # receive - capture (s); None until learnt
+    clock: _Clock | None = None  # None until learnt
     pending: list[float] = field(default_factory=list)  # out-of-range offsets in a row
+
+    @property
+    def offset(self) -> float | None:
+        return None if self.clock is None else self.clock.base
 
 
 class CameraClocks:
@@ -56,6 +92,8 @@ class CameraClocks:
     def __init__(self, config: ClockConfig | None = None) -> None:
         self.config = config or ClockConfig()
         self._cams: dict[int, _Camera] = {}
+        #: the clock that agrees with ours (offset 0), for every camera that fits it
+        self._zero = _Clock(0.0)
         self.dropped = 0  # frames dropped: capture time out of range
         self.resyncs = 0  # camera clocks learnt or re-synchronised after a jump
 
@@ -76,22 +114,30 @@ class CameraClocks:
         if receive_time_ns <= 0:
             # no receive clock (frames fed by a program, not the relay): nothing to check
             return ClockVerdict(t_capture)
-        d = receive_time_ns / 1e9 - t_capture
+        recv = receive_time_ns / 1e9
+        d = recv - t_capture
         cam = self._cams.get(camera_id)
         if cam is None:
             cam = self._cams[camera_id] = _Camera()
-        off = cam.offset
-        if off is None:
-            for off in [0.0, *(o.offset for o in self._cams.values() if o.offset is not None)]:
+        clk = cam.clock
+        if clk is None:
+            for known in [self._zero, *self._clocks()]:
+                off = known.offset(t_capture)
                 if self._fits(d, off):
-                    cam.offset = off
+                    cam.clock = known
                     cam.pending.clear()
                     return ClockVerdict(t_capture + off)
         else:
             c = self.config
-            if -c.max_ahead_s <= d - off <= c.max_late_s:  # _fits, inline: every frame
+            off = clk.base + clk.rate * (t_capture - clk.anchor) if clk.rate else clk.base
+            x = d - off
+            if -c.max_ahead_s <= x <= c.max_late_s:  # _fits, inline: every frame
                 if cam.pending:
                     cam.pending.clear()
+                if x < clk.block_min:
+                    clk.block_min = x
+                if recv >= clk.block_end:
+                    self._follow(clk, recv, t_capture)
                 return ClockVerdict(t_capture + off)
         # out of range: dropped, unless the camera keeps saying the same (a new clock)
         c = self.config
@@ -101,10 +147,41 @@ class CameraClocks:
         cam.pending.append(d)
         if len(cam.pending) >= c.resync_frames:
             # the smallest offset seen is the least delayed frame: mapped times stay <= receive
-            cam.offset = min(cam.pending)
+            cam.clock = _Clock(min(cam.pending))
             cam.pending.clear()
             self.resyncs += 1
-            return ClockVerdict(t_capture + cam.offset, resynced=True)
+            return ClockVerdict(t_capture + cam.clock.base, resynced=True)
         self.dropped += 1
-        skew = d - (cam.offset if cam.offset is not None else 0.0)
+        skew = d - (cam.clock.offset(t_capture) if cam.clock is not None else 0.0)
         return ClockVerdict(None, skew_s=skew)
+
+    def _clocks(self) -> list[_Clock]:
+        """The clocks of the cameras known, each once."""
+        out: list[_Clock] = []
+        for cam in self._cams.values():
+            if cam.clock is not None and all(cam.clock is not k for k in out):
+                out.append(cam.clock)
+        return out
+
+    def _follow(self, clk: _Clock, recv: float, t_capture: float) -> None:
+        """A block of ``clk``'s frames is over: while the least delay of the last two blocks
+        is outside the band, the offset's rate is corrected, from this capture on."""
+        c = self.config
+        low, before = clk.block_min, clk.last_min
+        clk.last_min, clk.block_min = low, math.inf
+        first = clk.block_end == -math.inf
+        clk.block_end = recv + c.follow_block_s
+        floor = max(low, before)
+        if first or not math.isfinite(floor):
+            return
+        if floor > c.follow_late_s:
+            excess = floor - c.follow_late_s
+        elif floor < -c.follow_ahead_s:
+            excess = floor + c.follow_ahead_s
+        else:
+            return
+        # the drift left over (the least delay's change from the block before) cancelled,
+        # and a quarter of what is outside the band taken back per block
+        rate = clk.rate + (low - before + 0.25 * excess) / c.follow_block_s
+        rate = max(-c.follow_max_rate, min(c.follow_max_rate, rate))
+        clk.base, clk.anchor, clk.rate = clk.offset(t_capture), t_capture, rate

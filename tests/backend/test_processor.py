@@ -1,8 +1,13 @@
 import asyncio
+import gc
+import inspect
 import time
+import types
+import warnings
 
 import pytest
 
+from backend import processor
 from backend.bus import Reader, Topic
 from backend.processor import Every, OnTopic, Processor, Runner
 
@@ -200,3 +205,54 @@ async def test_fixed_rate_ticks_run_on_loop_timers_and_their_pass_follows() -> N
     echoed_b = [x for rec in b_out.records_after(0) for x in rec.value]
     assert echoed_a == list(range(1, len(echoed_a) + 1)) and len(echoed_a) >= 39
     assert echoed_b == list(range(1, len(echoed_b) + 1)) and len(echoed_b) >= 4
+
+
+class Abandoned(Processor):
+    """A tick that waits for ever (stopped with the runner); it says when it began and
+    whether its coroutine was closed."""
+
+    def __init__(self, trigger: Every | OnTopic) -> None:
+        super().__init__(trigger)
+        self.name = f"abandoned-{type(trigger).__name__}"
+        self.began = 0
+        self.resumed = False
+        self.closed = False
+
+    async def tick(self) -> None:
+        self.began += 1
+        try:
+            await asyncio.get_running_loop().create_future()  # never done
+            self.resumed = True
+        finally:
+            self.closed = True
+
+
+@pytest.mark.parametrize("kind", ["pass", "fixed-rate"])
+async def test_a_tick_left_waiting_by_a_stop_before_its_task_ran_is_closed(kind: str) -> None:
+    """The runner's stop cancels the task that was to go on with a tick that waits (the
+    rest of a pass, or of a fixed-rate tick) before the task ever ran: the tick's coroutine
+    is closed at the stop and no coroutine of the runner's is left never started (one
+    warned "coroutine 'Runner._rest' was never awaited" whenever it was collected: the
+    cancelled task's traceback kept it until the loop's end)."""
+    src: Topic[int] = Topic("src", 8)
+    proc = Abandoned(OnTopic(src) if kind == "pass" else Every(100.0))
+    r = Runner()
+    r.add(proc)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        await r.start()  # the first pass (or the first tick) is scheduled: call_soon
+        # one turn of the loop: the tick begins, waits, and hands its rest to a new task,
+        # whose first step comes in the loop's next turn; this task goes on before it
+        await asyncio.sleep(0)
+        assert proc.began == 1 and not proc.closed
+        await r.stop()  # cancels the task before it ran
+        assert proc.closed and not proc.resumed
+        del r
+        gc.collect()
+        never_started = [
+            c for c in gc.get_objects()
+            if isinstance(c, types.CoroutineType) and c.cr_code.co_filename == processor.__file__
+            and inspect.getcoroutinestate(c) == inspect.CORO_CREATED
+        ]
+        assert never_started == []
+    assert [w for w in caught if "never awaited" in str(w.message)] == []

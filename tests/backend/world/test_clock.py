@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import random
 
 from hypothesis import given
 from hypothesis import strategies as st
@@ -153,3 +154,54 @@ def test_a_frame_with_huge_counts_is_capped() -> None:
     assert m.update(frame(0, T0, T0, robots, balls))
     assert m.rejected["too many objects"] == 2
     assert len(m.snapshot().robots) <= 16
+
+
+def test_a_simulator_clock_drifting_like_grsims_is_followed_without_a_drop() -> None:
+    """grSim stamps its simulated time (from 0 at its start), 1/60 s per 17 ms timer tick:
+    2 % slower than the receive clock, 20 ms a second. Its 4 cameras, learnt once, are
+    followed: no frame dropped for 2 minutes (it dropped 7 per camera every ~25 s), the
+    cameras of one instant keep one time, and mapped times stay within 0.1 s under the
+    receive time (at most 0.02 s over it while the follower settles)."""
+    cfg = ClockConfig()
+    c = CameraClocks(cfg)
+    learnt = 4 * (cfg.resync_frames - 1)  # each camera's first frames, before one is learnt
+    for k in range(120 * 59):  # 2 minutes of 17 ms ticks
+        sim, wall = k / 60, T0 + k * 0.017
+        mapped = []
+        for cam in range(4):
+            recv = wall + LATENCY + 0.0005 * ((k * 7 + cam * 3) % 5)  # a little jitter
+            v = c.check(cam, sim, int(recv * 1e9))
+            if k >= cfg.resync_frames:
+                assert v.t_local is not None, f"tick {k} camera {cam} dropped"
+                assert recv - 0.1 <= v.t_local <= recv + 0.02
+                mapped.append(v.t_local)
+        assert len(set(mapped)) <= 1
+    assert c.dropped == learnt and c.resyncs == 1
+
+
+def test_a_drift_too_fast_to_be_a_clock_is_still_dropped_and_resynchronised() -> None:
+    """Frames whose capture clock runs at half speed leave the window: out of range, then
+    a re-synchronisation, as before (the follower goes no faster than follow_max_rate)."""
+    cfg = ClockConfig()
+    c = CameraClocks(cfg)
+    for k in range(60 * 20):
+        t = T0 + k / 60
+        c.check(0, T0 + 0.5 * (t - T0), int((t + LATENCY) * 1e9))
+    assert c.dropped > 0 and c.resyncs >= 2
+
+
+def test_grsim_short_of_cpu_drifting_unevenly_is_followed_without_a_drop() -> None:
+    """grSim on a busy machine: its 17 ms ticks come late by a varying amount (its time
+    2-12 % slow, changing every 5 s), as measured beside the station (6 %, +-0.1 s around
+    the line). Still nothing dropped after the first learning, in 3 minutes."""
+    cfg = ClockConfig()
+    c = CameraClocks(cfg)
+    rnd = random.Random(7)
+    wall, late_mean = T0, 0.0
+    for k in range(180 * 60):
+        if k % 300 == 0:
+            late_mean = rnd.choice((1e-6, 0.0003, 0.0006, 0.001, 0.002))
+        wall += 0.017 + rnd.expovariate(1 / late_mean)
+        for cam in range(4):
+            c.check(cam, k / 60, int((wall + 0.0003 + rnd.expovariate(2000.0)) * 1e9))
+    assert c.dropped == 4 * (cfg.resync_frames - 1) and c.resyncs == 1
