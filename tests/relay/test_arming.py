@@ -10,7 +10,15 @@ import zmq
 
 from larcmacs_relay.__main__ import build_parser, config_from_args
 from sslpb import ssl_simulation_control_pb2, touchline_pb2
-from tests.relay.conftest import Harness, drain_udp, recv_udp, running_relay, wait_for
+from tests.relay.conftest import (
+    Harness,
+    drain_udp,
+    recv_udp,
+    running_relay,
+    subscribed,
+    wait_for,
+)
+from tests.relay.test_relay_codecs import make_detection_wrapper
 from tests.relay.test_relay_io import command_set
 
 BLUE = touchline_pb2.TEAM_BLUE
@@ -155,3 +163,24 @@ async def test_a_teleport_never_reaches_real_robots_armed_or_not() -> None:
                            what="the teleport dropped and counted")
             assert await nothing_for(h, 0.1) == []
         assert counter.by_reason.get("rejected", 0) == 2
+
+
+async def test_an_arming_change_is_acknowledged_by_statistics_at_once() -> None:
+    """The backend's reply to an operator waits for the relay's statistics to show the
+    change: they go out on the change, not on the stats timer (a minute here)."""
+    async with running_relay(output="robot-box", require_arming=True,
+                             stats_interval_s=60.0) as h:
+        sub = h.subscriber(b"stats", b"vision")
+        await subscribed(sub, lambda: h.send_vision(make_detection_wrapper(0)))
+        pub = await connect(h)
+
+        async def next_stats() -> touchline_pb2.RelayStats:
+            while True:
+                topic, body = await asyncio.wait_for(sub.recv_multipart(), 3.0)
+                if topic == b"stats":
+                    return touchline_pb2.RelayStats.FromString(body)
+        await pub.send_multipart(arming(True, "op"))
+        assert (await next_stats()).armed
+        await pub.send_multipart(arming(True, "op"))  # the repeat: no change, no stats
+        await pub.send_multipart(arming(False))
+        assert not (await next_stats()).armed
