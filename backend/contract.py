@@ -313,6 +313,10 @@ class ArmingInfo(TypedDict):
     by: Annotated[str, Field(description="who armed or disarmed it")]
     relay_armed: Annotated[bool | None, Field(
         description="the relay's arming from its statistics; null before any arrived")]
+    relay_unconfirmed: Annotated[str | None, Field(
+        description="why the relay is not known to be in the station's state (no statistics, "
+                    "stale ones, or they say otherwise; POST: not confirmed within 2 s); "
+                    "null: it confirmed")]
     refusal: Annotated[str | None, Field(
         description="why arming would be refused now (null: it would be accepted)")]
 

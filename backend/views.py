@@ -88,7 +88,36 @@ def arming_view(st: Station) -> contract.ArmingInfo:
     return {"required": required, "armed": st.armed, "since": st.armed_since,
             "by": st.armed_by,
             "relay_armed": None if rs is None else bool(rs.get("armed", True)),
+            "relay_unconfirmed": relay_arming_doubt(st, rs),
             "refusal": st.arm_refusal() if required and not st.armed else None}
+
+
+#: statistics older than this (the relay sends them every second) no longer tell its state
+RELAY_STATS_FRESH_S = 3.0
+
+
+def relay_arming_doubt(st: Station, rs: dict[str, Any] | None) -> str | None:
+    """Why the relay is not known to be armed as the station is (None: its fresh statistics
+    say it is)."""
+    return relay_arming_check(st, rs)[0]
+
+
+def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
+                       ) -> tuple[str | None, bool]:
+    """(the doubt as in ``relay_arming_doubt``, whether the relay is alive: its fresh
+    statistics may yet show the change). ``rs``: the latest statistics (read if None)."""
+    if rs is None:
+        rs = st.relay_stats.latest_value()
+    if rs is None:
+        return "no statistics from the relay yet (is it running?)", False
+    age = time.monotonic() - rs["received_mono"]
+    if age > RELAY_STATS_FRESH_S:
+        return f"the relay's last statistics are {age:.1f} s old (is it running?)", False
+    relay = bool(rs.get("armed", True))
+    if relay != st.armed:
+        return (f"the relay reports {'armed' if relay else 'disarmed'} "
+                f"(statistics {age:.1f} s old)"), True
+    return None, True
 
 
 def arming_warnings(st: Station) -> list[str]:

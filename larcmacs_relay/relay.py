@@ -616,9 +616,12 @@ class Relay:
                 self._command_error("commands", "arming refused: the emergency stop is latched",
                                     "arming refused")
                 return
-            if not self.armed:
+            was = self.armed
+            if not was:
                 log.warning("ARMED (by %s): commands go to the robots", msg.by or "?")
             self.armed, self.armed_by = True, msg.by
+            if not was:
+                self._acknowledge()
             return
         if not self.armed:
             return  # repeated every 0.5 s: zeros for the hold time, then silence
@@ -626,6 +629,12 @@ class Relay:
         self.armed, self.armed_by = False, msg.by
         self.table.stop_all(now)
         self._commands_changed = True
+        self._acknowledge()
+
+    def _acknowledge(self) -> None:
+        """The statistics at once after an arming change (not a second later on the stats
+        timer): the backend waits for them to tell the operator what the relay did."""
+        self._publish(self._pub, [b"stats", self.stats().SerializeToString()])
 
     def _command_error(self, stream: str, reason: str, kind: str = "rejected") -> None:
         self.streams[stream].error(kind, reason)

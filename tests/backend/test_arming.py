@@ -157,23 +157,32 @@ async def test_the_publisher_repeats_the_arming_state() -> None:
         armed = [False]
         p.armed = lambda: armed[0]
         p.armed_by = lambda: "op"
-        await asyncio.sleep(0.2)  # slow joiner
-        got: list[tl.Arming] = []
+        # the publisher's schedule on a clock of the test's own (``_arming(now)``, what
+        # ``tick`` calls with the monotonic time): counts, not scheduling luck
+        now = 0.0
 
-        async def collect(seconds: float) -> None:
-            end = time.monotonic() + seconds
-            while time.monotonic() < end:
-                await p.tick()
-                while await sub.poll(0):
-                    _, body = await sub.recv_multipart()
-                    got.append(tl.Arming.FromString(body))
-                await asyncio.sleep(0.02)
-        await collect(1.2)
-        assert 2 <= len(got) <= 4 and not any(m.armed for m in got)  # every 0.5 s
-        got.clear()
+        async def received(timeout_s: float = 3.0) -> tl.Arming:
+            _, body = await asyncio.wait_for(sub.recv_multipart(), timeout_s)
+            return tl.Arming.FromString(body)
+
+        # ZeroMQ's slow joiner: repeats (0.5 s apart on that clock) until one arrives
+        deadline = time.monotonic() + 5.0
+        while not await sub.poll(20):
+            assert time.monotonic() < deadline, "the subscription never received anything"
+            now += 0.5
+            p._arming(now)
+        while await sub.poll(0):
+            await sub.recv_multipart()
+        sent_at = now
+        for k in range(1, 61):  # 1.2 s on its clock, a pass every 20 ms
+            p._arming(sent_at + 0.02 * k)
         armed[0] = True
-        await collect(0.1)
-        assert got and got[0].armed and got[0].by == "op"  # at once on a change
+        p._arming(sent_at + 1.21)  # a change: at once, not at the next repeat
+        got = [await received()]
+        while not got[-1].armed:
+            got.append(await received())
+        assert [m.armed for m in got] == [False, False, True]  # every 0.5 s, then the change
+        assert got[-1].by == "op"
         pub.close(0)
         sub.close(0)
     finally:

@@ -118,6 +118,21 @@ def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") 
     raise AssertionError(f"timed out after {timeout_s} s waiting for {what or cond}: {last!r}")
 
 
+def next_relay_stats(st: StationHandle, span_s: float = 0.5,
+                     timeout_s: float = 5.0) -> dict[str, Any]:
+    """Returns the health once the relay's statistics, stamped by the relay at least
+    ``span_s`` after this call (the same machine's clock), have arrived: a stretch of the
+    relay's own running time, for checks that it did nothing meanwhile (every datagram it
+    sent before those statistics is in the receiver's socket by then)."""
+    t = time.time_ns() + int(span_s * 1e9)
+
+    def newer() -> dict[str, Any] | None:
+        h: dict[str, Any] = st.get("/api/health")
+        return h if (h["relay"] or {}).get("time_ns", 0) >= t else None
+    health: dict[str, Any] = wait_until(newer, timeout_s, what="the relay's next statistics")
+    return health
+
+
 def arm(st: StationHandle, timeout_s: float = 10.0) -> dict[str, Any]:
     """Arms a station whose relay requires arming (``--sim none``, real robots): retried
     until accepted (it is refused until vision arrives); returns the arming state."""

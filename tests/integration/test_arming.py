@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import socket
 import threading
-import time
 from collections.abc import Iterator
 
 import httpx
 import pytest
 
-from .conftest import StationHandle, arm, launched, wait_until
+from .conftest import StationHandle, arm, launched, next_relay_stats, wait_until
 from .test_robot_box_team import _box_ids, _camera
 
 
@@ -38,6 +37,20 @@ def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: 
     return httpx.post(st.url + path, json=body, headers={"X-Touchline": "1"}, timeout=5)
 
 
+def _disarmed_drops(health: dict) -> int:  # type: ignore[type-arg]
+    n: int = (health["streams"].get("relay.commands", {})
+              .get("errors_by_reason", {}).get("disarmed", 0))
+    return n
+
+
+def _robots_held(st: StationHandle) -> int:
+    """Robots the relay sends anything to (commands, or zeros for the hold time), from its
+    latest statistics."""
+    relay = st.get("/api/health")["relay"]
+    n: int = relay["active_robots"] + relay["stale_robots"]
+    return n
+
+
 def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
         station: StationHandle, box: socket.socket) -> None:
     stop = threading.Event()
@@ -57,11 +70,13 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
                            json={"strategy": {"play": "idle"}}).status_code == 200
         assert _post(station, "/api/robots/blue/3/target",
                      {"x": 3000, "y": 0}).status_code == 200
-        time.sleep(1.0)
-        assert _box_ids(box) == []
-        wait_until(lambda: (station.get("/api/health")["streams"].get("relay.commands", {})
-                            .get("errors_by_reason", {}).get("disarmed", 0)) > 0, 5,
+        # the relay drops each set when it takes it (it would send at once otherwise): once
+        # its statistics count more drops than those stamped after the target was set,
+        # sets with the target were taken, and nothing can be on its way to the box
+        dropped = _disarmed_drops(next_relay_stats(station, 0.0))
+        wait_until(lambda: _disarmed_drops(station.get("/api/health")) > dropped, 10,
                    what="the dropped command sets counted")
+        assert _box_ids(box) == []
 
         # armed: robot 3 is driven
         state = arm(station)
@@ -73,9 +88,10 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
 
         # the e-stop: disarmed, only stops (or nothing) from 0.2 s after the press
         assert _post(station, "/api/estop", {"active": True}).status_code == 200
-        time.sleep(0.2)
-        _box_ids(box)
-        time.sleep(1.0)
+        wait_until(lambda: station.get("/api/estop")["relay_latched"], 5,
+                   what="the relay latched")
+        _box_ids(box)  # sent before the relay latched
+        next_relay_stats(station, 1.0)  # a second of the relay's own time, latched
         got = _box_ids(box)
         assert all(sx == 0 for _, sx in got), got
         w = station.get("/api/world")
@@ -88,10 +104,11 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
         # released: still disarmed, nothing drives until armed again
         assert _post(station, "/api/estop", {"active": False, "confirm": True}).status_code \
             == 200
-        time.sleep(1.5)  # the zeros' hold time is 1 s: then the relay sends nothing
+        # the zeros' hold time is 1 s: then the relay holds no robot and sends nothing
+        wait_until(lambda: _robots_held(station) == 0, 10, what="the zeros' hold over")
         _box_ids(box)
-        time.sleep(0.5)
-        assert _box_ids(box) == []
+        next_relay_stats(station, 0.5)
+        assert _robots_held(station) == 0 and _box_ids(box) == []
         assert station.get("/api/world")["armed"] is False
     finally:
         httpx.delete(station.url + "/api/robots/blue/3/target", headers={"X-Touchline": "1"})

@@ -16,7 +16,7 @@ import pytest
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
-from .conftest import StationHandle, arm, launched, wait_until
+from .conftest import StationHandle, arm, launched, next_relay_stats, wait_until
 
 
 @pytest.fixture(scope="module")
@@ -90,8 +90,9 @@ def test_a_target_for_their_robot_never_drives_ours(station: StationHandle,
         r = httpx.post(station.url + "/api/robots/yellow/3/target", json={"x": 3000, "y": 0})
         assert r.status_code == 422, r.text
         assert "robot-box" in r.json()["detail"][0]["msg"]
-        # an observation window (36 relay cycles): nothing in it may drive robot 3
-        time.sleep(0.3)
+        # an observation window by the relay's own clock (its statistics stamped 0.3 s
+        # later at least): nothing in it may drive robot 3
+        next_relay_stats(station, 0.3)
         assert all(sx == 0 for rid, sx in _box_ids(box) if rid == 3)
         r = httpx.post(station.url + "/api/robots/blue/3/target", json={"x": 3000, "y": 0})
         assert r.status_code == 200, r.text

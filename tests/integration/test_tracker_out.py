@@ -24,7 +24,7 @@ from sslpb.ssl_vision_detection_tracked_pb2 import (
 )
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
-from .conftest import StationHandle, launched, wait_until
+from .conftest import StationHandle, launched, next_relay_stats, wait_until
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "fieldsim-2s.log.gz"
 
@@ -145,11 +145,16 @@ def test_tracked_vision_on_loopback_and_silent_in_replay() -> None:
             player(st, {"action": "open", "path": str(FIXTURE)})
             wait_until(lambda: st.get("/api/player")["source"] == "log", 20, what="log open")
             player(st, {"action": "play", "speed": 1})
-            time.sleep(0.3)  # frames already on the wire when the log opened
+            # the relay's own count of tracked frames sent, from statistics it stamped 0.3 s
+            # after the play (frames already on their way when the log opened are in it)
+            sent = next_relay_stats(st, 0.3)["streams"]["relay.tracker_out"]["packets"]
             t_replay = time.monotonic()
             wait_until(lambda: (st.get("/api/world")["replay"] or {}).get("position_s", 0) > 0.5,
                        10, what="the replay playing")
-            time.sleep(1.0)
+            # a second of the relay's time replaying: it sent none (its counter), and none
+            # arrived here
+            h = next_relay_stats(st, 1.0)
+            assert h["streams"]["relay.tracker_out"]["packets"] == sent
             assert st.get("/api/world")["replay"] is not None
             assert rx.since(t_replay) == []
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
+import math
 import random
 import socket
 import time
@@ -15,6 +16,7 @@ import zmq
 import zmq.asyncio
 
 from larcmacs_relay import Relay, RelayConfig
+from larcmacs_relay.codecs import Command
 from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
 from sslnet.multicast import open_multicast_sender
 
@@ -137,6 +139,31 @@ class Harness:
         s.setsockopt(zmq.LINGER, 0)
         s.connect(self.relay.sub_address)
         return s
+
+
+class CycleLog:
+    """Every output cycle the relay runs, by its own clock: (the cycle's ``now``, the commands
+    it sent). Checks of "nothing happened" or "only zeros went out until T" read this instead
+    of sleeping and hoping the loop ran meanwhile."""
+
+    def __init__(self, relay: Relay) -> None:
+        self.cycles: list[tuple[float, list[Command]]] = []
+        self._now = -math.inf
+        cycle, send = relay.output_cycle, relay._send_commands
+
+        def output_cycle(now: float) -> bool:
+            self._now = now
+            return cycle(now)
+
+        def send_commands(due: list[Command], version: int | None = None) -> None:
+            self.cycles.append((self._now, list(due)))
+            send(due, version)
+
+        relay.output_cycle = output_cycle  # type: ignore[method-assign]
+        relay._send_commands = send_commands  # type: ignore[method-assign]
+
+    def after(self, t: float) -> list[tuple[float, list[Command]]]:
+        return [c for c in self.cycles if c[0] > t]
 
 
 @contextlib.asynccontextmanager

@@ -25,6 +25,7 @@ from sslpb import (
     touchline_pb2,
 )
 from tests.relay.conftest import (
+    CycleLog,
     Harness,
     drain_udp,
     recv_udp,
@@ -59,6 +60,15 @@ async def connect_commands(h: Harness) -> zmq.asyncio.Socket:
         await pub.send_multipart(probe)
         await asyncio.sleep(0.02)
     return pub
+
+
+async def probe(h: Harness, pub: zmq.asyncio.Socket) -> None:
+    """An empty command set, returned from once the relay has handled it: everything the
+    relay's loop had to do before it has run."""
+    counter = h.relay.streams["commands"]
+    seen = counter.packets
+    await pub.send_multipart([b"commands", touchline_pb2.RobotCommandSet().SerializeToString()])
+    await wait_for(lambda: counter.packets > seen, what="the probe handled")
 
 
 def decode_rc(data: bytes) -> ssl_simulation_robot_control_pb2.RobotControl:
@@ -162,19 +172,29 @@ async def test_idle_relay_sends_nothing_and_wakes_on_a_command() -> None:
     """No robot known (or every one idle): no output cycle at all, not even empty ones; the
     next command set goes out at once."""
     async with running_relay(hold_time_s=0.05) as h:
+        relay = h.relay
         pub = await connect_commands(h)  # empty command sets: nothing to send
-        cycles = h.relay.cycles
-        await asyncio.sleep(0.2)  # lets cycles happen, if the relay wrongly cycled idle
-        assert cycles.total == 0 and drain_udp(h.sim_blue) == 0
+        cycles = relay.cycles
+
+        def asleep() -> bool:
+            """The relay's own schedule: no output timer armed, no cycle due (it never wakes
+            by itself until a command comes)."""
+            return relay._timer is None and not math.isfinite(relay._next_cycle)
+
+        # a round trip through the relay's command path after the first sets: had it cycled
+        # idle, a timer would be armed or a cycle counted by now (no sleep and hope)
+        await probe(h, pub)
+        assert asleep() and cycles.total == 0 and drain_udp(h.sim_blue) == 0
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
         data, _ = await recv_udp(h.sim_blue)
         assert [r.id for r in decode_rc(data).robot_commands] == [4]
         # command timeout (0.1 s) then zeros for the hold time (0.05 s), then idle: silent
-        await wait_for(lambda: h.relay.table.count(RobotState.IDLE) == 1, what="robot idle")
+        await wait_for(lambda: relay.table.count(RobotState.IDLE) == 1, what="robot idle")
+        await wait_for(asleep, what="no output timer once every robot is idle")
         drain_udp(h.sim_blue)
         total = cycles.total
-        await asyncio.sleep(0.2)
-        assert cycles.total == total and drain_udp(h.sim_blue) == 0
+        await probe(h, pub)
+        assert asleep() and cycles.total == total and drain_udp(h.sim_blue) == 0
 
 
 async def test_a_command_set_moves_the_output_timer_with_the_schedule() -> None:
@@ -327,6 +347,7 @@ async def test_stop_all_zeroes_every_robot_and_latency() -> None:
             touchline_pb2.RobotCommand(team=BLUE, id=1, forward_mps=1.0),
             touchline_pb2.RobotCommand(team=YELLOW, id=4, left_mps=1.0),
         ]
+        sent_at = time.monotonic()  # the relay takes them later: they are fresh until 1 s after
         await pub.send_multipart(command_set(*cmds, source_ns=time.time_ns() - 5_000_000))
 
         def moving(sock_data: bytes) -> bool:
@@ -341,6 +362,7 @@ async def test_stop_all_zeroes_every_robot_and_latency() -> None:
         assert stats.active_robots == 2
         assert 5.0 <= stats.command_latency_ms < 500.0
 
+        cycles = CycleLog(h.relay)
         await pub.send_multipart(command_set(stop_all=True))
         await wait_for(lambda: h.relay.stats().stale_robots == 2, what="both zeroed")
         t_stop = time.monotonic()
@@ -349,11 +371,17 @@ async def test_stop_all_zeroes_every_robot_and_latency() -> None:
         for sock in (h.sim_blue, h.sim_yellow):
             data, _ = await recv_udp(sock)
             assert not moving(data)
-        # still zero 0.2 s later although the old commands would not be stale yet
-        await asyncio.sleep(0.2)
-        drain_udp(h.sim_blue)
-        data, _ = await recv_udp(h.sim_blue)
-        assert not moving(data) and time.monotonic() - t_stop < 1.0
+        # still zero 0.2 s later although the old commands would not be stale yet: every
+        # cycle the relay ran after the stop, by its own clock, until they would be
+        fresh_until = sent_at + 1.0
+        await wait_for(lambda: any(t >= t_stop + 0.2 for t, _ in cycles.cycles),
+                       what="the relay's cycles 0.2 s past the stop")
+        window = [(t, sent) for t, sent in cycles.after(t_stop) if t < fresh_until]
+        assert any(t >= t_stop + 0.2 for t, _ in window), \
+            "no cycle 0.2-1 s after the commands: the relay's loop was starved"
+        assert {c.id for _, sent in window for c in sent} == {1, 4}
+        assert all(c.is_zero for _, sent in window for c in sent), \
+            [(round(t - t_stop, 3), sent) for t, sent in window if not all(c.is_zero for c in sent)]
         # a newer non-stop command revives the robot
         await pub.send_multipart(command_set(cmds[0]))
 

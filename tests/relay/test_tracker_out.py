@@ -115,11 +115,18 @@ async def test_own_frames_heard_back_on_the_tracker_input_are_not_forwarded() ->
         while counter.packets == 0:
             await pub.send_multipart([b"tracker-out", tracked(1)])
             await asyncio.sleep(0.02)
-        await wait_for(lambda: h.relay.own_tracker_echoes >= 1, what="own echo")
-        await asyncio.sleep(0.1)
-        while await sub.poll(50):
-            env = touchline_pb2.Envelope.FromString((await sub.recv_multipart())[1])
-            assert TrackerWrapperPacket.FromString(env.payload).uuid == "other-tracker"
+        await wait_for(lambda: h.relay.own_tracker_echoes >= counter.packets >= 1,
+                       what="every own frame heard back")
+        # another tracker's frame after them: the relay forwards in order on its one PUB, so
+        # an echo forwarded by mistake comes before this marker (no waiting for quiet)
+        h.sender.sendto(tracked(99, uuid="other-tracker"), dest)
+        while True:
+            env = touchline_pb2.Envelope.FromString(
+                (await asyncio.wait_for(sub.recv_multipart(), 3.0))[1])
+            got = TrackerWrapperPacket.FromString(env.payload)
+            assert got.uuid == "other-tracker"
+            if got.tracked_frame.frame_number == 99:
+                break
 
 
 async def test_no_tracker_out_refuses_and_counts() -> None:

@@ -45,6 +45,8 @@ export interface ArmingInfo {
   by: string;
   /** the relay's arming from its statistics; null before any arrived */
   relay_armed: boolean | null;
+  /** why the relay is not known to be in the station's state (no statistics, stale ones, or they say otherwise; POST: not confirmed within 2 s); null: it confirmed */
+  relay_unconfirmed: string | null;
   /** why arming would be refused now (null: it would be accepted) */
   refusal: string | null;
 }

@@ -51,6 +51,7 @@ export const arming = (extra: Partial<ArmingInfo> = {}): ArmingInfo => ({
   since: 0,
   by: "",
   relay_armed: null,
+  relay_unconfirmed: null,
   refusal: null,
   ...extra,
 });

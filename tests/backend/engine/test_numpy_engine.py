@@ -137,9 +137,17 @@ async def test_two_workers_run_calls_in_parallel() -> None:
         assert pids[0] == 0.05
 
 
+async def _busy(engine: NumpyEngine, timeout_s: float = 5.0) -> None:
+    """Returns once a call holds a worker (bounded)."""
+    deadline = time.monotonic() + timeout_s
+    while engine.health()["busy"] < 1:
+        assert time.monotonic() < deadline, "no call took a worker"
+        await asyncio.sleep(0.001)
+
+
 async def test_waiting_for_a_busy_worker_counts_towards_the_timeout(engine: NumpyEngine) -> None:
     slow = asyncio.create_task(engine.call("t.sleep_s", 0.5, timeout_s=2.0))
-    await asyncio.sleep(0)  # let it take the only worker
+    await _busy(engine)  # it has taken the only worker
     with pytest.raises(EngineTimeout, match="no free worker"):
         await engine.call("t.add", 1, 1, timeout_s=0.1)
     assert await slow == 0.5
@@ -147,7 +155,7 @@ async def test_waiting_for_a_busy_worker_counts_towards_the_timeout(engine: Nump
 
 async def test_cancelled_caller_leaves_a_working_engine(engine: NumpyEngine) -> None:
     task = asyncio.create_task(engine.call("t.forever", timeout_s=30.0))
-    await asyncio.sleep(0.1)
+    await _busy(engine)  # cancelled while its worker runs it
     task.cancel()
     with pytest.raises(asyncio.CancelledError):
         await task
