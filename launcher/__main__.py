@@ -13,6 +13,7 @@ import logging
 import os
 import shutil
 import signal
+import sys
 import tempfile
 import time
 import urllib.error
@@ -20,6 +21,7 @@ import urllib.request
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
+from typing import TextIO
 
 from backend.access import is_loopback
 from sslnet import defaults
@@ -63,6 +65,16 @@ def wait_http(url: str, timeout_s: float) -> bool:
         time.sleep(0.2)
     return False
 
+
+
+def announce(line: str, out: TextIO | None = None) -> None:
+    """Writes a machine-readable line (for tests and scripts) as one write of the line and its
+    newline. ``print`` writes the two apart when standard output is unbuffered
+    (PYTHONUNBUFFERED, as the tests run it), and the children share the pipe: a child's log
+    line written between them ended up inside "TOUCHLINE_READY <url>"."""
+    stream = sys.stdout if out is None else out
+    stream.write(line + "\n")
+    stream.flush()
 
 def main() -> int:
     p = argparse.ArgumentParser(prog="python -m launcher", description=__doc__)
@@ -165,12 +177,12 @@ def main() -> int:
                     "once on each operator laptop (docs/security.md)\n")
             print(hint, flush=True)  # noqa: T201
         # machine-readable lines for tests and scripts
-        print(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}", flush=True)  # noqa: T201
+        announce(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}")
         if own_state_dir is not None:
-            print(f"TOUCHLINE_STATE_DIR {own_state_dir}", flush=True)  # noqa: T201
+            announce(f"TOUCHLINE_STATE_DIR {own_state_dir}")
         pids = {c.name: c.proc.pid for c in sup.children if c.proc is not None}
-        print(f"TOUCHLINE_PIDS {json.dumps(pids)}", flush=True)  # noqa: T201
-        print(f"TOUCHLINE_READY {url}", flush=True)  # noqa: T201
+        announce(f"TOUCHLINE_PIDS {json.dumps(pids)}")
+        announce(f"TOUCHLINE_READY {url}")
     else:
         log.error("backend did not answer on %s within 30 s", url)
 
