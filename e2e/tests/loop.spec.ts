@@ -66,3 +66,25 @@ test("click a robot, click a point: the robot drives there", async ({ page }) =>
     .toBeLessThan(150);
   expect(Math.hypot(robot.x - target.x, robot.y - target.y)).toBeGreaterThan(1000);
 });
+
+test("the top bar's buttons stay whole and apart at laptop widths", async ({ page }) => {
+  // at 1441-1700 px "new file" broke in two and was drawn over the Logs button
+  await page.goto("/");
+  await expect(page.getByTestId("record-new-file")).toBeVisible();
+  for (const width of [1920, 1600, 1450, 1280]) {
+    await page.setViewportSize({ width, height: 800 });
+    const buttons = [
+      page.getByTestId("record-new-file"),
+      page.getByRole("button", { name: "Logs", exact: true }),
+    ];
+    const boxes = [];
+    for (const b of buttons) {
+      await expect(b).toBeVisible();
+      const box = (await b.boundingBox())!;
+      expect(box.height, `${width} px: one line`).toBeLessThan(40);
+      boxes.push(box);
+    }
+    const [nf, logs] = boxes;
+    expect(nf.x + nf.width, `${width} px: "new file" ends before Logs starts`).toBeLessThanOrEqual(logs.x);
+  }
+});
