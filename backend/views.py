@@ -88,7 +88,7 @@ def arming_view(st: Station) -> contract.ArmingInfo:
     return {"required": required, "armed": st.armed, "since": st.armed_since,
             "by": st.armed_by,
             "relay_armed": None if rs is None else bool(rs.get("armed", True)),
-            "relay_unconfirmed": relay_arming_doubt(st, rs),
+            "relay_unconfirmed": relay_arming_check(st, rs)[0],
             "refusal": st.arm_refusal() if required and not st.armed else None}
 
 
@@ -96,16 +96,11 @@ def arming_view(st: Station) -> contract.ArmingInfo:
 RELAY_STATS_FRESH_S = 3.0
 
 
-def relay_arming_doubt(st: Station, rs: dict[str, Any] | None) -> str | None:
-    """Why the relay is not known to be armed as the station is (None: its fresh statistics
-    say it is)."""
-    return relay_arming_check(st, rs)[0]
-
-
 def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
                        ) -> tuple[str | None, bool]:
-    """(the doubt as in ``relay_arming_doubt``, whether the relay is alive: its fresh
-    statistics may yet show the change). ``rs``: the latest statistics (read if None)."""
+    """(why the relay is not known to be armed as the station is, None when its fresh
+    statistics say it is; whether the relay is alive: its fresh statistics may yet show the
+    change). ``rs``: the latest statistics (read if None)."""
     if rs is None:
         rs = st.relay_stats.latest_value()
     if rs is None:
@@ -123,7 +118,8 @@ def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
 def arming_warnings(st: Station) -> list[str]:
     """Health lines: the relay's arming differs from the station's for a while."""
     rs = st.relay_stats.latest_value()
-    if rs is None or not st.arming_required or time.monotonic() - rs["received_mono"] > 3.0:
+    if rs is None or not st.arming_required \
+            or time.monotonic() - rs["received_mono"] > RELAY_STATS_FRESH_S:
         return []
     if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
         return ["the relay is armed although the station is not (another backend armed it?): "
@@ -141,7 +137,7 @@ def estop_warnings(st: Station) -> list[str]:
         out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
                    f"held at zero until an operator releases it")
         rs = st.relay_stats.latest_value()
-        if rs is not None and time.monotonic() - rs["received_mono"] < 3.0 \
+        if rs is not None and time.monotonic() - rs["received_mono"] < RELAY_STATS_FRESH_S \
                 and not rs.get("estop_latched") and time.monotonic() - st._estop_mono > 3.0:
             out.append("the relay has not latched the emergency stop (the backend holds "
                        "every robot at zero; a backend restart would rely on estop.json)")
@@ -372,7 +368,7 @@ def health(st: Station) -> contract.Health:
         age = time.monotonic() - rs["received_mono"]
         relay = {k: v for k, v in rs.items()
                  if k not in ("streams", "received_mono", "cpu_percent", "rss_mb")}
-        relay["alive"] = age < 3.0
+        relay["alive"] = age < RELAY_STATS_FRESH_S
         relay["age_s"] = age
         for name, stream in rs["streams"].items():
             streams[f"relay.{name}"] = stream
