@@ -99,8 +99,9 @@ test.describe("strategy", () => {
   test("keyboard: the Play selector is reachable and changes the play with the arrow keys", async ({ page }) => {
     await open(page);
     const select = page.getByTestId("play-select-bar");
+    // the plays come with the station's parameters: wait for them, not for the first render
+    await expect.poll(() => select.locator("option").count()).toBeGreaterThan(1);
     const names = await select.locator("option").evaluateAll((os) => os.map((o) => (o as HTMLOptionElement).value));
-    expect(names.length).toBeGreaterThan(1);
     await choosePlay(page, names[0]!);
     await select.focus();
     await expect(select).toBeFocused();
