@@ -1,20 +1,33 @@
-"""`python -m backend`: the strategy-bridge and the web station on one port."""
+"""`python -m backend`: the strategy-bridge and the web station on one port.
+
+The start is ordered for the robots (after a crash the first command counts): the station
+(ZeroMQ, the processors, the e-stop and arming from the state folder) starts first, and what
+its first command does not need (the web side's imports and server, the session recorder's
+file, the compute engine) once that command went to the relay (backend/startup.py)."""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import signal
+import threading
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import uvicorn
-
-from .access import AccessRule, base_url, print_login
-from .api import create_app
 from .config import Settings
 from .security import MAX_BODY_BYTES, MAX_JSON_DEPTH
+from .startup import StartupTimeline, process_start_mono
+
+if TYPE_CHECKING:
+    from .access import AccessRule
+
+#: the web side waits at most this long for the station's first command (no vision: it
+#: starts anyway)
+LATE_START_MAX_S = 2.0
 
 
 def main() -> None:
+    timeline = StartupTimeline(process_start_mono())
     d = Settings()
     p = argparse.ArgumentParser(
         prog="python -m backend", description=__doc__,
@@ -74,6 +87,10 @@ def main() -> None:
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
+    p.add_argument("--restarted", action="store_true",
+                   help="the launcher's supervisor restarts this backend after a crash (it "
+                        "adds this flag): the operator's arming is taken back from the state "
+                        "folder. Any other start is disarmed (docs/security.md)")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
@@ -85,8 +102,36 @@ def main() -> None:
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
                         log_dirs=a.log_dirs, record=not a.no_record,
                         record_dir=a.record_dir, require_token=a.require_token,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all)
-    app = create_app(settings)
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        restarted=a.restarted, late_start_max_s=LATE_START_MAX_S)
+    # a stop asked for before the web side runs (uvicorn's own handlers take over then) is
+    # still an orderly one: the station sends its last stop
+    stopping = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stopping.set())
+    from .station import Station  # numpy, scipy, ZeroMQ, the strategy: the first command's
+
+    timeline.mark("imports")
+    station = Station(settings, timeline)
+    timeline.mark("station built")
+    station.start_thread()
+    # the web side once the first command is out: its imports and start would otherwise take
+    # the CPU and the GIL from it
+    while not station.late_started.wait(0.05) and not stopping.is_set():
+        pass
+    if stopping.is_set():
+        station.stop_thread()
+        return
+    import uvicorn
+
+    from .access import base_url, print_login
+    from .api import create_app
+
+    timeline.mark("web imports")
+    if stopping.is_set():
+        station.stop_thread()
+        return
+    app = create_app(settings, station)
     rule: AccessRule = app.state.access
     if rule.required:
         # the URL to open once per laptop (the launcher's output shows it)

@@ -431,6 +431,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "startup": cast(contract.StartupInfo, st.startup.view()),
     }
     return out
 

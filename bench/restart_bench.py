@@ -37,8 +37,9 @@ backend while the robots drive and measures from the kill:
 ``--sim none`` (the relay then requires arming) and a fieldsim started by this program as the
 external simulator, arms the station once through ``POST /api/arm`` and never again: a kill
 whose new backend sends no command within ``--timeout`` s counts as "never" (then it is armed
-again to go on). The new backend's own start timeline (``GET /api/health`` ``startup``, when
-it has one) is printed per kill.
+again to go on). Kills are 13 s apart at least: the launcher gives up on a child that exits
+more than 5 times in a minute. The new backend's own start timeline (``GET /api/health``
+``startup``, when it has one) is printed per kill.
 
 Usage: .venv/bin/python bench/restart_bench.py [--target relay|backend] [--sim builtin|external]
        [--kills 10] [--poll-ms 5] [--backend-arg=--set=strategy.engine=octave]
@@ -82,6 +83,9 @@ HOLD_S = 0.05
 #: a pause between two datagrams longer than this is the relay's silence (it sends every
 #: 8.3 ms while it has anything to send)
 SILENCE_S = 0.03
+#: at least this long between two kills: the launcher gives up on a child that exits more
+#: than 5 times in a minute
+KILL_SPACING_S = 13.0
 
 
 def get(url: str, timeout_s: float = 2.0) -> Any:
@@ -296,6 +300,7 @@ def backend_mode(args: argparse.Namespace) -> int:
     move_s: list[float] = []
     web_s: list[float] = []
     never = 0
+    kills: list[float] = []
     with tempfile.TemporaryDirectory(prefix="touchline-restart-") as tmp:
         argv = [f"--relay-arg=--sim-blue-port={taps[0].port}",
                 f"--relay-arg=--sim-yellow-port={taps[1].port}",
@@ -333,11 +338,15 @@ def backend_mode(args: argparse.Namespace) -> int:
                     return any(m for tap in taps for _, m in tap.since(t))
                 wait(driving, 30, "the robots driving before the kill", 0.01)
                 time.sleep(1.0)  # a second of play (and the relay's statistics)
+                # the launcher gives up on a child that crashes more than 5 times a minute
+                if kills:
+                    time.sleep(max(0.0, kills[-1] + KILL_SPACING_S - time.monotonic()))
                 before = supervisor_child(state_dir, "backend")
                 assert before is not None
                 pid = before["pid"]
                 t_kill = time.monotonic()
                 t_kill_unix = time.time()
+                kills.append(t_kill)
                 os.kill(pid, signal.SIGKILL)
 
                 def new_child(old: int = pid) -> dict[str, Any] | None:
@@ -401,12 +410,16 @@ def backend_mode(args: argparse.Namespace) -> int:
 
 
 def first_after_silence(taps: list[SimTap], t_kill: float) -> float | None:
-    """The first command datagram (either team) after the relay fell silent following the
-    kill, in seconds from the kill; None if there is none yet. The silence must begin after
-    the relay's stale timeout (before it, the relay still repeats the old commands)."""
+    """The first command datagram (either team) that came after a silence once the relay's
+    own stop was over, in seconds from the kill; None if there is none yet. The relay's stop
+    of a robot ends at most its timeout plus the hold time plus a cycle after the kill (a
+    robot's last command may be older than the kill: then sooner); a datagram after that
+    which follows a silence is the new backend's. (Should the new backend ever command
+    before that, no datagram qualifies and the kill counts as never: not mistaken.)"""
     arrivals = sorted(a for tap in taps for a, _ in tap.since(t_kill - 0.2))
+    over = t_kill + RELAY_TIMEOUT_S + HOLD_S + 0.05
     for prev, cur in itertools.pairwise(arrivals):
-        if cur > t_kill and cur - prev > SILENCE_S and prev >= t_kill + RELAY_TIMEOUT_S * 0.9:
+        if cur >= over and cur - prev > SILENCE_S:
             return cur - t_kill
     return None
 
@@ -450,6 +463,8 @@ def main() -> int:
     ap.add_argument("--logs", type=Path, default=None,
                     help="keep the children's logs in this folder (default: a temporary one)")
     args = ap.parse_args()
+    # a SIGTERM (timeout, kill) stops the station too, like Ctrl-C
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     if args.target == "relay":
         args.kills = args.kills or 5
         return relay_mode(args)

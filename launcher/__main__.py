@@ -192,7 +192,7 @@ def main() -> int:
             if why is not None:
                 log.error("%s", why)
                 break
-            time.sleep(0.2)
+            sup.wait_exit(0.2)  # a child's exit wakes it at once
     finally:
         sup.stop(timeout_s=5.0)
         if own_state_dir is not None:

@@ -13,6 +13,7 @@ import json
 import logging
 import os
 import random
+import select
 import signal
 import socket
 import subprocess
@@ -120,6 +121,18 @@ class StationConfig:
         return not (self.sim == "builtin" and self.output == "sim")
 
 
+#: a child that ran this long before it exited crashed in use, not at its start: it is
+#: restarted at once (a child that exits sooner is restarted after a growing pause)
+STEADY_S = 10.0
+#: the pause before restarting a child that keeps exiting soon after its start, per restart
+#: in the last minute, and at most
+BACKOFF_STEP_S = 0.2
+BACKOFF_MAX_S = 2.0
+#: what the backend is told on a restart by the supervisor (not on a start of the station):
+#: it takes the operator's arming back from its state folder (docs/security.md)
+RESTARTED_FLAG = "--restarted"
+
+
 @dataclass
 class Child:
     name: str
@@ -128,6 +141,19 @@ class Child:
     restarts: int = 0
     started: float = 0.0
     history: list[float] = field(default_factory=list)
+    #: added to ``argv`` when the supervisor restarts the child (after a crash)
+    restart_args: list[str] = field(default_factory=list)
+    #: the running process's pidfd (Linux): the supervisor waits on it for the exit
+    pidfd: int | None = None
+
+    def restart_delay_s(self, now: float) -> float:
+        """The pause before the restart due now: none for a child that ran ``STEADY_S``
+        (a crash in use: the robots wait for it), else growing with the restarts of the last
+        minute (a child that cannot start is not restarted in a tight loop)."""
+        if now - self.started >= STEADY_S:
+            return 0.0
+        recent = sum(1 for t in self.history if now - t < 60)
+        return min(BACKOFF_MAX_S, BACKOFF_STEP_S * recent)
 
 
 def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
@@ -171,7 +197,7 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *(["--state-dir", cfg.state_dir] if cfg.state_dir else []),
         *cfg.backend_args,
-    ]))
+    ], restart_args=[RESTARTED_FLAG]))
     return children
 
 
@@ -230,19 +256,45 @@ class Supervisor:
         except OSError as exc:  # the station runs without it; the page just shows no restarts
             log.warning("cannot write %s: %s", self.status_file, exc)
 
-    def _start(self, c: Child) -> None:
-        log.info("starting %s: %s", c.name, " ".join(c.argv[1:]))
+    def _start(self, c: Child, restart: bool = False) -> None:
+        argv = [*c.argv, *c.restart_args] if restart else c.argv
+        log.info("starting %s: %s", c.name, " ".join(argv[1:]))
         out: IO[bytes] | None = None
         if self.log_dir is not None:
             old = self._logs.pop(c.name, None)
             if old is not None:
                 old.close()
             out = self._logs[c.name] = (self.log_dir / f"{c.name}.log").open("ab")
+        self._close_pidfd(c)
         c.proc = subprocess.Popen(
-            c.argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
+            argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
             stdin=subprocess.DEVNULL if self.detach else None, start_new_session=self.detach,
             preexec_fn=_die_with_parent)  # never orphaned, even by a SIGKILL of ours
         c.started = time.monotonic()
+        with contextlib.suppress(AttributeError, OSError):  # not Linux >= 5.3: polled
+            c.pidfd = os.pidfd_open(c.proc.pid)
+
+    @staticmethod
+    def _close_pidfd(c: Child) -> None:
+        if c.pidfd is not None:
+            with contextlib.suppress(OSError):
+                os.close(c.pidfd)
+            c.pidfd = None
+
+    def wait_exit(self, timeout_s: float) -> None:
+        """Returns when a child has exited or after ``timeout_s``: the launcher's loop calls
+        :meth:`watch` right after, so a crashed child is seen at once, not at the next poll
+        (it polled every 0.2 s). Without pidfds (not Linux) it just waits."""
+        if self.dead():
+            return
+        fds = [c.pidfd for c in self.children if c.pidfd is not None]
+        if not fds:
+            time.sleep(timeout_s)
+            return
+        poller = select.poll()
+        for fd in fds:
+            poller.register(fd, select.POLLIN)  # readable: the process has exited
+        poller.poll(timeout_s * 1000)
 
     def child(self, name: str) -> Child:
         return next(c for c in self.children if c.name == name)
@@ -262,11 +314,14 @@ class Supervisor:
             c.history = [t for t in c.history if now - t < 60] + [now]
             if len(c.history) > self.max_restarts:
                 return f"{c.name} exited {code} and keeps crashing; giving up"
-            log.warning("%s exited with %s; restarting", c.name, code)
+            delay = c.restart_delay_s(now)
+            log.warning("%s exited with %s; restarting%s", c.name, code,
+                        f" in {delay:.1f} s" if delay else "")
             c.restarts += 1
             self._last_exit[c.name] = code
-            time.sleep(min(2.0, 0.2 * c.restarts))
-            self._start(c)
+            if delay:
+                time.sleep(delay)
+            self._start(c, restart=True)
             self.write_status()
         return None
 
@@ -295,6 +350,7 @@ class Supervisor:
                     c.proc.kill()
                     c.proc.wait(timeout=timeout_s)
             self.exit_codes[c.name] = c.proc.returncode
+            self._close_pidfd(c)
         for f in self._logs.values():
             f.close()
         self._logs.clear()

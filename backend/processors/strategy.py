@@ -76,6 +76,8 @@ class StrategyProcessor(Processor):
         self._engine_point: tuple[float, tuple[float, float]] | None = None
         self._t0 = time.monotonic()
         self._record: BinaryIO | None = None
+        #: called once, with the first targets for a robot (the station's start timeline)
+        self.on_first_targets: Callable[[], None] | None = None
 
     def ball_contact(self, team: Team, rid: int) -> bool:
         """The robot reports the ball at its dribbler (False when it reports nothing)."""
@@ -139,6 +141,9 @@ class StrategyProcessor(Processor):
                     dribbler_rpm=DRIBBLER_RPM if mv.dribbler else 0.0,
                     max_speed_mps=mv.max_speed_mps)
         self.targets.write(out)
+        if out and self.on_first_targets is not None:
+            hook, self.on_first_targets = self.on_first_targets, None
+            hook()
 
     async def _engine_keeper(self, prep: Prepared) -> tuple[float, float] | None:
         """The keeper's spot (field frame) from the compute engine, or None (built-in code).

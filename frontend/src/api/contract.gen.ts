@@ -293,6 +293,7 @@ export interface Health {
   driving: DrivingInfo[];
   /** the latest operator actions, newest first */
   operator_actions: OperatorAction[];
+  startup: StartupInfo;
 }
 
 export interface HealthMessage {
@@ -853,6 +854,17 @@ export interface SnapshotMessage {
   health: Health;
   params: ParamsState;
   player: Player;
+}
+
+/**
+ * The backend's start (backend/startup.py): the first command's steps first, then what
+ * it does not need.
+ */
+export interface StartupInfo {
+  /** restarted by the launcher's supervisor after a crash (arming taken back) */
+  restarted: boolean;
+  /** seconds from the backend's process start at which each step was done: imports, station built, station running, first frame, first targets, first command; then recorder open, engine started, web imports, web serving (a step not done yet is absent) */
+  steps_s: Record<string, number>;
 }
 
 /** What the strategy is doing now (sent with every world update). */
