@@ -693,8 +693,12 @@ class StartupInfo(TypedDict):
 
     restarted: Annotated[bool, Field(
         description="restarted by the launcher's supervisor after a crash (arming taken back)")]
+    standby: Annotated[bool, Field(
+        description="a warm spare the supervisor told to start: imported before the crash; "
+                    "its steps count from the word to start")]
     steps_s: Annotated[dict[str, float], Field(
-        description="seconds from the backend's process start at which each step was done: "
+        description="seconds from the backend's process start (a warm spare: from the word to "
+                    "start) at which each step was done: "
                     "imports, station built, station running, first frame, first targets, "
                     "first command; then recorder open, engine started, web imports, web "
                     "serving (a step not done yet is absent)")]

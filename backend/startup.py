@@ -1,5 +1,6 @@
 """The backend's start, step by step: when each step was done, in seconds from the process's
-own start (the kernel's record of it, so the interpreter and the imports count too). Health
+own start (the kernel's record of it, so the interpreter and the imports count too), or for a
+warm spare from the word to start (its imports were done before). Health
 shows it (``startup``) and the log says it once the start is over: after a crash the
 station's first command must leave quickly, and this tells where a slow start goes
 (bench/restart_bench.py prints it for every restart)."""
@@ -43,6 +44,9 @@ class StartupTimeline:
         self.steps: dict[str, float] = {}
         #: started by the launcher's supervisor after a crash (``--restarted``)
         self.restarted = False
+        #: a warm spare (``--standby``) told to start: imported before, the steps count from
+        #: the word to start instead of the process start
+        self.standby = False
         self._lock = threading.Lock()
         self._said = False
 
@@ -61,12 +65,15 @@ class StartupTimeline:
                 return
             self._said = True
             steps = ", ".join(f"{k} {v:.2f}" for k, v in self.steps.items())
-        log.info("%s in s from the process start: %s",
-                 "restart (after a crash)" if self.restarted else "start", steps)
+        log.info("%s in s from %s: %s",
+                 "restart (after a crash)" if self.restarted else "start",
+                 "the word to start (a warm spare)" if self.standby else "the process start",
+                 steps)
 
     def view(self) -> dict[str, object]:
         with self._lock:
-            return {"restarted": self.restarted, "steps_s": dict(self.steps)}
+            return {"restarted": self.restarted, "standby": self.standby,
+                    "steps_s": dict(self.steps)}
 
 
 #: this process's timeline (one backend per process; tests that build several stations share

@@ -17,19 +17,20 @@ from the new relay's ``Popen`` (its process start):
 
 ``--target backend`` (issue 30: "commands flow again <= 1 s after the kill"). This runs the
 real launcher (``python -m launcher --isolated``: its supervisor restarts the backend as in
-``make run``) and stands between the relay and the simulator: the relay's simulator ports are
-this program's (``--relay-arg=--sim-blue-port=...``), which forwards every datagram to the
-simulator and its answers back, and notes when each arrived. ``--kills`` times it SIGKILLs the
-backend while the robots drive and measures from the kill:
+``make run``, from its warm spare unless ``--no-standby``) and stands between the relay and
+the simulator: the relay's simulator ports are this program's
+(``--relay-arg=--sim-blue-port=...``), which forwards every datagram to the simulator and its
+answers back, and notes when each arrived and what it commanded. ``--kills`` times it
+SIGKILLs the backend while the robots drive and measures from the kill:
 
-* ``restarted``: the new backend's process start (the supervisor's ``supervisor.json``);
-* ``first command``: the first command datagram the relay sent that came from the new
-  backend, as it arrived here (on the simulator's side, not polled). The relay runs with
-  ``--hold-time 0.05`` for this: its own stop of a robot whose commands went stale ends
-  0.15 s after the kill (100 ms timeout, then zeros for 50 ms) and it sends nothing more, so
-  the first datagram after that silence is the new backend's (checked: the silence must have
-  begun after the relay's timeout and before the new process answered);
-* ``first move``: the first of them that moves a robot (a velocity not zero);
+* ``restarted``: the new backend's process start, or its spare's word to start (the
+  supervisor's ``supervisor.json``);
+* ``first command``: the first command the relay sent that came from the new backend, as it
+  arrived here (on the simulator's side, not polled). The relay repeats each robot's last
+  command for 100 ms, then zeros: a robot's command that moves it and differs from every
+  command the relay sent that robot up to 50 ms after the kill (the old backend's last
+  sets, still on their way then) can only be the new backend's. (A new backend whose first
+  commands are zeros, or repeat the old one's bit for bit, is seen at its next.)
 * ``web``: the new backend's ``GET /api/health`` answers (polled every 20 ms: an upper
   bound).
 
@@ -42,13 +43,12 @@ more than 5 times in a minute. The new backend's own start timeline (``GET /api/
 ``startup``, when it has one) is printed per kill.
 
 Usage: .venv/bin/python bench/restart_bench.py [--target relay|backend] [--sim builtin|external]
-       [--kills 10] [--poll-ms 5] [--backend-arg=--set=strategy.engine=octave]
+       [--kills 10] [--poll-ms 5] [--no-standby] [--backend-arg=--set=strategy.engine=octave]
 """
 
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 import os
 import selectors
@@ -77,12 +77,9 @@ from launcher.supervisor import (  # noqa: E402
 )
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl  # noqa: E402
 
-#: the relay's stale-command timeout and the hold time this benchmark gives it (see above)
-RELAY_TIMEOUT_S = 0.1
-HOLD_S = 0.05
-#: a pause between two datagrams longer than this is the relay's silence (it sends every
-#: 8.3 ms while it has anything to send)
-SILENCE_S = 0.03
+#: commands the relay sends up to this long after the kill may still be the old backend's
+#: (its last command sets on their way, a busy relay): they are the baseline
+OLD_GRACE_S = 0.05
 #: at least this long between two kills: the launcher gives up on a child that exits more
 #: than 5 times in a minute
 KILL_SPACING_S = 13.0
@@ -176,8 +173,9 @@ def relay_mode(args: argparse.Namespace) -> int:
 
 class SimTap:
     """Stands between the relay and the simulator on one team's port: forwards each command
-    datagram to the simulator and each answer back to the relay, and notes (arrival
-    monotonic time, moves a robot) for every command datagram."""
+    datagram to the simulator and each answer back to the relay, and notes for every command
+    datagram its arrival (monotonic) and each robot's command (its bytes, and whether it
+    moves the robot)."""
 
     def __init__(self) -> None:
         self.front = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)  # the relay sends here
@@ -188,16 +186,11 @@ class SimTap:
         self.sim: tuple[str, int] | None = None  # set once the simulator's port is known
         self.relay: tuple[str, int] | None = None
         self.lock = threading.Lock()
-        self.log: list[tuple[float, bool]] = []
+        self.log: list[tuple[float, list[tuple[int, bytes, bool]]]] = []
 
-    def since(self, t: float) -> list[tuple[float, bool]]:
+    def since(self, t: float) -> list[tuple[float, list[tuple[int, bytes, bool]]]]:
         with self.lock:
             return [e for e in self.log if e[0] >= t]
-
-    def last_before(self, t: float) -> float:
-        with self.lock:
-            before = [a for a, _ in self.log if a < t]
-        return before[-1] if before else -1e9
 
 
 def run_taps(taps: list[SimTap], stop: threading.Event) -> None:
@@ -215,20 +208,39 @@ def run_taps(taps: list[SimTap], stop: threading.Event) -> None:
                 continue
             now = time.monotonic()
             if front:
-                moving = False
+                robots: list[tuple[int, bytes, bool]] = []
                 try:
                     for c in RobotControl.FromString(data).robot_commands:
                         lv = c.move_command.local_velocity
-                        moving = moving or abs(lv.forward) + abs(lv.left) + abs(lv.angular) > 1e-6
+                        moving = abs(lv.forward) + abs(lv.left) + abs(lv.angular) > 1e-6
+                        robots.append((c.id, c.SerializeToString(), moving))
                 except Exception:  # not ours to judge: forwarded as it is
                     pass
                 with tap.lock:
-                    tap.log.append((now, moving))
+                    tap.log.append((now, robots))
                     tap.relay = addr
                 if tap.sim is not None:
                     tap.back.sendto(data, tap.sim)
             elif tap.relay is not None:
                 tap.front.sendto(data, tap.relay)
+
+
+def first_new_command(taps: list[SimTap], t_kill: float) -> float | None:
+    """The arrival (s from the kill) of the first robot command that moves a robot and that
+    the relay had not sent that robot up to ``OLD_GRACE_S`` after the kill; None if none
+    came yet."""
+    found: list[float] = []
+    for tap in taps:
+        old: dict[int, set[bytes]] = {}
+        for t, robots in tap.since(t_kill - 1.0):
+            if t <= t_kill + OLD_GRACE_S:
+                for rid, raw, _ in robots:
+                    old.setdefault(rid, set()).add(raw)
+                continue
+            if any(moving and raw not in old.get(rid, ()) for rid, raw, moving in robots):
+                found.append(t - t_kill)
+                break
+    return min(found) if found else None
 
 
 class Launched:
@@ -297,14 +309,13 @@ def backend_mode(args: argparse.Namespace) -> int:
     threading.Thread(target=run_taps, args=(taps, stop), daemon=True).start()
     restarted_s: list[float] = []
     first_s: list[float] = []
-    move_s: list[float] = []
     web_s: list[float] = []
     never = 0
     kills: list[float] = []
     with tempfile.TemporaryDirectory(prefix="touchline-restart-") as tmp:
         argv = [f"--relay-arg=--sim-blue-port={taps[0].port}",
                 f"--relay-arg=--sim-yellow-port={taps[1].port}",
-                f"--relay-arg=--hold-time={HOLD_S}",
+                *(["--no-standby"] if args.no_standby else []),
                 *(f"--backend-arg={a}" for a in args.backend_args)]
         sim: Supervisor | None = None
         if external:
@@ -335,15 +346,18 @@ def backend_mode(args: argparse.Namespace) -> int:
                 def driving() -> bool:
                     # the robots driven now (a moving command in the last 50 ms)
                     t = time.monotonic() - 0.05
-                    return any(m for tap in taps for _, m in tap.since(t))
+                    return any(m for tap in taps for _, robots in tap.since(t)
+                               for _, _, m in robots)
                 wait(driving, 30, "the robots driving before the kill", 0.01)
                 time.sleep(1.0)  # a second of play (and the relay's statistics)
-                # the launcher gives up on a child that crashes more than 5 times a minute
+                # the launcher gives up on a child that crashes more than 5 times a minute;
+                # and its warm spare comes 5 s after a start
                 if kills:
                     time.sleep(max(0.0, kills[-1] + KILL_SPACING_S - time.monotonic()))
                 before = supervisor_child(state_dir, "backend")
                 assert before is not None
                 pid = before["pid"]
+                spare = before.get("spare_pid") is not None
                 t_kill = time.monotonic()
                 t_kill_unix = time.time()
                 kills.append(t_kill)
@@ -356,9 +370,8 @@ def backend_mode(args: argparse.Namespace) -> int:
                 restarted = child["started_unix"] - t_kill_unix
                 web: float | None = None
                 first: float | None = None
-                move: float | None = None
                 deadline = t_kill + args.timeout
-                while time.monotonic() < deadline and (web is None or move is None):
+                while time.monotonic() < deadline and (web is None or first is None):
                     if web is None:
                         try:
                             get(base + "/api/health", 0.5)
@@ -366,31 +379,25 @@ def backend_mode(args: argparse.Namespace) -> int:
                         except (OSError, ValueError):
                             pass
                     if first is None:
-                        first = first_after_silence(taps, t_kill)
-                    if first is not None and move is None:
-                        move = next((a - t_kill for tap in taps
-                                     for a, m in tap.since(t_kill + first) if m), None)
+                        first = first_new_command(taps, t_kill)
                     time.sleep(0.02)
-                if first is None:
-                    first = first_after_silence(taps, t_kill)
                 restarted_s.append(restarted)
                 if web is not None:
                     web_s.append(web)
+                how = "spare" if spare else "cold"
                 startup = startup_line(base)
                 if first is None:
                     never += 1
-                    print(f"kill {i + 1}: restarted {restarted * 1000:6.1f} ms, NO command "
-                          f"from the new backend within {args.timeout:g} s; web "
+                    print(f"kill {i + 1}: restarted ({how}) {restarted * 1000:6.1f} ms, NO "
+                          f"command from the new backend within {args.timeout:g} s; web "
                           f"{_ms(web)}{startup}", flush=True)
                     if external:
                         arm(base)  # to go on measuring
                     continue
                 first_s.append(first)
-                if move is not None:
-                    move_s.append(move)
-                print(f"kill {i + 1}: restarted {restarted * 1000:6.1f} ms, first command "
-                      f"{first * 1000:6.1f} ms, first move {_ms(move)}, web {_ms(web)} "
-                      f"after the kill{startup}", flush=True)
+                print(f"kill {i + 1}: restarted ({how}) {restarted * 1000:6.1f} ms, first "
+                      f"command {first * 1000:6.1f} ms, web {_ms(web)} after the kill"
+                      f"{startup}", flush=True)
         finally:
             station.stop()
             if sim is not None:
@@ -401,27 +408,11 @@ def backend_mode(args: argparse.Namespace) -> int:
     print(f"backend restarts ({what}), times from the SIGKILL; load {_loadavg()}")
     print(ms_summary("kill -> restarted (supervisor)", restarted_s))
     print(ms_summary("kill -> first command from it", first_s))
-    print(ms_summary("kill -> first command moving a robot", move_s))
     print(ms_summary("kill -> web answers (poll 20 ms)", web_s))
     if never:
         print(f"{never} of {args.kills} kills: no command from the new backend within "
               f"{args.timeout:g} s")
     return 0
-
-
-def first_after_silence(taps: list[SimTap], t_kill: float) -> float | None:
-    """The first command datagram (either team) that came after a silence once the relay's
-    own stop was over, in seconds from the kill; None if there is none yet. The relay's stop
-    of a robot ends at most its timeout plus the hold time plus a cycle after the kill (a
-    robot's last command may be older than the kill: then sooner); a datagram after that
-    which follows a silence is the new backend's. (Should the new backend ever command
-    before that, no datagram qualifies and the kill counts as never: not mistaken.)"""
-    arrivals = sorted(a for tap in taps for a, _ in tap.since(t_kill - 0.2))
-    over = t_kill + RELAY_TIMEOUT_S + HOLD_S + 0.05
-    for prev, cur in itertools.pairwise(arrivals):
-        if cur >= over and cur - prev > SILENCE_S:
-            return cur - t_kill
-    return None
 
 
 def startup_line(base: str) -> str:
@@ -432,7 +423,8 @@ def startup_line(base: str) -> str:
     if not startup:
         return ""
     steps = ", ".join(f"{k} {v * 1000:.0f}" for k, v in startup.get("steps_s", {}).items())
-    return f"\n    new backend from its process start (ms): {steps}"
+    frm = "the spare's word to start" if startup.get("standby") else "its process start"
+    return f"\n    new backend from {frm} (ms): {steps}"
 
 
 def _ms(v: float | None) -> str:
@@ -458,6 +450,8 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=15.0,
                     help="--target backend: a kill with no command within this many s counts "
                          "as never")
+    ap.add_argument("--no-standby", action="store_true",
+                    help="--target backend: the launcher keeps no warm spare (a cold restart)")
     ap.add_argument("--backend-arg", dest="backend_args", action="append", default=[],
                     help="--target backend: passed to the launcher's --backend-arg")
     ap.add_argument("--logs", type=Path, default=None,

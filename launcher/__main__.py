@@ -118,6 +118,10 @@ def main() -> int:
                    help="viewing needs a token too (see python -m backend --help)")
     p.add_argument("--estop-for-all", action="store_true",
                    help="a viewer without the operator token may press the emergency stop")
+    p.add_argument("--no-standby", action="store_true",
+                   help="keep no warm spare backend: a crashed backend is then started cold "
+                        "(its imports take 1-8 s on a busy 2-core machine instead of none; "
+                        "the spare costs the memory of an idle backend)")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -157,7 +161,7 @@ def main() -> int:
         relay_args=a.relay_args,
         backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *replay_args,
                       *a.backend_args]), ports),
-        restart=True,
+        restart=True, standby=not a.no_standby,
         status_file=Path(a.state_dir or ROOT_VAR) / "supervisor.json")
     stopping = False
 

@@ -287,3 +287,12 @@ def test_a_disarm_that_cannot_be_written_removes_the_armed_file(
     assert not ArmingStore(tmp_path, restarted=True).state.armed
     store.set(True, "op")  # an arming not written: a restart comes up disarmed, and says so
     assert "arming not persisted" in store.warning
+
+
+def test_an_unreadable_file_is_a_health_warning(tmp_path: Path) -> None:
+    (tmp_path / "state").mkdir()
+    (tmp_path / "state" / "arming.json").write_text("{not json")
+    st = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
+        warnings = c.get("/api/health").json()["warnings"]
+    assert any(w.startswith("arming.json is not readable") for w in warnings), warnings

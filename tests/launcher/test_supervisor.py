@@ -96,8 +96,8 @@ def test_a_restart_tells_the_child_and_a_start_does_not(tmp_path: Path) -> None:
     finally:
         sup.stop(timeout_s=5.0)
     assert argv_note.read_text().splitlines()[:2] == ["--port=1", "--port=1 --restarted"]
-    assert RESTARTED_FLAG in command_lines(StationConfig(), Ports.isolated(None))[-1] \
-        .restart_args
+    backend = command_lines(StationConfig(), Ports.isolated(None))[-1]
+    assert backend.restart_args == [RESTARTED_FLAG] and backend.standby_args == ["--standby"]
 
 
 def test_a_child_that_crashed_in_use_is_restarted_at_once_and_a_crash_loop_backs_off() -> None:
@@ -133,6 +133,51 @@ def test_the_exit_of_a_child_wakes_the_watch(tmp_path: Path) -> None:
         assert sup.dead() == [child]
     finally:
         sup.stop(timeout_s=5.0)
+
+
+# a child that notes how it runs; with --standby it waits for its line first, as the backend
+_SPARE = """
+import sys, time
+note, args = sys.argv[1], sys.argv[2:]
+if "--standby" in args:
+    line = sys.stdin.readline()
+    with open(note, "a") as f:
+        f.write("spare told " + (line.strip() or "nothing") + "\\n")
+    if not line.startswith("start"):
+        sys.exit(0)
+    args += line.split()[1:]
+with open(note, "a") as f:
+    f.write("running " + " ".join(args) + "\\n")
+time.sleep(600)
+"""
+
+
+def test_a_warm_spare_takes_over_with_the_restart_flags(tmp_path: Path) -> None:
+    import os
+    import signal
+
+    note = tmp_path / "note.txt"
+    child = Child("backend", [sys.executable, "-c", _SPARE, str(note), "--port=1"],
+                  restart_args=["--restarted"], standby_args=["--standby"])
+    sup = Supervisor([child], restart=True, standby=True, spare_after_s=0.0)
+    sup.start()
+    try:
+        _wait(lambda: note.exists() and "running" in note.read_text())
+        _wait(lambda: sup.watch() is None and child.spare is not None)
+        assert child.spare is not None and child.proc is not None
+        spare, first = child.spare.pid, child.proc.pid
+        os.kill(first, signal.SIGKILL)
+        sup.wait_exit(3600.0)
+        assert sup.watch() is None
+        assert child.proc.pid == spare and child.restarts == 1  # no new process: the spare
+        _wait(lambda: "running --port=1 --standby --restarted" in note.read_text())
+        _wait(lambda: sup.watch() is None and child.spare is not None)  # and the next spare
+    finally:
+        sup.stop(timeout_s=5.0)
+    lines = note.read_text().splitlines()
+    assert lines == ["running --port=1", "spare told start --restarted",
+                     "running --port=1 --standby --restarted", "spare told nothing"], lines
+    assert child.spare is None
 
 
 def test_command_lines_of_the_station() -> None:

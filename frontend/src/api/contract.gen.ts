@@ -863,7 +863,9 @@ export interface SnapshotMessage {
 export interface StartupInfo {
   /** restarted by the launcher's supervisor after a crash (arming taken back) */
   restarted: boolean;
-  /** seconds from the backend's process start at which each step was done: imports, station built, station running, first frame, first targets, first command; then recorder open, engine started, web imports, web serving (a step not done yet is absent) */
+  /** a warm spare the supervisor told to start: imported before the crash; its steps count from the word to start */
+  standby: boolean;
+  /** seconds from the backend's process start (a warm spare: from the word to start) at which each step was done: imports, station built, station running, first frame, first targets, first command; then recorder open, engine started, web imports, web serving (a step not done yet is absent) */
   steps_s: Record<string, number>;
 }
 
