@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import threading
@@ -74,7 +75,7 @@ def _stand_by() -> list[str] | None:
 
     from . import api, station  # noqa: F401
 
-    log.info("standby: imported, waiting for the word to start")
+    log.info("standby (pid %d): imported, waiting for the word to start", os.getpid())
     line = sys.stdin.readline()
     words = line.split()
     if not words or words[0] != STANDBY_START:

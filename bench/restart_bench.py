@@ -30,7 +30,9 @@ SIGKILLs the backend while the robots drive and measures from the kill:
   command for 100 ms, then zeros: a robot's command that moves it and differs from every
   command the relay sent that robot up to 50 ms after the kill (the old backend's last
   sets, still on their way then) can only be the new backend's. (A new backend whose first
-  commands are zeros, or repeat the old one's bit for bit, is seen at its next.)
+  commands are zeros, or repeat the old one's bit for bit, is seen at its next: the robots
+  are killed while driving, in the formation play with a new formation every second, so
+  they keep driving.)
 * ``web``: the new backend's ``GET /api/health`` answers (polled every 20 ms: an upper
   bound).
 
@@ -253,6 +255,7 @@ class Launched:
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             env={**os.environ, "PYTHONUNBUFFERED": "1"})
         self.info: dict[str, Any] = {}
+        self.lines: list[str] = []
         self.ready = threading.Event()
         threading.Thread(target=self._pump, daemon=True).start()
 
@@ -261,12 +264,16 @@ class Launched:
         for line in self.proc.stdout:
             self.out.write(line)
             self.out.flush()
+            self.lines.append(line)
             for key in ("TOUCHLINE_PORTS", "TOUCHLINE_PIDS", "TOUCHLINE_STATE_DIR",
                         "TOUCHLINE_READY"):
                 if line.startswith(key + " "):
                     self.info[key] = line.split(" ", 1)[1].strip()
             if line.startswith("TOUCHLINE_READY "):
                 self.ready.set()
+
+    def text(self) -> str:
+        return "".join(self.lines)
 
     def stop(self) -> None:
         self.proc.send_signal(signal.SIGTERM)
@@ -309,12 +316,16 @@ def backend_mode(args: argparse.Namespace) -> int:
     threading.Thread(target=run_taps, args=(taps, stop), daemon=True).start()
     restarted_s: list[float] = []
     first_s: list[float] = []
+    first_by: dict[str, list[float]] = {}
     web_s: list[float] = []
     never = 0
     kills: list[float] = []
     with tempfile.TemporaryDirectory(prefix="touchline-restart-") as tmp:
         argv = [f"--relay-arg=--sim-blue-port={taps[0].port}",
                 f"--relay-arg=--sim-yellow-port={taps[1].port}",
+                # a new formation every second: the robots keep driving, so the new
+                # backend's first commands move them (they are told by that)
+                "--backend-arg=--set=strategy.formation_period_s=1",
                 *(["--no-standby"] if args.no_standby else []),
                 *(f"--backend-arg={a}" for a in args.backend_args)]
         sim: Supervisor | None = None
@@ -348,16 +359,20 @@ def backend_mode(args: argparse.Namespace) -> int:
                     t = time.monotonic() - 0.05
                     return any(m for tap in taps for _, robots in tap.since(t)
                                for _, _, m in robots)
-                wait(driving, 30, "the robots driving before the kill", 0.01)
                 time.sleep(1.0)  # a second of play (and the relay's statistics)
                 # the launcher gives up on a child that crashes more than 5 times a minute;
                 # and its warm spare comes 5 s after a start
                 if kills:
                     time.sleep(max(0.0, kills[-1] + KILL_SPACING_S - time.monotonic()))
+                wait(driving, 30, "the robots driving at the kill", 0.002)
                 before = supervisor_child(state_dir, "backend")
                 assert before is not None
                 pid = before["pid"]
-                spare = before.get("spare_pid") is not None
+                spare = before.get("spare_pid")
+                # a spare still importing at the kill starts later (its log line says ready)
+                how = ("cold" if spare is None else "spare ready"
+                       if f"standby (pid {spare}): imported" in station.text() else
+                       "spare importing")
                 t_kill = time.monotonic()
                 t_kill_unix = time.time()
                 kills.append(t_kill)
@@ -384,7 +399,6 @@ def backend_mode(args: argparse.Namespace) -> int:
                 restarted_s.append(restarted)
                 if web is not None:
                     web_s.append(web)
-                how = "spare" if spare else "cold"
                 startup = startup_line(base)
                 if first is None:
                     never += 1
@@ -395,6 +409,7 @@ def backend_mode(args: argparse.Namespace) -> int:
                         arm(base)  # to go on measuring
                     continue
                 first_s.append(first)
+                first_by.setdefault(how, []).append(first)
                 print(f"kill {i + 1}: restarted ({how}) {restarted * 1000:6.1f} ms, first "
                       f"command {first * 1000:6.1f} ms, web {_ms(web)} after the kill"
                       f"{startup}", flush=True)
@@ -408,6 +423,9 @@ def backend_mode(args: argparse.Namespace) -> int:
     print(f"backend restarts ({what}), times from the SIGKILL; load {_loadavg()}")
     print(ms_summary("kill -> restarted (supervisor)", restarted_s))
     print(ms_summary("kill -> first command from it", first_s))
+    if len(first_by) > 1:
+        for how, values in sorted(first_by.items()):
+            print(ms_summary(f"  of which {how}", values))
     print(ms_summary("kill -> web answers (poll 20 ms)", web_s))
     if never:
         print(f"{never} of {args.kills} kills: no command from the new backend within "

@@ -59,9 +59,10 @@ def test_the_first_command_after_a_crash_leaves_before_the_slow_parts_start(
         wait_until(lambda: st.get("/api/health")["ok"], 60, what="a healthy station")
         if spare:
             # the supervisor's spare has imported and waits for its word (its log line)
-            wait_until(lambda: any("standby: imported" in ln for ln in st.log), 90,
-                       what="the warm spare ready")
-            assert _supervised(st).get("spare_pid") is not None
+            spare_pid = wait_until(lambda: _supervised(st).get("spare_pid"), 60,
+                                   what="the warm spare started")
+            wait_until(lambda: any(f"standby (pid {spare_pid}): imported" in ln
+                                   for ln in st.log), 90, what="the warm spare ready")
         first = st.get("/api/health")["startup"]
         assert first["restarted"] is False and first["standby"] is False
         old, _ = _kill_backend(st)
