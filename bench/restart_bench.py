@@ -39,10 +39,11 @@ SIGKILLs the backend while the robots drive and measures from the kill:
 ``--sim builtin`` runs fieldsim under the launcher; ``--sim external`` runs the launcher with
 ``--sim none`` (the relay then requires arming) and a fieldsim started by this program as the
 external simulator, arms the station once through ``POST /api/arm`` and never again: a kill
-whose new backend sends no command within ``--timeout`` s counts as "never" (then it is armed
-again to go on). Kills are 13 s apart at least: the launcher gives up on a child that exits
-more than 5 times in a minute. The new backend's own start timeline (``GET /api/health``
-``startup``, when it has one) is printed per kill.
+whose new backend sends no command within ``--timeout`` s counts as "never", and one whose
+new backend came up disarmed is counted (it is armed again to go on). Kills are 13 s apart
+at least: the launcher gives up on a child that exits more than 5 times in a minute. The new
+backend's own start timeline (``GET /api/health`` ``startup``, when it has one) is printed
+per kill.
 
 Usage: .venv/bin/python bench/restart_bench.py [--target relay|backend] [--sim builtin|external]
        [--kills 10] [--poll-ms 5] [--no-standby] [--backend-arg=--set=strategy.engine=octave]
@@ -319,6 +320,7 @@ def backend_mode(args: argparse.Namespace) -> int:
     first_by: dict[str, list[float]] = {}
     web_s: list[float] = []
     never = 0
+    disarmed = 0
     kills: list[float] = []
     with tempfile.TemporaryDirectory(prefix="touchline-restart-") as tmp:
         argv = [f"--relay-arg=--sim-blue-port={taps[0].port}",
@@ -400,13 +402,17 @@ def backend_mode(args: argparse.Namespace) -> int:
                 if web is not None:
                     web_s.append(web)
                 startup = startup_line(base)
+                if external and web is not None and not get(base + "/api/arm")["armed"]:
+                    # the new backend came up disarmed (and disarmed the relay): nothing
+                    # after its first moments reaches the robots; armed again to go on
+                    disarmed += 1
+                    startup += "\n    the new backend came up DISARMED (armed again to go on)"
+                    arm(base)
                 if first is None:
                     never += 1
                     print(f"kill {i + 1}: restarted ({how}) {restarted * 1000:6.1f} ms, NO "
                           f"command from the new backend within {args.timeout:g} s; web "
                           f"{_ms(web)}{startup}", flush=True)
-                    if external:
-                        arm(base)  # to go on measuring
                     continue
                 first_s.append(first)
                 first_by.setdefault(how, []).append(first)
@@ -430,6 +436,8 @@ def backend_mode(args: argparse.Namespace) -> int:
     if never:
         print(f"{never} of {args.kills} kills: no command from the new backend within "
               f"{args.timeout:g} s")
+    if external:
+        print(f"{disarmed} of {args.kills} kills: the new backend came up disarmed")
     return 0
 
 

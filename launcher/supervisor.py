@@ -132,10 +132,13 @@ BACKOFF_MAX_S = 2.0
 #: it takes the operator's arming back from its state folder (docs/security.md)
 RESTARTED_FLAG = "--restarted"
 #: a child with ``standby_args`` (the backend) gets a warm spare once it has run this long
-#: (the spare's imports then never compete with a start), and again this long after a spare
-#: exited on its own
+#: (the spare's imports then do not compete with its start); a spare that exited on its own
+#: is tried again ``SPARE_RETRY_S`` later
 SPARE_AFTER_S = 5.0
 SPARE_RETRY_S = 60.0
+#: after a spare took over (its start is over within a few hundred ms: nothing to import),
+#: the next spare comes sooner, ready for a second crash
+SPARE_AFTER_WARM_S = 1.0
 #: the line that starts a spare (then the restart's flags): backend/__main__.py
 SPARE_START = "start"
 
@@ -301,11 +304,12 @@ class Supervisor:
             stdin=stdin, start_new_session=self.detach,
             preexec_fn=_die_with_parent)  # never orphaned, even by a SIGKILL of ours
 
-    def _running(self, c: Child) -> None:
-        """``c.proc`` runs as the child from now on."""
+    def _running(self, c: Child, warm: bool = False) -> None:
+        """``c.proc`` runs as the child from now on (``warm``: a spare that took over)."""
         assert c.proc is not None
         c.started = time.monotonic()
-        c.spare_after = max(c.spare_after, c.started + self.spare_after_s)
+        after = min(self.spare_after_s, SPARE_AFTER_WARM_S) if warm else self.spare_after_s
+        c.spare_after = max(c.spare_after, c.started + after)
         with contextlib.suppress(AttributeError, OSError):  # not Linux >= 5.3: polled
             c.pidfd = os.pidfd_open(c.proc.pid)
 
@@ -347,7 +351,7 @@ class Supervisor:
         log.info("%s: the warm spare (pid %d) takes over", c.name, spare.pid)
         self._close_pidfd(c)
         c.proc = spare
-        self._running(c)
+        self._running(c, warm=True)
         return True
 
     @staticmethod
