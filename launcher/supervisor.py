@@ -356,10 +356,16 @@ class Supervisor:
 
     @staticmethod
     def _end_spare(spare: subprocess.Popen[bytes], timeout_s: float = 5.0) -> None:
-        """A spare not needed: its standard input closed (it exits), killed if it does not."""
+        """A spare not needed: its standard input closed (a waiting spare exits at once);
+        one still importing is stopped (SIGTERM: it has nothing to clean up), then killed."""
         with contextlib.suppress(OSError, ValueError):
             if spare.stdin is not None:
                 spare.stdin.close()
+        try:
+            spare.wait(timeout=min(1.0, timeout_s))
+            return
+        except subprocess.TimeoutExpired:
+            spare.terminate()
         try:
             spare.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
@@ -409,7 +415,8 @@ class Supervisor:
             c.restarts += 1
             self._last_exit[c.name] = code
             if self._take_spare(c):
-                log.warning("%s exited with %s; its warm spare took over", c.name, code)
+                log.warning("%s exited with %s; restarting: its warm spare took over", c.name,
+                            code)
                 self.write_status()
                 continue
             delay = c.restart_delay_s(now)
