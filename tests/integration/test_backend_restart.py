@@ -19,9 +19,46 @@ from typing import Any
 import httpx
 import pytest
 
+from sslnet.multicast import open_multicast_sender
+from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
 from .conftest import StationHandle, arm, launched, next_relay_stats, wait_until
 from .test_estop_latch import Simulator
-from .test_hostile_vision import Camera
+
+
+class StillCamera:
+    """Camera 0 at 60 Hz: blue 0 and blue 1 where no command moves them (the test is the
+    camera; nothing simulates the robots), off any formation spot, so the strategy keeps
+    driving them for as long as the test runs."""
+
+    ROBOTS = ((0, -1234.0, 567.0), (1, 1357.0, -864.0))
+
+    def __init__(self, group: str, port: int) -> None:
+        self.group, self.port = group, port
+        self.stop = threading.Event()
+        threading.Thread(target=self._run, daemon=True).start()
+
+    def _run(self) -> None:
+        sock = open_multicast_sender("127.0.0.1")
+        end = time.monotonic() + 300  # bounded
+        frame = 0
+        try:
+            while not self.stop.is_set() and time.monotonic() < end:
+                pkt = SSL_WrapperPacket()
+                d = pkt.detection
+                now = time.time()
+                d.frame_number, d.t_capture, d.t_sent, d.camera_id = frame, now, now, 0
+                for rid, x, y in self.ROBOTS:
+                    r = d.robots_blue.add()
+                    r.confidence, r.robot_id, r.x, r.y, r.orientation = 0.9, rid, x, y, 0.0
+                    r.pixel_x = r.pixel_y = 0.0
+                b = d.balls.add()
+                b.confidence, b.x, b.y, b.pixel_x, b.pixel_y = 0.9, 0.0, 1500.0, 0.0, 0.0
+                sock.sendto(pkt.SerializeToString(), (self.group, self.port))
+                frame += 1
+                self.stop.wait(1 / 60)
+        finally:
+            sock.close()
 
 
 def _supervised(st: StationHandle, name: str = "backend") -> dict[str, Any]:
@@ -88,10 +125,8 @@ def test_arming_survives_the_supervisors_restart_not_a_new_start_and_the_estop_b
         tmp_path: Path) -> None:
     state = tmp_path / "state"
 
-    def camera(st: StationHandle) -> Camera:
-        cam = Camera(st.ports["vision_group"], st.ports["vision"])
-        threading.Thread(target=cam.run, daemon=True).start()
-        return cam
+    def camera(st: StationHandle) -> StillCamera:
+        return StillCamera(st.ports["vision_group"], st.ports["vision"])
 
     # 1. armed by the operator, then a crash: the restart is armed, the robots driven again
     with launched("--sim", "none", state_dir=state) as st:
@@ -111,6 +146,9 @@ def test_arming_survives_the_supervisors_restart_not_a_new_start_and_the_estop_b
             # that was never disarmed (the crash's restart came up disarmed before)
             wait_until(lambda: sim.moving_since(t_kill + 0.2), 30,
                        what="the new backend driving without arming again")
+            # and the relay says so itself (its next statistics)
+            wait_until(lambda: st.get("/api/arm")["relay_armed"] is not None, 10,
+                       what="the relay's statistics in the new backend")
             assert st.get("/api/arm")["relay_armed"] is True
         finally:
             cam.stop.set()
