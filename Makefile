@@ -8,13 +8,16 @@ PORT ?= 8000
 RUN_ARGS ?=
 # make run LOG=path/to/file.log[.gz]: replay a log instead of live input
 LOG ?=
+# make run TEAM=path/to/folder: the team's own plays, processors and libraries (default team/)
+TEAM ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
         test-e2e bench soak experiments clean match fuzz
 
 run: build multicast
-	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") $(RUN_ARGS)
+	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") \
+	  $(if $(TEAM),--team-dir "$(TEAM)") $(RUN_ARGS)
 
 test: build multicast chromium octave lint typecheck test-py test-ts test-e2e
 	@scripts/test-summary.sh

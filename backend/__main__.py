@@ -74,6 +74,16 @@ def main() -> None:
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
+    p.add_argument("--team-dir", type=Path, default=d.team_dir, metavar="DIR",
+                   help="the team's code: plays, processors and libraries (default: "
+                        "$TOUCHLINE_TEAM_DIR, else the example folder team/; "
+                        "docs/team-code.md)")
+    p.add_argument("--allow-code-edit", action="store_true",
+                   help="operators on other machines may save team code from the page (it "
+                        "runs on this machine: docs/security.md); from loopback it always may")
+    p.add_argument("--team-memory-mb", type=int, default=d.team_memory_mb, metavar="MB",
+                   help="address-space limit of each team-code worker process "
+                        "(default %(default)s)")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
@@ -85,7 +95,9 @@ def main() -> None:
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
                         log_dirs=a.log_dirs, record=not a.no_record,
                         record_dir=a.record_dir, require_token=a.require_token,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all)
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        team_dir=a.team_dir.expanduser().resolve(),
+                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb)
     app = create_app(settings)
     rule: AccessRule = app.state.access
     if rule.required:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from pydantic import BaseModel, Field
@@ -9,6 +10,14 @@ from pydantic import BaseModel, Field
 from sslnet import defaults
 
 ROOT = Path(__file__).resolve().parent.parent
+#: the team's own code (issue 27): plays, processors, libraries (docs/team-code.md)
+TEAM_DIR_ENV = "TOUCHLINE_TEAM_DIR"
+
+
+def default_team_dir() -> Path:
+    """``TOUCHLINE_TEAM_DIR`` if set, else the example folder shipped in the repository."""
+    env = os.environ.get(TEAM_DIR_ENV, "").strip()
+    return Path(env).expanduser().resolve() if env else ROOT / "team"
 
 
 class Settings(BaseModel):
@@ -45,6 +54,14 @@ class Settings(BaseModel):
     view_token: bool = False
     #: a viewer (no operator token) may press the emergency stop (a class)
     estop_for_all: bool = False
+    #: the team's code: plays, processors and libraries (a start-time folder, never a web
+    #: parameter: what runs on this machine is chosen by whoever starts it)
+    team_dir: Path = Field(default_factory=default_team_dir)
+    #: the page may save team code from another machine (an operator, with the token); from
+    #: loopback it always may. It runs code on this machine: docs/security.md
+    allow_code_edit: bool = False
+    #: the address-space limit of each team-code worker process (RLIMIT_AS), MB
+    team_memory_mb: int = Field(default=1024, ge=64, le=65536)
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

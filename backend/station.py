@@ -28,7 +28,7 @@ from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .operators import Operators
-from .params.model import StationParams
+from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Processor, Runner
 from .processors import (
@@ -52,6 +52,8 @@ from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
 from .station_loop import StationLoop
+from .teamcode.registry import TeamRegistry
+from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
@@ -113,6 +115,10 @@ class Station:
         self.params_topic = self.bus.of(topics.PARAMS)
         self.referee_state = InternalReferee()
         self.referee_watch = RefereeWatch()
+        # the team's own code (issue 27): found now (read, never run here), watched from start
+        self.team = TeamRegistry(settings.team_dir, PLAYS)
+        self.team.rescan()
+        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
         for spec in topics.ALL:  # every topic exists (and shows in health) from the start
             self.bus.of(spec)
         # the processors, built here and configured from the parameters; start() only gives
@@ -199,6 +205,7 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        self.team_watcher.start(self.team_watcher_listing())
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
@@ -267,7 +274,21 @@ class Station:
     def engine_error(self) -> str:
         return self.engine.error
 
+    # ---- the team folder (backend/teamcode): a save is seen by the watcher's thread and
+    # handled here, on the station loop ----
+
+    def team_watcher_listing(self) -> dict[str, Any]:
+        return {f.name: f.stat for f in self.team.found.values()}
+
+    def _team_folder_changed(self, listing: dict[str, Any]) -> None:
+        self.loop.schedule(self.team.rescan, listing)
+
+    def team_rescan(self) -> set[str]:
+        """Looks at the team folder at once (after a save from the page)."""
+        return self.team.rescan()
+
     async def stop(self) -> None:
+        self.team_watcher.stop()
         self.replay.close()
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
