@@ -119,7 +119,7 @@ class CommandInput(RelayPart):
                                 "the station first)", "disarmed")
             return
         cset = touchline_pb2.RobotCommandSet()
-        try:
+        try:  # not self._parse: a call more per command set, on the hot path
             cset.ParseFromString(body)
         except DecodeError as exc:
             self._command_error("commands", f"RobotCommandSet does not parse: {exc}",

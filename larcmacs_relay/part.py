@@ -17,11 +17,13 @@ from collections import deque
 
 import zmq
 import zmq.asyncio
+from google.protobuf.message import DecodeError, Message
 
 from larcmacs_relay.codecs import Command
 from larcmacs_relay.commands import CommandTable
 from larcmacs_relay.config import RelayConfig
 from larcmacs_relay.feedback import SentLog
+from sslnet import streams
 from sslnet.rate import RateCounter
 from sslnet.ratelog import RateLimitedLog
 from sslnet.streams import StreamCounter
@@ -135,6 +137,28 @@ class RelayPart:
         self.streams[stream].error(kind, reason)
         kind = " ".join(reason.split()[:3])  # bounded set of log keys, one per kind of error
         self._ratelog.warning(f"{stream}-bad:{kind}", "rejected %s: %s", stream, reason)
+
+    def _parse(self, stream: str, msg: Message, body: bytes) -> bool:
+        """``body`` into ``msg``; False, counted as an error of ``stream`` by its wire
+        problem, when it does not parse."""
+        try:
+            msg.ParseFromString(body)
+        except DecodeError as exc:
+            self._command_error(stream, f"{msg.DESCRIPTOR.name} does not parse: {exc}",
+                                streams.wire_problem(body))
+            return False
+        return True
+
+    def _multicast(self, stream: str, sock: socket.socket, body: bytes,
+                   group: tuple[str, int], failed: str = "rejected") -> None:
+        """``body``, checked, to a multicast ``group``: counted in ``stream``, or its failure
+        as an error of kind ``failed``."""
+        try:
+            sock.sendto(body, group)
+        except OSError as exc:
+            self._command_error(stream, f"send failed: {exc}", failed)
+            return
+        self.streams[stream].packet(len(body))
 
     def _send(self, data: bytes, addr: tuple[str, int]) -> bool:
         if self._udp_out is None:

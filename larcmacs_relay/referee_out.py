@@ -38,9 +38,5 @@ class RefereeOutput(RelayPart):
         if ref is None:
             self._command_error("referee_out", f"Referee rejected: {reason}")
             return
-        try:
-            self._referee_out.sendto(body, (cfg.referee_group, cfg.referee_port))
-        except OSError as exc:
-            self._command_error("referee_out", f"send failed: {exc}")
-            return
-        self.streams["referee_out"].packet(len(body))
+        self._multicast("referee_out", self._referee_out, body,
+                        (cfg.referee_group, cfg.referee_port))

@@ -13,10 +13,7 @@ from __future__ import annotations
 import logging
 import time
 
-from google.protobuf.message import DecodeError
-
 from larcmacs_relay.part import RelayPart
-from sslnet import streams
 from sslpb import touchline_pb2
 
 log = logging.getLogger("larcmacs_relay")
@@ -36,11 +33,7 @@ class SafetyLatches(RelayPart):
 
     def _handle_estop(self, body: bytes, now: float) -> None:
         msg = touchline_pb2.EmergencyStop()
-        try:
-            msg.ParseFromString(body)
-        except DecodeError as exc:
-            self._command_error("commands", f"EmergencyStop does not parse: {exc}",
-                                streams.wire_problem(body))
+        if not self._parse("commands", msg, body):
             return
         if msg.action == touchline_pb2.EmergencyStop.PRESS:
             if not self.estop_latched:
@@ -62,11 +55,7 @@ class SafetyLatches(RelayPart):
 
     def _handle_arming(self, body: bytes, now: float) -> None:
         msg = touchline_pb2.Arming()
-        try:
-            msg.ParseFromString(body)
-        except DecodeError as exc:
-            self._command_error("commands", f"Arming does not parse: {exc}",
-                                streams.wire_problem(body))
+        if not self._parse("commands", msg, body):
             return
         if not self.arming_required:
             return  # always armed: nothing to do

@@ -6,8 +6,6 @@ answers.py.
 
 from __future__ import annotations
 
-from google.protobuf.message import DecodeError
-
 from larcmacs_relay import codecs
 from larcmacs_relay.codecs import Command
 from larcmacs_relay.part import Planned, RelayPart
@@ -62,11 +60,7 @@ class SimProtocolOutput(RelayPart):
         cfg = self.config
         counter = self.streams["sim_commands"]
         cmd = ssl_simulation_control_pb2.SimulatorCommand()
-        try:
-            cmd.ParseFromString(body)
-        except DecodeError as exc:
-            self._command_error("sim_commands", f"SimulatorCommand does not parse: {exc}",
-                                streams.wire_problem(body))
+        if not self._parse("sim_commands", cmd, body):
             return
         if not cmd.IsInitialized():
             self._command_error("sim_commands", "SimulatorCommand misses required fields",

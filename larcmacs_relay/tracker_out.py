@@ -62,9 +62,5 @@ class TrackerOutput(RelayPart):
             return
         if pkt.uuid not in self._own_tracker_uuids and len(self._own_tracker_uuids) < 64:
             self._own_tracker_uuids.add(pkt.uuid)
-        try:
-            self._tracker_out.sendto(body, (cfg.tracker_out_group, cfg.tracker_out_port))
-        except OSError as exc:
-            self._command_error("tracker_out", f"send failed: {exc}", "send failed")
-            return
-        self.streams["tracker_out"].packet(len(body))
+        self._multicast("tracker_out", self._tracker_out, body,
+                        (cfg.tracker_out_group, cfg.tracker_out_port), "send failed")
