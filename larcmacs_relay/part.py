@@ -83,7 +83,7 @@ class RelayPart:
     _ratelog: RateLimitedLog
     #: the native PUB (relay.py binds it): envelopes, feedback, stats
     _pub: zmq.Socket[bytes] | None
-    #: the one UDP socket every command leaves from (relay.py opens it); the simulator's
+    #: the one UDP socket every command leaves from (cycle.py opens it); the simulator's
     #: answers come back on it (answers.py)
     _udp_out: socket.socket | None
     #: the kernel stamps the simulator's answers' arrival (answers.py): then the output
