@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -40,7 +41,7 @@ def test_plan_path_goes_around_a_robot_in_the_way() -> None:
     route = [(-2000.0, 0.0), *pts]
     clearance = 90.0 + 60.0 + 90.0  # their body + margin + ours
     assert all(seg_dist((0.0, 0.0), a, b) >= clearance - 1.0
-               for a, b in zip(route, route[1:], strict=False))
+               for a, b in itertools.pairwise(route))
     # nothing in the way: straight
     assert plan_path(g, 1, -2000.0, 1500.0) == [(-2000.0, 1500.0)]
     # a robot not on the field: the goal itself
@@ -59,7 +60,7 @@ def test_plan_path_keeps_out_of_our_area_unless_the_goalkeeper() -> None:
     area = (-HL, -F.penalty_area_width / 2, -HL + F.penalty_area_depth,
             F.penalty_area_width / 2)
     assert len(pts) >= 2  # around the area
-    for a, b in zip(route, route[1:], strict=False):
+    for a, b in itertools.pairwise(route):
         mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
         assert not (area[0] < mid[0] < area[2] and area[1] < mid[1] < area[3])
     keeper = snap([Robot(0, *start2, 0.0)], [], None, keeper=0)
