@@ -10,16 +10,18 @@ client message, 14-17 % of a core for 25 clients at 60 Hz. A client whose socket
 unsent bytes is skipped (it gets the newest of each message once it has taken what it has: a
 slow client skips worlds, it never queues them), and one that takes nothing for
 ``STALLED_CLIENT_S`` is dropped. Any other server (a test client) is served through ASGI by its
-own loop (``backend/routes/ws.py``), woken by the same hand-over."""
+own loop (``backend/routes/ws.py``), woken by the same hand-over.
+
+Time (the world's turns, the stall timeout) is read from a ``Clock``: the loop's own by
+default, a test's where the test drives the time."""
 
 from __future__ import annotations
 
 import asyncio
-import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from starlette.types import ASGIApp, Receive, Scope, Send
 from websockets.frames import Frame, Opcode
@@ -42,6 +44,31 @@ STALLED_CLIENT_S = 2.0
 
 #: how early in its turn (a fraction of the period of ``stream.ws_max_hz``) a world may go
 WORLD_SLACK = 0.25
+
+class Timer(Protocol):
+    def cancel(self) -> None: ...
+
+
+class Clock(Protocol):
+    """The fan-out's time: ``now()`` (seconds, monotonic) and timers."""
+
+    def now(self) -> float: ...
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer: ...
+
+
+class LoopClock:
+    """An event loop's monotonic clock and its timers."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.loop = loop
+
+    def now(self) -> float:
+        return self.loop.time()
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
+        return self.loop.call_later(delay, callback)
+
 
 #: the scope key under which ``ServerSendTap`` keeps the server's own ``send`` of a websocket
 SERVER_SEND = "touchline.server_send"
@@ -136,16 +163,18 @@ class LoopFanout:
     """The websocket clients of one event loop for one station: woken by one hand-over from
     the station thread per publication. Directly written clients (``add_direct``) are sent
     what changed in that pass; ASGI-served clients (``add``) have their event set. Subscribed
-    to the station's views while it has a client."""
+    to the station's views while it has a client. ``clock``: the loop's by default."""
 
-    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop) -> None:
+    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop,
+                 clock: Clock | None = None) -> None:
         self.st, self.loop = st, loop
+        self.clock: Clock = clock if clock is not None else LoopClock(loop)
         self.events: set[asyncio.Event] = set()
         self.direct: list[DirectClient] = []
         self._unsubscribe: Callable[[], None] | None = None
         self._pending = False
         self._next_world = 0.0  # worlds go out at most stream.ws_max_hz
-        self._world_timer: asyncio.TimerHandle | None = None
+        self._world_timer: Timer | None = None
         self._frames_of: Views | None = None  # the views (and parameters) the cached
         self._frames_params = -1  # frames were made of
         self._frames: dict[tuple[str, ...], bytes] = {}
@@ -245,7 +274,7 @@ class LoopFanout:
         self.passes += 1
         st = self.st
         v = st.views
-        now = time.monotonic()
+        now = self.clock.now()
         period = 1.0 / st.params.current.stream.ws_max_hz
         # a world a little early (the views processor runs at that rate too, with jitter) goes
         # now rather than in a second pass: the turns stay a period apart on average
@@ -263,6 +292,7 @@ class LoopFanout:
                     c.stuck_since, c.stuck_buffered = now, buffered  # it took something
                 elif now - c.stuck_since >= STALLED_CLIENT_S:
                     c.stalled = True
+                    st.ws_dropped += 1
                     self.discard_direct(c)
                 continue
             c.stuck_since = None
@@ -296,7 +326,7 @@ class LoopFanout:
         if world_sent:
             self._next_world = max(self._next_world, now) + period
         if world_waits and self._world_timer is None:
-            self._world_timer = self.loop.call_later(
+            self._world_timer = self.clock.call_later(
                 max(0.0, self._next_world - WORLD_SLACK * period - now), self._world_turn)
 
     def _world_turn(self) -> None:
