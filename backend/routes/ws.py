@@ -65,7 +65,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
         await _serve_views(ws, st)
     except _Stalled:  # counted where it was found stalled (the fan-out, or a send here)
         peer = f"{ws.client.host}:{ws.client.port}" if ws.client else "?"
-        _ws_log.warning("stalled", "websocket client %s took nothing for %.0f s: dropped "
+        _ws_log.warning("stalled", "websocket client %s took nothing for %.1f s: dropped "
                         "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
 
 

@@ -21,6 +21,7 @@ from dataclasses import replace
 from types import SimpleNamespace
 from typing import Any
 
+import pytest
 import uvicorn
 from websockets.frames import Frame
 from websockets.streams import StreamReader
@@ -31,7 +32,7 @@ from backend.config import Settings
 from backend.station import Station
 from backend.viewhub import Views
 from backend.world.state import RobotState, WorldState
-from backend.wsfanout import LoopFanout
+from backend.wsfanout import STALLED_CLIENT_S, DirectSocket, LoopFanout
 from launcher.supervisor import free_tcp_port
 
 # ---- the real server
@@ -199,19 +200,23 @@ class FakeSocket:
         self.clock, self.reads_until = clock, reads_until
         self.window, self.kernel = window, kernel
         self.writes: list[bytes] = []
-        self.written = self.read = 0
+        self.written = self.read = self.acked = 0
+        self.acked_at = clock.now()  # when its peer last took (acknowledged) bytes
         self.aborted = False
 
     def _catch_up(self) -> None:
         if self.clock.now() < self.reads_until:
             self.read = self.written
+        acked = min(self.written, self.read + self.window)
+        if acked > self.acked:
+            self.acked, self.acked_at = acked, self.clock.now()
 
     def open(self) -> bool:
         return not self.aborted
 
     def pending(self) -> int:
         self._catch_up()
-        return max(0, self.written - self.read - self.window)
+        return self.written - self.acked
 
     def buffered(self) -> int:
         return max(0, self.pending() - self.kernel)
@@ -297,6 +302,82 @@ def _fanout(st: FakeStation, clock: FakeClock, socks: list[FakeSocket]) -> tuple
     clients = [f.add_direct(s, st.views, st.params.version, asyncio.Event())  # type: ignore[arg-type]
                for s in socks]
     return f, clients
+
+
+@pytest.mark.parametrize("readers", [1, 17, 25])
+def test_every_reader_gets_the_stream_beside_stalled_clients_on_a_loaded_loop(
+        readers: int) -> None:
+    """60 Hz of worlds published late by up to 0.9 of a period (the station's thread busy),
+    the loop's timers late by as much: each reader gets >= 90 % of the worlds published,
+    while three clients stop reading at 0.5 s, are dropped within 2 s of it and counted."""
+    hz, seconds, stop_at = 60.0, 10.0, 0.5
+
+    async def run() -> None:
+        period = 1.0 / hz
+        clock = FakeClock(timer_late=0.9 * period, seed=readers)
+        t0 = clock.now()
+        st = FakeStation(hz)
+        rng = random.Random(7)
+        stalled = [FakeSocket(clock, reads_until=t0 + stop_at) for _ in range(3)]
+        reading = [FakeSocket(clock) for _ in range(readers)]
+        f, clients = _fanout(st, clock, stalled + reading)
+        dropped_at: dict[int, float] = {}
+        n = int(seconds * hz)
+        for k in range(1, n + 1):
+            clock.advance(t0 + k * period + rng.uniform(0.0, 0.9 * period))
+            st.publish(**_world(k, PAD))
+            await _handed_over(f)
+            for i, c in enumerate(clients[:3]):
+                if c.ended.is_set() and i not in dropped_at:
+                    dropped_at[i] = clock.now()
+        clock.advance(clock.now() + 1.0)  # the last world's turn
+        for s in reading:
+            got = _worlds(s)
+            assert got == sorted(set(got))  # each world once, in order, the newest last
+            assert got[-1] == n
+            assert len(got) >= 0.9 * n, f"{len(got)} of {n} worlds"
+        assert all(s.aborted for s in stalled) and not any(s.aborted for s in reading)
+        assert all(c.stalled for c in clients[:3])
+        assert not any(c.ended.is_set() for c in clients[3:])
+        assert st.ws_dropped == 3
+        assert max(dropped_at.values()) - (t0 + stop_at) <= 2.0, dropped_at
+
+    asyncio.run(run())
+
+
+def test_a_client_whose_peer_takes_nothing_is_dropped_within_two_seconds() -> None:
+    """At the full stream, a client that reads nothing is dropped within 2 s (its kernel's
+    queue holds megabytes: the user-space buffer stays empty for seconds), STALLED_CLIENT_S
+    after its peer took its last byte; one that takes a little at a time is kept."""
+
+    async def run() -> None:
+        clock = FakeClock()
+        t0 = clock.now()
+        st = FakeStation(hz=60.0)
+        stuck = FakeSocket(clock, reads_until=t0)  # from the start
+        slow = FakeSocket(clock, reads_until=t0)
+        ok = FakeSocket(clock)
+        f, clients = _fanout(st, clock, [stuck, slow, ok])
+        k = 0
+        while not clients[0].ended.is_set():
+            k += 1
+            assert k < 600, "not dropped in 10 s"
+            clock.advance(t0 + k / 60)
+            slow.read += 1000  # it takes a little at a time: not stalled
+            st.publish(**_world(k, PAD))
+            await _handed_over(f)
+        assert clock.now() - t0 <= 2.0
+        assert clock.now() - stuck.acked_at >= STALLED_CLIENT_S  # not before its time
+        assert clients[0].stalled and stuck.aborted and st.ws_dropped == 1
+        assert not clients[1].ended.is_set() and not clients[2].ended.is_set()
+        assert f.direct == clients[1:]
+        n = len(stuck.writes)
+        st.publish(**_world(k + 1))
+        await _handed_over(f)
+        assert len(stuck.writes) == n  # dropped: never written again
+        assert _worlds(ok)[-1] == k + 1
+
+    asyncio.run(run())
 
 
 def test_a_client_that_holds_unsent_bytes_is_skipped_then_gets_the_newest() -> None:
@@ -445,5 +526,52 @@ def test_all_clients_of_a_loop_are_woken_by_one_hand_over_per_publication() -> N
         for e in events:
             w.discard(e)
         assert not st.listeners  # the last client gone: unsubscribed
+
+    asyncio.run(run())
+
+
+# ---- DirectSocket on a real TCP connection
+
+
+def test_a_direct_socket_counts_what_its_peer_has_not_taken() -> None:
+    """``pending`` counts the bytes in the kernel the peer has not acknowledged: they grow
+    while the peer reads nothing (the user-space buffer empty meanwhile), and go to 0 once it
+    reads."""
+
+    async def run() -> None:
+        accepted: asyncio.Future[asyncio.Transport] = asyncio.get_running_loop().create_future()
+
+        class Proto(asyncio.Protocol):
+            def connection_made(self, transport: asyncio.BaseTransport) -> None:
+                accepted.set_result(transport)  # type: ignore[arg-type]
+
+        server = await asyncio.get_running_loop().create_server(Proto, "127.0.0.1", 0)
+        port = server.sockets[0].getsockname()[1]
+        peer = socket.create_connection(("127.0.0.1", port))
+        peer.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        try:
+            transport = await asyncio.wait_for(accepted, 5.0)
+            sock = DirectSocket(SimpleNamespace(transport=transport))
+            assert sock.pending() == 0
+            sock.write(b"x" * 200_000)
+            assert sock.pending() > sock.buffered()  # the kernel's unacknowledged bytes
+            peer.settimeout(5.0)
+
+            def read_all() -> None:  # on a thread: the loop flushes the transport meanwhile
+                got = 0
+                while got < 200_000:
+                    got += len(peer.recv(65536))
+
+            await asyncio.to_thread(read_all)
+            for _ in range(1000):  # the acknowledgements arrive (a loopback round trip)
+                if sock.pending() == 0:
+                    break
+                await asyncio.sleep(0.001)
+            assert sock.pending() == 0
+            transport.close()
+        finally:
+            peer.close()
+            server.close()
+            await server.wait_closed()
 
     asyncio.run(run())
