@@ -38,6 +38,7 @@ import argparse
 import asyncio
 import base64
 import contextlib
+import fcntl
 import json
 import os
 import shutil
@@ -45,6 +46,7 @@ import socket
 import statistics
 import subprocess
 import sys
+import termios
 import time
 from pathlib import Path
 from typing import Any
@@ -161,35 +163,53 @@ def reset(s: socket.socket) -> bool:
     return state != 1  # TCP_ESTABLISHED
 
 
+def received(s: socket.socket) -> bool:
+    """Whether bytes from the server wait unread in ``s`` (its handshake answer, the snapshot)."""
+    n = bytearray(4)
+    fcntl.ioctl(s.fileno(), termios.FIONREAD, n)
+    return int.from_bytes(n, sys.byteorder) > 0
+
+
+class StalledClient:
+    def __init__(self, url: str) -> None:
+        self.t_request = time.monotonic()
+        self.t_served: float | None = None  # when its first bytes from the server were seen
+        self.sock = stalled_client(url)
+
+
 async def keep_stalled(url: str, n: int, stop: asyncio.Event, dropped: list[int],
-                       drops: list[float]) -> None:
+                       drops: list[tuple[float, float]]) -> None:
     """Keeps ``n`` stalled clients connected: one the backend drops is replaced at once, and
-    ``drops`` gets its drop's time after its upgrade request. A drop is seen as the client's
-    connection reset (polled every 20 ms), or else (a server that leaves it open) as the
-    ``websocket_dropped`` count moving in the health messages (about every 0.25 s; the
-    oldest client is taken as the one dropped: they are alike)."""
-    clients: list[tuple[float, socket.socket]] = []
+    ``drops`` gets its drop's time after its upgrade request and after the server's first
+    bytes reached it (its handshake answer and snapshot: it was served and never read). A
+    drop is seen as the client's connection reset (polled every 20 ms), or else (a server
+    that leaves it open) as the ``websocket_dropped`` count moving in the health messages
+    (about every 0.25 s; the oldest client is taken as the one dropped: they are alike)."""
+    clients: list[StalledClient] = []
     while dropped[0] < 0 and not stop.is_set():  # the first health message
         await asyncio.sleep(0.02)
     counted = dropped[0]  # the drops accounted for so far
     try:
         while not stop.is_set():
             while len(clients) < n:
-                clients.append((time.monotonic(), stalled_client(url)))
+                clients.append(StalledClient(url))
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(stop.wait(), 0.02)
             t = time.monotonic()
-            gone = [c for c in clients if reset(c[1])]
+            for c in clients:
+                if c.t_served is None and received(c.sock):
+                    c.t_served = t
+            gone = [c for c in clients if reset(c.sock)]
             rest = [c for c in clients if c not in gone]
             gone += rest[:max(0, dropped[0] - counted - len(gone))]
             for c in gone:
                 clients.remove(c)
-                drops.append(t - c[0])
-                c[1].close()
+                drops.append((t - c.t_request, t - (c.t_served or c.t_request)))
+                c.sock.close()
             counted += len(gone)
     finally:
-        for _, sock in clients:
-            sock.close()
+        for c in clients:
+            c.sock.close()
 
 
 def pyspy_cmd() -> list[str] | None:
@@ -204,7 +224,7 @@ async def phase(s: Sampler, n: int, stalled: int, seconds: float,
                 pyspy_out: str | None = None) -> dict[str, Any]:
     counts, sizes = [0] * n, [0] * n
     stop = asyncio.Event()
-    drops: list[float] = []
+    drops: list[tuple[float, float]] = []
     dropped = [-1]
     tasks = [asyncio.create_task(reader(s.url, counts, sizes, i, stop, dropped))
              for i in range(n)]
@@ -335,10 +355,13 @@ def main() -> None:
                     - mean(idle, "cpu_relay"))
             print(f"{name}: adds {r['thread_web'] - mean(idle, 'thread_web'):+.1f} % of a core "
                   f"to the web thread, {both:+.1f} % to relay + backend")
-        drops = sorted(r["drops"])
-        if drops:
-            print(f"{name}: {len(drops)} stalled clients dropped, after (min / median / max) "
-                  f"{drops[0]:.2f} / {statistics.median(drops):.2f} / {drops[-1]:.2f} s")
+        if r["drops"]:
+            req = sorted(d[0] for d in r["drops"])
+            served = sorted(d[1] for d in r["drops"])
+            print(f"{name}: {len(req)} stalled clients dropped, after (min / median / max) "
+                  f"{req[0]:.2f} / {statistics.median(req):.2f} / {req[-1]:.2f} s from their "
+                  f"upgrade request, {served[0]:.2f} / {statistics.median(served):.2f} / "
+                  f"{served[-1]:.2f} s from the server's first bytes")
         else:
             print(f"{name}: no stalled client dropped")
 
