@@ -707,7 +707,7 @@ class Health(TypedDict):
     websocket_clients: int
     websocket_dropped: Annotated[int, Field(
         description="clients dropped because their peer took none of the bytes sent to it for "
-                    "1.5 s (stalled: within 2 s of its last read; the connection is reset)")]
+                    "1.25 s (stalled: within 2 s of its last read; the connection is reset)")]
     engine: EngineHealth | None
     recording: Recording
     processes: Annotated[list[ProcessHealth], Field(
