@@ -26,8 +26,9 @@ PERIODS = 6
 #: ... at most this long after the last frame (the stop leaves the relay by then) ...
 MAX_S = 0.1
 #: ... decided this much sooner: the timer's lateness, the pass, ZeroMQ and the relay's
-#: output (measured 1-3 ms: bench/vision_loss_bench.py)
-SEND_MARGIN_S = 0.01
+#: output (bench/vision_loss_bench.py on 2 cores at load 10: decided 0.5-1 ms late, up to
+#: 5-10 ms when the machine is short of CPU; then 1-2 ms to the relay's datagram)
+SEND_MARGIN_S = 0.02
 #: ... and never sooner than this (a camera faster than the league's 75 Hz, or a burst,
 #: must not stop the robots for a 2-frame gap; the control's wake-up checks rely on it)
 MIN_S = 0.05
