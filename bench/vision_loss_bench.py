@@ -94,6 +94,8 @@ def main() -> int:
             last = cam.silence()
             stop, _ = sim.stop_after(last)
             took.append((stop.arrival_ns - last) / 1e6)
+            if took[-1] > 100.0:  # what came, to see where the time went
+                print("  " + sim.describe(last)[:600], flush=True)
             print(f"loss {k + 1:2d}: {took[-1]:6.1f} ms (the station's rule: stop after "
                   f"{after * 1000:.1f} ms of silence)", flush=True)
             cam.resume()

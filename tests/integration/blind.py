@@ -100,6 +100,13 @@ class Simulator:
         self.sock.bind(("127.0.0.1", port))
         self.sock.setblocking(False)
         enable_kernel_timestamps(self.sock)
+        self.trace: list[Command] = []  # what stop_after read, for a failure's message
+
+    def describe(self, t_ns: int) -> str:
+        """The datagrams ``stop_after`` read: ms after ``t_ns``, robot: speed."""
+        return "; ".join(
+            f"{(c.arrival_ns - t_ns) / 1e6:.1f} ms " + " ".join(
+                f"{i}:{v:.2f}" for i, v in sorted(c.speeds.items())) for c in self.trace)
 
     def read(self, timeout_s: float = 0.0) -> list[Command]:
         """Every datagram waiting (after up to ``timeout_s`` for the first)."""
@@ -122,21 +129,31 @@ class Simulator:
         """``rid`` commanded to move in what arrives now."""
         return any(c.speeds.get(rid, 0.0) > 0.05 for c in self.read(timeout_s))
 
-    def stop_after(self, t_ns: int, rid: int = 0,
+    def stop_after(self, t_ns: int, rid: int = 0, hold_s: float = 0.4,
                    timeout_s: float = 5.0) -> tuple[Command, Command | None]:
-        """The first datagram after ``t_ns`` that commands zero to every robot in it, ``rid``
-        among them, and the last one before it that drove ``rid`` (None: none after ``t_ns``).
-        Bounded by ``timeout_s``."""
+        """The stop after ``t_ns``: the first datagram commanding zero to every robot in it,
+        ``rid`` among them, after which nothing but zeros came for ``hold_s`` (a zero for
+        another reason that the robots drove on from, such as a strategy stalled for a
+        moment on a loaded machine, is not it); and the last datagram before it that drove
+        ``rid`` (None: none after ``t_ns``). Bounded by ``timeout_s``."""
         deadline = time.monotonic() + timeout_s
         drove: Command | None = None
+        stop: Command | None = None
+        self.trace = []
         while time.monotonic() < deadline:
             for c in self.read(0.05):
                 if c.arrival_ns < t_ns:
                     continue
-                if rid in c.speeds and all(s == 0.0 for s in c.speeds.values()):
-                    return c, drove
+                self.trace.append(c)
+                if all(s == 0.0 for s in c.speeds.values()):
+                    if stop is None and rid in c.speeds:
+                        stop = c
+                    continue
+                stop = None  # driven again: that zero was not the stop
                 if c.speeds.get(rid, 0.0) > 0.0:
                     drove = c
+            if stop is not None and time.time_ns() - stop.arrival_ns > hold_s * 1e9:
+                return stop, drove
         raise AssertionError(f"no stop for robot {rid} within {timeout_s} s")
 
     def close(self) -> None:

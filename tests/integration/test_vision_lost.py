@@ -43,7 +43,8 @@ def test_every_camera_silent_stops_every_robot_within_100_ms(bare: StationHandle
         took_ns = stop.arrival_ns - last_ns
         # (the last frame's send time is before the relay received it, the stop's arrival
         # after the relay sent it: the relay's own interval is shorter still)
-        assert took_ns < BOUND_NS, f"stopped {took_ns / 1e6:.1f} ms after the last frame"
+        assert took_ns < BOUND_NS, (f"stopped {took_ns / 1e6:.1f} ms after the last frame: "
+                                    + sim.describe(last_ns))
         # driven on the last commands until the station's stop (the relay's own stale stop
         # comes 100 ms after the last command, which came after the last frame: not it)
         assert drove is not None and drove.arrival_ns > last_ns, \
