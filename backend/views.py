@@ -316,15 +316,19 @@ def world_health(st: Station) -> contract.WorldHealth | None:
     each camera's clock offset."""
     model = st.world.model
     age = st.control.vision_age_s(time.monotonic())
+    silence, lost = st.world.silence, st.control.vision_lost
     return {
         "age_s": age if math.isfinite(age) else None,
-        "stale": age > st.control.vision_stale_s,
+        "stale": age > st.control.vision_stale_s or lost is not None,
         "rejected": dict(model.rejected),
         "recent_rejections": st.world.recent_rejections(),
         "last_rejection": model.last_rejection,
         "clock_resyncs": model.clocks.resyncs,
         "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
         "camera_pairs": cast(list[contract.CameraPair], model.camera_pairs.view()),
+        "camera_rates_hz": {str(c): r for c, r in silence.rates_hz().items()},
+        "lost_after_s": silence.lost_after_s(),
+        "vision_lost": None if lost is None else lost.reason(),
     }
 
 
@@ -478,7 +482,9 @@ def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
     if replaying:
         vision, world = {"last_age_s": 0.0}, None
     if world is not None:
-        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
+        if world["vision_lost"] is not None:
+            out.append(f"{world['vision_lost']}: robots stopped")
+        elif world["stale"] and vision.get("last_age_s", -1) >= 0 \
                 and vision.get("last_age_s", -1) < 1.0:
             # vision arrives but nothing of it reaches the world: say why
             since = ("no frame merged yet" if world["age_s"] is None
