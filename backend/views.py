@@ -418,6 +418,13 @@ def health(st: Station) -> contract.Health:
     if access["blocked_clients"]:
         station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
                              "wrong tokens (someone is guessing the operator token)")
+    team_files = st.team.files_view()
+    # a team file that failed while running (its robots are stopped, its topic stale)
+    station_lines += [f"team code {f['name']}: {f['error']['kind']} at {f['error']['file']}"
+                      f"{':' + str(f['error']['line']) if f['error']['line'] else ''}"
+                      for f in team_files if f["state"] == "error" and f["error"] is not None
+                      and st.team.runs.get(f["name"]) is not None
+                      and st.team.runs[f["name"]].state == "error"]
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
@@ -444,7 +451,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
-        "team_code": st.team.files_view(),
+        "team_code": team_files,
     }
     return out
 
