@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 from pathlib import Path
 
 import uvicorn
@@ -15,7 +16,7 @@ from .security import MAX_BODY_BYTES, MAX_JSON_DEPTH
 
 
 def main() -> None:
-    d = Settings()
+    d = Settings.from_env()  # the folders may come from TOUCHLINE_* variables (config.py)
     p = argparse.ArgumentParser(
         prog="python -m backend", description=__doc__,
         epilog="Web security (docs/api.md, Security): the Host header must be the bound "
@@ -42,7 +43,12 @@ def main() -> None:
                    help="override a parameter, e.g. --set strategy.engine=octave (VALUE is "
                         "JSON, or text); repeatable")
     p.add_argument("--state-dir", type=Path, default=d.state_dir,
-                   help="where parameters and presets are kept (default %(default)s)")
+                   help="where parameters and presets are kept (default %(default)s; "
+                        "TOUCHLINE_STATE_DIR)")
+    p.add_argument("--scripts-dir", type=Path, default=d.scripts_dir, metavar="DIR",
+                   help="the .m files the Octave engine runs (default %(default)s; "
+                        "TOUCHLINE_SCRIPTS_DIR). Folders are never parameters: "
+                        "docs/security.md")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME",
                    help="a host name or address this station may be reached by besides the "
@@ -66,17 +72,19 @@ def main() -> None:
     p.add_argument("--log", type=Path, default=None, metavar="FILE",
                    help="replay this SSL log file (.log or .log.gz) instead of live input: "
                         "nothing is sent to robots or a simulator")
-    p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=[],
+    p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=None,
                    metavar="DIR", help="a folder whose logs the page may open (repeatable; the "
-                   "recording folder always is)")
-    p.add_argument("--record-dir", type=Path, default=None, metavar="DIR",
-                   help="record into DIR for this run (the recording.folder parameter stays)")
+                   "recording folder always is; TOUCHLINE_LOG_DIRS, separated by "
+                   f"{os.pathsep!r})")
+    p.add_argument("--record-dir", type=Path, default=d.record_dir, metavar="DIR",
+                   help="record into DIR (default: logs/ in the state folder; "
+                        "TOUCHLINE_RECORD_DIR)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
     p.add_argument("--team-dir", type=Path, default=d.team_dir, metavar="DIR",
-                   help="the team's code: plays, processors and libraries (default: "
-                        "$TOUCHLINE_TEAM_DIR, else the example folder team/; "
+                   help="the team's code: plays, processors and libraries (default "
+                        "%(default)s, the example folder; TOUCHLINE_TEAM_DIR; "
                         "docs/team-code.md)")
     p.add_argument("--allow-code-edit", action="store_true",
                    help="operators on other machines may save team code from the page (it "
@@ -93,10 +101,11 @@ def main() -> None:
                         relay_output=a.relay_output, require_arming=a.require_arming,
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
-                        log_dirs=a.log_dirs, record=not a.no_record,
+                        log_dirs=d.log_dirs if a.log_dirs is None else a.log_dirs,
+                        record=not a.no_record, scripts_dir=a.scripts_dir,
                         record_dir=a.record_dir, require_token=a.require_token,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
-                        team_dir=a.team_dir.expanduser().resolve(),
+                        team_dir=a.team_dir,
                         allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb)
     app = create_app(settings)
     rule: AccessRule = app.state.access

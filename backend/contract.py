@@ -662,6 +662,28 @@ class Recording(TypedDict):
 
 
 @with_config(_STRICT)
+class StationFolder(TypedDict):
+    """A folder the station reads code from or writes to. Set when the station starts (its
+    flag, or its environment variable), never by a parameter or a request (docs/security.md)."""
+
+    name: Annotated[str, Field(description='the setting: "scripts_dir", "record_dir", ...')]
+    label: str
+    what: Annotated[str, Field(description="what the station reads or writes there")]
+    paths: Annotated[list[str], Field(
+        description="absolute, as this run uses them; empty: none (e.g. no state kept)")]
+    flag: Annotated[str, Field(description='the command-line flag, e.g. "--scripts-dir"')]
+    env: Annotated[str, Field(description='the environment variable, e.g. '
+                                          '"TOUCHLINE_SCRIPTS_DIR"')]
+
+
+@with_config(_STRICT)
+class StationFolders(TypedDict):
+    """GET /api/folders: the station's folders, read-only."""
+
+    folders: list[StationFolder]
+
+
+@with_config(_STRICT)
 class AccessHealth(TypedDict):
     """Who may do what (docs/security.md) and what was refused since the start."""
 
@@ -1235,6 +1257,7 @@ EXPORTS: dict[str, object] = {
     "OperatorAction": OperatorAction,
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
+    "StationFolders": StationFolders,
     "PlayerHistory": PlayerHistory, "TeamCode": TeamCode, "TeamFile": TeamFile,
     "TeamError": TeamError, "TeamFileText": TeamFileText, "TeamFileSaved": TeamFileSaved,
     "StoppedRobot": StoppedRobot,

@@ -151,7 +151,7 @@ class Station:
         self.strategy.referee_source = self.control.active_referee
         self.strategy.team = self.team_plays
         # the compute engine for the strategy (started and replaced in the background)
-        self.engine = EngineSwitch(self.strategy)
+        self.engine = EngineSwitch(self.strategy, settings.scripts_dir)
         # the session recorder (made in start(): it opens a file; closed in stop())
         self.recording = RecordingControl(self)
         # the log player: in replay the pipeline runs on the log's time and nothing is sent

@@ -1,5 +1,9 @@
 """Every tunable of the station, declared once. The UI renders its forms from the JSON schema
-of ``StationParams``: each number has a default, a range, a step, a unit and a description."""
+of ``StationParams``: each number has a default, a range, a step, a unit and a description.
+
+No parameter names a folder or a file: those are set when the station starts
+(``backend/config.py``, docs/security.md). A string parameter is a Literal, or carries a pattern
+that excludes '/', '\\' and '..' (tests/backend/test_params_paths.py walks the schema)."""
 
 from __future__ import annotations
 
@@ -40,7 +44,7 @@ RobotKey = Annotated[str, Field(pattern=r"^(1[0-5]|[0-9])$")]
 
 class StrategyParams(Group):
     """What our robots do on their own (operator targets always come first), and the compute
-    engine that may compute a role."""
+    engine that may compute a role (its scripts folder is set at start: --scripts-dir)."""
 
     play: str = Field(
         default="formation", pattern=PLAY_NAME_PATTERN,
@@ -80,9 +84,6 @@ class StrategyParams(Group):
     engine: Literal["off", "numpy", "octave"] = Field(
         default="off", description="compute engine for the goalkeeper: off (built-in code), "
                                    "numpy (worker process) or octave (the .m scripts)")
-    scripts_dir: str = Field(default="engine_scripts",
-                             description="folder of .m files for the Octave engine (relative "
-                                         "to the project)")
     goalkeeper_function: str = Field(
         default="goalkeeper", pattern=r"^[A-Za-z]\w*(\.[A-Za-z]\w*)?$",
         description="engine function computing the keeper's target, called as "
@@ -179,12 +180,11 @@ class StreamParams(Group):
 
 
 class RecordingParams(Group):
-    """The session recorder: every live session as an SSL log file (docs/logformat.md)."""
+    """The session recorder: every live session as an SSL log file (docs/logformat.md), into
+    the folder set at start (--record-dir, else logs/ in the state folder)."""
 
     enabled: bool = Field(default=True, description="record every live session (vision, "
                           "referee, world, commands, operator actions, health)")
-    folder: str = Field(default="", max_length=1024, description="where the logs go; empty: "
-                        "logs/ in the state folder (var/logs)")
     max_mb: int = num(1024, 1, 65536, "MB", 64, "a file larger than this is closed and the "
                       "next one started")
     rotate_on_stage: bool = Field(default=True, description="start a new file when the game "

@@ -862,6 +862,29 @@ export interface SnapshotMessage {
   player: Player;
 }
 
+/**
+ * A folder the station reads code from or writes to. Set when the station starts (its
+ * flag, or its environment variable), never by a parameter or a request (docs/security.md).
+ */
+export interface StationFolder {
+  /** the setting: "scripts_dir", "record_dir", ... */
+  name: string;
+  label: string;
+  /** what the station reads or writes there */
+  what: string;
+  /** absolute, as this run uses them; empty: none (e.g. no state kept) */
+  paths: string[];
+  /** the command-line flag, e.g. "--scripts-dir" */
+  flag: string;
+  /** the environment variable, e.g. "TOUCHLINE_SCRIPTS_DIR" */
+  env: string;
+}
+
+/** GET /api/folders: the station's folders, read-only. */
+export interface StationFolders {
+  folders: StationFolder[];
+}
+
 /** One of our robots stopped because its play (team code) failed. */
 export interface StoppedRobot {
   id: number;

@@ -26,6 +26,7 @@ import type {
   PresetDetail,
   PresetList,
   RefereeView,
+  StationFolders,
   StrategyInfo,
   TargetAnswer,
   Team,
@@ -245,6 +246,8 @@ export const getPlayerHistory = (seconds: number) =>
   request<PlayerHistory>("GET", `/api/player/history?seconds=${encodeURIComponent(String(seconds))}`);
 /** The logs the player may open. */
 export const getLogs = () => request<LogList>("GET", "/api/logs");
+/** The station's folders, set when it started (read-only: docs/security.md). */
+export const getFolders = () => request<StationFolders>("GET", "/api/folders");
 /** Start a new recording file, start or stop recording. */
 export function postRecording(action: RecordingIn["action"]): Promise<Recording> {
   const body: RecordingIn = { action };

@@ -30,6 +30,8 @@ export type {
   LatencyStage,
   LogFileInfo,
   LogList,
+  StationFolder,
+  StationFolders,
   ParamChange,
   ParamsDiff,
   ParamsState,

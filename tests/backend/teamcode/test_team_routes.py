@@ -204,3 +204,20 @@ def test_plays_are_chosen_among_the_known_ones(local: TestClient, tmp_path: Path
     assert r.status_code == 200 and r.json()["values"]["strategy"]["play"] == "ring"
     r = local.patch("/api/params", json={"strategy": {"robot_plays": {"6": "ring"}}})
     assert r.status_code == 422
+
+
+def test_the_team_folder_is_a_station_folder(local: TestClient, tmp_path: Path) -> None:
+    """Set when the station starts (--team-dir, TOUCHLINE_TEAM_DIR), shown read-only with the
+    other folders, never a parameter."""
+    folders = {f["name"]: f for f in local.get("/api/folders").json()["folders"]}
+    team = folders["team_dir"]
+    assert team["paths"] == [str(tmp_path / "team")]
+    assert (team["flag"], team["env"], team["label"]) == ("--team-dir", "TOUCHLINE_TEAM_DIR",
+                                                          "Team code")
+    env = Settings.from_env({"TOUCHLINE_TEAM_DIR": str(tmp_path / "elsewhere")})
+    assert env.team_dir == tmp_path / "elsewhere"
+    flag = Settings.from_env({"TOUCHLINE_TEAM_DIR": str(tmp_path / "elsewhere")},
+                             team_dir=tmp_path / "flag")
+    assert flag.team_dir == tmp_path / "flag"
+    r = local.patch("/api/params", json={"strategy": {"team_dir": "/tmp/x"}})
+    assert r.status_code == 422
