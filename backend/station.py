@@ -19,7 +19,7 @@ from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics, views
+from . import contract, stalldump, topics, views
 from .bus import DataBus
 from .config import Settings
 from .control.goto import Target
@@ -149,6 +149,9 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        stalls = stalldump.from_env()
+        if stalls is not None:
+            self.tracker.after_send = stalls.beat
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
