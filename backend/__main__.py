@@ -85,7 +85,8 @@ def main() -> None:
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
                         log_dirs=a.log_dirs, record=not a.no_record,
                         record_dir=a.record_dir, require_token=a.require_token,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all)
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        freeze_gc=True)
     app = create_app(settings)
     rule: AccessRule = app.state.access
     if rule.required:

@@ -51,7 +51,7 @@ from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
-from .station_loop import StationLoop
+from .station_loop import StationLoop, freeze_start_up
 from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
@@ -205,6 +205,8 @@ class Station:
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
+        if s.freeze_gc:
+            freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
 
