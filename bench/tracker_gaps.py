@@ -20,7 +20,8 @@ this script's own scheduling does not count). Beside it, as options:
 
 It prints the gaps between tracked frames (max, the 10 longest with what was going on and the
 vision multicast's own longest silence around each: fieldsim's stalls are not the backend's),
-counts over 100 and 300 ms, and the load average at the start and the end.
+counts over 100 and 300 ms, the relay's stale stops, the launcher's restarts (a restarted
+backend is a long silence of its own), and the load average at the start and the end.
 
     PYTHONPATH=. .venv/bin/python bench/tracker_gaps.py --minutes 10 --full --browser \\
         --index-mb 500 [--json out.json] [--pyspy FILE]
@@ -202,6 +203,13 @@ def vision_silence(vision: list[float], t0: float, t1: float) -> float:
     return max((b - a for a, b in itertools.pairwise(seg)), default=float("nan"))
 
 
+def stale_stops(c: httpx.Client) -> int:
+    """The relay's count of robots stopped because their commands went stale (it stops a
+    robot whose commands are older than its timeout, 0.1 s: a stalled backend)."""
+    relay = c.get("/api/health").json().get("relay") or {}
+    return int(relay.get("stale_stops", 0))
+
+
 def loadavg() -> str:
     return " ".join(Path("/proc/loadavg").read_text().split()[:3])
 
@@ -245,7 +253,8 @@ def main() -> None:
         k, _, v = item.partition("=")
         os.environ[k] = v
     load0 = loadavg()
-    st = start_station(args)
+    launcher_log = work / "launcher.log"
+    st = start_station(args, stderr=launcher_log.open("w"))
     os.environ.clear()
     os.environ.update(env_before)
     ports, url = st.ports, st.url
@@ -284,6 +293,7 @@ def main() -> None:
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         t_start = time.time()
         n0 = len(tracker.times)
+        stale0 = stale_stops(c)
         if a.index_mb:
             threads.append(threading.Thread(target=indexer, daemon=True, args=(
                 url, big, work / "rec" / "log-cache", act, stop, a.index_every, cycles)))
@@ -329,6 +339,7 @@ def main() -> None:
             th.join(60)
         t_end = time.time()
         load1 = loadavg()
+        stale1 = stale_stops(c)
     finally:
         for p in extra:
             with contextlib.suppress(OSError):
@@ -345,6 +356,8 @@ def main() -> None:
             st.proc.kill()
         tracker.halt.set()
         vision.halt.set()
+        restarts = [line.strip() for line in launcher_log.read_text(errors="replace")
+                    .splitlines() if "restarting" in line]
         shutil.rmtree(work, ignore_errors=True)
 
     times = [t for t in tracker.times if t_start <= t <= t_end]
@@ -360,6 +373,10 @@ def main() -> None:
               f"(open to replaying)")
     print(f"max gap {lengths[0] * 1000:.1f} ms; gaps > 50 ms: {over[50]}, > 100 ms: "
           f"{over[100]}, > 300 ms: {over[300]}")
+    print(f"relay stale stops (commands older than its timeout): {stale1 - stale0}; "
+          f"processes restarted by the launcher: {len(restarts)}")
+    for line in restarts:
+        print(f"  {line}")
     print("longest gaps (ms, at s (unix), vision's own longest silence then, what was going on):")
     for length, t0, t1 in g[:10]:
         print(f"  {length * 1000:7.1f} at {t0 - t_start:7.1f} s ({t0:.3f})  vision "
@@ -369,6 +386,7 @@ def main() -> None:
             "args": vars(a), "load_start": load0, "load_end": load1,
             "frames": len(times), "seconds": t_end - t_start,
             "max_gap_ms": lengths[0] * 1000, "over": over, "open_s": cycles,
+            "stale_stops": stale1 - stale0, "restarts": restarts,
             "longest": [(x[0] * 1000, x[1] - t_start, act.during(x[1], x[2])) for x in g[:50]],
         }, indent=1))
 
