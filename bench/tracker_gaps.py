@@ -4,7 +4,7 @@
 The game controller drops its tracker source after 300 ms without a frame, so a backend pass
 that stalls that long makes it judge the game with no tracker. This runs the launcher's station
 (``--full``: 8 cameras x 75 Hz, division A, 11 v 11, the "match" play; else the default
-simulator with ``--play``) for ``--minutes`` and listens to the relay's tracked-vision multicast
+simulator with ``--play``) for ``--minutes`` (2) and listens to the relay's tracked-vision multicast
 on loopback as a third party, with the kernel's receive time of every datagram (SO_TIMESTAMPNS:
 this script's own scheduling does not count). Beside it, as options:
 
@@ -20,7 +20,8 @@ this script's own scheduling does not count). Beside it, as options:
 
 It prints the gaps between tracked frames (max, the 10 longest with what was going on and the
 vision multicast's own longest silence around each: fieldsim's stalls are not the backend's),
-counts over 100 and 300 ms, the relay's stale stops, the launcher's restarts (a restarted
+counts over 100 and 300 ms (and the same for the gaps the vision multicast did not share: on a
+busy machine every process stops now and then, the simulator too), the relay's stale stops, the launcher's restarts (a restarted
 backend is a long silence of its own), and the load average at the start and the end.
 
     PYTHONPATH=. .venv/bin/python bench/tracker_gaps.py --minutes 10 --full --browser \\
@@ -216,7 +217,7 @@ def loadavg() -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--minutes", type=float, default=10.0)
+    ap.add_argument("--minutes", type=float, default=2.0)
     ap.add_argument("--full", action="store_true", help="8 x 75 Hz, division A, 11 v 11, match")
     ap.add_argument("--play", default="match", help="the play without --full")
     ap.add_argument("--browser", action="store_true")
@@ -373,6 +374,12 @@ def main() -> None:
               f"(open to replaying)")
     print(f"max gap {lengths[0] * 1000:.1f} ms; gaps > 50 ms: {over[50]}, > 100 ms: "
           f"{over[100]}, > 300 ms: {over[300]}")
+    # the gaps the simulator's vision did not share (its own longest silence in them under
+    # 50 ms): what the relay and the backend added, not the machine stopping everyone
+    own = [x for x in g if vision_silence(vis, x[1], x[2]) < 0.05]
+    own_over = {ms: sum(1 for x in own if x[0] > ms / 1000) for ms in (100, 300)}
+    print(f"  of them while vision kept coming: max {own[0][0] * 1000 if own else 0:.1f} ms; "
+          f"> 100 ms: {own_over[100]}, > 300 ms: {own_over[300]}")
     print(f"relay stale stops (commands older than its timeout): {stale1 - stale0}; "
           f"processes restarted by the launcher: {len(restarts)}")
     for line in restarts:
@@ -387,6 +394,10 @@ def main() -> None:
             "frames": len(times), "seconds": t_end - t_start,
             "max_gap_ms": lengths[0] * 1000, "over": over, "open_s": cycles,
             "stale_stops": stale1 - stale0, "restarts": restarts,
+            "own_max_gap_ms": own[0][0] * 1000 if own else 0.0, "own_over": own_over,
+            "tracker_times": [round(t, 6) for t in times],
+            "vision_times": [round(t, 6) for t in vis if t_start <= t <= t_end],
+            "replay_seen": act.replay_seen,
             "longest": [(x[0] * 1000, x[1] - t_start, act.during(x[1], x[2])) for x in g[:50]],
         }, indent=1))
 
