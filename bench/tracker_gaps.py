@@ -21,8 +21,9 @@ this script's own scheduling does not count). Beside it, as options:
 It prints the gaps between tracked frames (max, the 10 longest with what was going on and the
 vision multicast's own longest silence around each: fieldsim's stalls are not the backend's),
 counts over 100 and 300 ms (and the same for the gaps the vision multicast did not share: on a
-busy machine every process stops now and then, the simulator too), the relay's stale stops, the launcher's restarts (a restarted
-backend is a long silence of its own), and the load average at the start and the end.
+busy machine every process stops now and then, the simulator too), the relay's stale stops,
+the launcher's restarts (a restarted backend is a long silence of its own), and the load
+average at the start and the end.
 
     PYTHONPATH=. .venv/bin/python bench/tracker_gaps.py --minutes 10 --full --browser \\
         --index-mb 500 [--json out.json] [--pyspy FILE]
