@@ -94,7 +94,8 @@ def main() -> None:
                         log_dirs=d.log_dirs if a.log_dirs is None else a.log_dirs,
                         record=not a.no_record, scripts_dir=a.scripts_dir,
                         record_dir=a.record_dir, require_token=a.require_token,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all)
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        freeze_gc=True)
     app = create_app(settings)
     rule: AccessRule = app.state.access
     if rule.required:

@@ -80,6 +80,9 @@ class Settings(BaseModel):
     view_token: bool = False
     #: a viewer (no operator token) may press the emergency stop (a class)
     estop_for_all: bool = False
+    #: keep the start-up objects out of the garbage collector (backend.station_loop.
+    #: freeze_start_up); ``python -m backend`` sets it, a test process with many stations not
+    freeze_gc: bool = False
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )
