@@ -106,7 +106,8 @@ def main() -> None:
                         record_dir=a.record_dir, require_token=a.require_token,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
                         team_dir=a.team_dir,
-                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb)
+                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
+                        freeze_gc=True)
     app = create_app(settings)
     rule: AccessRule = app.state.access
     if rule.required:

@@ -89,6 +89,9 @@ class Settings(BaseModel):
     allow_code_edit: bool = False
     #: the address-space limit of each team-code worker process (RLIMIT_AS), MB
     team_memory_mb: int = Field(default=1024, ge=64, le=65536)
+    #: keep the start-up objects out of the garbage collector (backend.station_loop.
+    #: freeze_start_up); ``python -m backend`` sets it, a test process with many stations not
+    freeze_gc: bool = False
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )

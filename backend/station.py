@@ -19,7 +19,7 @@ from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics, views
+from . import contract, stalldump, topics, views
 from .bus import DataBus
 from .config import Settings
 from .control.goto import Target
@@ -51,7 +51,7 @@ from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
-from .station_loop import StationLoop
+from .station_loop import StationLoop, freeze_start_up
 from .teamcode.plays import TeamPlays
 from .teamcode.processors import TeamProcessors
 from .teamcode.registry import TeamRegistry
@@ -169,6 +169,9 @@ class Station:
         self.team_processors.contacts = self.strategy.contacts
         self.team_processors.replaying = lambda: self.replay.replaying
         self.strategy.team_topics = lambda: self.team_processors.outputs
+        stalls = stalldump.from_env()
+        if stalls is not None:
+            self.tracker.after_send = stalls.beat
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
@@ -224,6 +227,8 @@ class Station:
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
+        if s.freeze_gc:
+            freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
 
