@@ -53,6 +53,8 @@ const strategy: StrategyState = {
   our_side: "negative-x",
   side_from_referee: false,
   tick_ms: 1.2,
+  robot_plays: {},
+  stopped: [],
 };
 
 function input(robots: Robot[], layers = ALL_LAYERS, extra: Partial<DrawInput> = {}): DrawInput {

@@ -16,6 +16,9 @@ function isObj(v: unknown): v is Record<string, unknown> {
   return typeof v === "object" && v !== null && !Array.isArray(v);
 }
 
+/** A play known only by name (the schema's choices, the parameter in force): taken as built-in. */
+const BUILTIN = { source: "builtin", file: null, language: null } as const;
+
 /** The plays to list, in the station's order; the current play is always among them. */
 export function playList(
   info: StrategyInfo | null | undefined,
@@ -36,13 +39,16 @@ export function playList(
         name: p.name,
         title: typeof p.title === "string" && p.title ? p.title : humanizePlay(p.name),
         description: typeof p.description === "string" ? p.description : "",
+        source: p.source === "team" ? "team" : "builtin",
+        file: typeof p.file === "string" ? p.file : null,
+        language: p.language === "python" || p.language === "octave" ? p.language : null,
       });
     }
   }
   if (out.length === 0 && schemaOptions) {
-    for (const o of schemaOptions) add({ name: String(o), title: humanizePlay(String(o)), description: "" });
+    for (const o of schemaOptions) add({ name: String(o), title: humanizePlay(String(o)), description: "", ...BUILTIN });
   }
-  if (current && !seen.has(current)) add({ name: current, title: humanizePlay(current), description: "" });
+  if (current && !seen.has(current)) add({ name: current, title: humanizePlay(current), description: "", ...BUILTIN });
   return out;
 }
 

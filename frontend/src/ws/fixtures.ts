@@ -6,6 +6,7 @@ import type {
   Health,
   InternalReferee,
   Player,
+  PlayInfo,
   Recording,
   Referee,
   RefereeTeam,
@@ -38,6 +39,7 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     halt_reason: "",
     strategy: null,
     internal_referee: internalReferee(),
+    team: {},
     replay: null,
     recorded: null,
     ...extra,
@@ -99,6 +101,7 @@ export function health(rate = 60): Health {
     operators: [],
     driving: [],
     operator_actions: [],
+    team_code: [],
   };
 }
 
@@ -175,16 +178,21 @@ export const referee = (command: string, extra: Partial<Referee> = {}): Referee 
   ...extra,
 });
 
-/** GET /api/strategy with three plays (`plays` replaces them). */
-export const strategyView = (plays: StrategyView["plays"], extra: Partial<StrategyView> = {}): StrategyView => ({
+/** GET /api/strategy with three plays (`plays` replaces them; built-in unless they say). */
+export const strategyView = (
+  plays: Array<Pick<PlayInfo, "name" | "title" | "description"> & Partial<PlayInfo>>,
+  extra: Partial<StrategyView> = {},
+): StrategyView => ({
   play: "match",
-  plays,
+  plays: plays.map((p) => ({ source: "builtin", file: null, language: null, ...p })),
   situation: "running",
   situation_text: "Game running",
   our_team: "blue",
   our_side: "negative-x",
   side_from_referee: false,
   tick_ms: 0.5,
+  robot_plays: {},
+  stopped: [],
   roles: {},
   ...extra,
 });
