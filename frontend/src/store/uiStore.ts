@@ -32,6 +32,11 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
     help: "a kick in progress: dashed line to where the ball is predicted to stop, a cross there, the kicker and the kick speed",
   },
   {
+    key: "commands",
+    label: "Commands (replay)",
+    help: "in replay: the velocity control would command now for each robot (an arrow of 0.5 s of travel; nothing is sent), beside what the robots did",
+  },
+  {
     key: "recorded",
     label: "Recorded estimate",
     help: "in replay: the robots and ball as the log's own tracker had them (dashed rings), beside today's filter output",
