@@ -22,7 +22,7 @@ export const SHORTCUTS: [string, string][] = [
   ["H", "internal referee HALT"],
   ["S", "internal referee STOP"],
   ["G", "internal referee FORCE START"],
-  ["Alt + 1 – 5", "switch panel: Robots, Params, Plots, Referee, Health"],
+  ["Alt + 1 – 6", "switch panel: Robots, Params, Plots, Referee, Health, Code"],
   ["L", "large text (projector)"],
   ["?", "this help"],
   ["wheel", "zoom the field at the cursor"],
