@@ -52,6 +52,7 @@ from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
 from .station_loop import StationLoop
+from .teamcode.plays import TeamPlays
 from .teamcode.registry import TeamRegistry
 from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
@@ -79,7 +80,14 @@ class Station:
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,
             "refused": {}, "blocked_clients": 0}
+        # the team's own code (issue 27): found now (read, never run here), watched from start
+        self.team = TeamRegistry(settings.team_dir, PLAYS)
+        self.team.rescan()
+        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
+        self.team_plays = TeamPlays(self.team, settings.team_memory_mb)
         self.params = ParamStore(settings.state_dir)
+        # a play is chosen among the built-in ones and the team folder's (known now)
+        self.params.play_names = lambda: [*PLAYS, *sorted(self.team.plays())]
         overrides: dict[str, Any] = {}
         if settings.our_team is not None:
             overrides["our_team"] = settings.our_team
@@ -115,10 +123,6 @@ class Station:
         self.params_topic = self.bus.of(topics.PARAMS)
         self.referee_state = InternalReferee()
         self.referee_watch = RefereeWatch()
-        # the team's own code (issue 27): found now (read, never run here), watched from start
-        self.team = TeamRegistry(settings.team_dir, PLAYS)
-        self.team.rescan()
-        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
         for spec in topics.ALL:  # every topic exists (and shows in health) from the start
             self.bus.of(spec)
         # the processors, built here and configured from the parameters; start() only gives
@@ -143,6 +147,7 @@ class Station:
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        self.strategy.team = self.team_plays
         # the compute engine for the strategy (started and replaced in the background)
         self.engine = EngineSwitch(self.strategy)
         # the session recorder (made in start(): it opens a file; closed in stop())
@@ -155,6 +160,7 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        self.strategy.replaying = lambda: self.replay.replaying
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
@@ -295,6 +301,7 @@ class Station:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
+        await self.team_plays.close()
         await self.engine.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)

@@ -58,8 +58,9 @@ def strategy_state(st: Station) -> contract.StrategyState:
         "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
         "side_from_referee": bool(core and core.side_from_referee),
         "tick_ms": core.last_tick_ms if core is not None else 0.0,
-        "robot_plays": {},
-        "stopped": [],
+        "robot_plays": {str(rid): play for rid, play in st.strategy.robot_plays.items()},
+        "stopped": [{"id": rid, "play": play, "reason": why}
+                    for rid, play, why in st.strategy.stopped],
     }
 
 
@@ -78,7 +79,7 @@ def strategy_view(st: Station) -> contract.StrategyView:
         "plays": plays,
         "roles": {f"{team}/{rid}": role
                   # a copy: the strategy's worker thread may be assigning roles now
-                  for rid, role in (dict(core.strategy.roles).items() if core else [])},
+                  for rid, role in (core.roles.items() if core else [])},
     }
 
 

@@ -128,6 +128,24 @@ class Runner:
         p.reason = "failed"
         self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}", self.name))
 
+    # ---- what each kind of runner does its own way ----
+
+    def ensure(self) -> None:
+        """Starts and loads the file unless it runs, is starting, or failed."""
+        raise NotImplementedError
+
+    def update(self, found: Found) -> None:
+        """The file (or a library) changed: load it again."""
+        raise NotImplementedError
+
+    def send(self, game: Any, inputs: Any, budget_s: float,
+             now: float | None = None) -> Pending | None:
+        """Sends one tick's request (None: nothing asked)."""
+        raise NotImplementedError
+
+    async def close(self) -> None:
+        raise NotImplementedError
+
     def late(self, p: Pending) -> None:
         """The tick stopped waiting for ``p``: its output, whenever it comes, is discarded."""
         if not p.done:

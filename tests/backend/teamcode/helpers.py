@@ -65,3 +65,94 @@ async def answer(p: Pending | None, timeout_s: float = 10.0) -> Pending:
     await asyncio.wait([p.fut], timeout=timeout_s)
     await until(lambda: p.done, what="the reply accounted")
     return p
+
+
+class Rig:
+    """The strategy and control processors on a Data Bus, with the team folder ``folder``'s
+    plays in real worker processes: a world and a referee written by the test, one strategy
+    tick and one control step at a time (no sockets, no station loop)."""
+
+    def __init__(self, folder: Path, play: str, **strategy: Any) -> None:
+        from backend import topics
+        from backend.bus import DataBus
+        from backend.params.model import StationParams
+        from backend.processors import ControlProcessor, StrategyProcessor
+        from backend.teamcode.plays import TeamPlays
+        from backend.teamcode.registry import TeamRegistry
+
+        self.topics = topics
+        self.bus = DataBus(check_types=True)
+        self.registry = TeamRegistry(folder, PLAYS)
+        self.registry.rescan()
+        self.plays = TeamPlays(self.registry, 1024)
+        self.params = StationParams.model_validate(
+            {"strategy": {"play": play, "team_budget_ms": 100.0, **strategy}})
+        self.strategy = StrategyProcessor(self.bus, "blue", self.params.strategy)
+        self.strategy.team = self.plays
+        self.control = ControlProcessor(self.bus, 0.05, 0.3)
+        self.strategy.configure(self.params)
+        self.control.configure(self.params)
+        self.robots: dict[int, tuple[float, float, float]] = {
+            1: (-1000.0, 0.0, 0.0), 2: (-1000.0, 800.0, 0.0), 3: (-1000.0, -800.0, 0.0)}
+        self.ball: tuple[float, float] | None = (0.0, 0.0)
+        self.last_step_start = time.monotonic()
+        self.step_span = (0.0, 0.0)
+        self.last: dict[int, Any] = {}
+
+    def configure(self, **strategy: Any) -> None:
+        from backend.params.model import StationParams
+
+        values = self.params.model_dump()
+        values["strategy"].update(strategy)
+        self.params = StationParams.model_validate(values)
+        self.strategy.configure(self.params)
+        self.control.configure(self.params)
+
+    def see(self) -> None:
+        from backend.world.state import BallState, RobotState, WorldState
+
+        robots = tuple(RobotState("blue", rid, x, y, o, t_seen=time.time())
+                       for rid, (x, y, o) in sorted(self.robots.items()))
+        ball = None if self.ball is None else BallState(self.ball[0], self.ball[1],
+                                                        t_seen=time.time())
+        self.bus.of(self.topics.WORLD).write(WorldState(time.time(), time.time_ns(), ball,
+                                                        robots))
+
+    def referee(self, command: str) -> None:
+        from backend.world.referee import RefereeState
+
+        self.bus.of(self.topics.REFEREE).write(RefereeState(
+            command, "NORMAL_FIRST_HALF", len(command), None, {"goalkeeper": 0}, {},
+            None, None, 0))
+
+    async def tick(self) -> dict[int, Any]:
+        """One strategy tick then one control step (a camera frame); the commands by id.
+        ``step_span``: (monotonic before the previous step, after this one): the control
+        step's dt (its own clock) lies within."""
+        self.see()
+        await self.strategy.tick()
+        self.see()
+        before = time.monotonic()
+        self.control.step()
+        self.step_span = (self.last_step_start, time.monotonic())
+        self.last_step_start = before
+        cs = self.bus.of(self.topics.ROBOT_COMMANDS).latest_value()
+        self.last = {} if cs is None else {c.id: c for c in cs.commands}
+        return self.last
+
+    def targets(self) -> dict[int, Any]:
+        t = self.bus.of(self.topics.TARGETS).latest_value() or {}
+        return {rid: e for (_team, rid), e in t.items()}
+
+    async def running(self, name: str) -> None:
+        """Ticks until the play's worker answers (it starts on the first tick)."""
+        for _ in range(2000):
+            await self.tick()
+            run = self.registry.runs.get(name)
+            if run is not None and (run.state == "error" or run.ticks > 0):
+                return
+            await asyncio.sleep(0.005)
+        raise AssertionError(f"{name} never answered")
+
+    async def close(self) -> None:
+        await self.plays.close()

@@ -170,3 +170,37 @@ def test_viewing_needs_the_view_token_when_asked(tmp_path: Path) -> None:
     with _client(tmp_path, view_token=True) as c:
         assert c.get("/api/team").status_code == 401
         assert c.get("/api/team/files/ring.py").status_code == 401
+
+
+def test_plays_are_chosen_among_the_known_ones(local: TestClient, tmp_path: Path) -> None:
+    schema = local.get("/api/params/schema").json()
+    play = schema["$defs"]["StrategyParams"]["properties"]["play"]
+    assert play["enum"][:6] == ["match", "defend", "attack-drill", "formation", "simple",
+                                "idle"] and "ring" in play["enum"]
+    r = local.patch("/api/params", json={"strategy": {"play": "ring"}})
+    assert r.status_code == 200 and r.json()["values"]["strategy"]["play"] == "ring"
+    r = local.patch("/api/params", json={"strategy": {"play": "no_such_play"}})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"] == ["body", "strategy", "play"]
+    assert "no play named 'no_such_play'" in r.json()["detail"][0]["msg"]
+    # per robot
+    r = local.patch("/api/params", json={"strategy": {"robot_plays": {"3": "match",
+                                                                       "4": "ring"}}})
+    assert r.status_code == 200
+    assert r.json()["values"]["strategy"]["robot_plays"] == {"3": "match", "4": "ring"}
+    r = local.patch("/api/params", json={"strategy": {"robot_plays": {"5": "nothing"}}})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][-1] == "5"
+    assert local.patch("/api/params", json={"strategy": {"robot_plays": {"16": "ring"}}}
+                       ).status_code == 422
+    r = local.patch("/api/params", json={"strategy": {"robot_plays": {"3": None}}})
+    assert r.json()["values"]["strategy"]["robot_plays"] == {"4": "ring"}
+    # the file goes: the play in force stays chosen (its robots stop, error "missing"), but
+    # it can no longer be chosen anew
+    (tmp_path / "team" / "ring.py").unlink()
+    local.put("/api/team/files/other.py", json={"text": "x = 1\n"})  # (a rescan)
+    assert "ring" not in local.get("/api/params/schema").json()["$defs"]["StrategyParams"][
+        "properties"]["play"]["enum"]
+    r = local.patch("/api/params", json={"strategy": {"kick_speed_mps": 5.0}})
+    assert r.status_code == 200 and r.json()["values"]["strategy"]["play"] == "ring"
+    r = local.patch("/api/params", json={"strategy": {"robot_plays": {"6": "ring"}}})
+    assert r.status_code == 422
