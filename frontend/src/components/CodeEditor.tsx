@@ -9,7 +9,7 @@ import { useEffect, useRef } from "react";
 import { closeBrackets, closeBracketsKeymap } from "@codemirror/autocomplete";
 import { defaultKeymap, history, historyKeymap, indentWithTab } from "@codemirror/commands";
 import { python } from "@codemirror/lang-python";
-import { bracketMatching, HighlightStyle, indentOnInput, StreamLanguage, syntaxHighlighting } from "@codemirror/language";
+import { bracketMatching, HighlightStyle, indentOnInput, indentUnit, StreamLanguage, syntaxHighlighting } from "@codemirror/language";
 import { octave } from "@codemirror/legacy-modes/mode/octave";
 import { highlightSelectionMatches, searchKeymap } from "@codemirror/search";
 import { Compartment, EditorState, Prec, StateEffect, StateField, type Extension } from "@codemirror/state";
@@ -55,6 +55,8 @@ const setup: Extension = [
   highlightActiveLine(),
   highlightSelectionMatches(),
   EditorState.tabSize.of(4),
+  // the panel is narrow beside the field: long lines wrap instead of scrolling sideways
+  EditorView.lineWrapping,
   keymap.of([...closeBracketsKeymap, ...defaultKeymap, ...searchKeymap, ...historyKeymap, indentWithTab]),
 ];
 
@@ -109,8 +111,12 @@ const errorField = StateField.define<DecorationSet>({
   provide: (f) => EditorView.decorations.from(f),
 });
 
+/** The language and its indentation: Python's four spaces (PEP 8; CodeMirror's default of two
+ * makes the next line after a `def` an "unexpected indent"), two in Octave as in team/*.m. */
 function languageExt(language: "python" | "octave"): Extension {
-  return language === "octave" ? StreamLanguage.define(octave) : python();
+  return language === "octave"
+    ? [StreamLanguage.define(octave), indentUnit.of("  ")]
+    : [python(), indentUnit.of("    ")];
 }
 
 function readOnlyExt(ro: boolean): Extension {

@@ -10,6 +10,7 @@ import {
   chipLanding,
   commandVelocity,
   drawRecorded,
+  stoppedBanners,
   flyingLabel,
   KICK_CROSS_PX,
   KICK_DASH,
@@ -363,13 +364,20 @@ describe("drawField: robots a failed team-code play holds still", () => {
   const stopped = { ...strategy, stopped: [{ id: 1, play: "pass_drill", reason: "exception at pass_drill.py:12: ZeroDivisionError" }] };
   const robots = [...ours, robot("yellow", 1, 2500, 0)];
 
-  it("rings each of our stopped robots in red and tags it with the play's name", () => {
+  it("rings each of our stopped robots in red and names the play in a banner", () => {
     const { ctx, calls } = fakeCtx();
     const counts = drawField(ctx, { ...input(robots), world: world(1, { robots, strategy: stopped }) });
     // ours only: the yellow robot with the same id is not the one stopped
     expect(counts.stopped).toEqual(["blue 1"]);
     expect(calls.filter((c) => c.name === "stroke" && c.style === COLORS.stopped)).toHaveLength(1);
-    expect(calls.filter((c) => c.name === "fillText").map((c) => c.args[0])).toContain("\u25a0 pass_drill");
+    expect(calls.filter((c) => c.name === "fillText").map((c) => c.args[0])).toContain("pass_drill failed: blue 1 stopped");
+  });
+
+  it("banners each failed play once with its robots, at most two lines", () => {
+    const s = (stopped: { id: number; play: string }[]) => stoppedBanners({ our_team: "yellow", stopped });
+    expect(s([{ id: 4, play: "b" }, { id: 2, play: "b" }, { id: 1, play: "a" }])).toEqual(["a failed: yellow 1 stopped", "b failed: yellow 2, 4 stopped"]);
+    expect(s([{ id: 1, play: "a" }, { id: 2, play: "b" }, { id: 3, play: "c" }])).toEqual(["a failed: yellow 1 stopped", "2 more plays failed: see the Code tab"]);
+    expect(s([])).toEqual([]);
   });
 
   it("marks nothing while every play runs, or when the stopped robot is not on the field", () => {

@@ -186,7 +186,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
     if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
     // Always (not a layer): robots standing still because their play failed must not look idle.
-    if (L.filtered && world.strategy?.stopped?.length) counts.stopped = drawStopped(ctx, t, robots, world.strategy, input.largeText === true);
+    if (L.filtered && world.strategy?.stopped?.length) counts.stopped = drawStopped(ctx, t, robots, world.strategy);
     const kick = world.ball?.kick;
     if (L.kicks && world.ball && kick) {
       // Under the ball: the line leaves from under it.
@@ -215,6 +215,9 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
   const halt = world?.halt_reason;
   if (world && !world.estop && typeof halt === "string" && halt) {
     drawBanner(ctx, t, `robots held: ${halt}`, "rgba(146,64,14,0.92)", "#fef3c7", slot++);
+  }
+  if (world?.strategy?.stopped?.length) {
+    for (const line of stoppedBanners(world.strategy)) drawBanner(ctx, t, line, "rgba(127,29,29,0.92)", "#fee2e2", slot++);
   }
   if (input.stale && world) {
     drawBanner(ctx, t, "connection lost: showing the last data received", "rgba(120,53,15,0.92)", "#fef3c7", slot++);
@@ -919,43 +922,39 @@ function drawRoleTags(
 
 /**
  * Robots a failed team-code play holds still: a solid red ring around each (the robot's own
- * no-answer ring is dashed) and a red tag under it with the play's name. Returns the robots
- * marked ("blue 3").
+ * no-answer ring is dashed); the play's name is in a banner over the field (stoppedBanners)
+ * and in the tooltip. Returns the robots marked ("blue 3").
  */
 function drawStopped(
   ctx: CanvasRenderingContext2D,
   t: FieldTransform,
   robots: readonly Robot[],
   strategy: { our_team: Team; stopped: readonly { id: number; play: string }[] },
-  largeText: boolean,
 ): string[] {
   const out: string[] = [];
   const rad = Math.max(MIN_ROBOT_PX, ROBOT_RADIUS_MM * t.scale);
-  const px = roleTagPx(rad, largeText);
-  const h = Math.round(px * 1.35);
   ctx.save();
-  ctx.font = `700 ${px}px ${TAG_FONT}`;
-  ctx.textAlign = "left";
-  ctx.textBaseline = "middle";
+  ctx.lineWidth = Math.max(2.5, rad * 0.22);
+  ctx.strokeStyle = COLORS.stopped;
   for (const s of strategy.stopped) {
     const r = robots.find((x) => x.team === strategy.our_team && x.id === s.id);
     if (!r || !Number.isFinite(r.x) || !Number.isFinite(r.y)) continue;
     const c = worldToCanvas(t, r.x, r.y);
     ctx.beginPath();
     ctx.arc(c.x, c.y, rad + Math.max(4, rad * 0.35), 0, 2 * Math.PI);
-    ctx.lineWidth = Math.max(2.5, rad * 0.2);
-    ctx.strokeStyle = COLORS.stopped;
     ctx.stroke();
-    const label = `■ ${s.play}`;
-    const w = ctx.measureText(label).width + px * 0.6;
-    const x = c.x - w / 2;
-    const y = c.y + rad + Math.max(6, rad * 0.45);
-    ctx.fillStyle = "rgba(127,29,29,0.92)";
-    ctx.fillRect(x, y, w, h);
-    ctx.fillStyle = "#fee2e2";
-    ctx.fillText(label, x + px * 0.3, y + h / 2 + px * 0.05);
     out.push(`${r.team} ${r.id}`);
   }
   ctx.restore();
   return out;
+}
+
+/** One line per failed play over the field: "pass_drill failed: blue 1, 2 stopped" (two at most). */
+export function stoppedBanners(strategy: { our_team: Team; stopped: readonly { id: number; play: string }[] }): string[] {
+  const by = new Map<string, number[]>();
+  for (const s of strategy.stopped) by.set(s.play, [...(by.get(s.play) ?? []), s.id]);
+  const lines = [...by.entries()]
+    .sort(([a], [b]) => a.localeCompare(b))
+    .map(([play, ids]) => `${play} failed: ${strategy.our_team} ${ids.sort((a, b) => a - b).join(", ")} stopped`);
+  return lines.length > 2 ? [lines[0]!, `${lines.length - 1} more plays failed: see the Code tab`] : lines;
 }
