@@ -64,6 +64,11 @@ async function caretAtEndOf(page: Page, text: string): Promise<void> {
 
 const save = (page: Page) => page.keyboard.press("ControlOrMeta+s");
 
+/** "all" when each of our six robots has the play's target at x (our frame); the safety
+ * envelope may move one out of a forbidden spot (near the ball at STOP, say), never by more
+ * than 600 mm here. Else the xs, for the failure message. */
+const all6 = (xs: number[], x: number) => (xs.length >= 6 && xs.every((v) => Math.abs(v - x) < 600) ? "all" : xs.join(","));
+
 test.describe("team code", () => {
   let originalPlay = "match";
 
@@ -91,10 +96,7 @@ test.describe("team code", () => {
     await expect(select.locator('optgroup[label="Built-in"] option', { hasText: "Match" })).toHaveCount(1);
     await select.selectOption(NAME);
     await expect.poll(async () => (await strategy(page)).play, { timeout: 15_000 }).toBe(NAME);
-    // every robot of ours has the play's target; the safety envelope may move one out of a
-    // forbidden spot (near the ball at STOP, say), never by more than 600 mm here
-    const all = (xs: number[], x: number) => (xs.length >= 6 && xs.every((v) => Math.abs(v - x) < 600) ? "all" : xs.join(","));
-    await expect.poll(async () => all(await teamTargetsX(page), -2000), { timeout: 20_000 }).toBe("all");
+    await expect.poll(async () => all6(await teamTargetsX(page), -2000), { timeout: 20_000 }).toBe("all");
 
     // the Code tab: the file runs, drives our robots; the editor shows it
     await page.getByTestId("tab-code").click();
@@ -112,7 +114,7 @@ test.describe("team code", () => {
     await save(page);
     await expect(page.getByTestId("code-save-status")).toHaveText("saved");
     expect(readFileSync(join(teamDir, FILE), "utf8")).toContain("\nX = -1000.0\n");
-    await expect.poll(async () => all(await teamTargetsX(page), -1000), { timeout: 10_000 }).toBe("all");
+    await expect.poll(async () => all6(await teamTargetsX(page), -1000), { timeout: 10_000 }).toBe("all");
     await expect
       .poll(async () => {
         const { robots, sign } = await ourRobots(page);
@@ -164,7 +166,7 @@ test.describe("team code", () => {
     await expect(page.getByTestId("code-stopped")).toHaveCount(0);
     await expect.poll(async () => (await strategy(page)).stopped.length, { timeout: 10_000 }).toBe(0);
     await expect.poll(async () => (await stats(page)).stoppedDrawn.length).toBe(0);
-    await expect.poll(async () => all(await teamTargetsX(page), -1000), { timeout: 10_000 }).toBe("all");
+    await expect.poll(async () => all6(await teamTargetsX(page), -1000), { timeout: 10_000 }).toBe("all");
   });
 
   test("a save on disk meanwhile is a conflict: the edits stay until reloaded from disk", async ({ page }) => {
@@ -199,6 +201,30 @@ test.describe("team code", () => {
     await expect(page.getByTestId("code-group-play").getByTestId("code-file-e2e_new.py")).toHaveCount(1);
     await expect(page.locator(".cm-content")).toContainText("def play(game: Game)");
     await expect(page.getByTestId("play-select-bar").locator('optgroup[label="Team"] option', { hasText: "E2e new" })).toHaveCount(1);
+  });
+
+  test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording", async ({ page }) => {
+    test.setTimeout(90_000);
+    writeFileSync(join(teamDir, FILE), SOURCE);
+    await open(page);
+    try {
+      await page.getByTestId("open-log").click();
+      await page.getByTestId("log-open-fieldsim-2s.log.gz").click();
+      await expect(page.getByTestId("replay-badge")).toBeVisible();
+      await expect.poll(async () => ((await (await page.request.get("/api/player")).json()) as { loading: number | null }).loading).toBeNull();
+      await page.getByTestId("play-select-bar").selectOption(NAME);
+      await expect.poll(async () => (await strategy(page)).play, { timeout: 15_000 }).toBe(NAME);
+      // play the 2.5 s log at half speed: the strategy runs on each replayed world
+      await page.request.post("/api/player", { data: { action: "play", speed: 0.5 }, headers: { "Content-Type": "application/json" } });
+      await expect.poll(async () => all6(await teamTargetsX(page), -2000), { timeout: 15_000 }).toBe("all");
+      // drawn: the play's commands (arrows) beside the log's own estimate (rings); nothing sent
+      await expect.poll(async () => (await stats(page)).commandsDrawn, { timeout: 10_000 }).toBeGreaterThan(0);
+      expect((await stats(page)).recordedDrawn).toBeGreaterThan(0);
+      const w = await world(page);
+      expect((w as unknown as { replay: unknown }).replay).not.toBeNull();
+    } finally {
+      await page.request.post("/api/player", { data: { action: "live" }, headers: { "Content-Type": "application/json" } });
+    }
   });
 
   // The pictures of docs/team-code.md (only with TOUCHLINE_DOCS_SHOTS=1; 1400x900): the shipped
