@@ -71,6 +71,8 @@ function handleReplayKey(ev: KeyboardEvent): boolean {
 
 export function handleKey(ev: KeyboardEvent): boolean {
   if (ev.ctrlKey || ev.metaKey) return false;
+  // taken already by the element (the code editor's Escape closing its search, say)
+  if (ev.defaultPrevented) return false;
   // Outside text inputs only: "e" is a letter when typing (the E-stop button is always one click away).
   if (typing(ev)) {
     if (ev.key === "Escape") (ev.target as HTMLElement).blur();

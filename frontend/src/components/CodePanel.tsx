@@ -36,6 +36,7 @@ import {
   reloadFromDisk,
   saveFile,
   setBufferText,
+  teamStore,
   useTeam,
   type Buffer,
 } from "../team/teamStore";
@@ -351,6 +352,19 @@ export default function CodePanel() {
   useEffect(() => {
     if (connected) void loadTeam();
   }, [connected]);
+
+  // Ctrl/Cmd+S anywhere on the tab saves the open file (in the editor, the editor's own key)
+  useEffect(() => {
+    const onKey = (ev: KeyboardEvent) => {
+      if (!(ev.ctrlKey || ev.metaKey) || ev.key.toLowerCase() !== "s" || ev.defaultPrevented) return;
+      const name = teamStore.getState().open;
+      if (!name) return;
+      ev.preventDefault();
+      void saveFile(name);
+    };
+    window.addEventListener("keydown", onKey);
+    return () => window.removeEventListener("keydown", onKey);
+  }, []);
 
   // a file saved elsewhere: a clean buffer takes it, one with edits is told
   const seen = useRef(new Map<string, string>()).current;

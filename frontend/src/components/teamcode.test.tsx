@@ -197,10 +197,11 @@ describe("the Code tab", () => {
   const team = (edit: TeamCode["edit"] = { allowed: true, reason: null }): TeamCode => ({ dir: "/home/me/team", api_version: 1, edit, files });
 
   function render(edit?: TeamCode["edit"]) {
-    stubApi({
+    const fetchMock = stubApi({
       "GET /api/team": () => ({ status: 200, body: team(edit) }),
       "GET /api/strategy": () => ({ status: 200, body: strategyView(builtin) }),
       "GET /api/team/files/pass_drill.py": () => ({ status: 200, body: { name: "pass_drill.py", text: SOURCE, version: "aaaaaaaaaaaa", language: "python" } }),
+      "PUT /api/team/files/pass_drill.py": () => ({ status: 200, body: { name: "pass_drill.py", version: "aaaaaaaaaaaa", saved_at_unix: 1_700_000_000 } }),
     });
     appStore.setState({
       connection: connected,
@@ -208,6 +209,7 @@ describe("the Code tab", () => {
       world: world(1, { strategy: strategy({ stopped: [{ id: 4, play: "pass_drill", reason: "exception at pass_drill.py:7: ValueError: broken on purpose" }, { id: 2, play: "pass_drill", reason: "x" }] }) }),
     });
     act(() => t.root.render(<CodePanel />));
+    return fetchMock;
   }
 
   it("lists the files grouped with their states, and opens the play in use with its error", async () => {
@@ -247,6 +249,19 @@ describe("the Code tab", () => {
     await settle();
     expect(q("code-detail-tick")?.textContent).toBe("p50 4.20 ms · p99 9.87 ms");
     expect(q("code-detail-robots")?.textContent).toBe("0, 1");
+  });
+
+  it("saves the open file on Ctrl+S anywhere on the tab (PUT with the version it was opened at)", async () => {
+    const fetchMock = render();
+    await settle();
+    await editorLoaded();
+    act(() => {
+      window.dispatchEvent(new KeyboardEvent("keydown", { key: "s", ctrlKey: true, cancelable: true }));
+    });
+    await settle();
+    const put = fetchMock.mock.calls.find(([, init]) => init?.method === "PUT");
+    expect(put?.[0]).toBe("/api/team/files/pass_drill.py");
+    expect(JSON.parse(String(put?.[1]?.body))).toEqual({ text: SOURCE, base_version: "aaaaaaaaaaaa" });
   });
 
   it("is read-only with the station's reason when this browser may not edit", async () => {
