@@ -1,7 +1,7 @@
 function orders = keeper_wall(ours, theirs, ball, game)
   % Keeper and wall (Octave, the paper's style)
-  % The lowest id keeps goal on the line between ball and goal centre, the next two stand as a
-  % wall in front of our defence area. Several functions in one file: keeper_spot and
+  % Our goalkeeper (the referee's, else robot 0 if it is ours, else our lowest id) keeps goal
+  % between ball and goal centre; the others stand as a wall in front of our defence area. Several functions in one file: keeper_spot and
   % wall_spots below. Try changing WALL_GAP or the keeper's distance from the line.
   %
   % ours: one row a robot (id x y orientation vx vy omega visible mine ball_contact),
@@ -13,6 +13,13 @@ function orders = keeper_wall(ours, theirs, ball, game)
     return;
   end
   ids = sort(mine(:, 1));
+  keeper = game.goalkeeper;
+  if isnan(keeper)
+    keeper = 0;
+  end
+  if any(ids == keeper)
+    ids = [keeper; ids(ids ~= keeper)];  % the keeper first
+  end
   if isempty(ball)
     b = [0 0];
   else

@@ -27,6 +27,8 @@ from ..world.referee import RefereeState
 from ..world.state import Team, WorldState
 from .common import badlog
 
+#: our goalkeeper while no referee names one (the game controller's default)
+KEEPER_DEFAULT = 0
 #: an engine answer older than this is not used (the built-in code is, as a fallback)
 ENGINE_MAX_AGE_S = 0.25
 DRIBBLER_RPM = 3000.0
@@ -198,7 +200,7 @@ class StrategyProcessor(Processor):
                 raise RuntimeError("team plays chosen but no team code host")
             game = build_game(prep, world, referee, team, contacts, self.team_topics(),
                               self.replaying())
-            tick = self.team.ask(game, theirs, p.team_budget_ms / 1000.0)
+            tick = self.team.ask(game, theirs, p.team_budget_ms / 1000.0, p.engine_timeout_s)
         intents = await asyncio.to_thread(self.core.builtin_intents, prep, builtin, keeper)
         stopped: list[tuple[int, str, str]] = []
         if tick is not None:
@@ -206,7 +208,8 @@ class StrategyProcessor(Processor):
             sit = prep.inp.situation
             rules = Rules(prep.inp.fs, sit.kind, sit.ours,
                           prep.inp.ball.xy if prep.inp.ball is not None else None,
-                          sit.designated, prep.inp.keeper_id, p.stop_distance_mm)
+                          sit.designated, KEEPER_DEFAULT if prep.inp.keeper_id is None
+                          else prep.inp.keeper_id, p.stop_distance_mm)
             bots = {b.id: b for b in prep.inp.ours}
             orders = tick.orders(rules, bots)
             intents.update(orders.intents)

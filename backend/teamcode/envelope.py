@@ -5,7 +5,8 @@ What it does here, per order (the rest acts on every robot's entry, team or not:
 1.5 m/s cap, kicks only when the referee allows, each robot's speed and acceleration limits,
 the e-stop and arming (control and the relay), the stale stop (control, the relay)):
 
-* a Target inside our defence area (except the referee's goalkeeper), inside theirs (0.2 m
+* a Target inside our defence area (except the referee's goalkeeper: robot 0 when no referee
+  names one, the game controller's default), inside theirs (0.2 m
   further while the game is stopped), beyond the field's walls, or (STOP, the other team's
   set pieces and ball placement) within the stop distance of the ball (and of the placement
   corridor) is **moved to the nearest allowed point** and counted;
@@ -48,7 +49,9 @@ class Rules:
     ours: bool | None = None  # our set piece (True), theirs (False)
     ball: tuple[float, float] | None = None
     designated: tuple[float, float] | None = None  # ball placement mark
-    keeper_id: int | None = None  # the referee's goalkeeper of ours
+    #: the referee's goalkeeper of ours; with no referee naming one, robot 0 (the game
+    #: controller's default)
+    keeper_id: int | None = 0
     stop_distance_mm: float = 650.0  # robot centre to ball (rules 500 plus margin)
 
     @property

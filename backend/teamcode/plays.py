@@ -25,10 +25,11 @@ from touchline import Game
 from ..strategy.model import Bot, Intent
 from .discovery import Found
 from .envelope import Rules, check_target, check_velocity
+from .octave import OctaveRunner
 from .orders import OrderError, TargetOrder, VelocityOrder, validate_orders
 from .registry import TeamRegistry
 from .runner import Pending, PythonRunner, Runner
-from .state import ErrorInfo, FileRun
+from .state import ErrorInfo
 
 log = logging.getLogger("touchline.team")
 
@@ -132,29 +133,6 @@ def _intent(o: TargetOrder, rules: Rules) -> Intent:
                   own_defense_ok=o.id == rules.keeper_id)
 
 
-class _NotRun(Runner):
-    """A file this station cannot run: failed with the reason."""
-
-    def __init__(self, found: Found, run: FileRun, why: str) -> None:
-        super().__init__(found, run)
-        self.why = why
-        self.update(found)
-
-    def ensure(self) -> None:
-        return None
-
-    def update(self, found: Found) -> None:
-        self.found = found
-        self.fail(ErrorInfo("import", self.why, found.name))
-
-    def send(self, game: object, inputs: object, budget_s: float,
-             now: float | None = None) -> Pending | None:
-        return None
-
-    async def close(self) -> None:
-        self.closed = True
-
-
 class TeamPlays:
     """The runners of the team's plays (by file name), following the team folder."""
 
@@ -163,6 +141,8 @@ class TeamPlays:
         self.memory_mb = memory_mb
         self.runners: dict[str, Runner] = {}
         self.last_used: dict[str, float] = {}
+        #: an Octave play's budget: the compute engine's timeout (strategy.engine_timeout_s)
+        self.octave_timeout_s = 0.2
         self._closing: set[asyncio.Task[None]] = set()
         registry.listeners.append(self._changed)
 
@@ -173,7 +153,7 @@ class TeamPlays:
     def _new_runner(self, found: Found) -> Runner:
         run = self.registry.run(found.name)
         if found.language == "octave":
-            return _NotRun(found, run, "Octave plays are not run by this station yet")
+            return OctaveRunner(found, run, self.team_dir, self.octave_timeout_s)
         return PythonRunner(found, run, self.team_dir, self.memory_mb, "play")
 
     def runner(self, found: Found) -> Runner:
@@ -207,10 +187,16 @@ class TeamPlays:
             task.add_done_callback(self._closing.discard)
 
     def ask(self, game: Game, groups: Mapping[str, tuple[int, ...]], budget_s: float,
-            now: float | None = None) -> TeamTick:
+            octave_timeout_s: float | None = None, now: float | None = None) -> TeamTick:
         """Sends this tick's requests: ``groups`` maps each team play in use to the robots it
-        drives (sorted ids). Runners of plays not in use close after ``IDLE_CLOSE_S``."""
+        drives (sorted ids); ``budget_s`` a Python play's CPU time, ``octave_timeout_s`` an
+        Octave play's. Runners of plays not in use close after ``IDLE_CLOSE_S``."""
         now = time.monotonic() if now is None else now
+        if octave_timeout_s is not None:
+            self.octave_timeout_s = octave_timeout_s
+            for r in self.runners.values():
+                if isinstance(r, OctaveRunner):
+                    r.timeout_s = octave_timeout_s
         plays = self.registry.plays()
         asks: list[_Ask] = []
         for play, mine in groups.items():
@@ -240,7 +226,9 @@ class TeamPlays:
                 self.runners[name].run.robots = ()
                 if now - self.last_used.get(name, now) > IDLE_CLOSE_S:
                     self._close(name)
-        return TeamTick(asks, now + budget_s + IPC_GRACE_S)
+        longest = max((a.pending.budget_s for a in asks if a.pending is not None),
+                      default=budget_s)
+        return TeamTick(asks, now + longest + IPC_GRACE_S)
 
     async def close(self) -> None:
         for name in list(self.runners):

@@ -24,7 +24,7 @@ FS = DIVISION_B
 HL, HW = FS.half_length, FS.half_width
 PAD = FS.penalty_area_depth
 PAW = FS.penalty_area_width / 2.0
-RUNNING = Rules(FS, "running", None, (0.0, 0.0))
+RUNNING = Rules(FS, "running", None, (0.0, 0.0), keeper_id=None)
 
 
 def target(x: float, y: float, rid: int = 1, **kw: object) -> TargetOrder:
