@@ -78,7 +78,7 @@ test.describe("team code", () => {
 
   test.afterAll(async ({ request }) => {
     await request.patch("/api/params", { data: { strategy: { play: originalPlay, robot_plays: {} } } });
-    for (const f of [FILE, "e2e_new.py"]) rmSync(join(teamDir, f), { force: true });
+    for (const f of [FILE, "e2e_new.py", "e2e_wall.m"]) rmSync(join(teamDir, f), { force: true });
   });
 
   test("edit a play in the page, save, the robots follow; break it, see the error and the stopped robots; fix it", async ({ page }) => {
@@ -190,17 +190,49 @@ test.describe("team code", () => {
     await expect(page.getByTestId("code-save-status")).toHaveAttribute("data-dirty", "false");
   });
 
-  test("a new play from the page: made from the template, listed as a play, offered in the top bar", async ({ page }) => {
+  test("new plays from the page (Python, Octave); an Octave play given to one robot drives it", async ({ page }) => {
+    test.setTimeout(90_000);
     await open(page);
     await page.getByTestId("tab-code").click();
     await page.getByTestId("code-new").click();
     await page.getByTestId("code-new-name").fill("e2e new");
     await page.getByTestId("code-new-create").click();
-    await expect(page.getByTestId("code-file-e2e_new.py")).toBeVisible();
     await expect(page.getByTestId("code-file-e2e_new.py")).toHaveAttribute("aria-current", "true");
     await expect(page.getByTestId("code-group-play").getByTestId("code-file-e2e_new.py")).toHaveCount(1);
     await expect(page.locator(".cm-content")).toContainText("def play(game: Game)");
     await expect(page.getByTestId("play-select-bar").locator('optgroup[label="Team"] option', { hasText: "E2e new" })).toHaveCount(1);
+
+    // an Octave play: the paper's style, highlighted as Octave, listed as a play
+    await page.getByTestId("code-new").click();
+    await page.getByTestId("code-new-name").fill("e2e_wall");
+    await page.getByTestId("code-new-language").selectOption("octave");
+    await page.getByTestId("code-new-create").click();
+    await expect(page.getByTestId("code-group-play").getByTestId("code-file-e2e_wall.m")).toHaveCount(1);
+    await expect(page.locator(".cm-content")).toContainText("function orders = e2e_wall(ours, theirs, ball, game)");
+    await expect(page.locator(".cm-content")).toHaveAttribute("data-language", "octave");
+
+    // given to one robot of ours in its panel (the rest keep the team's play)
+    const { team, robots } = await ourRobots(page);
+    const rid = robots.map((r) => r.id).sort((a, b) => a - b)[1]!;
+    await page.getByTestId("tab-robots").click();
+    await page.getByTestId(`robot-row-${team}-${rid}`).click();
+    const choice = page.getByTestId("robot-play-select");
+    await expect(choice.locator('optgroup[label="Team"] option', { hasText: "E2e wall" })).toHaveCount(1);
+    await choice.selectOption("e2e_wall");
+    await expect.poll(async () => (await strategy(page)).robot_plays[String(rid)], { timeout: 15_000 }).toBe("e2e_wall");
+    // the template's row: x = -2000 in our frame (the Octave worker may take a moment to start)
+    await expect
+      .poll(async () => {
+        const { robots: rs, sign } = await ourRobots(page);
+        const r = rs.find((x) => x.id === rid)!;
+        return r.target?.source === "team" ? Math.round(sign * r.target.x) : null;
+      }, { timeout: 30_000 })
+      .toBe(-2000);
+    await expect(page.getByTestId("robot-play-effective")).toHaveAttribute("data-value", "e2e_wall");
+    await expect(page.getByTestId("robot-play-effective")).toHaveAttribute("data-override", "true");
+    // back to the team's play
+    await choice.selectOption("");
+    await expect.poll(async () => (await strategy(page)).robot_plays[String(rid)], { timeout: 15_000 }).not.toBe("e2e_wall");
   });
 
   test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording", async ({ page }) => {
