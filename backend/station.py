@@ -53,6 +53,7 @@ from .replay.logs import LogFolders
 from .replay.player import LogPlayer
 from .station_loop import StationLoop
 from .teamcode.plays import TeamPlays
+from .teamcode.processors import TeamProcessors
 from .teamcode.registry import TeamRegistry
 from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
@@ -161,13 +162,19 @@ class Station:
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
         self.strategy.replaying = lambda: self.replay.replaying
+        # the team's processors (their topics team/<name>; the plays read them as topics)
+        self.team_processors = TeamProcessors(self.bus, self.team, settings.team_memory_mb)
+        self.team_processors.referee_source = self.control.active_referee
+        self.team_processors.contacts = self.strategy.contacts
+        self.team_processors.replaying = lambda: self.replay.replaying
+        self.strategy.team_topics = lambda: self.team_processors.outputs
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
-            ViewPublisher(self.hub),
+            self.team_processors, ViewPublisher(self.hub),
             RecordingProcessor(self))
 
     # ---- the station thread (backend/station_loop.py): the web side changes station state
@@ -204,6 +211,7 @@ class Station:
         prm = self.params.current
         rec = self.recording.open(prm)
         self.ingest.record = self.publisher.record = self.tracker.record = rec.record
+        self.team_processors.record = rec.record
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop

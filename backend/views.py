@@ -248,7 +248,7 @@ def world(st: Station) -> contract.World:
         "internal_referee": referee_view(st)["internal"],
         "replay": st.player.clock(),
         "recorded": recorded_world(st.recorded_tracked) if st.player.log is not None else None,
-        "team": {},
+        "team": st.team_processors.world_view(),
     }
     out["strategy"] = strategy_state(st)
     if ref is not None:

@@ -53,6 +53,7 @@ TYPE_NAMES = {
     1003: "touchline action",
     1004: "touchline health",
     1005: "touchline session",
+    1006: "touchline team",
 }
 
 _Referee = ssl_gc_referee_message_pb2.Referee

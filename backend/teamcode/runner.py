@@ -18,6 +18,7 @@ import asyncio
 import contextlib
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
@@ -182,6 +183,20 @@ class PythonRunner(Runner):
         self._want = 0  # loads asked for (a save during a load loads again)
         self._done = 0
         self._loading = False  # a load request is with the worker
+        #: what the loaded file says of itself (a processor: rate_hz, trigger, max_hz,
+        #: reads), checked by ``info_check``
+        self.info: dict[str, Any] = {}
+        self.info_check: Callable[[dict[str, Any]], str | None] | None = None
+
+    def check_info(self, info: Any) -> str | None:
+        """What the loaded file says of itself (a processor's schedule): kept in ``info``
+        when usable; else why not. ``info_check`` (set by the processors' host) judges."""
+        if not isinstance(info, dict):
+            return "the worker described the file wrongly"
+        why = self.info_check(info) if self.info_check is not None else None
+        if why is None:
+            self.info = info
+        return why
 
     @property
     def pid(self) -> int:
@@ -259,7 +274,11 @@ class PythonRunner(Runner):
             self._loading = False
         if self.closed or self._done < self._want:
             return  # saved again meanwhile: the next load counts
-        if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 3:
+        if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:
+            problem = self.check_info(reply[3])
+            if problem is not None:
+                self.fail(ErrorInfo("import", problem, found.name))
+                return
             self.run.loaded_version = str(reply[2])
             self.run.reloaded_at_unix = time.time()
             self.run.reloads += 1

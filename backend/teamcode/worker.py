@@ -7,7 +7,8 @@ Protocol on stdin/stdout, as the compute engine's (``backend.engine._numpy_worke
 of a 4-byte big-endian length and a pickle. The first frame out is ``("ready", pid)``; then
 each request carries a sequence number its reply repeats:
 
-* ``("load", seq, name, kind, entry, hard_s)`` -> ``("loaded", seq, version)`` or
+* ``("load", seq, name, kind, entry, hard_s)`` -> ``("loaded", seq, version, info)`` (a
+  processor's ``rate_hz``, ``trigger``, ``max_hz``, ``reads``; {} for a play) or
   ``("error", seq, error, 0.0)``: imports the file (again: a reload drops every module of the
   team folder and imports it anew, keeping numpy and touchline loaded; a class play or
   processor that defines ``keep()``/``restore()`` carries its state across).
@@ -251,6 +252,25 @@ class Host:
         self.loaded = Loaded(module, call, instance, version)
         return version
 
+    def info(self) -> dict[str, Any]:
+        """What the station needs to know of a processor to schedule it (its class
+        attributes, as plain data; the station checks them)."""
+        inst = self.loaded.instance if self.loaded is not None else None
+        if self.kind != "processor" or inst is None:
+            return {}
+        out: dict[str, Any] = {}
+        for key in ("rate_hz", "max_hz"):
+            v = getattr(inst, key, None)
+            out[key] = float(v) if isinstance(v, int | float) and not isinstance(v, bool) \
+                else repr(v)[:60]
+        trigger = getattr(inst, "trigger", None)
+        out["trigger"] = trigger if trigger is None or isinstance(trigger, str) \
+            else repr(trigger)[:60]
+        reads = getattr(inst, "reads", ())
+        out["reads"] = [r if isinstance(r, str) else repr(r)[:60] for r in reads] \
+            if isinstance(reads, list | tuple) else repr(reads)[:60]
+        return out
+
     # ---- one tick ----
 
     def tick(self, game: Any, inputs: Any) -> Any:
@@ -295,7 +315,7 @@ def main() -> None:
             faulthandler.dump_traceback_later(hard_s, exit=True, file=dump)
             try:
                 version = host.load(name, kind, entry)
-                reply: Any = ("loaded", seq, version)
+                reply: Any = ("loaded", seq, version, host.info())
             except BaseException as exc:  # SystemExit from team code's import too
                 reply = ("error", seq, host.error("import", exc, name), 0.0)
             faulthandler.cancel_dump_traceback_later()

@@ -86,7 +86,7 @@ class Rig:
         self.registry.rescan()
         self.plays = TeamPlays(self.registry, 1024)
         self.params = StationParams.model_validate(
-            {"strategy": {"play": play, "team_budget_ms": 100.0, **strategy}})
+            {"strategy": {"play": play, "team_budget_ms": 200.0, **strategy}})
         self.strategy = StrategyProcessor(self.bus, "blue", self.params.strategy)
         self.strategy.team = self.plays
         self.control = ControlProcessor(self.bus, 0.05, 0.3)

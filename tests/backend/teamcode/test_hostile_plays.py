@@ -197,7 +197,7 @@ async def test_a_play_that_stops_answering_stops_its_robots(rig: Rig, tmp_path: 
                                 "    while N[0] > 5:\n        pass\n"
                                 "    return {rid: Velocity(1.0, 0.0, 0.0) for rid in game.mine}\n")
     rig.registry.rescan()
-    rig.configure(play="hangs", team_budget_ms=10.0)
+    rig.configure(play="hangs")
     await rig.running("hangs.py")
     moving = 0
     for _ in range(5):

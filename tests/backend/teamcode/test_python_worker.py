@@ -249,6 +249,16 @@ BURN = ("import time\nfrom touchline import Target\nMS = {ms}\n"
         "    return {{1: Target(0.0, 0.0)}}\n")
 
 
+@pytest.fixture
+def patient(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No hard limit to speak of: these tests judge the CPU-time budget, which a busy
+    machine does not change; the wall-clock hard limit it would (tested on its own)."""
+    from backend.teamcode import runner as runner_mod
+
+    monkeypatch.setattr(runner_mod, "hard_limit_s", lambda _budget_s: 30.0)
+
+
+@pytest.mark.usefixtures("patient")
 async def test_over_budget_three_ticks_in_a_row_fails(tmp_path: Path) -> None:
     write(tmp_path, "slow.py", BURN.format(ms=30))
     r = await started(tmp_path, "slow.py")
@@ -272,6 +282,7 @@ async def test_over_budget_three_ticks_in_a_row_fails(tmp_path: Path) -> None:
         await r.close()
 
 
+@pytest.mark.usefixtures("patient")
 async def test_one_tick_over_budget_is_discarded_but_not_fatal(tmp_path: Path) -> None:
     write(tmp_path, "once.py", "import time\nfrom touchline import Target\nN = [0]\n"
                                "def play(game):\n    N[0] += 1\n    t = time.thread_time()\n"

@@ -113,3 +113,18 @@ async def test_an_error_names_file_and_line_and_a_fix_resumes(tmp_path: Path) ->
         assert rig.registry.runs["flaky.py"].errors == 1
     finally:
         await rig.close()
+
+
+async def test_a_play_reads_the_processors_topics(tmp_path: Path) -> None:
+    write(tmp_path, "follows.py", "from touchline import Target\n"
+                                  "def play(game):\n"
+                                  "    v = game.topics.get('possession', {}).get('ours', -1.0)\n"
+                                  "    return {r: Target(1000.0 * v, 0.0) for r in game.mine}\n")
+    rig = Rig(tmp_path, "follows")
+    rig.strategy.team_topics = lambda: {"possession": {"ours": 0.75}}
+    try:
+        await rig.running("follows.py")
+        await rig.tick()
+        assert math.isclose(rig.targets()[1].target.x, 750.0)
+    finally:
+        await rig.close()
