@@ -1,7 +1,7 @@
 import { readFileSync, rmSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { expect, test, type Page } from "@playwright/test";
-import { open, stats, world, type Robot } from "./helpers";
+import { open, stats, world, type Hooks, type Robot } from "./helpers";
 
 // The team's own code against the real station (issue 27): the config starts the station on a
 // copy of the shipped team folder (E2E_TEAM_DIR); this spec writes a play into it, picks it in
@@ -233,6 +233,32 @@ test.describe("team code", () => {
     // back to the team's play
     await choice.selectOption("");
     await expect.poll(async () => (await strategy(page)).robot_plays[String(rid)], { timeout: 15_000 }).not.toBe("e2e_wall");
+  });
+
+  test("a team processor's outputs: shown in the Code tab, plotted from there, among the Plots tab's signals", async ({ page }) => {
+    await open(page);
+    await page.getByTestId("tab-code").click();
+    // the shipped ball-possession processor (team/possession.py) runs from the start
+    await page.getByTestId("code-file-possession.py").click();
+    await expect(page.getByTestId("code-state-possession.py")).toHaveAttribute("data-state", "running");
+    await expect(page.getByTestId("code-detail-outputs")).toContainText("ours");
+    await page.getByTestId("code-plot-ours").click();
+    await expect(page.getByTestId("tab-plots")).toHaveAttribute("aria-selected", "true");
+    const plotted = () =>
+      page.evaluate(() => {
+        const api = (window as unknown as { __touchline: Hooks }).__touchline;
+        const p = api.plots().find((x) => x.keys.includes("team.possession.ours"));
+        return { points: p?.points ?? 0, signal: api.signals().includes("team.possession.ours") };
+      });
+    await expect.poll(async () => (await plotted()).points, { timeout: 10_000 }).toBeGreaterThan(2);
+    expect((await plotted()).signal).toBe(true);
+    // found by the signal search as well
+    await page.getByTestId("add-plot").click();
+    await page.getByTestId("signal-search").fill("team possession");
+    await expect(page.getByTestId("signal-team.possession.ours")).toBeVisible();
+    await page.keyboard.press("Escape");
+    for (let n = await page.getByRole("button", { name: "Remove plot" }).count(); n > 0; n--)
+      await page.getByRole("button", { name: "Remove plot" }).last().click();
   });
 
   test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording", async ({ page }) => {
