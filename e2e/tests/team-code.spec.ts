@@ -62,6 +62,12 @@ async function caretAtEndOf(page: Page, text: string): Promise<void> {
   await page.keyboard.press("End");
 }
 
+/** Closes the notifications (a picture without "Play: ..." over the field). */
+async function dismissToasts(page: Page): Promise<void> {
+  for (let n = await page.getByTestId("toast").count(); n > 0; n--) await page.getByTestId("toast").first().getByRole("button").click();
+  await expect(page.getByTestId("toast")).toHaveCount(0);
+}
+
 const save = (page: Page) => page.keyboard.press("ControlOrMeta+s");
 
 /** "all" when each of our six robots has the play's target at x (our frame); the safety
@@ -307,6 +313,7 @@ test.describe("team code", () => {
       await page.keyboard.press("ControlOrMeta+End");
       await expect(page.locator(".cm-content")).toContainText("def play(game: Game)");
       await expect(page.getByTestId("code-detail-tick")).toContainText("p50");
+      await dismissToasts(page);
       await page.mouse.move(0, 0);
       await page.screenshot({ path: new URL("../../docs/screenshot-code.png", import.meta.url).pathname });
 
@@ -317,6 +324,7 @@ test.describe("team code", () => {
       await expect(page.getByTestId("code-error")).toContainText("mien");
       await expect(page.locator('.cm-line[data-error-line="true"]')).toHaveCount(1);
       await expect.poll(async () => (await stats(page)).stoppedDrawn.length, { timeout: 10_000 }).toBeGreaterThanOrEqual(6);
+      await dismissToasts(page);
       await page.mouse.move(0, 0);
       await page.screenshot({ path: new URL("../../docs/screenshot-code-error.png", import.meta.url).pathname });
     } finally {
