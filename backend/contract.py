@@ -820,7 +820,8 @@ class Health(TypedDict):
     latency_stages: list[LatencyStage]
     websocket_clients: int
     websocket_dropped: Annotated[int, Field(
-        description="clients dropped because their socket took nothing for 2 s (stalled)")]
+        description="clients dropped because their peer took none of the bytes sent to it for "
+                    "1.25 s (stalled: within 2 s of its last read; the connection is reset)")]
     engine: EngineHealth | None
     recording: Recording
     processes: Annotated[list[ProcessHealth], Field(

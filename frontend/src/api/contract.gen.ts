@@ -278,7 +278,7 @@ export interface Health {
   latency: LatencyHealth | null;
   latency_stages: LatencyStage[];
   websocket_clients: number;
-  /** clients dropped because their socket took nothing for 2 s (stalled) */
+  /** clients dropped because their peer took none of the bytes sent to it for 1.25 s (stalled: within 2 s of its last read; the connection is reset) */
   websocket_dropped: number;
   engine: EngineHealth | null;
   recording: Recording;
