@@ -41,9 +41,11 @@ sslpb/__init__.py: .venv/.ok node_modules/.ok $(wildcard proto/sslpb/*.proto) sc
 proto: .venv/.ok node_modules/.ok
 	TOUCHLINE_REQUIRE_TS_PROTO=1 $(PY) scripts/gen_proto.py
 
-# The browser contract: TypeScript types and the docs/api.md reference from backend/contract.py.
+# The browser contract: TypeScript types and the docs/api.md reference from backend/contract.py;
+# and docs/team-api.md, the team-code interface, from the touchline package.
 contract: .venv/.ok
 	$(PY) scripts/gen_contract.py
+	$(PY) scripts/gen_team_api.py
 
 build: setup
 	npm run build

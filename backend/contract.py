@@ -614,6 +614,16 @@ class WorldHealth(TypedDict):
     camera_clock_offsets_s: Annotated[dict[str, float | None], Field(
         description="per camera: receive - capture (s)")]
     camera_pairs: list[CameraPair]
+    camera_rates_hz: Annotated[dict[str, float], Field(
+        description="per camera heard within the last second: frames a second by the receive "
+        "clock (0: not measured yet)")]
+    lost_after_s: Annotated[float | None, Field(
+        description="every camera silent this long: every robot is stopped (6 frame periods, "
+        "at most 0.1 s less 20 ms for the stop to reach the robots; null: a camera slower than "
+        "30 Hz or not measured yet, then safety.vision_stale_s)")]
+    vision_lost: Annotated[str | None, Field(
+        description="every camera silent past lost_after_s: why every robot is stopped (as "
+        "world.halt_reason says), else null")]
 
 
 @with_config(_STRICT)

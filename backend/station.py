@@ -144,6 +144,7 @@ class Station:
         self.publisher.armed_by = lambda: self.armed_by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        self.control.silence = self.world.silence
         self.control.may_drive_other_team = self.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None

@@ -316,15 +316,19 @@ def world_health(st: Station) -> contract.WorldHealth | None:
     each camera's clock offset."""
     model = st.world.model
     age = st.control.vision_age_s(time.monotonic())
+    silence, lost = st.world.silence, st.control.vision_lost
     return {
         "age_s": age if math.isfinite(age) else None,
-        "stale": age > st.control.vision_stale_s,
+        "stale": age > st.control.vision_stale_s or lost is not None,
         "rejected": dict(model.rejected),
         "recent_rejections": st.world.recent_rejections(),
         "last_rejection": model.last_rejection,
         "clock_resyncs": model.clocks.resyncs,
         "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
         "camera_pairs": cast(list[contract.CameraPair], model.camera_pairs.view()),
+        "camera_rates_hz": {str(c): r for c, r in silence.rates_hz().items()},
+        "lost_after_s": silence.lost_after_s(),
+        "vision_lost": None if lost is None else lost.reason(),
     }
 
 
@@ -414,6 +418,13 @@ def health(st: Station) -> contract.Health:
     if access["blocked_clients"]:
         station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
                              "wrong tokens (someone is guessing the operator token)")
+    team_files = st.team.files_view()
+    # a team file that failed while running (its robots are stopped, its topic stale)
+    station_lines += [f"team code {f['name']}: {f['error']['kind']} at {f['error']['file']}"
+                      f"{':' + str(f['error']['line']) if f['error']['line'] else ''}"
+                      for f in team_files if f["state"] == "error" and f["error"] is not None
+                      and st.team.runs.get(f["name"]) is not None
+                      and st.team.runs[f["name"]].state == "error"]
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
@@ -440,7 +451,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
-        "team_code": st.team.files_view(),
+        "team_code": team_files,
     }
     return out
 
@@ -478,7 +489,9 @@ def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
     if replaying:
         vision, world = {"last_age_s": 0.0}, None
     if world is not None:
-        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
+        if world["vision_lost"] is not None:
+            out.append(f"{world['vision_lost']}: robots stopped")
+        elif world["stale"] and vision.get("last_age_s", -1) >= 0 \
                 and vision.get("last_age_s", -1) < 1.0:
             # vision arrives but nothing of it reaches the world: say why
             since = ("no frame merged yet" if world["age_s"] is None

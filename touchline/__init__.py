@@ -9,6 +9,10 @@ A team's play, role or processor imports only from here::
     def play(game: Game) -> dict[int, Target]:
         ...
 
+A play is a file of the team folder with a top-level ``def play(game)``, or a ``class Play``
+whose ``tick(self, game)`` is called (one instance; its ``keep()`` / ``restore(kept)``, when
+it defines them, carry its state across a save of the file, as a ``Processor``'s do).
+
 ``touchline.lib`` lends a play Touchline's own pieces: the geometry library, the path planner
 (``plan_path(game, rid, x, y)``) and the built-in roles (goalkeeper, attacker, defenders).
 

@@ -151,6 +151,8 @@ class StrategyProcessor(Processor):
                 self.robot_plays = {b.id: p.play for b in prep.inp.ours
                                     if (team, b.id) not in out} if p.play != "idle" else {}
                 self.stopped = []
+                if self.team is not None and self.team.runners:
+                    self.team.release()  # no team play in use: their workers go in a while
                 moves = await asyncio.to_thread(self.core.decide, prep, keeper)
             else:
                 moves = await self._mixed_tick(prep, world, referee, contacts, keeper, out)
@@ -166,6 +168,8 @@ class StrategyProcessor(Processor):
                     max_speed_mps=mv.max_speed_mps)
         else:
             self.robot_plays, self.stopped = {}, []
+            if self.team is not None and self.team.runners:
+                self.team.release()
         self.targets.write(out)
 
     def _team_robot(self, rid: int) -> bool:

@@ -68,7 +68,8 @@ class ReplayControl:
         st.world_topic.clear()  # no world of before the jump is shown or obeyed
         st.referee_topic.clear()  # the log's own referee is heard within 0.1 s
         st.control.motion.reset_all()
-        st.control.replay_clock = self.player.now_ns if replay else None
+        # (vision is judged by what the feed delivered: one lagging the playhead is no loss)
+        st.control.replay_clock = self.player.delivered_ns if replay else None
         # a referee is silent by the log's clock in replay (a paused replay is not silence)
         st.referee_watch.clock = (lambda: self.player.now_ns() / 1e9) if replay \
             else time.monotonic

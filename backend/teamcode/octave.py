@@ -7,9 +7,11 @@ layouts of ``touchline.octave``).
 The Octave path is the team folder and its ``lib/``; several functions in one file work as
 in any Octave function file (local functions after the main one). A save of the play or of
 any ``.m`` file restarts its worker: a clean workspace (``persistent`` variables start
-afresh), the paper's complaint about MATLAB's cleared workspace solved. The budget is the
-engine's timeout (``strategy.engine_timeout_s``): a call that takes longer is stopped (its
-worker restarted) and the play fails until its next save.
+afresh), the paper's complaint about MATLAB's cleared workspace solved; the file is read
+and parsed when the worker starts (a parse error is a load error, with its line). The budget
+is the engine's timeout (``strategy.engine_timeout_s``): a call that takes longer is
+stopped (its worker restarted, its robots stopped meanwhile); three in a row and the play
+fails until its next save, as a Python play over its CPU budget.
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ from touchline.octave import BALL_COLUMNS, ORDER_COLUMNS, OURS_COLUMNS, THEIRS_C
 
 from ..engine import EngineError, EngineTimeout, EngineWorkerDied, OctaveEngine
 from .discovery import Found
-from .runner import Pending, Runner
-from .state import ErrorInfo, FileRun
+from .runner import LOAD_LIMIT_S, OVER_BUDGET_IN_A_ROW, Pending, Runner
+from .state import ErrorInfo, ErrorKind, FileRun
 
 #: "at name (FILE, line N)" in the engine's traceback text
 _AT = re.compile(r"at (\S+) \((.+), line (\d+)\)")
@@ -215,6 +217,23 @@ class OctaveRunner(Runner):
         if self.closed or self._done < self._want:
             await eng.close()
             return
+        # the play's file read and parsed now (Octave does it at the first call, which then
+        # takes longer than a tick may; a parse error is a load error, with its line)
+        try:
+            await eng.call("nargin", self.function, timeout_s=LOAD_LIMIT_S)
+        except EngineError as exc:
+            await eng.close()
+            if not isinstance(exc, EngineTimeout):
+                err = octave_error(exc, self.name, self.team_dir)
+                kind: ErrorKind = "import" if err.kind in ("import", "exception") else "crash"
+                self.fail(ErrorInfo(kind, err.message, err.file, err.line, err.traceback))
+            else:
+                self.fail(ErrorInfo("import", f"stuck: not read within {LOAD_LIMIT_S:g} s",
+                                    self.name))
+            return
+        if self.closed or self._done < self._want:
+            await eng.close()
+            return
         self.engine = eng
         self.run.loaded_version = self.found.version
         self.run.reloaded_at_unix = time.time()
@@ -229,8 +248,8 @@ class OctaveRunner(Runner):
         eng = self.engine
         if self.closed or self.run.state != "running" or eng is None:
             return None
-        if self.inflight is not None:
-            return None
+        if self.inflight is not None or eng.health()["idle"] == 0:
+            return None  # its worker is busy, or being restarted after a timeout
         args = octave_args(game)
         version = self.found.version
         timeout = self.timeout_s
@@ -240,10 +259,7 @@ class OctaveRunner(Runner):
             try:
                 res = await eng.call(self.function, *args, timeout_s=timeout)
             except EngineTimeout:
-                return ("error", 0, {"kind": "budget", "message": (
-                    f"did not return within strategy.engine_timeout_s = {timeout:g} s (its "
-                    "Octave worker was restarted)"), "file": self.name, "line": None,
-                    "traceback": ""}, time.perf_counter() - t0)
+                return ("timeout", 0, time.perf_counter() - t0)
             except EngineWorkerDied as exc:
                 return ("error", 0, {"kind": "crash", "message": str(exc).splitlines()[0],
                                      "file": self.name, "line": None, "traceback": ""},
@@ -276,7 +292,23 @@ class OctaveRunner(Runner):
             if self.inflight is p:
                 self.inflight = None
             return
-        self.accept(p, t.result())
+        reply = t.result()
+        if reply[0] == "timeout":
+            # over its budget: the engine restarted the worker; like a Python play's CPU
+            # budget, three in a row and the play fails until its next save
+            p.done = True
+            if self.inflight is p:
+                self.inflight = None
+            self.run.overruns += 1
+            self.over_in_a_row += 1
+            p.reason = f"over its budget (strategy.engine_timeout_s = {self.timeout_s:g} s)"
+            if self.over_in_a_row >= OVER_BUDGET_IN_A_ROW:
+                self.fail(ErrorInfo("budget", (
+                    f"did not return within strategy.engine_timeout_s = {self.timeout_s:g} s "
+                    f"{self.over_in_a_row} ticks in a row (its Octave worker was restarted "
+                    "each time)"), self.name))
+            return
+        self.accept(p, reply)
 
     async def close(self) -> None:
         self.closed = True

@@ -220,15 +220,20 @@ class TeamPlays:
             p = r.send(replace(game, mine=mine), None, budget_s, now)
             asks.append(_Ask(play, mine, r, p, "" if p is not None else
                              "busy: its previous tick has not answered"))
-        used = {a.runner.name for a in asks if a.runner is not None}
-        for name in list(self.runners):
-            if name not in used:
-                self.runners[name].run.robots = ()
-                if now - self.last_used.get(name, now) > IDLE_CLOSE_S:
-                    self._close(name)
+        self.release({a.runner.name for a in asks if a.runner is not None}, now)
         longest = max((a.pending.budget_s for a in asks if a.pending is not None),
                       default=budget_s)
         return TeamTick(asks, now + longest + IPC_GRACE_S)
+
+    def release(self, used: set[str] | None = None, now: float | None = None) -> None:
+        """Runners not ``used`` this tick drive no robot; those unused for
+        ``IDLE_CLOSE_S`` lose their worker (a tick without any team play calls this too)."""
+        now = time.monotonic() if now is None else now
+        for name in list(self.runners):
+            if used is None or name not in used:
+                self.runners[name].run.robots = ()
+                if now - self.last_used.get(name, now) > IDLE_CLOSE_S:
+                    self._close(name)
 
     async def close(self) -> None:
         for name in list(self.runners):

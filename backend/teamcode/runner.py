@@ -338,9 +338,15 @@ class PythonRunner(Runner):
         asyncio.get_running_loop().call_later(hard + KILL_GRACE_S, self._stuck, w, p)
         return p
 
-    def _stuck(self, w: PyWorker, p: Pending) -> None:
-        if not p.done and w.alive:
-            w.kill(f"stuck: no answer within {hard_limit_s(p.budget_s) + KILL_GRACE_S:.2f} s")
+    def _stuck(self, w: PyWorker, p: Pending, final: bool = False) -> None:
+        if p.done or not w.alive:
+            return
+        if not final:
+            # once more a moment later: a reply that came while the station's loop was busy
+            # (its timer runs before the reader's next step) is read first, not killed
+            asyncio.get_running_loop().call_later(0.02, self._stuck, w, p, True)
+            return
+        w.kill(f"stuck: no answer within {hard_limit_s(p.budget_s) + KILL_GRACE_S:.2f} s")
 
     def _replied(self, p: Pending, f: asyncio.Future[Any]) -> None:
         if f.cancelled():

@@ -301,6 +301,8 @@ def test_a_failing_play_stops_its_robot_and_says_why(
         assert e["line"] == line
     if play == "spins.py":
         assert e["line"] in (3, 4) and "stuck" in e["message"]
+    warnings = st.get("/api/health")["warnings"]
+    assert any(x.startswith(f"team code {play}: {kind} at {play}") for x in warnings), warnings
     w = st.get("/api/world")
     stopped = {s["id"]: s for s in w["strategy"]["stopped"]}
     assert stopped[0]["play"] == name and kind in stopped[0]["reason"]

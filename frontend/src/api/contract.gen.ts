@@ -1112,6 +1112,12 @@ export interface WorldHealth {
   /** per camera: receive - capture (s) */
   camera_clock_offsets_s: Record<string, number | null>;
   camera_pairs: CameraPair[];
+  /** per camera heard within the last second: frames a second by the receive clock (0: not measured yet) */
+  camera_rates_hz: Record<string, number>;
+  /** every camera silent this long: every robot is stopped (6 frame periods, at most 0.1 s less 20 ms for the stop to reach the robots; null: a camera slower than 30 Hz or not measured yet, then safety.vision_stale_s) */
+  lost_after_s: number | null;
+  /** every camera silent past lost_after_s: why every robot is stopped (as world.halt_reason says), else null */
+  vision_lost: string | null;
 }
 
 export interface WorldMessage {

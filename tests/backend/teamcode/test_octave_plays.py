@@ -98,8 +98,8 @@ async def test_errors_say_where(tmp_path: Path) -> None:
         e = r.run.error
         assert e is not None and (e.kind, e.file, e.line) == ("exception", "oops.m", 5)
         assert "nonconformant" in e.message and "oops.m, line 2" in e.traceback
-        await answer(r2.send(game(), None, 0.01))
-        e = r2.run.error
+        e = r2.run.error  # read when its worker started: nothing to ask
+        assert r2.run.state == "error" and r2.send(game(), None, 0.01) is None
         assert e is not None and (e.kind, e.file, e.line) == ("import", "typo.m", 2)
         # fixed: resumes
         write(tmp_path, "typo.m", "function orders = typo(ours, theirs, ball, game)\n"
@@ -113,14 +113,25 @@ async def test_errors_say_where(tmp_path: Path) -> None:
 
 
 async def test_a_stuck_play_is_stopped_by_the_engine_timeout(tmp_path: Path) -> None:
+    """Each call past the engine's timeout is discarded (the worker restarted, nothing is
+    asked meanwhile); the third in a row fails the play until its next save."""
     write(tmp_path, "forever.m", "function orders = forever(ours, theirs, ball, game)\n"
                                  "  while true\n  end\nend\n")
     r = await started(tmp_path, "forever.m", timeout_s=0.3)
     try:
-        p = await answer(r.send(game(), None, 0.01))
-        assert p.output is None
+        timed_out = 0
+        while r.run.state == "running":
+            # (after a timeout nothing is asked until the engine's new worker is up)
+            await until(lambda: r.engine is not None and r.engine.health()["idle"] == 1,
+                        60.0, "a worker to call")
+            p = r.send(game(), None, 0.01)
+            await answer(p)
+            assert p.output is None and p.reason.startswith("over its budget")
+            timed_out += 1
+        assert timed_out == 3 and r.run.overruns == 3
         e = r.run.error
         assert e is not None and e.kind == "budget" and "engine_timeout_s = 0.3 s" in e.message
+        assert "3 ticks in a row" in e.message
     finally:
         await r.close()
 

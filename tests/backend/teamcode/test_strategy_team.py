@@ -5,13 +5,16 @@ plays' robots stopped with the reason, operator targets first."""
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
+
+import pytest
 
 from backend import topics
 from backend.control.goto import Target
 from backend.messages import OperatorTarget
 
-from .helpers import Rig, write
+from .helpers import Rig, until, write
 
 LINE = ("from touchline import Target, Velocity\n"
         "def play(game):\n"
@@ -126,5 +129,30 @@ async def test_a_play_reads_the_processors_topics(tmp_path: Path) -> None:
         await rig.running("follows.py")
         await rig.tick()
         assert math.isclose(rig.targets()[1].target.x, 750.0)
+    finally:
+        await rig.close()
+
+
+async def test_a_play_no_robot_runs_gives_its_worker_back(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from backend.teamcode import plays as plays_mod
+
+    write(tmp_path, "liner.py", LINE)
+    rig = Rig(tmp_path, "liner")
+    try:
+        await rig.running("liner.py")
+        runner = rig.plays.runners["liner.py"]
+        pid = runner.pid  # type: ignore[attr-defined]
+        assert pid > 0 and rig.registry.runs["liner.py"].robots == (1, 2, 3)
+        rig.configure(play="formation")  # the built-in play for the whole team
+        await rig.tick()
+        assert rig.registry.runs["liner.py"].robots == ()
+        assert "liner.py" in rig.plays.runners  # kept a while: a switch back is instant
+        monkeypatch.setattr(plays_mod, "IDLE_CLOSE_S", 0.0)
+        await rig.tick()
+        assert "liner.py" not in rig.plays.runners
+        await until(lambda: runner.closed and not rig.plays._closing)  # its close done
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)
     finally:
         await rig.close()
