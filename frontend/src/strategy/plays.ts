@@ -75,3 +75,56 @@ export function situationLine(
   if (!text && !side) return null;
   return { text, side: side && s.side_from_referee === true ? `${side}, side from the referee` : side };
 }
+
+export interface PlayGroup {
+  label: "Built-in" | "Team";
+  plays: PlayInfo[];
+}
+
+/**
+ * The plays as the selectors group them: the station's own ("Built-in") and the team's files
+ * ("Team"), each in the station's order. A single group without a label when the team has no
+ * plays (nothing to tell apart).
+ */
+export function playGroups(list: readonly PlayInfo[]): PlayGroup[] {
+  const builtin = list.filter((p) => p.source !== "team");
+  const team = list.filter((p) => p.source === "team");
+  if (team.length === 0) return builtin.length ? [{ label: "Built-in", plays: builtin }] : [];
+  return builtin.length ? [{ label: "Built-in", plays: builtin }, { label: "Team", plays: team }] : [{ label: "Team", plays: team }];
+}
+
+/** Whether the selectors must show group labels (team plays beside built-in ones). */
+export function showGroups(groups: readonly PlayGroup[]): boolean {
+  return groups.some((g) => g.label === "Team");
+}
+
+/**
+ * What of the team folder changes the list of plays (a file added, removed or renamed, a
+ * title or description changed): when this differs from the last one seen, the page asks
+ * the station for its plays again. Saves that change only code do not change it.
+ */
+export function teamPlaysKey(
+  files: readonly { name: string; kind: string; play: string | null; title: string; description: string }[] | null | undefined,
+): string {
+  if (!Array.isArray(files)) return "";
+  return files
+    .filter((f) => f.kind === "play")
+    .map((f) => `${f.name}\u0000${f.play ?? ""}\u0000${f.title}\u0000${f.description}`)
+    .sort()
+    .join("\u0001");
+}
+
+/** The per-robot plays in the parameters: `strategy.robot_plays` {"3": "pass_drill"}. */
+export function robotPlays(values: ParamValues | null | undefined): Record<string, string> {
+  const group = values?.["strategy"];
+  const m = isObj(group) ? group.robot_plays : undefined;
+  if (!isObj(m)) return {};
+  const out: Record<string, string> = {};
+  for (const [k, v] of Object.entries(m)) if (typeof v === "string" && v) out[k] = v;
+  return out;
+}
+
+/** PATCH body giving robot `id` its own play (null: back to the team's play). */
+export function robotPlayPatch(id: number, play: string | null): Record<string, unknown> {
+  return { [PLAY_PATH[0]]: { robot_plays: { [String(id)]: play ? play : null } } };
+}

@@ -7,6 +7,7 @@ import type {
   InternalReferee,
   Player,
   PlayInfo,
+  TeamFile,
   Recording,
   Referee,
   RefereeTeam,
@@ -257,3 +258,32 @@ export const replayClock = (extra: Partial<ReplayClock> = {}): ReplayClock => ({
   epoch: 1,
   ...extra,
 });
+
+/** A team file as GET /api/team and health.team_code list it (a library unless `extra` says). */
+export function teamFile(name: string, extra: Partial<TeamFile> = {}): TeamFile {
+  const py = name.endsWith(".py");
+  return {
+    name,
+    kind: "library",
+    language: py ? "python" : "octave",
+    play: null,
+    title: "",
+    description: "",
+    state: "idle",
+    error: null,
+    version: "0123456789ab",
+    mtime_unix: 1_700_000_000,
+    size_bytes: 100,
+    reloaded_at_unix: null,
+    reloads: 0,
+    ticks: 0,
+    errors: 0,
+    overruns: 0,
+    moved_out: 0,
+    tick_ms_p50: null,
+    tick_ms_p99: null,
+    robots: [],
+    outputs: {},
+    ...extra,
+  };
+}
