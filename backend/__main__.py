@@ -60,10 +60,14 @@ def main() -> None:
                         relay_output=a.relay_output, require_arming=a.require_arming,
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
-                        log_dirs=a.log_dirs, record=not a.no_record,
+                        log_dirs=d.log_dirs if a.log_dirs is None else a.log_dirs,
+                        record=not a.no_record, scripts_dir=a.scripts_dir,
                         record_dir=a.record_dir, require_token=a.require_token,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
-                        restarted=a.restarted, late_start_max_s=LATE_START_MAX_S)
+                        team_dir=a.team_dir,
+                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
+                        freeze_gc=True, restarted=a.restarted,
+                        late_start_max_s=LATE_START_MAX_S)
     run(settings, timeline, a.log_level)
 
 
@@ -86,7 +90,7 @@ def _stand_by() -> list[str] | None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    d = Settings()
+    d = Settings.from_env()  # the folders may come from TOUCHLINE_* variables (config.py)
     p = argparse.ArgumentParser(
         prog="python -m backend", description=__doc__,
         epilog="Web security (docs/api.md, Security): the Host header must be the bound "
@@ -113,7 +117,12 @@ def _parser() -> argparse.ArgumentParser:
                    help="override a parameter, e.g. --set strategy.engine=octave (VALUE is "
                         "JSON, or text); repeatable")
     p.add_argument("--state-dir", type=Path, default=d.state_dir,
-                   help="where parameters and presets are kept (default %(default)s)")
+                   help="where parameters and presets are kept (default %(default)s; "
+                        "TOUCHLINE_STATE_DIR)")
+    p.add_argument("--scripts-dir", type=Path, default=d.scripts_dir, metavar="DIR",
+                   help="the .m files the Octave engine runs (default %(default)s; "
+                        "TOUCHLINE_SCRIPTS_DIR). Folders are never parameters: "
+                        "docs/security.md")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME",
                    help="a host name or address this station may be reached by besides the "
@@ -137,14 +146,26 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--log", type=Path, default=None, metavar="FILE",
                    help="replay this SSL log file (.log or .log.gz) instead of live input: "
                         "nothing is sent to robots or a simulator")
-    p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=[],
+    p.add_argument("--log-dir", dest="log_dirs", type=Path, action="append", default=None,
                    metavar="DIR", help="a folder whose logs the page may open (repeatable; the "
-                   "recording folder always is)")
-    p.add_argument("--record-dir", type=Path, default=None, metavar="DIR",
-                   help="record into DIR for this run (the recording.folder parameter stays)")
+                   "recording folder always is; TOUCHLINE_LOG_DIRS, separated by "
+                   f"{os.pathsep!r})")
+    p.add_argument("--record-dir", type=Path, default=d.record_dir, metavar="DIR",
+                   help="record into DIR (default: logs/ in the state folder; "
+                        "TOUCHLINE_RECORD_DIR)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
+    p.add_argument("--team-dir", type=Path, default=d.team_dir, metavar="DIR",
+                   help="the team's code: plays, processors and libraries (default "
+                        "%(default)s, the example folder; TOUCHLINE_TEAM_DIR; "
+                        "docs/team-code.md)")
+    p.add_argument("--allow-code-edit", action="store_true",
+                   help="operators on other machines may save team code from the page (it "
+                        "runs on this machine: docs/security.md); from loopback it always may")
+    p.add_argument("--team-memory-mb", type=int, default=d.team_memory_mb, metavar="MB",
+                   help="address-space limit of each team-code worker process "
+                        "(default %(default)s)")
     p.add_argument("--restarted", action="store_true",
                    help="the launcher's supervisor restarts this backend after a crash (it "
                         "adds this flag): the operator's arming is taken back from the state "

@@ -20,7 +20,7 @@ from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics, views
+from . import contract, stalldump, topics, views
 from .arming import ArmingStore
 from .bus import DataBus
 from .config import Settings
@@ -30,7 +30,7 @@ from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .operators import Operators
-from .params.model import StationParams
+from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Processor, Runner
 from .processors import (
@@ -54,7 +54,11 @@ from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
 from .startup import StartupTimeline, process_start_mono
-from .station_loop import StationLoop
+from .station_loop import StationLoop, freeze_start_up
+from .teamcode.plays import TeamPlays
+from .teamcode.processors import TeamProcessors
+from .teamcode.registry import TeamRegistry
+from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
@@ -87,7 +91,14 @@ class Station:
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,
             "refused": {}, "blocked_clients": 0}
+        # the team's own code (issue 27): found now (read, never run here), watched from start
+        self.team = TeamRegistry(settings.team_dir, PLAYS)
+        self.team.rescan()
+        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
+        self.team_plays = TeamPlays(self.team, settings.team_memory_mb)
         self.params = ParamStore(settings.state_dir)
+        # a play is chosen among the built-in ones and the team folder's (known now)
+        self.params.play_names = lambda: [*PLAYS, *sorted(self.team.plays())]
         overrides: dict[str, Any] = {}
         if settings.our_team is not None:
             overrides["our_team"] = settings.our_team
@@ -151,12 +162,14 @@ class Station:
         self.publisher.armed_by = lambda: self.armed_by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        self.control.silence = self.world.silence
         self.control.may_drive_other_team = self.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        self.strategy.team = self.team_plays
         # the compute engine for the strategy (started and replaced in the background)
-        self.engine = EngineSwitch(self.strategy)
+        self.engine = EngineSwitch(self.strategy, settings.scripts_dir)
         # the session recorder (made in start(): it opens a file; closed in stop())
         self.recording = RecordingControl(self)
         # the log player: in replay the pipeline runs on the log's time and nothing is sent
@@ -171,13 +184,23 @@ class Station:
         self.world.on_world = self._first_frame
         self.strategy.on_first_targets = lambda: self.startup.mark("first targets")
         self.publisher.on_first_command = self._first_command
+        self.strategy.replaying = lambda: self.replay.replaying
+        # the team's processors (their topics team/<name>; the plays read them as topics)
+        self.team_processors = TeamProcessors(self.bus, self.team, settings.team_memory_mb)
+        self.team_processors.referee_source = self.control.active_referee
+        self.team_processors.contacts = self.strategy.contacts
+        self.team_processors.replaying = lambda: self.replay.replaying
+        self.strategy.team_topics = lambda: self.team_processors.outputs
+        stalls = stalldump.from_env()
+        if stalls is not None:
+            self.tracker.after_send = stalls.beat
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
-            ViewPublisher(self.hub),
+            self.team_processors, ViewPublisher(self.hub),
             RecordingProcessor(self))
 
     # ---- the station thread (backend/station_loop.py): the web side changes station state
@@ -223,10 +246,13 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        self.team_watcher.start(self.team_watcher_listing())
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
         self.startup.mark("station running")
+        if s.freeze_gc:
+            freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
         if s.late_start_max_s <= 0 or self.startup.done("first command"):
@@ -258,6 +284,7 @@ class Station:
         prm = self.params.current
         rec = self.recording.open(prm)
         self.ingest.record = self.publisher.record = self.tracker.record = rec.record
+        self.team_processors.record = rec.record
         self.recording.configure(prm, self.params.version)  # the parameters, recorded
         self.startup.mark("recorder open")
         self.engine.started = lambda: self.startup.mark("engine started")
@@ -327,16 +354,31 @@ class Station:
     def engine_error(self) -> str:
         return self.engine.error
 
+    # ---- the team folder (backend/teamcode): a save is seen by the watcher's thread and
+    # handled here, on the station loop ----
+
+    def team_watcher_listing(self) -> dict[str, Any]:
+        return {f.name: f.stat for f in self.team.found.values()}
+
+    def _team_folder_changed(self, listing: dict[str, Any]) -> None:
+        self.loop.schedule(self.team.rescan, listing)
+
+    def team_rescan(self) -> set[str]:
+        """Looks at the team folder at once (after a save from the page)."""
+        return self.team.rescan()
+
     async def stop(self) -> None:
         if self._late_timer is not None:
             self._late_timer.cancel()
             self._late_timer = None
+        self.team_watcher.stop()
         self.replay.close()
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
+        await self.team_plays.close()
         await self.engine.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)

@@ -8,18 +8,23 @@ transport directly (``DirectSocket``): the ASGI send path (a task per client, a 
 through Starlette and uvicorn, a frame built per client) cost ~40 us of the web thread per
 client message, 14-17 % of a core for 25 clients at 60 Hz. A client whose socket still holds
 unsent bytes is skipped (it gets the newest of each message once it has taken what it has: a
-slow client skips worlds, it never queues them), and one that takes nothing for
-``STALLED_CLIENT_S`` is dropped. Any other server (a test client) is served through ASGI by its
-own loop (``backend/routes/ws.py``), woken by the same hand-over."""
+slow client skips worlds, it never queues them), and one whose peer has taken (acknowledged)
+nothing for ``STALLED_CLIENT_S`` while it had bytes to take is dropped, its connection reset.
+Any other server (a test client) is served through ASGI by its own loop
+(``backend/routes/ws.py``), woken by the same hand-over.
+
+Time (the world's turns, the stall timeout) is read from a ``Clock``: the loop's own by
+default, a test's where the test drives the time."""
 
 from __future__ import annotations
 
 import asyncio
-import time
+import contextlib
+import struct
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from starlette.types import ASGIApp, Receive, Scope, Send
 from websockets.frames import Frame, Opcode
@@ -31,17 +36,60 @@ if TYPE_CHECKING:
     from .station import Station
     from .viewhub import Views
 
+try:  # Linux's count of the bytes of a TCP socket its peer has not acknowledged (SIOCOUTQ)
+    import fcntl
+    import termios
+    _SIOCOUTQ: int | None = termios.TIOCOUTQ
+except (ImportError, AttributeError):  # pragma: no cover - elsewhere: the user-space buffer only
+    _SIOCOUTQ = None
+
 try:  # the server's own websocket protocol (uvicorn's default with the websockets package)
     from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
 except ImportError:  # pragma: no cover - another server: every client goes through ASGI
     WebSocketsSansIOProtocol = None  # type: ignore[assignment,misc]
 
-#: a websocket client whose socket takes no message for this long is dropped (it reconnects
-#: and gets a snapshot): it no longer slows anyone, but it held its buffers for ever
-STALLED_CLIENT_S = 2.0
+#: a websocket client whose peer takes (acknowledges) none of the bytes written to it for this
+#: long is dropped, its connection reset (it reconnects and gets a snapshot): it no longer
+#: slows anyone, but it held its buffers for ever. Counted from the last byte its peer took:
+#: a client that stops reading still takes ~300 kB into its receive buffer (0.2-0.3 s of the
+#: full stream on loopback), so it goes within 2 s of its last read even on a loaded machine
+#: (1.5 s gave 1.8-2.3 s at load 15)
+STALLED_CLIENT_S = 1.25
 
-#: how early in its turn (a fraction of the period of ``stream.ws_max_hz``) a world may go
-WORLD_SLACK = 0.25
+#: how early (in periods of ``stream.ws_max_hz``) a world may go before its turn. The turns
+#: stay a period apart on average, and a publication or a timer that came late (the station's
+#: thread or this loop busy) does not make the next world wait: only a burst of more than this
+#: many worlds above the rate does. With a quarter of a period a late world pushed the next
+#: turn back, the next world waited on a timer, and a newer one replaced it before the timer
+#: (late too) fired: 1-3 % of the worlds were lost so with 5 busy processes beside the
+#: station, 13-14 % with publications and timers up to 0.9 period late (the tests' loop)
+WORLD_BURST = 2.0
+
+
+class Timer(Protocol):
+    def cancel(self) -> None: ...
+
+
+class Clock(Protocol):
+    """The fan-out's time: ``now()`` (seconds, monotonic) and timers."""
+
+    def now(self) -> float: ...
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer: ...
+
+
+class LoopClock:
+    """An event loop's monotonic clock and its timers."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.loop = loop
+
+    def now(self) -> float:
+        return self.loop.time()
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
+        return self.loop.call_later(delay, callback)
+
 
 #: the scope key under which ``ServerSendTap`` keeps the server's own ``send`` of a websocket
 SERVER_SEND = "touchline.server_send"
@@ -88,6 +136,9 @@ class DirectSocket:
     def __init__(self, proto: Any) -> None:
         self.proto = proto
         self.transport: asyncio.WriteTransport = proto.transport
+        sock = self.transport.get_extra_info("socket")
+        self._fd: int | None = sock.fileno() if sock is not None else None
+        self._outq = bytearray(4)
 
     def open(self) -> bool:
         p = self.proto
@@ -98,8 +149,28 @@ class DirectSocket:
         """Bytes written that the socket has not taken yet."""
         return self.transport.get_write_buffer_size()
 
+    def pending(self) -> int:
+        """Bytes written that the peer has not taken: those still in ``buffered`` and those in
+        the kernel's send queue that the peer has not acknowledged. The kernel's queue holds
+        megabytes: a peer that stopped reading leaves nothing in ``buffered`` for seconds.
+        Where the kernel does not tell (not Linux), ``buffered`` only."""
+        if self._fd is not None and _SIOCOUTQ is not None:
+            try:
+                fcntl.ioctl(self._fd, _SIOCOUTQ, self._outq)
+            except OSError:  # not a TCP socket (a Unix one): the user-space buffer only
+                self._fd = None
+            else:
+                unacked: int = struct.unpack_from("i", self._outq)[0]
+                return self.buffered() + unacked
+        return self.buffered()
+
     def write(self, data: bytes) -> None:
         self.transport.write(data)
+
+    def abort(self) -> None:
+        """Resets the connection, dropping what it holds unsent (a close frame would wait
+        behind it for ever, and the buffers with it)."""
+        self.transport.abort()
 
 
 def direct_socket(scope: Scope) -> DirectSocket | None:
@@ -127,25 +198,30 @@ class DirectClient:
     params_version: int
     #: set when the client is no longer served: it closed, or it stalled (``stalled``)
     ended: asyncio.Event
+    #: when its peer was last seen taking bytes (or holding none of ours)
+    taken_at: float
     stalled: bool = False
-    stuck_since: float | None = None  # since when its socket has taken nothing
-    stuck_buffered: int = 0
+    #: the bytes its peer had not taken at the end of the last pass
+    pending_after: int = 0
 
 
 class LoopFanout:
     """The websocket clients of one event loop for one station: woken by one hand-over from
     the station thread per publication. Directly written clients (``add_direct``) are sent
     what changed in that pass; ASGI-served clients (``add``) have their event set. Subscribed
-    to the station's views while it has a client."""
+    to the station's views while it has a client. ``clock``: the loop's by default."""
 
-    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop) -> None:
+    def __init__(self, st: Station, loop: asyncio.AbstractEventLoop,
+                 clock: Clock | None = None) -> None:
         self.st, self.loop = st, loop
+        self.clock: Clock = clock if clock is not None else LoopClock(loop)
         self.events: set[asyncio.Event] = set()
         self.direct: list[DirectClient] = []
         self._unsubscribe: Callable[[], None] | None = None
         self._pending = False
-        self._next_world = 0.0  # worlds go out at most stream.ws_max_hz
-        self._world_timer: asyncio.TimerHandle | None = None
+        #: the world's next turn: worlds go at stream.ws_max_hz on average (WORLD_BURST)
+        self._world_turn_at = -1e9
+        self._world_timer: Timer | None = None
         self._frames_of: Views | None = None  # the views (and parameters) the cached
         self._frames_params = -1  # frames were made of
         self._frames: dict[tuple[str, ...], bytes] = {}
@@ -169,7 +245,7 @@ class LoopFanout:
         published since is sent at once); ``ended`` is set when the fan-out stops serving it
         (it closed, or it stalled)."""
         c = DirectClient(sock, sent.world_key, sent.health_mono, sent.geometry_seq,
-                         sent.player_serial, params_version, ended)
+                         sent.player_serial, params_version, ended, self.clock.now())
         self.direct.append(c)
         self._subscribe()
         if self.st.views.serial != sent.serial or self.st.params.version != params_version:
@@ -237,19 +313,17 @@ class LoopFanout:
 
     def fan_out(self, world_turn: bool = False) -> None:
         """Sends every directly written client what changed since what it has: parameters,
-        geometry, the player, the world (at most ``stream.ws_max_hz``: a world that is early
-        waits for its turn, then the newest goes), health; in that order, in one write.
-        A client whose socket still holds bytes is skipped; one that took nothing for
-        ``STALLED_CLIENT_S`` is dropped (``stalled``). ``world_turn``: the waiting world's
-        turn has come (its timer)."""
+        geometry, the player, the world (``stream.ws_max_hz`` on average: a world more than
+        ``WORLD_BURST`` turns early waits for its turn, then the newest goes), health; in that
+        order, in one write. A client whose socket still holds bytes is skipped; one whose
+        peer took nothing for ``STALLED_CLIENT_S`` is dropped (``stalled``), its connection
+        reset. ``world_turn``: the waiting world's turn has come (its timer)."""
         self.passes += 1
         st = self.st
         v = st.views
-        now = time.monotonic()
+        now = self.clock.now()
         period = 1.0 / st.params.current.stream.ws_max_hz
-        # a world a little early (the views processor runs at that rate too, with jitter) goes
-        # now rather than in a second pass: the turns stay a period apart on average
-        world_due = world_turn or now >= self._next_world - WORLD_SLACK * period
+        world_due = world_turn or now >= self._world_turn_at - WORLD_BURST * period
         world_waits = world_sent = False
         params_version = st.params.version
         for c in list(self.direct):
@@ -257,15 +331,19 @@ class LoopFanout:
             if not sock.open():
                 self.discard_direct(c)
                 continue
-            buffered = sock.buffered()
-            if buffered:
-                if c.stuck_since is None or buffered < c.stuck_buffered:
-                    c.stuck_since, c.stuck_buffered = now, buffered  # it took something
-                elif now - c.stuck_since >= STALLED_CLIENT_S:
-                    c.stalled = True
-                    self.discard_direct(c)
+            pending = sock.pending()
+            if pending == 0 or pending < c.pending_after:
+                c.taken_at = now  # its peer took something since the last pass
+            elif now - c.taken_at >= STALLED_CLIENT_S:
+                c.stalled = True
+                st.ws_dropped += 1
+                self.discard_direct(c)
+                with contextlib.suppress(RuntimeError, OSError):
+                    sock.abort()
                 continue
-            c.stuck_since = None
+            c.pending_after = pending
+            if sock.buffered():
+                continue
             kinds: list[str] = []
             if c.params_version != params_version:
                 kinds.append("params")
@@ -287,17 +365,19 @@ class LoopFanout:
                 kinds.append("health")
                 c.health_mono = v.health_mono
             if kinds:
+                data = self._data(v, tuple(kinds))
                 try:
-                    sock.write(self._data(v, tuple(kinds)))
+                    sock.write(data)
                 except (RuntimeError, OSError):  # the connection went meanwhile
                     self.discard_direct(c)
                     continue
+                c.pending_after = pending + len(data)
                 self.writes += 1
         if world_sent:
-            self._next_world = max(self._next_world, now) + period
+            self._world_turn_at = max(self._world_turn_at, now) + period
         if world_waits and self._world_timer is None:
-            self._world_timer = self.loop.call_later(
-                max(0.0, self._next_world - WORLD_SLACK * period - now), self._world_turn)
+            self._world_timer = self.clock.call_later(
+                max(0.0, self._world_turn_at - WORLD_BURST * period - now), self._world_turn)
 
     def _world_turn(self) -> None:
         self._world_timer = None

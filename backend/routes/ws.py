@@ -63,10 +63,9 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
     client that takes nothing for ``STALLED_CLIENT_S`` is dropped."""
     try:
         await _serve_views(ws, st)
-    except _Stalled:
-        st.ws_dropped += 1
+    except _Stalled:  # counted where it was found stalled (the fan-out, or a send here)
         peer = f"{ws.client.host}:{ws.client.port}" if ws.client else "?"
-        _ws_log.warning("stalled", "websocket client %s took nothing for %.0f s: dropped "
+        _ws_log.warning("stalled", "websocket client %s took nothing for %.1f s: dropped "
                         "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
 
 
@@ -76,6 +75,7 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
             async with asyncio.timeout(STALLED_CLIENT_S):  # no task per send (wait_for makes one)
                 await ws.send_text(text)
         except TimeoutError:
+            st.ws_dropped += 1
             raise _Stalled from None
 
     closed = asyncio.Event()

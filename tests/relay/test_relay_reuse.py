@@ -8,7 +8,8 @@ import random
 
 import pytest
 
-from larcmacs_relay import Relay, RelayConfig, codecs, relay
+from larcmacs_relay import Relay, RelayConfig, codecs
+from larcmacs_relay import command_input as relay
 from larcmacs_relay.codecs import Command
 from larcmacs_relay.commands import CommandTable
 from sslpb import touchline_pb2
