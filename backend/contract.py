@@ -833,6 +833,24 @@ class TeamFileSaved(TypedDict):
 
 
 @with_config(_STRICT)
+class StartupInfo(TypedDict):
+    """The backend's start (backend/startup.py): the first command's steps first, then what
+    it does not need."""
+
+    restarted: Annotated[bool, Field(
+        description="restarted by the launcher's supervisor after a crash (arming taken back)")]
+    standby: Annotated[bool, Field(
+        description="a warm spare the supervisor told to start: imported before the crash; "
+                    "its steps count from the word to start")]
+    steps_s: Annotated[dict[str, float], Field(
+        description="seconds from the backend's process start (a warm spare: from the word to "
+                    "start) at which each step was done: "
+                    "imports, station built, station running, first frame, first targets, "
+                    "first command; then recorder open, engine started, web imports, web "
+                    "serving (a step not done yet is absent)")]
+
+
+@with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
 
@@ -865,6 +883,7 @@ class Health(TypedDict):
     driving: Annotated[list[DrivingInfo], Field(description="who drives which team")]
     operator_actions: Annotated[list[OperatorAction], Field(
         description="the latest operator actions, newest first")]
+    startup: StartupInfo
     team_code: Annotated[list[TeamFile], Field(
         description="the team folder's files and their states (as GET /api/team)")]
 

@@ -124,15 +124,17 @@ def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
 
 
 def arming_warnings(st: Station) -> list[str]:
-    """Health lines: the relay's arming differs from the station's for a while."""
+    """Health lines: the relay's arming differs from the station's for a while; the arming
+    file could not be read or written (backend/arming.py)."""
+    out = [st.arming_store.warning] if st.arming_store.warning else []
     rs = st.relay_stats.latest_value()
     if rs is None or not st.arming_required \
             or time.monotonic() - rs["received_mono"] > RELAY_STATS_FRESH_S:
-        return []
+        return out
     if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
-        return ["the relay is armed although the station is not (another backend armed it?): "
-                "it is disarmed again within 0.5 s"]
-    return []
+        out.append("the relay is armed although the station is not (another backend armed "
+                   "it?): it is disarmed again within 0.5 s")
+    return out
 
 
 def estop_warnings(st: Station) -> list[str]:
@@ -451,6 +453,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "startup": cast(contract.StartupInfo, st.startup.view()),
         "team_code": team_files,
     }
     return out

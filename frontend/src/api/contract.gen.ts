@@ -293,6 +293,7 @@ export interface Health {
   driving: DrivingInfo[];
   /** the latest operator actions, newest first */
   operator_actions: OperatorAction[];
+  startup: StartupInfo;
   /** the team folder's files and their states (as GET /api/team) */
   team_code: TeamFile[];
 }
@@ -860,6 +861,19 @@ export interface SnapshotMessage {
   health: Health;
   params: ParamsState;
   player: Player;
+}
+
+/**
+ * The backend's start (backend/startup.py): the first command's steps first, then what
+ * it does not need.
+ */
+export interface StartupInfo {
+  /** restarted by the launcher's supervisor after a crash (arming taken back) */
+  restarted: boolean;
+  /** a warm spare the supervisor told to start: imported before the crash; its steps count from the word to start */
+  standby: boolean;
+  /** seconds from the backend's process start (a warm spare: from the word to start) at which each step was done: imports, station built, station running, first frame, first targets, first command; then recorder open, engine started, web imports, web serving (a step not done yet is absent) */
+  steps_s: Record<string, number>;
 }
 
 /**

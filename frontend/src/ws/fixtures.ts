@@ -102,6 +102,7 @@ export function health(rate = 60): Health {
     operators: [],
     driving: [],
     operator_actions: [],
+    startup: { restarted: false, standby: false, steps_s: { imports: 0.6, "first command": 0.7 } },
     team_code: [],
   };
 }
