@@ -60,7 +60,8 @@ def main() -> None:
                         relay_output=a.relay_output, require_arming=a.require_arming,
                         play="idle" if a.no_demo else a.play,
                         set_params=a.set_params, state_dir=a.state_dir, log=a.log,
-                        log_dirs=d.log_dirs if a.log_dirs is None else a.log_dirs,
+                        log_dirs=(Settings.from_env().log_dirs if a.log_dirs is None
+                                  else a.log_dirs),
                         record=not a.no_record, scripts_dir=a.scripts_dir,
                         record_dir=a.record_dir, require_token=a.require_token,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
