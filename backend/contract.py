@@ -17,7 +17,10 @@ from typing import Annotated, Literal, NotRequired
 from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
-Team = Literal["blue", "yellow"]
+# the contract's names for the domain's types (one definition each, in domain/)
+from domain.rules import RefereeCommand as RefereeCommand
+from domain.teams import Team as Team
+
 Side = Literal["negative-x", "positive-x"]
 ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
 #: the filter in use for an object: "raw", "median", "paper", "kalman", "adaptive" ("" before any)
@@ -272,7 +275,7 @@ class Referee(TypedDict):
 
     source: Annotated[str, Field(description='"game-controller", "internal" or "none"')]
     source_identifier: str
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     stage_time_left_s: float | None
@@ -366,13 +369,14 @@ class InternalReferee(TypedDict):
     disabled_reason: str
     foreign_source: Annotated[str | None, Field(
         description="a game controller heard on the network (the internal referee steps aside)")]
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     designated_position: Vec | None
     score: Score
     max_allowed_bots: Score
-    commands: Annotated[list[str], Field(description="the commands an operator may give")]
+    commands: Annotated[list[RefereeCommand], Field(
+        description="the commands an operator may give")]
 
 
 @with_config(_STRICT)
@@ -1008,7 +1012,8 @@ class Point(BaseModel):
 
 class RefereeCommandIn(BaseModel):
     model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
+    command: RefereeCommand = Field(description="a referee command the operator may give "
+                                    "(InternalReferee.commands)")
     designated_position: Point | None = Field(default=None, description="for ball placement")
 
 
@@ -1268,6 +1273,7 @@ ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessag
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {
     "Team": Team, "Side": Side, "ControlAlgorithm": ControlAlgorithm,
+    "RefereeCommand": RefereeCommand,
     "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,

@@ -7,6 +7,8 @@ export type Side = "negative-x" | "positive-x";
 
 export type ControlAlgorithm = "algorithm1" | "algorithm2" | "proportional";
 
+export type RefereeCommand = "HALT" | "STOP" | "NORMAL_START" | "FORCE_START" | "PREPARE_KICKOFF_YELLOW" | "PREPARE_KICKOFF_BLUE" | "PREPARE_PENALTY_YELLOW" | "PREPARE_PENALTY_BLUE" | "DIRECT_FREE_YELLOW" | "DIRECT_FREE_BLUE" | "INDIRECT_FREE_YELLOW" | "INDIRECT_FREE_BLUE" | "TIMEOUT_YELLOW" | "TIMEOUT_BLUE" | "GOAL_YELLOW" | "GOAL_BLUE" | "BALL_PLACEMENT_YELLOW" | "BALL_PLACEMENT_BLUE";
+
 export type TargetSource = "operator" | "strategy" | "team";
 
 export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage | PlayerMessage;
@@ -339,14 +341,14 @@ export interface InternalReferee {
   disabled_reason: string;
   /** a game controller heard on the network (the internal referee steps aside) */
   foreign_source: string | null;
-  command: string;
+  command: RefereeCommand;
   stage: string;
   command_counter: number;
   designated_position: Vec | null;
   score: Score;
   max_allowed_bots: Score;
   /** the commands an operator may give */
-  commands: string[];
+  commands: RefereeCommand[];
 }
 
 export interface LatencyHealth {
@@ -633,7 +635,7 @@ export interface Referee {
   /** "game-controller", "internal" or "none" */
   source: string;
   source_identifier: string;
-  command: string;
+  command: RefereeCommand;
   stage: string;
   command_counter: number;
   stage_time_left_s: number | null;
@@ -651,8 +653,8 @@ export interface Referee {
 }
 
 export interface RefereeCommandIn {
-  /** HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ... */
-  command: string;
+  /** a referee command the operator may give (InternalReferee.commands) */
+  command: RefereeCommand;
   /** for ball placement */
   designated_position?: Point | null;
 }

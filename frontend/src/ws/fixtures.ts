@@ -10,6 +10,7 @@ import type {
   TeamFile,
   Recording,
   Referee,
+  RefereeCommand,
   RefereeTeam,
   StrategyView,
   StreamHealth,
@@ -160,7 +161,7 @@ export const refereeTeam = (name: string, extra: Partial<RefereeTeam> = {}): Ref
 });
 
 /** A referee state with only the basic fields (as the internal referee sends). */
-export const referee = (command: string, extra: Partial<Referee> = {}): Referee => ({
+export const referee = (command: RefereeCommand, extra: Partial<Referee> = {}): Referee => ({
   source: "game-controller",
   source_identifier: "gc-1",
   command,
