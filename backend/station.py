@@ -16,6 +16,7 @@ from typing import Any, TypeVar, cast
 import zmq
 import zmq.asyncio
 
+from domain.wallclock import clock
 from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
@@ -132,7 +133,7 @@ class Station:
         self.armed_since = armed.since  # Unix s of the last arm or disarm (0: never)
         if self.arming_store.restored and self._armed:
             log.warning("restarted after a crash: ARMED as the operator left it (by %s at %s)",
-                        armed.by or "?", time.strftime("%H:%M:%S", time.localtime(armed.since)))
+                        armed.by or "?", clock(armed.since))
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
         self.world_topic = self.bus.of(topics.WORLD)
         self.geometry_topic = self.bus.of(topics.GEOMETRY)

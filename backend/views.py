@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf.message import DecodeError
 
+from domain.wallclock import clock
 from sslnet.proc import rss_mb
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
@@ -143,7 +144,7 @@ def estop_warnings(st: Station) -> list[str]:
     out: list[str] = []
     s = st.estop_latch.state
     if st.estop:
-        when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
+        when = clock(s.since) if s.since > 0 else "?"
         out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
                    f"held at zero until an operator releases it")
         rs = st.relay_stats.latest_value()
