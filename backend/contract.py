@@ -18,6 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
 # the contract's names for the domain's types (one definition each, in domain/)
+from domain.rules import BALL_RADIUS_MM, ROBOT_RADIUS_MM
 from domain.rules import RefereeCommand as RefereeCommand
 from domain.teams import Team as Team
 
@@ -1269,6 +1270,10 @@ class ParamsMessage(TypedDict):
 
 ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
                  | PlayerMessage)
+
+#: the rules' numbers the page draws with before a geometry packet names its own (exported
+#: to TypeScript as constants: the page keeps no copy)
+CONSTANTS: dict[str, float] = {"ROBOT_RADIUS_MM": ROBOT_RADIUS_MM, "BALL_RADIUS_MM": BALL_RADIUS_MM}
 
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {

@@ -34,6 +34,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from domain.angles import wrap_angle
+from domain.rules import ROBOT_RADIUS_MM
 
 from ..filters.core import line_sums
 from .state import BallState, KickedBall, RobotState, Team
@@ -49,7 +50,7 @@ class KickConfig:
     speed_window_s: float = 0.04  # speed: slope over this long of measurements
     min_samples: int = 2  # measurements off the previous line before a kick starts
     off_line_mm: float = 15.0  # noise allowance of "off the previous line"
-    robot_radius_mm: float = 90.0
+    robot_radius_mm: float = ROBOT_RADIUS_MM
     reach_mm: float = 100.0  # kick start this far beyond the robot's radius at most
     front_half_angle_deg: float = 60.0  # the front: this far either side of the heading
     stop_mps: float = 0.1  # slower than this: the kick is over

@@ -5,6 +5,7 @@ import type { Geometry, RecordedWorld, Robot, RobotKey, Team, World } from "../a
 import { sameRobot } from "../api/types";
 import { placementTarget } from "../referee";
 import { roleColor, roleTag } from "../strategy/roles";
+import { BALL_RADIUS_MM } from "../api/contract.gen";
 import { ROBOT_RADIUS_MM } from "./hitTest";
 import { pathPoints, tracePath } from "./paths";
 import { angleToCanvas, worldToCanvas, type FieldTransform } from "./transform";
@@ -183,7 +184,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       counts.robots++;
     }
     // The recorded estimate over today's: a ring just outside each robot, so both stay visible.
-    if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : BALL_RADIUS_MM);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
     // Always (not a layer): robots standing still because their play failed must not look idle.
     if (L.filtered && world.strategy?.stopped?.length) counts.stopped = drawStopped(ctx, t, robots, world.strategy);
@@ -194,7 +195,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       counts.kickStop = { x: kick.stop_x, y: kick.stop_y };
     }
     if (L.filtered) {
-      const br = g.ball_radius > 0 ? g.ball_radius : 21.5;
+      const br = g.ball_radius > 0 ? g.ball_radius : BALL_RADIUS_MM;
       for (const o of world.other_balls ?? []) {
         drawOtherBall(ctx, t, o, br);
         counts.otherBalls++;
@@ -619,7 +620,7 @@ function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World)
  * over today's filter output so a difference between the two shows as an offset ring.
  * Returns the number of objects drawn.
  */
-export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, rec: RecordedWorld, ballRadiusMm = 21.5): number {
+export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, rec: RecordedWorld, ballRadiusMm = BALL_RADIUS_MM): number {
   let n = 0;
   ctx.save();
   ctx.strokeStyle = COLORS.recorded;
