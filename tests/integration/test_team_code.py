@@ -272,6 +272,12 @@ def bench(tmp_path_factory: pytest.TempPathFactory
             wait_until(lambda: len([r for r in st.get("/api/world")["robots"]
                                     if r["team"] == "blue"]) == 3, 20, what="blue 0-2 seen")
             arm(st)
+            # the team's play drives before the first test: its worker process starts after
+            # the station (seconds on a loaded machine), and until then the robots get zero
+            t = time.monotonic()
+            wait_until(lambda: team_file(st, "mover.py")["state"] == "running"
+                       and bool(sim.since(t, 1)) and sim.since(t, 1)[-1] > 0.5, 30,
+                       what="mover.py driving robot 1")
             yield st, cam, sim
         finally:
             cam.stop.set()
