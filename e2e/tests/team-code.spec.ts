@@ -1,7 +1,7 @@
 import { readFileSync, rmSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { expect, test, type Page } from "@playwright/test";
-import { open, stats, world, type Hooks, type Robot } from "./helpers";
+import { open, stats, world, type Hooks, type Robot, type World } from "./helpers";
 
 // The team's own code against the real station (issue 27): the config starts the station on a
 // copy of the shipped team folder (E2E_TEAM_DIR); this spec writes a play into it, picks it in
@@ -34,6 +34,12 @@ interface StrategyNow {
   our_side: "negative-x" | "positive-x";
   robot_plays: Record<string, string>;
   stopped: { id: number; play: string; reason: string }[];
+}
+
+/** The world in replay: the playhead and what the log recorded (its commands among it). */
+interface ReplayNow extends World {
+  replay: { position_s: number } | null;
+  recorded: { commands: { team: string; id: number; forward_mps: number; left_mps: number }[] } | null;
 }
 
 async function strategy(page: Page): Promise<StrategyNow> {
@@ -267,7 +273,7 @@ test.describe("team code", () => {
       await page.getByRole("button", { name: "Remove plot" }).last().click();
   });
 
-  test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording", async ({ page }) => {
+  test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording and the commands it sent", async ({ page }) => {
     test.setTimeout(90_000);
     writeFileSync(join(teamDir, FILE), SOURCE);
     await open(page);
@@ -286,6 +292,30 @@ test.describe("team code", () => {
       expect((await stats(page)).recordedDrawn).toBeGreaterThan(0);
       const w = await world(page);
       expect((w as unknown as { replay: unknown }).replay).not.toBeNull();
+
+      // paused where the log's robot 1 was driving (2.2 s): what the play commands each robot
+      // now beside the command the log sent it then, for the same robots, both drawn
+      const post = (data: object) => page.request.post("/api/player", { data, headers: { "Content-Type": "application/json" } });
+      await post({ action: "pause" });
+      await post({ action: "seek", position_s: 2.2 });
+      const compared = async () => {
+        const now = (await world(page)) as ReplayNow;
+        if (Math.abs((now.replay?.position_s ?? 0) - 2.2) > 1e-6 || !now.recorded) return "not at 2.2 s";
+        const sentThen = now.recorded.commands.filter((c) => Math.hypot(c.forward_mps, c.left_mps) > 0.05);
+        const both = sentThen.filter((c) => {
+          const r = now.robots.find((x) => x.team === c.team && x.id === c.id);
+          return r?.target?.source === "team" && r.command && Math.hypot(r.command.forward_mps, r.command.left_mps) > 0.05;
+        });
+        return both.length > 0 ? "both" : `sent then ${sentThen.length}, with the play's own command 0`;
+      };
+      await expect.poll(compared, { timeout: 15_000 }).toBe("both");
+      await expect.poll(async () => (await stats(page)).recordedCommandsDrawn, { timeout: 10_000 }).toBeGreaterThan(0);
+      expect((await stats(page)).commandsDrawn).toBeGreaterThan(0);
+      // the layers panel says which arrow is which
+      await page.getByTestId("layers-toggle").click();
+      await expect(page.getByTestId("commands-legend")).toContainText("commanded now");
+      await expect(page.getByTestId("commands-legend")).toContainText("sent then (log)");
+      await page.getByTestId("layers-toggle").click();
     } finally {
       await page.request.post("/api/player", { data: { action: "live" }, headers: { "Content-Type": "application/json" } });
     }
