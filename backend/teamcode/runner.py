@@ -262,16 +262,26 @@ class PythonRunner(Runner):
         w = self.worker
         fut = w.request("load", found.name, self.kind, found.entry, LOAD_LIMIT_S)
         self._loading = True
+        # The answer is accounted in the future's callback, as the ticks' answers are: in the
+        # order the worker gave them. (Awaited here, it was accounted a few loop steps later,
+        # after the answer of a tick sent during the reload: that tick's failure was cleared
+        # by "loaded" and counted again on the next tick.)
+        fut.add_done_callback(lambda f: self._loaded(found, f))
         try:
             async with asyncio.timeout(LOAD_LIMIT_S + KILL_GRACE_S):
-                reply = await asyncio.shield(fut)
+                await asyncio.wait([fut])
         except TimeoutError:
             w.kill(f"stuck: loading took longer than {LOAD_LIMIT_S:g} s")
             return  # _gone says it
-        except WorkerGone:
-            return  # _gone says it
         finally:
             self._loading = False
+
+    def _loaded(self, found: Found, fut: asyncio.Future[Any]) -> None:
+        """The worker's answer to a load (not called if it ended first: _gone says it)."""
+        if fut.cancelled() or fut.exception() is not None:
+            return
+        self._loading = False
+        reply = fut.result()
         if self.closed or self._done < self._want:
             return  # saved again meanwhile: the next load counts
         if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import pickle
+import time
 from pathlib import Path
 
 import pytest
@@ -167,6 +168,59 @@ async def test_an_exception_has_its_traceback(tmp_path: Path) -> None:
         assert "backend" not in e.traceback
         assert r.run.errors == 1
         assert r.send(game(), None, 1.0) is None
+    finally:
+        await r.close()
+
+
+def _wait_worker_idle(pid: int, timeout_s: float = 20.0) -> None:
+    """Blocks (the station's loop too, on purpose) until the worker has answered every request
+    it was sent: asleep in a read of its standard input (Linux: /proc/<pid>/syscall)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        with open(f"/proc/{pid}/stat") as f:
+            state = f.read().rsplit(")", 1)[1].split()[0]
+        with open(f"/proc/{pid}/syscall") as f:
+            call = f.read().split()
+        if state == "S" and call[:2] == ["0", "0x0"]:  # read(0, ...) with nothing to read
+            return
+        time.sleep(0.001)  # polling the condition, bounded
+    raise AssertionError("the worker never went idle")
+
+
+async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) -> None:
+    """A save with a typo that only a call finds (game.mien): the reload imports fine, the
+    tick sent meanwhile (the play is still running during a reload) fails. When both answers
+    come in one read, the failure must stand: counted once, not cleared by the load's answer
+    and counted again on the next tick (errors: 2 for one typo before)."""
+    good = ("import os, time\nfrom touchline import Target\n"
+            "GATE = {gate!r}\n"
+            "deadline = time.monotonic() + 20.0\n"
+            "while not os.path.exists(GATE) and time.monotonic() < deadline:\n"
+            "    time.sleep(0.001)  # a slow import (numpy, a model...), until the test opens\n"
+            "def play(game):\n    return {{r: Target(0.0, 0.0) for r in game.mine}}\n")
+    gate = tmp_path / "gate"
+    gate.touch()
+    write(tmp_path, "typo.py", good.format(gate=str(gate)))
+    r = await started(tmp_path, "typo.py")
+    try:
+        assert (await answer(r.send(game(), None, 1.0))).output is not None
+        gate.unlink()
+        write(tmp_path, "typo.py", good.format(gate=str(gate)).replace("game.mine", "game.mien"))
+        r.update(found(tmp_path, "typo.py"))
+        await until(lambda: r._loading, what="the load request with the worker")
+        assert r.run.state == "running"  # the old version runs on while the new one loads
+        p = r.send(game(), None, 1.0)
+        assert p is not None
+        gate.touch()  # the import ends; the worker answers the load, then the tick
+        _wait_worker_idle(r.pid)  # both answers wait in the pipe: read in one go
+        await answer(p)
+        await until(lambda: r._task is None, what="the load accounted")
+        assert p.reason == "failed"
+        assert r.run.state == "error" and r.run.error is not None
+        assert "mien" in r.run.error.message
+        assert r.run.errors == 1
+        assert r.send(game(), None, 1.0) is None  # failed: not asked again until a save
+        assert r.run.errors == 1
     finally:
         await r.close()
 
