@@ -820,6 +820,9 @@ class TeamFile(TypedDict):
     ticks: int
     errors: int
     overruns: Annotated[int, Field(description="ticks over the time budget (output discarded)")]
+    late: Annotated[int, Field(
+        description="ticks whose answer came after the tick stopped waiting (the budget + a "
+                    "grace, wall clock: a busy machine), not over the budget (output discarded)")]
     moved_out: Annotated[int, Field(
         description="targets the safety envelope moved out of a forbidden area, or capped")]
     tick_ms_p50: Annotated[float | None, Field(description="CPU time of a tick, ms")]

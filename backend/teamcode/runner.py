@@ -168,8 +168,10 @@ class Runner:
         if not p.done and p.warmup:
             p.reason = "warming up (the first call after a load)"
         elif not p.done:
+            # not over its budget (CPU time, judged when the answer comes): late (wall time:
+            # the machine is busy, or the worker was not scheduled)
             p.reason = "late (no answer within the budget and the grace)"
-            self.run.overruns += 1
+            self.run.late += 1
 
 
 def error_from(err: dict[str, Any], name: str) -> ErrorInfo:

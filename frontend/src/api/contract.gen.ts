@@ -1067,6 +1067,8 @@ export interface TeamFile {
   errors: number;
   /** ticks over the time budget (output discarded) */
   overruns: number;
+  /** ticks whose answer came after the tick stopped waiting (the budget + a grace, wall clock: a busy machine), not over the budget (output discarded) */
+  late: number;
   /** targets the safety envelope moved out of a forbidden area, or capped */
   moved_out: number;
   /** CPU time of a tick, ms */

@@ -339,6 +339,35 @@ async def test_one_tick_over_budget_is_discarded_but_not_fatal(tmp_path: Path) -
         await r.close()
 
 
+async def test_a_late_answer_is_counted_late_not_over_budget(tmp_path: Path) -> None:
+    """An answer that comes after the tick stopped waiting, with little CPU time spent (the
+    worker not scheduled on a busy machine; here: it waits on a gate, asleep): discarded for
+    that tick and counted as late, not over the play's CPU budget."""
+    gate = tmp_path / "gate"
+    gate.touch()
+    write(tmp_path, "sleepy.py", "import os, time\nfrom touchline import Target\n"
+                                 f"GATE = {str(gate)!r}\n"
+                                 "def play(game):\n"
+                                 "    end = time.monotonic() + 20.0\n"
+                                 "    while not os.path.exists(GATE) and time.monotonic() < end:\n"
+                                 "        time.sleep(0.001)\n"
+                                 "    return {1: Target(0.0, 0.0)}\n")
+    r = await started(tmp_path, "sleepy.py")
+    try:
+        assert (await answer(r.send(game(), None, BUDGET))).output is not None  # warm-up
+        gate.unlink()
+        p = r.send(game(), None, BUDGET)
+        assert p is not None
+        r.late(p)  # the tick's deadline (TeamTick.wait): no answer yet
+        assert p.reason.startswith("late") and (r.run.late, r.run.overruns) == (1, 0)
+        gate.touch()
+        await answer(p)
+        assert p.cpu_ms is not None and p.cpu_ms < BUDGET * 1000.0
+        assert (r.run.late, r.run.overruns, r.run.state) == (1, 0, "running")
+    finally:
+        await r.close()
+
+
 async def test_a_spin_is_stopped_with_its_line(tmp_path: Path) -> None:
     write(tmp_path, "spin.py", "from touchline import Target\n"
                                "def play(game):\n"
