@@ -17,10 +17,11 @@ from touchline import Game, Target
 TITLE = "Pass drill"
 DESCRIPTION = "Two robots pass the ball back and forth; the others hold their spots"
 
-SPOTS = ((-2000.0, -1500.0), (-2000.0, 1500.0))  #: mm, our frame: on our half, in the open
+# where the two passers stand (mm, our frame: our goal at -x): on our half, in the open
+SPOTS = ((-2000.0, -1500.0), (-2000.0, 1500.0))
 PASS_SPEED_MPS = 3.0
-CONTACT_MM = 90.0 + 21.5  #: robot radius + ball radius: the ball at the kicker
-READY_MM = 150.0  #: a receiver this close to its spot is ready for the pass
+CONTACT_MM = 90.0 + 21.5  # robot radius + ball radius: the ball at the kicker
+READY_MM = 150.0  # a receiver this close to its spot is ready for the pass
 
 
 def kick_towards(game: Game, rid: int, aim: tuple[float, float], speed_mps: float,
