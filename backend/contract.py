@@ -17,14 +17,19 @@ from typing import Annotated, Literal, NotRequired
 from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
-Team = Literal["blue", "yellow"]
+# the contract's names for the domain's types (one definition each, in domain/)
+from domain.rules import BALL_RADIUS_MM, ROBOT_RADIUS_MM
+from domain.rules import RefereeCommand as RefereeCommand
+from domain.teams import Team as Team
+
 Side = Literal["negative-x", "positive-x"]
 ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
 #: the filter in use for an object: "raw", "median", "paper", "kalman", "adaptive" ("" before any)
 FilterName = Annotated[str, Field(
     description='"raw", "median", "paper", "kalman" or "adaptive"')]
-#: who set a robot's target: an operator's click, or the strategy
-TargetSource = Literal["operator", "strategy"]
+#: who set a robot's target: an operator's click, the strategy (a built-in play), or a play of
+#: the team's own code (team/)
+TargetSource = Literal["operator", "strategy", "team"]
 
 _STRICT = ConfigDict(extra="forbid")
 
@@ -271,7 +276,7 @@ class Referee(TypedDict):
 
     source: Annotated[str, Field(description='"game-controller", "internal" or "none"')]
     source_identifier: str
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     stage_time_left_s: float | None
@@ -322,6 +327,16 @@ class ArmingInfo(TypedDict):
 
 
 @with_config(_STRICT)
+class StoppedRobot(TypedDict):
+    """One of our robots stopped because its play (team code) failed."""
+
+    id: int
+    play: str
+    reason: Annotated[str, Field(description='the error in one line ("exception at '
+                                             'pass_drill.py:12: ZeroDivisionError ...")')]
+
+
+@with_config(_STRICT)
 class StrategyState(TypedDict):
     """What the strategy is doing now (sent with every world update)."""
 
@@ -333,6 +348,12 @@ class StrategyState(TypedDict):
     side_from_referee: Annotated[bool, Field(
         description="our side comes from the referee (blue_team_on_positive_half)")]
     tick_ms: float
+    robot_plays: Annotated[dict[str, str], Field(
+        description='the play each of our robots runs now, keyed by id ("3"); robots an '
+        'operator drives and robots not on the field are left out')]
+    stopped: Annotated[list[StoppedRobot], Field(
+        description="robots held still because the team-code play that drives them failed "
+        "(marked on the field)")]
 
 
 @with_config(_STRICT)
@@ -349,13 +370,14 @@ class InternalReferee(TypedDict):
     disabled_reason: str
     foreign_source: Annotated[str | None, Field(
         description="a game controller heard on the network (the internal referee steps aside)")]
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     designated_position: Vec | None
     score: Score
     max_allowed_bots: Score
-    commands: Annotated[list[str], Field(description="the commands an operator may give")]
+    commands: Annotated[list[RefereeCommand], Field(
+        description="the commands an operator may give")]
 
 
 @with_config(_STRICT)
@@ -399,6 +421,9 @@ class World(TypedDict):
         description="set while the station replays a log (nothing is sent to robots then)")]
     recorded: Annotated[RecordedWorld | None, Field(
         description="in replay, the estimate recorded in the log (null live, or if none)")]
+    team: Annotated[dict[str, dict[str, float]], Field(
+        description="the team's processors' latest outputs (team/<name>.py: {key: number}; "
+        "booleans as 0/1), plotted as team.<name>.<key>")]
 
 
 # ------------------------------------------------------------------------------ geometry
@@ -594,6 +619,16 @@ class WorldHealth(TypedDict):
     camera_clock_offsets_s: Annotated[dict[str, float | None], Field(
         description="per camera: receive - capture (s)")]
     camera_pairs: list[CameraPair]
+    camera_rates_hz: Annotated[dict[str, float], Field(
+        description="per camera heard within the last second: frames a second by the receive "
+        "clock (0: not measured yet)")]
+    lost_after_s: Annotated[float | None, Field(
+        description="every camera silent this long: every robot is stopped (6 frame periods, "
+        "at most 0.1 s less 20 ms for the stop to reach the robots; null: a camera slower than "
+        "30 Hz or not measured yet, then safety.vision_stale_s)")]
+    vision_lost: Annotated[str | None, Field(
+        description="every camera silent past lost_after_s: why every robot is stopped (as "
+        "world.halt_reason says), else null")]
 
 
 @with_config(_STRICT)
@@ -629,6 +664,28 @@ class Recording(TypedDict):
     records: int
     dropped: Annotated[int, Field(description="records lost because the writer fell behind")]
     error: Annotated[str, Field(description='why recording stopped (e.g. disk full), or ""')]
+
+
+@with_config(_STRICT)
+class StationFolder(TypedDict):
+    """A folder the station reads code from or writes to. Set when the station starts (its
+    flag, or its environment variable), never by a parameter or a request (docs/security.md)."""
+
+    name: Annotated[str, Field(description='the setting: "scripts_dir", "record_dir", ...')]
+    label: str
+    what: Annotated[str, Field(description="what the station reads or writes there")]
+    paths: Annotated[list[str], Field(
+        description="absolute, as this run uses them; empty: none (e.g. no state kept)")]
+    flag: Annotated[str, Field(description='the command-line flag, e.g. "--scripts-dir"')]
+    env: Annotated[str, Field(description='the environment variable, e.g. '
+                                          '"TOUCHLINE_SCRIPTS_DIR"')]
+
+
+@with_config(_STRICT)
+class StationFolders(TypedDict):
+    """GET /api/folders: the station's folders, read-only."""
+
+    folders: list[StationFolder]
 
 
 @with_config(_STRICT)
@@ -686,6 +743,118 @@ class OperatorAction(TypedDict):
     details: str
 
 
+# ------------------------------------------------------------------------------ team code
+
+
+TeamFileKind = Literal["play", "processor", "library"]
+TeamLanguage = Literal["python", "octave"]
+TeamFileState = Literal["idle", "starting", "running", "error"]
+TeamErrorKind = Literal["import", "exception", "output", "budget", "crash", "missing"]
+
+
+@with_config(_STRICT)
+class TeamError(TypedDict):
+    """Why a file of the team's code does not run (it stays so until the file, or a library
+    it uses, is saved again)."""
+
+    kind: Annotated[TeamErrorKind, Field(
+        description='"import": does not load (syntax, import, a name taken); "exception": '
+        'raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); '
+        '"budget": over its time budget 3 ticks in a row, or stuck (killed); "crash": its '
+        'worker process died; "missing": the file of a chosen play is gone')]
+    message: str
+    file: Annotated[str, Field(description='the team file it happened in ("lib/util.py")')]
+    line: int | None
+    traceback: str
+    at_unix: float
+
+
+@with_config(_STRICT)
+class TeamFile(TypedDict):
+    """One file of the team folder and how it runs."""
+
+    name: Annotated[str, Field(description='path in the team folder: "pass_drill.py", '
+                                           '"lib/util.m"')]
+    kind: TeamFileKind
+    language: TeamLanguage
+    play: Annotated[str | None, Field(description="the play's name (a play's file stem)")]
+    title: Annotated[str, Field(description="TITLE (Python) or the first help line (.m)")]
+    description: str
+    state: Annotated[TeamFileState, Field(
+        description='"idle": not in use (a play nobody runs, a library); "starting": its '
+        'worker is starting; "running"; "error": see error')]
+    error: TeamError | None
+    version: Annotated[str, Field(description="12 hex digits of the content's SHA-256")]
+    mtime_unix: float
+    size_bytes: int
+    reloaded_at_unix: Annotated[float | None, Field(
+        description="when the running version was loaded (null: not loaded)")]
+    reloads: int
+    ticks: int
+    errors: int
+    overruns: Annotated[int, Field(description="ticks over the time budget (output discarded)")]
+    moved_out: Annotated[int, Field(
+        description="targets the safety envelope moved out of a forbidden area, or capped")]
+    tick_ms_p50: Annotated[float | None, Field(description="CPU time of a tick, ms")]
+    tick_ms_p99: float | None
+    robots: Annotated[list[int], Field(description="our robots it drives now (plays)")]
+    outputs: Annotated[dict[str, float], Field(
+        description="a processor's latest outputs (booleans as 0/1)")]
+
+
+@with_config(_STRICT)
+class TeamEdit(TypedDict):
+    allowed: Annotated[bool, Field(description="this caller may save files from the page")]
+    reason: Annotated[str | None, Field(description="why not (null when allowed)")]
+
+
+@with_config(_STRICT)
+class TeamCode(TypedDict):
+    """GET /api/team: the team folder (a start-time setting: --team-dir, make run TEAM=)."""
+
+    dir: str
+    api_version: Annotated[int, Field(description="touchline.API_VERSION the station speaks")]
+    edit: TeamEdit
+    files: list[TeamFile]
+
+
+@with_config(_STRICT)
+class TeamFileText(TypedDict):
+    """GET /api/team/files/{name}."""
+
+    name: str
+    text: str
+    version: str
+    language: TeamLanguage
+
+
+@with_config(_STRICT)
+class TeamFileSaved(TypedDict):
+    """The answer of PUT /api/team/files/{name}: saved, and being reloaded."""
+
+    name: str
+    version: str
+    saved_at_unix: float
+
+
+@with_config(_STRICT)
+class StartupInfo(TypedDict):
+    """The backend's start (backend/startup.py): the first command's steps first, then what
+    it does not need."""
+
+    restarted: Annotated[bool, Field(
+        description="restarted by the launcher's supervisor after a crash (arming taken back)")]
+    standby: Annotated[bool, Field(
+        description="a warm spare the supervisor told to start: imported before the crash; "
+                    "its steps count from the word to start")]
+    steps_s: Annotated[dict[str, float], Field(
+        description="seconds from the backend's process start (a warm spare: from the word to "
+                    "start) at which each step was done: "
+                    "imports, station built, station running, first frame, first targets, "
+                    "first command; then recorder open, engine started, web imports, web "
+                    "serving (a step not done yet is absent)")]
+
+
 @with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
@@ -719,6 +888,9 @@ class Health(TypedDict):
     driving: Annotated[list[DrivingInfo], Field(description="who drives which team")]
     operator_actions: Annotated[list[OperatorAction], Field(
         description="the latest operator actions, newest first")]
+    startup: StartupInfo
+    team_code: Annotated[list[TeamFile], Field(
+        description="the team folder's files and their states (as GET /api/team)")]
 
 
 # ------------------------------------------------------------------------------ parameters
@@ -736,6 +908,10 @@ class PlayInfo(TypedDict):
     name: str
     title: str
     description: str
+    source: Annotated[Literal["builtin", "team"], Field(
+        description='"team": a play of the team folder (its file stem)')]
+    file: Annotated[str | None, Field(description="the team file (null for built-in plays)")]
+    language: TeamLanguage | None
 
 
 @with_config(_STRICT)
@@ -814,6 +990,14 @@ class EstopAnswer(EstopInfo):
 # (pydantic models: FastAPI validates each request against them; NaN and unknown keys refused)
 
 
+class TeamFileIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    text: str = Field(description="the whole file (UTF-8; at most 256 KB)")
+    base_version: str | None = Field(
+        default=None, description="the version the edit started from (409 when the file "
+        "changed on disk since); null: a new file")
+
+
 class TargetIn(BaseModel):
     model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
     x: float = Field(description="target x in mm (vision frame)")
@@ -829,7 +1013,8 @@ class Point(BaseModel):
 
 class RefereeCommandIn(BaseModel):
     model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
+    command: RefereeCommand = Field(description="a referee command the operator may give "
+                                    "(InternalReferee.commands)")
     designated_position: Point | None = Field(default=None, description="for ball placement")
 
 
@@ -1086,9 +1271,14 @@ class ParamsMessage(TypedDict):
 ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
                  | PlayerMessage)
 
+#: the rules' numbers the page draws with before a geometry packet names its own (exported
+#: to TypeScript as constants: the page keeps no copy)
+CONSTANTS: dict[str, float] = {"ROBOT_RADIUS_MM": ROBOT_RADIUS_MM, "BALL_RADIUS_MM": BALL_RADIUS_MM}
+
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {
     "Team": Team, "Side": Side, "ControlAlgorithm": ControlAlgorithm,
+    "RefereeCommand": RefereeCommand,
     "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,
@@ -1097,7 +1287,10 @@ EXPORTS: dict[str, object] = {
     "OperatorAction": OperatorAction,
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
-    "PlayerHistory": PlayerHistory,
+    "StationFolders": StationFolders,
+    "PlayerHistory": PlayerHistory, "TeamCode": TeamCode, "TeamFile": TeamFile,
+    "TeamError": TeamError, "TeamFileText": TeamFileText, "TeamFileSaved": TeamFileSaved,
+    "StoppedRobot": StoppedRobot,
     # request bodies (their optional fields are optional in TypeScript too)
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
     "EnableIn": EnableIn, "ArmIn": ArmIn, "TeleportBallIn": TeleportBallIn,
@@ -1106,4 +1299,5 @@ EXPORTS: dict[str, object] = {
     "PlayerPlayIn": PlayerPlayIn,
     "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
     "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,
+    "TeamFileIn": TeamFileIn,
 }

@@ -88,6 +88,16 @@ class Processor:
         on every processor at start and on every change, between two ticks)."""
         return None
 
+    #: for a topic-triggered processor with a max wait that has ``wake_in_s``: the runner
+    #: asks it again at least this often while waiting (None: at its deadlines only)
+    wake_check_s: float | None = None
+
+    def wake_in_s(self) -> float | None:
+        """For a topic-triggered processor with a max wait: seconds until it must run
+        though no input arrives, if that is sooner than its max wait (a deadline of its own:
+        the control's stop when every camera went silent); None: its max wait only."""
+        return None
+
     def set_rate(self, hz: float) -> None:
         if not math.isfinite(hz) or hz <= 0:
             raise ValueError(f"{self.name}: rate must be a positive number, got {hz}")
@@ -561,8 +571,11 @@ class Runner:
 
     async def _deadlines(self, proc: Processor) -> None:
         """A topic-triggered processor with ``max_wait_s``: runs it when it has not run for
-        that long (its input went quiet). Without a max wait there is nothing to do here."""
+        that long (its input went quiet), or sooner when it says so (``wake_in_s``: asked
+        again at every wake-up, and at least every ``wake_check_s``). Without a max wait
+        there is nothing to do here."""
         link = self._link_of[id(proc)]
+        check = proc.wake_check_s
         while True:
             trig = proc.trigger
             if not isinstance(trig, OnTopic):
@@ -572,11 +585,19 @@ class Runner:
                 return
             due = link.last_run + trig.max_wait_s
             now = time.perf_counter()
+            soon = proc.wake_in_s()
+            # (a deadline passed is served by any run since: run and still due, its tick
+            # failed, and it waits for its max wait, no spinning on it)
+            if soon is not None and now + soon > link.last_run:
+                due = min(due, now + soon)
             if now < due:
-                await asyncio.sleep(due - now)
+                await asyncio.sleep(due - now if check is None else min(due - now, check))
                 continue
             link.due = True
             if self._passing:  # the pass under way runs it in its next round
                 link.last_run = now
+                # (its own deadline stays due until then: not asked again at once)
+                await asyncio.sleep(trig.max_wait_s if check is None
+                                    else min(trig.max_wait_s, check))
                 continue
             self._pass_now()

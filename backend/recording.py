@@ -31,21 +31,16 @@ class RecordingControl:
         self._params_recorded: dict[str, Any] | None = None
 
     def folder(self) -> Path:
-        st = self.station
-        if st.settings.record_dir is not None:
-            return st.settings.record_dir
-        folder = st.params.current.recording.folder
-        if folder:
-            return Path(folder).expanduser()
-        return (st.settings.state_dir or ROOT / "var") / "logs"
+        """Set when the station starts (--record-dir, else logs/ in the state folder), never
+        by a parameter: a page must not make the station write where it likes."""
+        return self.station.settings.recording_folder() or ROOT / "var" / "logs"
 
     def wanted(self, p: StationParams) -> bool:
         """Records live sessions unless told not to (the parameter, --no-record), when
         replaying from the command line, or for a station that keeps no state (tests)."""
         s = self.station.settings
         return (p.recording.enabled and s.record and s.log is None
-                and (s.state_dir is not None or bool(p.recording.folder)
-                     or s.record_dir is not None))
+                and s.recording_folder() is not None)
 
     def open(self, p: StationParams) -> SessionRecorder:
         rp = p.recording
@@ -61,9 +56,6 @@ class RecordingControl:
         rec.max_bytes = p.recording.max_mb << 20
         rec.rotate_on_stage = p.recording.rotate_on_stage
         rec.our_team = p.team.our_team
-        folder = self.folder()
-        if folder != Path(rec.status()["folder"]):
-            rec.set_folder(folder)
         rec.set_enabled(self.wanted(p))
         values = p.model_dump(mode="json")
         changes = values if self._params_recorded is None else \

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import threading
 import time
 import uuid
 from collections.abc import Callable
@@ -15,11 +16,13 @@ from typing import Any, TypeVar, cast
 import zmq
 import zmq.asyncio
 
+from domain.wallclock import clock
 from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics, views
+from . import contract, stalldump, topics, views
+from .arming import ArmingStore
 from .bus import DataBus
 from .config import Settings
 from .control.goto import Target
@@ -28,7 +31,7 @@ from .estop import EstopLatch
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .operators import Operators
-from .params.model import StationParams
+from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Processor, Runner
 from .processors import (
@@ -51,7 +54,12 @@ from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
-from .station_loop import StationLoop
+from .startup import StartupTimeline, process_start_mono
+from .station_loop import StationLoop, freeze_start_up
+from .teamcode.plays import TeamPlays
+from .teamcode.processors import TeamProcessors
+from .teamcode.registry import TeamRegistry
+from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
@@ -61,8 +69,15 @@ T = TypeVar("T")
 
 
 class Station:
-    def __init__(self, settings: Settings) -> None:
+    def __init__(self, settings: Settings, startup: StartupTimeline | None = None) -> None:
         self.settings = settings
+        #: when each step of the start was done (health's ``startup``)
+        self.startup = startup or StartupTimeline(process_start_mono())
+        self.startup.restarted = settings.restarted
+        #: set once the parts the first command does not need have been started
+        #: (``start_late``): the web side starts after it (``python -m backend``)
+        self.late_started = threading.Event()
+        self._late_timer: asyncio.TimerHandle | None = None
         self.ctx: zmq.asyncio.Context | None = None
         #: the station thread and its event loop (the command queue)
         self.loop = StationLoop(self.start, self.stop, self._after_command)
@@ -77,7 +92,14 @@ class Station:
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,
             "refused": {}, "blocked_clients": 0}
+        # the team's own code (issue 27): found now (read, never run here), watched from start
+        self.team = TeamRegistry(settings.team_dir, PLAYS)
+        self.team.rescan()
+        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
+        self.team_plays = TeamPlays(self.team, settings.team_memory_mb)
         self.params = ParamStore(settings.state_dir)
+        # a play is chosen among the built-in ones and the team folder's (known now)
+        self.params.play_names = lambda: [*PLAYS, *sorted(self.team.plays())]
         overrides: dict[str, Any] = {}
         if settings.our_team is not None:
             overrides["our_team"] = settings.our_team
@@ -100,10 +122,18 @@ class Station:
         self._estop_mono = time.monotonic()
         if self.estop_latch.active:
             self.estop_topic.write(True)
-        #: arming (a relay with --require-arming): the station starts disarmed, never persisted
-        self._armed = False
-        self.armed_by = ""
-        self.armed_since = 0.0  # Unix s of the last arm or disarm (0: never)
+        #: arming (a relay with --require-arming): the operator's, persisted; a start
+        #: disarmed, a restart by the supervisor as the operator left it (backend/arming.py)
+        self.arming_store = ArmingStore(settings.state_dir, settings.restarted)
+        armed = self.arming_store.state
+        if armed.armed and self.estop_latch.active:  # the stop wins: disarmed
+            armed = self.arming_store.set(False, "e-stop active at start")
+        self._armed = armed.armed
+        self.armed_by = armed.by
+        self.armed_since = armed.since  # Unix s of the last arm or disarm (0: never)
+        if self.arming_store.restored and self._armed:
+            log.warning("restarted after a crash: ARMED as the operator left it (by %s at %s)",
+                        armed.by or "?", clock(armed.since))
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
         self.world_topic = self.bus.of(topics.WORLD)
         self.geometry_topic = self.bus.of(topics.GEOMETRY)
@@ -133,12 +163,14 @@ class Station:
         self.publisher.armed_by = lambda: self.armed_by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
         self.control.internal = self.internal_referee
+        self.control.silence = self.world.silence
         self.control.may_drive_other_team = self.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        self.strategy.team = self.team_plays
         # the compute engine for the strategy (started and replaced in the background)
-        self.engine = EngineSwitch(self.strategy)
+        self.engine = EngineSwitch(self.strategy, settings.scripts_dir)
         # the session recorder (made in start(): it opens a file; closed in stop())
         self.recording = RecordingControl(self)
         # the log player: in replay the pipeline runs on the log's time and nothing is sent
@@ -149,13 +181,27 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        # the start's milestones (each hook is called once, then removed)
+        self.world.on_world = self._first_frame
+        self.strategy.on_first_targets = lambda: self.startup.mark("first targets")
+        self.publisher.on_first_command = self._first_command
+        self.strategy.replaying = lambda: self.replay.replaying
+        # the team's processors (their topics team/<name>; the plays read them as topics)
+        self.team_processors = TeamProcessors(self.bus, self.team, settings.team_memory_mb)
+        self.team_processors.referee_source = self.control.active_referee
+        self.team_processors.contacts = self.strategy.contacts
+        self.team_processors.replaying = lambda: self.replay.replaying
+        self.strategy.team_topics = lambda: self.team_processors.outputs
+        stalls = stalldump.from_env()
+        if stalls is not None:
+            self.tracker.after_send = stalls.beat
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
-            ViewPublisher(self.hub),
+            self.team_processors, ViewPublisher(self.hub),
             RecordingProcessor(self))
 
     # ---- the station thread (backend/station_loop.py): the web side changes station state
@@ -184,14 +230,16 @@ class Station:
             self.publish_views(force=True)
 
     async def start(self) -> None:
+        """What the first command needs: the ZeroMQ sockets, the parameters applied and the
+        processors running (the e-stop and the arming were loaded when the station was
+        built). The rest (``start_late``) follows the first command set sent to the relay,
+        or ``settings.late_start_max_s`` without one (no vision); at once with 0."""
         s = self.settings
         self.ctx = zmq.asyncio.Context()
         self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats",
                                                                 b"feedback"]))
         self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
-        rec = self.recording.open(prm)
-        self.ingest.record = self.publisher.record = self.tracker.record = rec.record
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
@@ -199,19 +247,59 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        self.team_watcher.start(self.team_watcher_listing())
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
+        self.startup.mark("station running")
+        if s.freeze_gc:
+            freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
+        if s.late_start_max_s <= 0 or self.startup.done("first command"):
+            self.start_late()
+        else:
+            self._late_timer = asyncio.get_running_loop().call_later(
+                s.late_start_max_s, self.start_late)
+
+    def _first_frame(self, _world: object) -> None:
+        self.world.on_world = _no_world_hook
+        self.startup.mark("first frame")
+
+    def _first_command(self) -> None:
+        """The first command set for robots went to the relay: the rest starts now (after
+        this pass: the pass that sent it is not delayed by it)."""
+        self.startup.mark("first command")
+        if self.loop.loop is not None:
+            self.loop.loop.call_soon(self.start_late)
+
+    def start_late(self) -> None:
+        """On the station loop, once: what the first command does not need. The session
+        recorder opens its file (what came before is not in it), the compute engine starts
+        (the strategy uses the built-in code until it runs), and the web side may start."""
+        if self.late_started.is_set():
+            return
+        if self._late_timer is not None:
+            self._late_timer.cancel()
+            self._late_timer = None
+        prm = self.params.current
+        rec = self.recording.open(prm)
+        self.ingest.record = self.publisher.record = self.tracker.record = rec.record
+        self.team_processors.record = rec.record
+        self.recording.configure(prm, self.params.version)  # the parameters, recorded
+        self.startup.mark("recorder open")
+        self.engine.started = lambda: self.startup.mark("engine started")
+        self.engine.configure(prm.strategy)
+        self.late_started.set()
 
     def apply_params(self, p: StationParams, version: int) -> None:
         """Applies a validated parameter set to every part at once (between two ticks: the
         event loop runs one thing at a time), then tells the clients."""
         for proc in self.processors:
             proc.configure(p)
-        self.engine.configure(p.strategy)
-        self.recording.configure(p, version)
+        if self.late_started.is_set():  # else start_late starts them with these parameters
+            self.engine.configure(p.strategy)
+            self.recording.configure(p, version)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         sized = {s.name: s for s in topics.ALL}
@@ -267,13 +355,31 @@ class Station:
     def engine_error(self) -> str:
         return self.engine.error
 
+    # ---- the team folder (backend/teamcode): a save is seen by the watcher's thread and
+    # handled here, on the station loop ----
+
+    def team_watcher_listing(self) -> dict[str, Any]:
+        return {f.name: f.stat for f in self.team.found.values()}
+
+    def _team_folder_changed(self, listing: dict[str, Any]) -> None:
+        self.loop.schedule(self.team.rescan, listing)
+
+    def team_rescan(self) -> set[str]:
+        """Looks at the team folder at once (after a save from the page)."""
+        return self.team.rescan()
+
     async def stop(self) -> None:
+        if self._late_timer is not None:
+            self._late_timer.cancel()
+            self._late_timer = None
+        self.team_watcher.stop()
         self.replay.close()
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
+        await self.team_plays.close()
         await self.engine.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
@@ -376,13 +482,15 @@ class Station:
             return why
         if not self._armed:
             log.warning("ARMED by %s: commands go to the robots", by or "?")
-            self._armed, self.armed_by, self.armed_since = True, by, time.time()
+            state = self.arming_store.set(True, by)
+            self._armed, self.armed_by, self.armed_since = True, by, state.since
         return None
 
     def disarm(self, by: str = "") -> None:
         if self._armed:
             log.warning("disarmed by %s: only stops go to the robots", by or "?")
-            self._armed, self.armed_by, self.armed_since = False, by, time.time()
+            state = self.arming_store.set(False, by)
+            self._armed, self.armed_by, self.armed_since = False, by, state.since
 
     def adopt_relay_estop(self, by: str) -> None:
         """The relay is latched although this backend is not (its file was lost, or another
@@ -474,6 +582,10 @@ class Station:
         g = self.geometry_topic.latest_value()
         return None if g is None else cast(contract.Geometry, g)
 
+
+
+def _no_world_hook(_world: object) -> None:
+    pass
 
 
 def _stop_all_bytes() -> bytes:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf.message import DecodeError
 
+from domain.wallclock import clock
 from sslnet.proc import rss_mb
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
@@ -58,6 +59,9 @@ def strategy_state(st: Station) -> contract.StrategyState:
         "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
         "side_from_referee": bool(core and core.side_from_referee),
         "tick_ms": core.last_tick_ms if core is not None else 0.0,
+        "robot_plays": {str(rid): play for rid, play in st.strategy.robot_plays.items()},
+        "stopped": [{"id": rid, "play": play, "reason": why}
+                    for rid, play, why in st.strategy.stopped],
     }
 
 
@@ -65,13 +69,18 @@ def strategy_view(st: Station) -> contract.StrategyView:
     """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
     core = st.strategy.core
     team = st.params.current.team.our_team
+    plays: list[contract.PlayInfo] = [
+        {"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1],
+         "source": "builtin", "file": None, "language": None} for n in PLAYS]
+    plays += [{"name": n, "title": f.title or n, "description": f.description,
+               "source": "team", "file": f.name, "language": f.language}
+              for n, f in sorted(st.team.plays().items())]
     return {
         **strategy_state(st),
-        "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
-                  for n in PLAYS],
+        "plays": plays,
         "roles": {f"{team}/{rid}": role
                   # a copy: the strategy's worker thread may be assigning roles now
-                  for rid, role in (dict(core.strategy.roles).items() if core else [])},
+                  for rid, role in (core.roles.items() if core else [])},
     }
 
 
@@ -116,15 +125,17 @@ def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
 
 
 def arming_warnings(st: Station) -> list[str]:
-    """Health lines: the relay's arming differs from the station's for a while."""
+    """Health lines: the relay's arming differs from the station's for a while; the arming
+    file could not be read or written (backend/arming.py)."""
+    out = [st.arming_store.warning] if st.arming_store.warning else []
     rs = st.relay_stats.latest_value()
     if rs is None or not st.arming_required \
             or time.monotonic() - rs["received_mono"] > RELAY_STATS_FRESH_S:
-        return []
+        return out
     if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
-        return ["the relay is armed although the station is not (another backend armed it?): "
-                "it is disarmed again within 0.5 s"]
-    return []
+        out.append("the relay is armed although the station is not (another backend armed "
+                   "it?): it is disarmed again within 0.5 s")
+    return out
 
 
 def estop_warnings(st: Station) -> list[str]:
@@ -133,7 +144,7 @@ def estop_warnings(st: Station) -> list[str]:
     out: list[str] = []
     s = st.estop_latch.state
     if st.estop:
-        when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
+        when = clock(s.since) if s.since > 0 else "?"
         out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
                    f"held at zero until an operator releases it")
         rs = st.relay_stats.latest_value()
@@ -240,6 +251,7 @@ def world(st: Station) -> contract.World:
         "internal_referee": referee_view(st)["internal"],
         "replay": st.player.clock(),
         "recorded": recorded_world(st.recorded_tracked) if st.player.log is not None else None,
+        "team": st.team_processors.world_view(),
     }
     out["strategy"] = strategy_state(st)
     if ref is not None:
@@ -307,15 +319,19 @@ def world_health(st: Station) -> contract.WorldHealth | None:
     each camera's clock offset."""
     model = st.world.model
     age = st.control.vision_age_s(time.monotonic())
+    silence, lost = st.world.silence, st.control.vision_lost
     return {
         "age_s": age if math.isfinite(age) else None,
-        "stale": age > st.control.vision_stale_s,
+        "stale": age > st.control.vision_stale_s or lost is not None,
         "rejected": dict(model.rejected),
         "recent_rejections": st.world.recent_rejections(),
         "last_rejection": model.last_rejection,
         "clock_resyncs": model.clocks.resyncs,
         "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
         "camera_pairs": cast(list[contract.CameraPair], model.camera_pairs.view()),
+        "camera_rates_hz": {str(c): r for c, r in silence.rates_hz().items()},
+        "lost_after_s": silence.lost_after_s(),
+        "vision_lost": None if lost is None else lost.reason(),
     }
 
 
@@ -405,6 +421,13 @@ def health(st: Station) -> contract.Health:
     if access["blocked_clients"]:
         station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
                              "wrong tokens (someone is guessing the operator token)")
+    team_files = st.team.files_view()
+    # a team file that failed while running (its robots are stopped, its topic stale)
+    station_lines += [f"team code {f['name']}: {f['error']['kind']} at {f['error']['file']}"
+                      f"{':' + str(f['error']['line']) if f['error']['line'] else ''}"
+                      for f in team_files if f["state"] == "error" and f["error"] is not None
+                      and st.team.runs.get(f["name"]) is not None
+                      and st.team.runs[f["name"]].state == "error"]
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
@@ -431,6 +454,8 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "startup": cast(contract.StartupInfo, st.startup.view()),
+        "team_code": team_files,
     }
     return out
 
@@ -468,7 +493,9 @@ def _warnings(vision: dict[str, Any], relay: dict[str, Any] | None,
     if replaying:
         vision, world = {"last_age_s": 0.0}, None
     if world is not None:
-        if world["stale"] and vision.get("last_age_s", -1) >= 0 \
+        if world["vision_lost"] is not None:
+            out.append(f"{world['vision_lost']}: robots stopped")
+        elif world["stale"] and vision.get("last_age_s", -1) >= 0 \
                 and vision.get("last_age_s", -1) < 1.0:
             # vision arrives but nothing of it reaches the world: say why
             since = ("no frame merged yet" if world["age_s"] is None

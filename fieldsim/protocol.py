@@ -15,10 +15,11 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 
-from google.protobuf.message import DecodeError, Message
+from google.protobuf.message import Message
 
 from fieldsim.world import MAX_ROBOT_ID, Team, World
 from sslnet.ratelog import RateLimitedLog
+from sslnet.streams import MISSING_FIELD, parse_message
 from sslpb import grsim_packet_pb2 as grsim_pb
 from sslpb import grsim_robot_status_pb2 as grsim_status_pb
 from sslpb import ssl_gc_common_pb2 as common_pb
@@ -55,14 +56,10 @@ class _Malformed(Exception):
 
 
 def _parse(msg: Message, data: bytes) -> None:
-    try:
-        msg.ParseFromString(data)
-    except (DecodeError, RuntimeError, ValueError) as exc:
-        raise _Malformed(f"cannot decode: {exc}") from None
-    if not msg.IsInitialized():
-        finder = getattr(msg, "FindInitializationErrors", None)
-        missing = ", ".join(finder()) if finder is not None else "?"
-        raise _Malformed(f"missing required fields: {missing}")
+    why = parse_message(msg, data)
+    if why is not None:
+        raise _Malformed(f"missing required fields: {why[1]}" if why[0] == MISSING_FIELD
+                         else f"cannot decode: {why[1]}")
 
 
 def _finite(*values: float) -> bool:

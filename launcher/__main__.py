@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TextIO
 
 from backend.access import is_loopback
+from backend.config import Settings
 from sslnet import defaults
 from sslnet.multicast import interface_multicast_flag, loopback_multicast_ok
 
@@ -88,7 +89,8 @@ def main() -> int:
     p.add_argument("--our-team", choices=["blue", "yellow"], default=None,
                    help="override the stored team parameter")
     p.add_argument("--state-dir", default=None,
-                   help="parameters and presets folder (default var/; --isolated: a temp dir)")
+                   help="parameters and presets folder (default var/, or TOUCHLINE_STATE_DIR; "
+                        "--isolated: a temp dir)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--isolated", action="store_true",
                    help="free non-standard ports for everything (tests)")
@@ -106,8 +108,11 @@ def main() -> int:
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session into the recording folder (var/logs)")
     p.add_argument("--record-dir", default=None, metavar="DIR",
-                   help="record into DIR for this run (default: the recording.folder "
-                        "parameter, else var/logs)")
+                   help="record into DIR (default: logs/ in the state folder; or "
+                        "TOUCHLINE_RECORD_DIR)")
+    p.add_argument("--scripts-dir", default=None, metavar="DIR",
+                   help="the .m files the Octave engine runs (default engine_scripts/; or "
+                        "TOUCHLINE_SCRIPTS_DIR). Folders are set here, never as parameters")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
@@ -118,6 +123,18 @@ def main() -> int:
                    help="viewing needs a token too (see python -m backend --help)")
     p.add_argument("--estop-for-all", action="store_true",
                    help="a viewer without the operator token may press the emergency stop")
+    p.add_argument("--no-standby", action="store_true",
+                   help="keep no warm spare backend: a crashed backend is then started cold "
+                        "(its imports take 1-8 s on a busy 2-core machine instead of none; "
+                        "the spare costs the memory of an idle backend)")
+    p.add_argument("--team-dir", default=None, metavar="DIR",
+                   help="the team's code: plays, processors, libraries (make run TEAM=DIR; "
+                        "default $TOUCHLINE_TEAM_DIR, else the example folder team/)")
+    p.add_argument("--allow-code-edit", action="store_true",
+                   help="operators on other machines may save team code from the page (it "
+                        "runs on this machine: docs/security.md)")
+    p.add_argument("--team-memory-mb", type=int, default=None, metavar="MB",
+                   help="address-space limit of each team-code worker (default 1024)")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -139,12 +156,23 @@ def main() -> int:
         a.sim = "none"  # a replay has no simulator, and nothing is sent to robots
         replay_args.append(f"--log={os.path.abspath(a.log)}")
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
+    if a.team_dir is not None:
+        if not os.path.isdir(a.team_dir):
+            log.error("no such team folder: %s", a.team_dir)
+            return 2
+        replay_args.append(f"--team-dir={os.path.abspath(a.team_dir)}")
+    if a.allow_code_edit:
+        replay_args.append("--allow-code-edit")
+    if a.team_memory_mb is not None:
+        replay_args.append(f"--team-memory-mb={a.team_memory_mb}")
     if a.no_record:
         replay_args.append("--no-record")
     replay_args += [f"--{flag.replace('_', '-')}" for flag in
                     ("require_token", "view_token", "estop_for_all") if getattr(a, flag)]
-    if a.record_dir:
-        replay_args.append(f"--record-dir={os.path.abspath(a.record_dir)}")
+    # the station's folders (backend/config.py): given here, or the TOUCHLINE_* variables
+    # the backend inherits
+    replay_args += [f"--{flag.replace('_', '-')}={os.path.abspath(getattr(a, flag))}"
+                    for flag in ("record_dir", "scripts_dir") if getattr(a, flag)]
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
     own_state_dir: str | None = None  # a temporary state folder of ours: removed at exit
     if a.isolated and a.state_dir is None:
@@ -157,8 +185,9 @@ def main() -> int:
         relay_args=a.relay_args,
         backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *replay_args,
                       *a.backend_args]), ports),
-        restart=True,
-        status_file=Path(a.state_dir or ROOT_VAR) / "supervisor.json")
+        restart=True, standby=not a.no_standby,
+        status_file=Path(a.state_dir or Settings.from_env().state_dir or ROOT_VAR)
+        / "supervisor.json")
     stopping = False
 
     def on_signal(signum: int, _frame: object) -> None:
@@ -192,7 +221,7 @@ def main() -> int:
             if why is not None:
                 log.error("%s", why)
                 break
-            time.sleep(0.2)
+            sup.wait_exit(0.2)  # a child's exit wakes it at once
     finally:
         sup.stop(timeout_s=5.0)
         if own_state_dir is not None:

@@ -12,7 +12,8 @@ The kinds are mixed deterministically from ``--seed`` (a pool of distinct datagr
 once, then drawn from): random bytes, truncated and byte-flipped valid packets, valid protobuf
 with required fields missing, oversized (> the relay's 32 KiB, few), empty, strings that are
 not UTF-8, enum values out of range, NaN/inf coordinates, huge repeated counts. Each datagram
-in the pool is classified beforehand with the backend's own parser (``parse_into``) into the
+in the pool is classified beforehand with the station's own parser
+(``sslnet.streams.parse_message``) into the
 reason the relay or the backend should count it under, or "accepted" (it parses: the world
 model then drops frames whose capture time is random as "time out of range"; a consistent
 fake clock would be learnt as a camera: that is spoofing, not a malformed datagram).
@@ -54,10 +55,10 @@ import httpx
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from backend.processors.common import parse_into  # noqa: E402
 from backend.world.referee import decode_referee  # noqa: E402
 from sslnet import streams  # noqa: E402
 from sslnet.multicast import open_multicast_sender  # noqa: E402
+from sslnet.streams import parse_message as parse_into  # noqa: E402
 from sslpb.ssl_gc_referee_message_pb2 import Referee  # noqa: E402
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket  # noqa: E402
 

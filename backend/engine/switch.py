@@ -6,10 +6,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..config import ROOT
 from ..params.model import StrategyParams
 from .base import PoolEngine
 from .numpy_engine import NumpyEngine
@@ -22,18 +22,22 @@ log = logging.getLogger("touchline.station")
 
 
 class EngineSwitch:
-    """Follows ``strategy.engine`` and ``strategy.scripts_dir``: a change closes the old
-    engine and starts the new one; ``error`` says why one did not start."""
+    """Follows ``strategy.engine``: a change closes the old engine and starts the new one;
+    ``error`` says why one did not start. The Octave engine runs the .m files of
+    ``scripts_dir``, set when the station starts (--scripts-dir), never by a parameter."""
 
-    def __init__(self, strategy: StrategyProcessor) -> None:
+    def __init__(self, strategy: StrategyProcessor, scripts_dir: Path) -> None:
         self.strategy = strategy
+        self.scripts_dir = scripts_dir
         self.error = ""
-        self._key: tuple[str, str] | None = None
+        self._key: str | None = None
         self._gen = 0
         self._tasks: set[asyncio.Task[None]] = set()
+        #: called when an engine has started (the station's start timeline)
+        self.started: Callable[[], None] = lambda: None
 
     def configure(self, sp: StrategyParams) -> None:
-        key = (sp.engine, sp.scripts_dir)
+        key = sp.engine
         if key == self._key:
             return
         self._key = key
@@ -57,10 +61,8 @@ class EngineSwitch:
                               preload=["backend.geometry.fit"], workers=1,
                               default_timeout_s=sp.engine_timeout_s)
         else:
-            scripts = Path(sp.scripts_dir)
-            if not scripts.is_absolute():
-                scripts = ROOT / scripts
-            eng = OctaveEngine(str(scripts), workers=1, default_timeout_s=sp.engine_timeout_s)
+            eng = OctaveEngine(str(self.scripts_dir), workers=1,
+                               default_timeout_s=sp.engine_timeout_s)
         try:
             await eng.start()
         except Exception as exc:
@@ -72,6 +74,7 @@ class EngineSwitch:
             await eng.close()
             return
         self.strategy.engine = eng
+        self.started()
         log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
                  sp.goalkeeper_function)
 

@@ -8,13 +8,15 @@ import logging
 import os
 import re
 import tempfile
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
+from domain.wallclock import file_stamp
+
+from ..config import Settings
 from ..contract import ParamChange
 from .model import StationParams
 
@@ -52,7 +54,64 @@ def _errors(exc: ValidationError) -> list[dict[str, Any]]:
 
 
 # Maps keyed by robot ("blue/3"): in a patch, ``null`` for a key removes that override.
-OVERRIDE_MAPS = frozenset({"robots", "robot_overrides"})
+OVERRIDE_MAPS = frozenset({"robots", "robot_overrides", "robot_plays"})
+
+#: parameters that named a folder until issue 30, and the start-up setting (backend/config.py)
+#: that sets it now. Files the station wrote before (params.json, presets) still load: these
+#: are dropped from them with a log line; a request that carries one is refused.
+MOVED_TO_START: dict[str, str] = {
+    "strategy.scripts_dir": "scripts_dir",
+    "recording.folder": "record_dir",
+}
+#: words that make an unknown key a path (refused with where folders are set instead)
+_PATH_WORDS = frozenset({"dir", "dirs", "directory", "folder", "folders", "path", "paths",
+                         "file", "files", "filename"})
+
+
+def _moved_msg(dotted: str) -> str:
+    field = MOVED_TO_START.get(dotted)
+    if field is not None:
+        meta = Settings.folder_fields()[field]
+        return (f"folders are set when the station starts ({meta['flag']} or "
+                f"{Settings.env_name(field)}), not as a parameter")
+    return ("folders and files are set when the station starts (its command line or a "
+            "TOUCHLINE_* environment variable; docs/security.md), not as parameters")
+
+
+def path_errors(changes: Any, known: Any, path: tuple[str, ...] = ()) -> list[dict[str, Any]]:
+    """The keys of a patch that are not parameters but name a folder or a file (a moved one,
+    or any unknown key whose name says dir, folder, path, file): one error each, saying
+    where it is set instead. Other unknown keys are left to the model's own refusal."""
+    if not isinstance(changes, dict) or not isinstance(known, dict) \
+            or (path and path[-1] in OVERRIDE_MAPS):  # keyed by robot: checked by its model
+        return []
+    out: list[dict[str, Any]] = []
+    for k, v in changes.items():
+        here = (*path, str(k))
+        dotted = ".".join(here)
+        if k in known:
+            out += path_errors(v, known[k], here)
+        elif dotted in MOVED_TO_START or _PATH_WORDS & set(str(k).lower().split("_")):
+            out.append({"loc": ["body", *here], "msg": _moved_msg(dotted),
+                        "type": "path_not_a_parameter"})
+    return out
+
+
+def drop_moved(values: dict[str, Any], where: str) -> dict[str, Any]:
+    """``values`` (a file written before issue 30) without the parameters that became
+    start-up settings; one log line names what was dropped."""
+    dropped: list[str] = []
+    out = dict(values)
+    for dotted, field in MOVED_TO_START.items():
+        group, key = dotted.split(".")
+        g = out.get(group)
+        if isinstance(g, dict) and key in g:
+            out[group] = {k: v for k, v in g.items() if k != key}
+            dropped.append(f"{dotted}={g[key]!r} (now {Settings.folder_fields()[field]['flag']})")
+    if dropped:
+        log.warning("%s: dropped %s: folders are set when the station starts", where,
+                    ", ".join(dropped))
+    return out
 
 
 def deep_merge(base: dict[str, Any], patch: dict[str, Any],
@@ -144,6 +203,9 @@ class ParamStore:
         #: made on an older version of the page is refused for the leaves changed since
         self.changed_in: dict[str, int] = {}
         self._listeners: list[Callable[[StationParams, int], None]] = []
+        #: the plays that may be chosen now (built-in and the team folder's); None: any name
+        #: the schema's pattern takes (a store without a station)
+        self.play_names: Callable[[], Sequence[str]] | None = None
         #: problems with the state folder found at start-up (health shows them)
         self.warnings: list[str] = []
         if state_dir is not None:
@@ -182,7 +244,7 @@ class ParamStore:
                 raise ValueError(f"'version' is {version!r}, not a whole number >= 0")
             # unknown or removed keys from an older version are dropped, not fatal
             current = StationParams.model_validate(
-                _known_only(self.defaults.model_dump(), values))
+                _known_only(self.defaults.model_dump(), drop_moved(values, str(f))))
         except (ValueError, ValidationError, OSError, RecursionError) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._set_aside(f, reason)
@@ -191,7 +253,7 @@ class ParamStore:
         log.info("parameters loaded from %s (version %d)", f, self.version)
 
     def _set_aside(self, f: Path, reason: str) -> None:
-        bad = f.with_name(f"{f.stem}.invalid-{time.strftime('%Y%m%d-%H%M%S')}{f.suffix}")
+        bad = f.with_name(f"{f.stem}.invalid-{file_stamp()}{f.suffix}")
         try:
             os.replace(f, bad)
             where = f"set aside as {bad.name}"
@@ -208,18 +270,48 @@ class ParamStore:
         return self.current.model_dump(mode="json")
 
     def schema(self) -> dict[str, Any]:
-        return StationParams.model_json_schema()
+        """The JSON schema, with the plays known now as ``strategy.play``'s choices (the
+        team folder's plays come and go with its files)."""
+        schema = StationParams.model_json_schema()
+        if self.play_names is not None:
+            strategy = schema.get("$defs", {}).get("StrategyParams", {})
+            play = strategy.get("properties", {}).get("play")
+            if isinstance(play, dict):
+                play["enum"] = list(self.play_names())
+        return schema
+
+    def _check_plays(self, new: StationParams) -> None:
+        """A play chosen (for the team or a robot) must be known now; one already in force
+        may stay (its file may be gone for a moment: its robots stop meanwhile)."""
+        if self.play_names is None:
+            return
+        known = set(self.play_names())
+        old, sp = self.current.strategy, new.strategy
+        errors: list[dict[str, Any]] = []
+        if sp.play != old.play and sp.play not in known:
+            errors.append({"loc": ["body", "strategy", "play"], "type": "enum",
+                           "msg": f"no play named {sp.play!r}; plays: "
+                                  f"{', '.join(sorted(known))}"})
+        for rid, play in sp.robot_plays.items():
+            if play != old.robot_plays.get(rid) and play not in known:
+                errors.append({"loc": ["body", "strategy", "robot_plays", rid], "type": "enum",
+                               "msg": f"no play named {play!r}; plays: "
+                                      f"{', '.join(sorted(known))}"})
+        if errors:
+            raise ParamError(errors)
 
     def patch(self, changes: dict[str, Any]) -> StationParams:
         """Validates the whole result, then applies it at once; nothing applied on error."""
         if not isinstance(changes, dict):
             raise ParamError([{"loc": ["body"], "msg": "expected an object of changes",
                                "type": "type_error"}])
+        self._refuse_paths(changes)
         merged = deep_merge(self.values(), changes)
         try:
             new = StationParams.model_validate(merged)
         except ValidationError as exc:
             raise ParamError(_errors(exc)) from None
+        self._check_plays(new)
         return self._set(new)
 
     def replace(self, values: dict[str, Any]) -> StationParams:
@@ -230,11 +322,18 @@ class ParamStore:
         if not isinstance(values, dict):
             raise ParamError([{"loc": ["body"], "msg": "expected an object of parameter "
                                "groups", "type": "type_error"}])
+        self._refuse_paths(values)
         try:
             new = StationParams.model_validate(deep_merge(base, values))
         except ValidationError as exc:
             raise ParamError(_errors(exc)) from None
+        self._check_plays(new)
         return self._set(new)
+
+    def _refuse_paths(self, changes: dict[str, Any]) -> None:
+        errors = path_errors(changes, self.defaults.model_dump())
+        if errors:
+            raise ParamError(errors)
 
     def _set(self, new: StationParams) -> StationParams:
         if new == self.current:
@@ -305,7 +404,7 @@ class ParamStore:
             raise ParamError([{"loc": ["path", "name"], "type": "value_error",
                                "msg": f"preset {name!r} is not a valid preset file: {exc}"}]) \
                 from None
-        return values
+        return drop_moved(values, f"preset {name!r}")
 
     def load_preset(self, name: str) -> StationParams:
         return self.replace(self.read_preset(name))

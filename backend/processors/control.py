@@ -20,6 +20,8 @@ from ..messages import Command, CommandSet, TargetEntry
 from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.referee import RefereeState
+from ..world.silence import MIN_S as LOST_MIN_S
+from ..world.silence import CameraSilence, Lost
 from ..world.state import RobotState, Team, WorldState
 from .internal_referee import InternalRefereeProcessor
 
@@ -27,7 +29,8 @@ from .internal_referee import InternalRefereeProcessor
 class ControlProcessor(Processor):
     """Turns targets into robot commands on every world update with each robot's chosen
     controller (the paper's Algorithm 1 or 2, or the proportional baseline), then the safety
-    rules: emergency stop and HALT zero every robot; a stale world zeroes every robot, a robot
+    rules: emergency stop and HALT zero every robot; every camera silent (``CameraSilence``:
+    6 frame periods, at most 0.1 s, at >= 30 Hz) or a stale world zeroes every robot, a robot
     not seen gets zero; STOP and the other team's ball placement cap the speed.
 
     A command set carries the robots with something new (a camera saw the robot, its target
@@ -79,6 +82,13 @@ class ControlProcessor(Processor):
         #: in replay, the log's time at the playhead (Unix ns): vision is as old as the log
         #: says, whatever the speed and also while paused
         self.replay_clock: Callable[[], int] | None = None
+        #: the receive clock live (the relay stamps arrivals with this machine's wall clock)
+        self.clock_ns: Callable[[], int] = time.time_ns
+        #: every camera's frames by the receive clock (the world processor's, fed with every
+        #: detection frame; None: only the vision_stale_s rule)
+        self.silence: CameraSilence | None = None
+        #: every camera silent past its time (in the last tick), else None
+        self.vision_lost: Lost | None = None
 
     def active_referee(self) -> RefereeState | None:
         """The referee the robots obey: the newest state, except the internal referee's own
@@ -102,8 +112,35 @@ class ControlProcessor(Processor):
             return (self.replay_clock() - recv_ns) / 1e9 if recv_ns > 0 else math.inf
         age = now_mono - rec.time_mono
         if recv_ns > 0:
-            age = max(age, (time.time_ns() - recv_ns) / 1e9)
+            age = max(age, (self.clock_ns() - recv_ns) / 1e9)
         return age
+
+    def receive_now_ns(self) -> int:
+        """Now on the clock vision is judged by: the wall clock live, the log's time at the
+        playhead in replay (a paused or stepped replay is not silence)."""
+        return self.replay_clock() if self.replay_clock is not None else self.clock_ns()
+
+    def _lost(self, vision_age: float) -> Lost | None:
+        # (only once the world is LOST_MIN_S old: no camera is past its time sooner, and a
+        # tick on every frame asks nothing)
+        if self.silence is None or not vision_age >= LOST_MIN_S:
+            return None
+        return self.silence.lost(self.receive_now_ns())
+
+    #: the runner asks ``wake_in_s`` again at least this often: a deadline that a frame set
+    #: is never sooner than LOST_MIN_S after it (the nap never oversleeps it)
+    wake_check_s = LOST_MIN_S
+
+    def wake_in_s(self) -> float | None:
+        """Seconds until every camera counts as silent, so the runner runs this tick then
+        and not at its next max wait (up to 50 ms later); None when nothing is due (the rule
+        does not hold, the vision is already lost, or a replay: nothing is sent)."""
+        if self.replay_clock is not None or self.silence is None or self.vision_lost:
+            return None
+        d = self.silence.deadline_ns()
+        if d is None:
+            return None
+        return max(0.0, (d - self.clock_ns()) / 1e9)
 
     def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
         self.motion.apply_settings(settings)
@@ -130,6 +167,8 @@ class ControlProcessor(Processor):
         ref = self.active_referee()
         estop = bool(self.estop.latest_value())
         created = time.time_ns()
+        vision_age = self.vision_age_s(now)
+        self.vision_lost = lost = self._lost(vision_age)
         if estop:
             self.halt_reason = "emergency stop"
             self._reset()
@@ -147,11 +186,11 @@ class ControlProcessor(Processor):
         zero = _ZERO
         targets_age = self.targets.age_s(now)
         stalled = targets_age > self.strategy_stale_s
-        vision_age = self.vision_age_s(now)
-        blind = vision_age > self.vision_stale_s
+        blind = lost is not None or vision_age > self.vision_stale_s
         if rec is None or blind or (ref and ref.halted) or stalled:
             self.halt_reason = ("HALT" if ref and ref.halted else
                                 "no vision" if vision_age == math.inf else
+                                lost.reason() if lost is not None else
                                 f"no vision for {vision_age:.1f} s" if blind
                                 else f"strategy stalled ({targets_age:.1f} s)")
             self._reset()
@@ -196,9 +235,16 @@ class ControlProcessor(Processor):
                 continue
             basis[key] = (robot, entry, now)
             x, y = robot.x, robot.y
-            # (next_waypoint's own first test inline: most targets have no path)
-            aim = entry.target if len(entry.path) <= 1 else next_waypoint(entry, x, y)
-            vel = m.step_at(x, y, robot.orientation, aim, dt)
+            if entry.stop:  # a team play that failed: zero, never the last command
+                m.reset()
+                out.append(Command(key[0], key[1], zero))
+                continue
+            if entry.velocity is not None:  # a team play's velocity order, limited
+                vel = m.step_velocity(robot.orientation, entry.velocity, dt)
+            else:
+                # (next_waypoint's own first test inline: most targets have no path)
+                aim = entry.target if len(entry.path) <= 1 else next_waypoint(entry, x, y)
+                vel = m.step_at(x, y, robot.orientation, aim, dt)
             # referee_limits: the command's cap (once per tick), then the robot's own
             cap = entry.max_speed_mps
             vel = capped(vel, cmd_cap if cap is None else min(cmd_cap, cap))

@@ -13,6 +13,7 @@ from ..bus import DataBus, Reader
 from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.model import WorldModel
+from ..world.silence import CameraSilence
 from ..world.state import WorldState
 from .common import LatencyStage, badlog
 
@@ -36,6 +37,9 @@ class WorldProcessor(Processor):
         #: every world written (the station records it)
         self.on_world: Callable[[WorldState], None] = lambda w: None
         self.latency = LatencyStage()  # relay arrival -> world written
+        #: every detection frame's arrival, merged or not (a camera whose frames are dropped
+        #: is not silent: that is the stale world's stop); the control's all-vision-lost stop
+        self.silence = CameraSilence(self.model.config.max_camera_id)
         self._rejected_total = 0
         # (monotonic time, counts by reason) when the counts changed, the last 10 s
         self._rejection_log: deque[tuple[float, dict[str, int]]] = deque(maxlen=32)
@@ -70,6 +74,7 @@ class WorldProcessor(Processor):
         configured as the old one and told the field again."""
         self.reader.read_new()  # frames of before the jump are not merged
         self.model = WorldModel()
+        self.silence.reset()
         if self._params is not None:
             self.configure(self._params)
         self._geometry_seq = -1
@@ -101,6 +106,9 @@ class WorldProcessor(Processor):
                            n)
         if not frames:
             return
+        heard = self.silence.frame
+        for f in frames:
+            heard(f.camera_id, f.receive_time_ns)
         self._field_from_geometry()
         merged = [f for f in frames if self.model.update(f)]
         total = sum(self.model.rejected.values())

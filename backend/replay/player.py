@@ -140,6 +140,17 @@ class LogPlayer:
         """The station's clock: the wall clock live, the playhead's log time in replay."""
         return time.time_ns() if self.log is None else self.position_ns()
 
+    def delivered_ns(self) -> int:
+        """The log's time up to which every record has been emitted: the playhead, or just
+        before the next record to emit while the feed lags it (a seek's pre-roll, a batch at
+        a time; a fast replay on a busy station). Vision is as old as this clock says: frames
+        the feed has not emitted yet are no silence of the cameras."""
+        pos = self.position_ns()
+        feed = self._feed
+        if feed is not None and feed.ahead is not None and feed.ahead.time_ns <= pos:
+            return feed.ahead.time_ns - 1
+        return pos
+
     def duration_s(self) -> float:
         return 0.0 if self.log is None else (self.log.t_last_ns - self.log.t_first_ns) / 1e9
 

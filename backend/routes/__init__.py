@@ -17,6 +17,7 @@ from . import (
     robots,
     sim,
     strategy,
+    team,
     token,
     views,
     ws,
@@ -26,4 +27,4 @@ from . import (
 ROUTERS: tuple[APIRouter, ...] = (
     views.router, ws.router, robots.router, sim.router, strategy.router, referee.router,
     estop.router, arming.router, params.router, replay.router, recording.router,
-    token.router, login.router, operators.router)
+    token.router, login.router, operators.router, team.router)

@@ -1,10 +1,12 @@
-"""The station's views on request: health, world, geometry (the websocket pushes them)."""
+"""The station's views on request: health, world, geometry (the websocket pushes them), and
+the station's folders (set at start, read-only)."""
 
 from __future__ import annotations
 
 from fastapi import APIRouter, HTTPException
 from fastapi.responses import JSONResponse
 
+from .. import contract
 from ..jsonsafe import SafeJSONResponse
 from .deps import VIEWER, StationDep
 
@@ -29,3 +31,9 @@ async def geometry(st: StationDep) -> JSONResponse:
     if geo is None:
         raise HTTPException(404, "no geometry packet received yet")
     return SafeJSONResponse(geo, what="geometry")
+
+
+@router.get("/folders")
+async def folders(st: StationDep) -> contract.StationFolders:
+    # set when the station started: no route or parameter changes them (docs/security.md)
+    return st.settings.station_folders()

@@ -33,6 +33,9 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from domain.angles import wrap_angle
+from domain.rules import ROBOT_RADIUS_MM
+
 from ..filters.core import line_sums
 from .state import BallState, KickedBall, RobotState, Team
 
@@ -47,7 +50,7 @@ class KickConfig:
     speed_window_s: float = 0.04  # speed: slope over this long of measurements
     min_samples: int = 2  # measurements off the previous line before a kick starts
     off_line_mm: float = 15.0  # noise allowance of "off the previous line"
-    robot_radius_mm: float = 90.0
+    robot_radius_mm: float = ROBOT_RADIUS_MM
     reach_mm: float = 100.0  # kick start this far beyond the robot's radius at most
     front_half_angle_deg: float = 60.0  # the front: this far either side of the heading
     stop_mps: float = 0.1  # slower than this: the kick is over
@@ -127,10 +130,6 @@ def stop_of(x: float, y: float, vx: float, vy: float, t: float,
         return x, y, t
     d = v * v / (2 * decel)
     return x + vx / v * d, y + vy / v * d, t + v / decel
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 @dataclass
@@ -233,7 +232,7 @@ class KickDetector:
                 self._end("stopped")
                 return
             if speed >= cfg.turn_min_mps * 1000.0:
-                turn = abs(_wrap(math.atan2(v[1], v[0]) - math.atan2(k.u[1], k.u[0])))
+                turn = abs(wrap_angle(math.atan2(v[1], v[0]) - math.atan2(k.u[1], k.u[0])))
                 if turn > math.radians(cfg.max_turn_deg):
                     self._end("turned")
                     return
@@ -351,7 +350,7 @@ class KickDetector:
             d = math.hypot(x - r.x, y - r.y)
             if d > reach or d >= best_d:
                 continue
-            if abs(_wrap(math.atan2(y - r.y, x - r.x) - r.orientation)) > half:
+            if abs(wrap_angle(math.atan2(y - r.y, x - r.x) - r.orientation)) > half:
                 continue
             best, best_d = (r.team, r.id), d
         return best

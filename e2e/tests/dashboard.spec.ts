@@ -65,6 +65,36 @@ test("a parameter changed in one browser shows in another; a bad value shows the
   }
 });
 
+test("the station's folders show read-only beside the parameters; an import carrying one is refused with the field named", async ({ page }) => {
+  await page.goto("/");
+  await expect(page.getByTestId("connection-status")).toContainText("connected");
+  await page.getByTestId("tab-params").click();
+  const answer = (await (await page.request.get("/api/folders")).json()) as { folders: { name: string; paths: string[] }[] };
+  const state = answer.folders.find((f) => f.name === "state_dir")!.paths[0];
+  const box = page.getByTestId("station-folders");
+  const paths = (name: string) => box.getByTestId(`station-folder-${name}`).getByTestId("station-folder-paths");
+  await expect(paths("scripts_dir")).toHaveText(/\/engine_scripts$/);
+  await expect(box.getByTestId("station-folder-scripts_dir")).toContainText("--scripts-dir");
+  await expect(paths("record_dir")).toHaveText(`${state}/logs`);
+  await expect(paths("log_dirs")).toHaveText(/\/tests\/data$/);
+  await expect(paths("state_dir")).toHaveText(state);
+  await expect(box.locator("input, button, select, textarea")).toHaveCount(0);
+  // no form field for a folder (the group's other fields are there)
+  await expect(page.getByTestId("param-input-recording.max_mb")).toHaveCount(1);
+  await expect(page.getByTestId("param-input-strategy.goalkeeper_function")).toHaveCount(1);
+  await expect(page.getByTestId("param-input-recording.folder")).toHaveCount(0);
+  await expect(page.getByTestId("param-input-strategy.scripts_dir")).toHaveCount(0);
+
+  // an export from before the folders left the parameters: refused, the server's words shown
+  const v0 = (await (await page.request.get("/api/params")).json()).version as number;
+  await page.getByTestId("params-import-file").setInputFiles(
+    new URL("../../tests/data/state-before-issue30/touchline-params.json", import.meta.url).pathname);
+  const alert = page.getByTestId("presets").getByRole("alert");
+  await expect(alert).toContainText("strategy.scripts_dir: folders are set when the station starts (--scripts-dir");
+  await expect(alert).toContainText("recording.folder: folders are set when the station starts (--record-dir");
+  expect((await (await page.request.get("/api/params")).json()).version).toBe(v0);
+});
+
 test("a live plot of a robot signal moves", async ({ page }) => {
   await open(page);
   await page.getByTestId("tab-plots").click();
@@ -193,5 +223,29 @@ test("field: wheel zooms, F fits; right-click teleports the ball", async ({ page
     }, { timeout: 5_000 }).toBeLessThan(60);
   } finally {
     await page.request.post("/api/sim/ball", { data: { x: 0, y: 0 } });
+  }
+});
+
+// The README's pictures (only with TOUCHLINE_DOCS_SHOTS=1: the config leaves out the "docs:"
+// tests otherwise; 1280x720): the station as a newcomer first sees it, with today's top bar
+// and blue 1 selected, driving to an operator's target; then the Health tab.
+test("docs: screenshots of the station and its health", async ({ page }) => {
+  await open(page);
+  if (await page.getByTestId("name-prompt").isVisible()) await page.getByTestId("name-save").click();
+  await page.getByTestId("robot-row-blue-1").click();
+  const p = await toScreen(page, 1500, 1500);
+  try {
+    await page.mouse.click(p.x, p.y);
+    await expect.poll(async () => (await world(page)).robots.find((r) => r.team === "blue" && r.id === 1)?.target?.source ?? null)
+      .toBe("operator");
+    await expect.poll(() => maxSpeed(page), { timeout: 10_000 }).toBeGreaterThan(100);
+    await page.mouse.move(0, 0);
+    await page.screenshot({ path: new URL("../../docs/screenshot.png", import.meta.url).pathname });
+    await page.getByTestId("tab-health").click();
+    await expect(page.getByTestId("health-estop")).toBeVisible();
+    await page.mouse.move(0, 0);
+    await page.screenshot({ path: new URL("../../docs/screenshot-health.png", import.meta.url).pathname });
+  } finally {
+    await page.request.delete("/api/robots/blue/1/target", { headers: { "X-Touchline": "1" } });
   }
 });

@@ -1,6 +1,7 @@
 import asyncio
 import gc
 import inspect
+import itertools
 import time
 import types
 import warnings
@@ -256,3 +257,76 @@ async def test_a_tick_left_waiting_by_a_stop_before_its_task_ran_is_closed(kind:
         ]
         assert never_started == []
     assert [w for w in caught if "never awaited" in str(w.message)] == []
+
+
+class OwnDeadline(Processor):
+    """Topic-triggered with a long max wait and a deadline of its own (the control's stop
+    when every camera fell silent): ``wake_in_s`` says how long until it."""
+
+    name = "own-deadline"
+    wake_check_s = 0.05
+
+    def __init__(self, src: Topic[int], max_wait_s: float) -> None:
+        super().__init__(OnTopic(src, max_wait_s=max_wait_s))
+        self.runs: list[float] = []
+        self.deadline: float | None = None  # perf_counter
+        self.fail = False
+        self.asked = 0
+
+    def step(self) -> None:
+        self.runs.append(time.perf_counter())
+        if self.fail:  # before it forgets its deadline: it stays due
+            raise RuntimeError("broken tick")
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
+            self.deadline = None  # done: the processor asks nothing more
+
+    def wake_in_s(self) -> float | None:
+        self.asked += 1
+        if self.deadline is None or self.asked >= 2000:  # (never forever, should it spin)
+            return None
+        return self.deadline - time.perf_counter()
+
+
+async def test_a_processor_runs_at_its_own_deadline_before_its_max_wait() -> None:
+    """Max wait 10 s, its own deadline 30 ms away (set after its last run, as a frame's
+    arrival sets the control's): it runs then, not 10 s later; a deadline set while the
+    runner naps is seen at the next check (``wake_check_s``)."""
+    src: Topic[int] = Topic("src", 8)
+    p = OwnDeadline(src, max_wait_s=10.0)
+    r = Runner()
+    r.add(p)
+    await r.start()
+    try:
+        await _until(lambda: len(p.runs) >= 1)  # the first pass
+        for _ in range(3):
+            n = len(p.runs)
+            p.deadline = deadline = time.perf_counter() + 0.03
+            # (bounded well inside the max wait: without the deadline it runs in 10 s)
+            await _until(lambda n=n: len(p.runs) > n, timeout_s=5.0)  # type: ignore[misc]
+            assert p.runs[n] >= deadline and p.deadline is None  # at, not before, it
+    finally:
+        await r.stop()
+
+
+async def test_a_deadline_that_stays_due_does_not_spin_the_loop() -> None:
+    """A processor whose deadline passed and whose tick fails (so it stays due): run once
+    for it, then at its max wait, not over and over (the loop stays free)."""
+    src: Topic[int] = Topic("src", 8)
+    p = OwnDeadline(src, max_wait_s=0.05)
+    r = Runner()
+    r.add(p)
+    await r.start()
+    try:
+        await _until(lambda: len(p.runs) >= 1)
+        p.fail = True
+        p.deadline = time.perf_counter() + 0.01
+        n = len(p.runs)
+        await _until(lambda: len(p.runs) >= n + 6)
+        assert p.asked < 2000  # asked at each wake-up, not in a loop
+        # after the first run for it, one run a max wait (a slow machine only widens the
+        # gaps; spinning makes them microseconds)
+        runs = p.runs[n + 1:]
+        gaps = [b - a for a, b in itertools.pairwise(runs)]
+        assert min(gaps) >= 0.04, gaps
+    finally:
+        await r.stop()

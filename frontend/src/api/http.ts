@@ -9,6 +9,7 @@ import type {
   EnableIn,
   EstopAnswer,
   EstopIn,
+  RefereeCommand,
   RefereeCommandIn,
   LogList,
   OperatorAction,
@@ -26,9 +27,14 @@ import type {
   PresetDetail,
   PresetList,
   RefereeView,
+  StationFolders,
   StrategyInfo,
   TargetAnswer,
   Team,
+  TeamCode,
+  TeamFileIn,
+  TeamFileSaved,
+  TeamFileText,
 } from "./types";
 import { pushToast } from "../store/toasts";
 
@@ -203,13 +209,31 @@ export const deletePreset = (name: string) => request<PresetList>("DELETE", `/ap
 /** The plays the strategy offers and the current one. A play is chosen with PATCH /api/params. */
 export const getStrategy = () => request<StrategyInfo>("GET", "/api/strategy");
 
+// ---- the team's own code (team/, issue 27) ----
+
+/** The team folder: its files and their states, and whether this browser may edit. */
+export const getTeam = () => request<TeamCode>("GET", "/api/team");
+
+/** A team file's path in the URL: its folder's slash stays a slash ("lib/util.py"). */
+const teamFileUrl = (name: string) => `/api/team/files/${name.split("/").map(encodeURIComponent).join("/")}`;
+
+/** The text and version of a team file. */
+export const getTeamFile = (name: string) => request<TeamFileText>("GET", teamFileUrl(name));
+
+/** Save a team file (created when `base_version` is null). 409: it changed on disk since
+ * `base_version`; 403: this browser may not edit code (the reason in the message). */
+export function putTeamFile(name: string, text: string, base_version: string | null): Promise<TeamFileSaved> {
+  const body: TeamFileIn = { text, base_version };
+  return request<TeamFileSaved>("PUT", teamFileUrl(name), body);
+}
+
 // ---- referee and simulator ----
 
 /** A card from the internal referee: yellow (one robot fewer for 120 s), red (for the rest of
  * the game), or clear (withdraw the team's cards). */
 export type Card = CardIn["card"];
 
-export function postRefereeCommand(command: string, designated_position?: { x: number; y: number }): Promise<RefereeView> {
+export function postRefereeCommand(command: RefereeCommand, designated_position?: { x: number; y: number }): Promise<RefereeView> {
   const body: RefereeCommandIn = designated_position
     ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } }
     : { command };
@@ -245,6 +269,8 @@ export const getPlayerHistory = (seconds: number) =>
   request<PlayerHistory>("GET", `/api/player/history?seconds=${encodeURIComponent(String(seconds))}`);
 /** The logs the player may open. */
 export const getLogs = () => request<LogList>("GET", "/api/logs");
+/** The station's folders, set when it started (read-only: docs/security.md). */
+export const getFolders = () => request<StationFolders>("GET", "/api/folders");
 /** Start a new recording file, start or stop recording. */
 export function postRecording(action: RecordingIn["action"]): Promise<Recording> {
   const body: RecordingIn = { action };

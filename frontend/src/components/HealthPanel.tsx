@@ -108,11 +108,30 @@ export function Processes({ h }: { h: Health }) {
 /** A calibration offset worth a look: two cameras this far apart on the same robots. */
 export const CAMERA_PAIR_WARN_MM = 20;
 
+/** When every camera is silent: each camera's rate, the silence after which every robot is
+ * stopped (the vision_stale_s rule when a camera is slow or not measured yet), and the stop. */
+function CameraRates({ w }: { w: NonNullable<Health["world"]> }) {
+  const rates = Object.entries(w.camera_rates_hz);
+  if (rates.length === 0) return null;
+  const after = w.lost_after_s === null ? "safety.vision_stale_s" : `${fmtFixed(w.lost_after_s * 1000, 0)} ms`;
+  return (
+    <p className={w.vision_lost ? "warn" : "muted"} data-testid="health-camera-rates">
+      {rates.map(([c, r]) => `cam ${c}: ${r > 0 ? `${fmtFixed(r, 0)} Hz` : "—"}`).join(" · ")}
+      {` · all silent: robots stopped after ${after}`}
+      {w.vision_lost ? ` · ${w.vision_lost}` : ""}
+    </p>
+  );
+}
+
 /** Camera agreement: per pair of cameras, how far apart they see the robots both see (a
- * calibration offset), and each camera's clock offset. */
+ * calibration offset), and each camera's clock offset; each camera's rate. */
 export function Cameras({ h }: { h: Health }) {
   const w = h.world;
-  if (!w || (w.camera_pairs.length === 0 && Object.keys(w.camera_clock_offsets_s).length === 0)) return null;
+  if (
+    !w ||
+    (w.camera_pairs.length === 0 && Object.keys(w.camera_clock_offsets_s).length === 0 && Object.keys(w.camera_rates_hz).length === 0)
+  )
+    return null;
   return (
     <section>
       <h3>
@@ -143,6 +162,7 @@ export function Cameras({ h }: { h: Health }) {
           .map(([c, o]) => `cam ${c}: ${o === null ? "—" : fmtFixed(o, 3)}`)
           .join(" · ")}
       </p>
+      <CameraRates w={w} />
     </section>
   );
 }

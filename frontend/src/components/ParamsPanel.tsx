@@ -14,6 +14,7 @@ import { changedFields, getAt, groupResetPatch, type GroupDesc } from "../params
 import { useAppState } from "../store/hooks";
 import { pushToast } from "../store/toasts";
 import { ParamField } from "./ParamField";
+import { StationFolders } from "./StationFolders";
 
 const errText = presetErrorText;
 
@@ -253,6 +254,7 @@ export function ParamsPanel() {
         <Group key={g.key} g={g} values={params.values} open={q !== "" || i < 2} />
       ))}
       <Presets />
+      <StationFolders />
     </div>
   );
 }

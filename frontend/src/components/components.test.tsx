@@ -150,6 +150,9 @@ describe("Cameras", () => {
         { camera_a: 0, camera_b: 1, dx_mm: 24.96, dy_mm: -10.04, samples: 200 },
         { camera_a: 1, camera_b: 3, dx_mm: 1.2, dy_mm: 0.4, samples: 50 },
       ],
+      camera_rates_hz: { "0": 60.02, "1": 0 },
+      lost_after_s: 0.08,
+      vision_lost: null,
     };
     act(() => t.root.render(<Cameras h={{ ...health(), world }} />));
     const far = q("health-camera-pair-0-1")!;
@@ -157,6 +160,14 @@ describe("Cameras", () => {
     expect(far.querySelector(".warn")).not.toBeNull();
     expect(q("health-camera-pair-1-3")!.querySelector(".warn")).toBeNull();
     expect(q("health-camera-clocks")?.textContent).toBe("cam 0: 0.000 · cam 1: 0.002");
+    expect(q("health-camera-rates")?.textContent).toBe("cam 0: 60 Hz · cam 1: — · all silent: robots stopped after 80 ms");
+    expect(q("health-camera-rates")?.className).toBe("muted");
+    const lost = { ...world, lost_after_s: null, vision_lost: "no vision: every camera silent for 95 ms (was 60 Hz)" };
+    act(() => t.root.render(<Cameras h={{ ...health(), world: lost }} />));
+    expect(q("health-camera-rates")?.textContent).toBe(
+      "cam 0: 60 Hz · cam 1: — · all silent: robots stopped after safety.vision_stale_s · no vision: every camera silent for 95 ms (was 60 Hz)",
+    );
+    expect(q("health-camera-rates")?.className).toBe("warn");
   });
 });
 
@@ -264,7 +275,7 @@ describe("Arming", () => {
     vi.stubGlobal("fetch", fetchMock);
     act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
     const w = disarmed();
-    w.strategy = { play: "idle", situation: "", situation_text: "", our_team: "blue", our_side: "negative-x", side_from_referee: false, tick_ms: 0 };
+    w.strategy = { play: "idle", situation: "", situation_text: "", our_team: "blue", our_side: "negative-x", side_from_referee: false, tick_ms: 0, robot_plays: {}, stopped: [] };
     act(() => appStore.setState({ world: w }));
     act(() => (q("arm-button") as HTMLButtonElement).click());
     expect(q("arm-dialog")?.textContent).toContain("Robots will move: arm blue?");

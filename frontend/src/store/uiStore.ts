@@ -3,15 +3,17 @@
 
 import { useSyncExternalStore } from "react";
 import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
+import type { RefereeCommand } from "../api/types";
 import { createStore } from "./createStore";
 
-export type Tab = "robots" | "params" | "plots" | "referee" | "health";
+export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "code";
 export const TABS: { key: Tab; label: string }[] = [
   { key: "robots", label: "Robots" },
   { key: "params", label: "Params" },
   { key: "plots", label: "Plots" },
   { key: "referee", label: "Referee" },
   { key: "health", label: "Health" },
+  { key: "code", label: "Code" },
 ];
 
 /** The field layers the user can toggle: exactly what the field drawing takes. */
@@ -32,6 +34,11 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
     help: "a kick in progress: dashed line to where the ball is predicted to stop, a cross there, the kicker and the kick speed",
   },
   {
+    key: "commands",
+    label: "Commands (replay)",
+    help: "in replay: the velocity control would command now for each robot (an arrow of 0.5 s of travel; nothing is sent), beside what the robots did",
+  },
+  {
     key: "recorded",
     label: "Recorded estimate",
     help: "in replay: the robots and ball as the log's own tracker had them (dashed rings), beside today's filter output",
@@ -44,7 +51,7 @@ export interface UiState {
   largeText: boolean;
   help: boolean;
   /** Ball placement waiting for a click on the field: the referee command to give. */
-  placing: string | null;
+  placing: RefereeCommand | null;
 }
 
 const LS_KEY = "touchline.ui.v1";

@@ -219,3 +219,28 @@ def test_live_detaches(log: LogFile) -> None:
     assert h.player.source == "live" and h.player.clock() is None
     with pytest.raises(PlayerError, match="no log is open"):
         h.player.play(1.0)
+
+
+def test_the_delivered_clock_waits_for_the_feed(log: LogFile) -> None:
+    """Vision is judged by the log's time up to which the feed emitted every record: while a
+    seek's pre-roll comes a batch at a time, or a fast replay's feed lags the playhead, the
+    frames not emitted yet are no silence; caught up, it is the playhead."""
+    h = Harness(log)
+    h.drain()
+    h.player.seek(1.5)
+    target = T0 + int(1.5 * S)
+    assert h.player.position_ns() == target
+    first = h.player.delivered_ns()
+    # just before the pre-roll's first record: nothing of it emitted yet
+    assert first < T0 + int((1.5 - PREROLL_S) * S) + FRAME
+    h.drain()
+    assert h.player.delivered_ns() == target  # caught up: the playhead (paused)
+    h.player.play(10.0)
+    h.clock.t += 0.1  # one second of log at 10x, nothing emitted yet
+    assert h.player.position_ns() == pytest.approx(target + S, abs=1_000)
+    assert h.player.delivered_ns() < target + FRAME
+    h.player.emit(h.player.due())  # one batch (70 records are due)
+    assert h.out[-1].time_ns <= h.player.delivered_ns() < h.out[-1].time_ns + FRAME
+    assert h.player.delivered_ns() < target + S // 2
+    h.drain()
+    assert h.player.delivered_ns() == h.player.position_ns()
