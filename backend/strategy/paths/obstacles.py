@@ -14,14 +14,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from domain.field import Field
+from domain.rules import ROBOT_RADIUS_MM as ROBOT_RADIUS_MM  # SSL robots: at most 180 mm across
 
 Array = NDArray[np.float64]
 Bounds = tuple[float, float, float, float]  #: xmin, ymin, xmax, ymax (mm)
 Point = tuple[float, float]
-
-
-#: SSL robots are at most 180 mm across
-ROBOT_RADIUS_MM = 90.0
 
 
 def _as_rows(a: ArrayLike | None, width: int, what: str) -> Array:
