@@ -20,7 +20,7 @@ router = APIRouter(prefix="/api/estop", tags=["estop"])
 
 @router.get("", dependencies=[VIEWER])
 async def estop_get(st: StationDep) -> contract.EstopInfo:
-    return await st.call(st.estop_view)
+    return await st.call(st.safety.estop_view)
 
 
 @router.post("", response_model=None)
@@ -37,13 +37,13 @@ async def estop(body: EstopIn, st: StationDep, rule: RuleDep,
             "releasing the emergency stop must be confirmed: send "
             '{"active": false, "confirm": true}')})
     if body.active:
-        await st.call(st.set_estop, True, who)
+        await st.call(st.safety.set_estop, True, who)
         log.warning("emergency stop ACTIVE: pressed by %s", who)
     else:
-        was = st.estop_latch.state
-        await st.call(st.set_estop, False, who)
+        was = st.safety.latch.state
+        await st.call(st.safety.set_estop, False, who)
         log.warning("emergency stop RELEASED by %s (pressed by %s)%s", who, was.by,
                     f": {body.reason}" if body.reason else "")
     await st.call(st.operator_action, "estop" if body.active else "estop-release",
                   who, {"reason": body.reason})
-    return {"estop": body.active, **await st.call(st.estop_view)}
+    return {"estop": body.active, **await st.call(st.safety.estop_view)}

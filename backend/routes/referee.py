@@ -30,8 +30,8 @@ def _foreign(st: Station) -> JSONResponse | None:
 
 @router.get("", dependencies=[VIEWER])
 async def referee_get(st: StationDep) -> JSONResponse:
-    world = await st.read(st.world_dict)
-    return SafeJSONResponse({**await st.call(st.referee_view), "active": world["referee"]},
+    world = await st.read(st.browser.world)
+    return SafeJSONResponse({**await st.call(st.browser.referee), "active": world["referee"]},
                             what="referee")
 
 
@@ -44,7 +44,7 @@ async def referee_enable(body: EnableIn, st: StationDep,
         return JSONResponse(status_code=409, content={"detail": str(exc)})
     await st.call(st.operator_action, "internal-referee", caller.who,
                   {"enabled": body.enabled})
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)
 
 
 @router.post("/internal/command", response_model=None)
@@ -67,7 +67,7 @@ async def referee_command(body: RefereeCommandIn, st: StationDep,
                   {"command": body.command,
                    "designated_position": None if dp is None else {"x": dp.x, "y": dp.y}})
     log.info("internal referee: %s", body.command)
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)
 
 
 @router.post("/internal/card", response_model=None)
@@ -81,4 +81,4 @@ async def referee_card(body: CardIn, st: StationDep,
     await st.call(st.operator_action, "card", caller.who,
                   {"team": body.team, "card": body.card})
     log.info("internal referee: %s card for %s", body.card, body.team)
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)

@@ -22,10 +22,10 @@ router = APIRouter(prefix="/api/sim", tags=["simulator"])
 
 
 def check_simulator(st: Station) -> None:
-    if st.player.log is not None:
+    if st.replay.replaying:
         raise HTTPException(409, "replaying a log: nothing is sent to a simulator (go back "
                                  "to live first)")
-    if st.relay_output() == "robot-box":
+    if st.safety.relay_output() == "robot-box":
         raise HTTPException(409, "no simulator: the relay drives real robots (robot-box), "
                                  "teleports need a simulator output")
 
