@@ -5,6 +5,7 @@ immutable ``views`` it publishes and changes state only through ``call`` (the co
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
 import logging
 import threading
@@ -103,6 +104,10 @@ class Station:
             changes = deep_merge(changes, parse_setting(item))
         if changes:
             self.params.patch(changes)
+        # from here on changes come on the station thread; their file is written by a thread
+        # of its own, in order (an fsync takes milliseconds: not on the control loop)
+        self.params.writer = concurrent.futures.ThreadPoolExecutor(
+            1, thread_name_prefix="params-writer")
         self.bus = DataBus(self.params.current.bus.sizes())
         # topics the API writes to
         self.operator_targets = self.bus.of(topics.OPERATOR_TARGETS)
@@ -234,7 +239,7 @@ class Station:
         prm = self.params.current
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
-        # the store validates and persists in the web thread; the station applies on its loop
+        # every change is made on the station thread (the routes submit it): applied at once
         self.params.subscribe(self._apply_params_soon)
         for p in self.processors:
             self.runner.add(p)
@@ -345,6 +350,8 @@ class Station:
         rec = self.recording.recorder
         if rec is not None:  # what is queued is written, the file gets its index
             await asyncio.to_thread(rec.close)
+        if self.params.writer is not None:  # the last parameter change is on disk (in order)
+            await asyncio.wrap_future(self.params.writer.submit(lambda: None))
 
     # ---- commands from the API (written onto the bus; processors apply them) ----
 

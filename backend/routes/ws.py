@@ -43,7 +43,7 @@ async def ws_endpoint(ws: WebSocket, st: StationDep) -> None:
     await ws.accept()
     st.web.clients += 1
     try:
-        with ws_session(ws, st):
+        async with ws_session(ws, st):
             await _serve_client(ws, st)
     except (WebSocketDisconnect, RuntimeError, ConnectionError):
         pass
