@@ -24,7 +24,9 @@ from domain.field import division
 from domain.rules import (
     PLACEMENT_TOLERANCE_MM,
 )
-from match.config import MatchConfig
+
+# re-exported: match.config is its home; callers that import it from here keep working
+from match.config import MatchConfig as MatchConfig
 from match.events import EventDetector
 from match.judge import Judge
 from match.referee import MatchReferee
