@@ -18,15 +18,11 @@ import zmq
 import zmq.asyncio
 
 from sslnet.proc import CpuMeter
-from sslpb import ssl_gc_common_pb2
-from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
 from . import stalldump, topics
 from .bus import DataBus
 from .config import Settings
-from .control.goto import Target
 from .engine.switch import EngineSwitch
-from .messages import OperatorTarget
 from .operators import Operators
 from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
@@ -57,7 +53,6 @@ from .teamcode.registry import TeamRegistry
 from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views, WebStats
 from .views import BrowserData, ViewParts
-from .world.state import Team
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
@@ -352,45 +347,6 @@ class Station:
             await asyncio.to_thread(rec.close)
         if self.params.writer is not None:  # the last parameter change is on disk (in order)
             await asyncio.wrap_future(self.params.writer.submit(lambda: None))
-
-    # ---- commands from the API (written onto the bus; processors apply them) ----
-
-    def set_target(self, team: Team, rid: int, x: float, y: float,
-                   orientation: float | None) -> None:
-        self.operator_targets.write(OperatorTarget(team, rid, Target(x, y, orientation)))
-
-    def clear_target(self, team: Team, rid: int) -> None:
-        self.operator_targets.write(OperatorTarget(team, rid, None))
-
-    def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
-                      vy_mps: float = 0.0) -> None:
-        """Through the simulator (SSL simulation protocol, metres)."""
-        cmd = SimulatorCommand()
-        b = cmd.control.teleport_ball
-        b.x, b.y, b.z = x_mm / 1000.0, y_mm / 1000.0, 0.0
-        b.vx, b.vy, b.vz = vx_mps, vy_mps, 0.0
-        self.sim_commands.write(cmd.SerializeToString())
-
-    def teleport_robot(self, team: Team, rid: int, x_mm: float, y_mm: float,
-                       orientation: float | None, present: bool = True) -> None:
-        cmd = SimulatorCommand()
-        t = cmd.control.teleport_robot.add()
-        t.id.id = rid
-        t.id.team = ssl_gc_common_pb2.BLUE if team == "blue" else ssl_gc_common_pb2.YELLOW
-        t.x, t.y = x_mm / 1000.0, y_mm / 1000.0
-        if orientation is not None:
-            t.orientation = orientation
-        t.v_x = t.v_y = t.v_angular = 0.0
-        t.present = present
-        self.sim_commands.write(cmd.SerializeToString())
-
-    def give_card(self, team: Team, card: str) -> None:
-        """A card from the internal referee; the division's robots per team come from the
-        field size (A: 12 m x 9 m, 11 robots)."""
-        geo = self.browser.geometry()
-        self.referee_state.robots_per_team = \
-            11 if geo is not None and geo["field_length"] >= 11000 else 6
-        self.referee_state.card(team, card)
 
     # ---- the views the web side reads (backend/viewhub.py) ----
 

@@ -12,6 +12,7 @@ from ..contract import CardIn, EnableIn, RefereeCommandIn
 from ..jsonsafe import SafeJSONResponse
 from ..referee.internal import RefereeCommandError
 from ..station import Station
+from ..world.state import Team
 from .checks import check_on_field
 from .deps import VIEWER, OperatorDep, StationDep
 
@@ -70,13 +71,22 @@ async def referee_command(body: RefereeCommandIn, st: StationDep,
     return await st.call(st.browser.referee)
 
 
+def _card(st: Station, team: Team, card: str) -> None:
+    """On the station thread: a card from the internal referee; the division's robots per
+    team come from the field size (A: 12 m x 9 m, 11 robots)."""
+    geo = st.browser.geometry()
+    st.referee_state.robots_per_team = \
+        11 if geo is not None and geo["field_length"] >= 11000 else 6
+    st.referee_state.card(team, card)
+
+
 @router.post("/internal/card", response_model=None)
 async def referee_card(body: CardIn, st: StationDep,
                        caller: OperatorDep) -> contract.RefereeView | JSONResponse:
     refused = _foreign(st)
     if refused is not None:
         return refused
-    await st.call(st.give_card, body.team, body.card)
+    await st.call(_card, st, body.team, body.card)
     await st.call(st.internal_referee.enable, True)
     await st.call(st.operator_action, "card", caller.who,
                   {"team": body.team, "card": body.card})
