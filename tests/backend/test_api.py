@@ -424,7 +424,7 @@ def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # typ
 
     def step() -> Any:
         relay.sock.send_multipart([b"vision", env])
-        return st.geometry()
+        return st.browser.geometry()
     _until(step, "the geometry")
     st.call_sync(lambda: None)  # fresh views: the geometry as published
     r = c.get("/api/geometry")
@@ -489,7 +489,7 @@ def test_geometry_arriving_while_a_page_is_connected_reaches_it_clean(  # type: 
             seq += 1
             relay.sock.send_multipart([b"vision", _geometry_envelope(seq, a="Good",
                                                                      b="BADNAME")])
-            return st.geometry()
+            return st.browser.geometry()
         _until(step, "the geometry")
         msg = _ws_until(ws, lambda m: m["type"] == "geometry", "the geometry message")
     g = msg["geometry"]
@@ -584,7 +584,7 @@ def test_the_other_team_is_commanded_only_where_it_can_be_addressed(  # type: ig
         assert c.post("/api/robots/blue/3/target", json={"x": 0, "y": 0}).status_code == 200
         teleport = c.post("/api/sim/robots/yellow/3", json={"x": 0, "y": 0})
         assert teleport.status_code == (409 if output == "robot-box" else 200), teleport.text
-        assert st.drives_other_team() == (status == 200)
+        assert st.safety.drives_other_team() == (status == 200)
 
 
 def test_a_player_change_while_the_next_world_waits_reaches_the_page(client) -> None:  # type: ignore[no-untyped-def]
@@ -601,8 +601,8 @@ def test_a_player_change_while_the_next_world_waits_reaches_the_page(client) -> 
         time.sleep(0.2)  # the client's loop is in the world's wait now
 
         def player_changed() -> None:
-            st.player.error = "marker"
-            st.player.serial += 1
+            st.replay.player.error = "marker"
+            st.replay.player.serial += 1
         st.call_sync(player_changed)
         msg = _ws_until(ws, lambda m: m["type"] == "player", "the player message", 5.0)
     assert msg["player"]["error"] == "marker"

@@ -136,7 +136,8 @@ def station(tmp_path) -> Iterator[tuple[TestClient, Station, Clock]]:  # type: i
                         state_dir=tmp_path / "state", allowed_hosts=["testserver"])
     st = Station(settings)
     clock = Clock()
-    st.operators = Operators(release_after_s=5.0, clock=clock)
+    # the station's own Operators (its views were built with it), on the test's clock
+    st.operators.clock, st.operators.release_after_s = clock, 5.0
     with TestClient(create_app(settings, st), headers={"X-Touchline": "1"}) as c:
         yield c, st, clock
 
@@ -174,7 +175,7 @@ def test_a_second_operator_gets_409_naming_the_holder_until_taking_over(station)
     acts = [(a["action"], a["by"].split(" ")[0]) for a in c.get("/api/operators").json()["actions"]]
     assert acts[:3] == [("target", "bob"), ("driving-taken-over", "bob"), ("estop", "bob")]
     assert ("driving-taken", "alice") in acts and ("target", "alice") in acts
-    assert st.health()["operator_actions"][0]["action"] == "target"
+    assert st.browser.health()["operator_actions"][0]["action"] == "target"
 
 
 def test_asking_for_driving_and_the_holder_giving_it(station) -> None:  # type: ignore[no-untyped-def]
@@ -262,6 +263,6 @@ def test_every_operator_action_is_listed_with_who(station) -> None:  # type: ign
                   headers=A).status_code == 200
     assert c.post("/api/arm", json={"armed": False}, headers=A).status_code == 200
     assert c.post("/api/estop", json={"active": True}, headers=B).status_code == 200
-    acts = [(a["action"], a["by"].split(" ")[0]) for a in st.health()["operator_actions"]]
+    acts = [(a["action"], a["by"].split(" ")[0]) for a in st.browser.health()["operator_actions"]]
     assert acts == [("estop", "bob"), ("disarm", "alice"), ("referee", "alice"),
                     ("params-import", "alice"), ("preset-load", "alice")]

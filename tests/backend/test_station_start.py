@@ -46,7 +46,7 @@ def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Pat
         assert isinstance(steps, dict) and "station running" in steps
         # running, and nothing of the rest yet: no vision, so no command
         assert not st.late_started.is_set()
-        assert st.recorder is None and st.strategy.engine is None
+        assert st.recording.recorder is None and st.strategy.engine is None
         assert "recorder open" not in steps and "engine started" not in steps
         # vision (the world a camera frame makes), until the first command set has left
         # for the relay: the strategy's targets, then control's commands
@@ -56,7 +56,7 @@ def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Pat
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert steps["first targets"] <= steps["first command"] <= steps["recorder open"]
-        assert st.recorder is not None and st.recorder.status()["enabled"]
+        assert st.recording.recorder is not None and st.recording.recorder.status()["enabled"]
         _wait(lambda: st.strategy.engine is not None)  # the numpy engine's worker
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
@@ -73,7 +73,7 @@ def test_without_vision_the_rest_starts_after_its_bound(tmp_path: Path) -> None:
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert "recorder open" in steps and "first command" not in steps
-        assert st.recorder is not None
+        assert st.recording.recorder is not None
     finally:
         st.stop_thread()
 
@@ -83,6 +83,6 @@ def test_with_no_bound_everything_starts_at_once(tmp_path: Path) -> None:
     st = Station(_settings(tmp_path))
     st.start_thread()
     try:
-        assert st.late_started.is_set() and st.recorder is not None
+        assert st.late_started.is_set() and st.recording.recorder is not None
     finally:
         st.stop_thread()
