@@ -239,15 +239,20 @@ def kick_view(k: KickedBall | None, t_ref: float) -> contract.BallKick | None:
     }
 
 
-def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
-    """A tracked-vision record of the log (m) as the page draws it (mm)."""
+def recorded_world(payload: bytes, commands: list[contract.RecordedCommand] | None = None
+                   ) -> contract.RecordedWorld | None:
+    """A tracked-vision record of the log (m) as the page draws it (mm), with the commands
+    the log sent at that time."""
+    commands = commands or []
+    empty: contract.RecordedWorld | None = \
+        {"source": "", "ball": None, "robots": [], "commands": commands} if commands else None
     if not payload:
-        return None
+        return empty
     p = TrackerWrapperPacket()
     try:
         p.ParseFromString(payload)
     except DecodeError:
-        return None
+        return empty
     f = p.tracked_frame
     ball: contract.Vec | None = None
     if f.balls:
@@ -256,7 +261,7 @@ def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
         {"team": "yellow" if r.robot_id.team == 1 else "blue", "id": r.robot_id.id,
          "x": r.pos.x * 1000.0, "y": r.pos.y * 1000.0, "orientation": r.orientation}
         for r in f.robots if r.visibility > 0]
-    return {"source": p.source_name, "ball": ball, "robots": robots}
+    return {"source": p.source_name, "ball": ball, "robots": robots, "commands": commands}
 
 
 def feedback_view(v: RobotFeedbackView | None) -> contract.RobotFeedback | None:
@@ -299,8 +304,8 @@ def world(p: ViewParts) -> contract.World:
         "strategy": None,
         "internal_referee": referee_view(p)["internal"],
         "replay": player.clock(),
-        "recorded": recorded_world(p.replay.recorded_tracked) if player.log is not None
-        else None,
+        "recorded": recorded_world(p.replay.recorded_tracked, p.replay.commands_view())
+        if player.log is not None else None,
         "team": p.team_processors.world_view(),
     }
     out["strategy"] = strategy_state(p)

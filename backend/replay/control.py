@@ -10,7 +10,10 @@ import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-from ssllog.format import TYPE_TRACKER_2020
+from google.protobuf.message import DecodeError
+
+from domain.teams import Team
+from ssllog.format import TYPE_TL_COMMANDS, TYPE_TRACKER_2020
 from sslpb import touchline_pb2 as tl
 
 from .. import contract, topics
@@ -23,12 +26,19 @@ from .player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
 log = logging.getLogger("touchline.station")
 T = TypeVar("T")
 
+#: the relay's default --command-timeout (larcmacs_relay/config.py): a robot the log sent
+#: nothing newer than this before the playhead was being sent zero by the relay
+RECORDED_COMMAND_TTL_S = 0.100
+_TEAMS: dict[int, Team] = {tl.TEAM_BLUE: "blue", tl.TEAM_YELLOW: "yellow"}
+_ZERO = tl.RobotCommand()
+
 
 class ReplayControl:
     """Owns the log player for the station: ``player`` (the pure player), ``feed`` (the
     processor that emits its records), ``open_log``, ``command`` (a player command that wakes
     the feed), ``recorded_tracked`` (the log's own estimate at the playhead, drawn beside
-    today's).
+    today's), ``recorded_commands`` (the commands the log sent each robot, beside those
+    computed now).
 
     It writes the log's datagrams onto the topics the relay ingest writes (``bus``) and, when
     time jumps, restarts what keeps state across frames: the world model, the feedback, the
@@ -56,6 +66,8 @@ class ReplayControl:
         self._opening: asyncio.Task[None] | None = None
         #: in replay, the newest tracked-vision record of the log (the live estimate)
         self.recorded_tracked = b""
+        #: in replay, the newest command the log sent each robot and its log time (ns)
+        self.recorded_commands: dict[tuple[Team, int], tuple[int, tl.RobotCommand]] = {}
         self._seq = 0
 
     @property
@@ -70,12 +82,45 @@ class ReplayControl:
         if rec.type == TYPE_TRACKER_2020:  # the live estimate of the time: shown, not used
             self.recorded_tracked = rec.payload
             return
+        if rec.type == TYPE_TL_COMMANDS:  # what the live station sent then: shown, not sent
+            self._recorded_commands(rec.time_ns, rec.payload)
+            return
         self._seq += 1
         vision = rec.type == 4
         env = tl.Envelope(stream=tl.STREAM_VISION if vision else tl.STREAM_REFEREE,
                           receive_time_ns=rec.time_ns, sequence=self._seq,
                           source="log", payload=rec.payload)
         (self.vision_packets if vision else self.referee_packets).write(env)
+
+    def _recorded_commands(self, t_ns: int, payload: bytes) -> None:
+        cs = tl.RobotCommandSet()
+        try:
+            cs.ParseFromString(payload)
+        except DecodeError:
+            return  # a damaged record: the commands before it stand until they expire
+        if cs.stop_all:  # the e-stop or the way into replay: every robot zero
+            for key in self.recorded_commands:
+                self.recorded_commands[key] = (t_ns, _ZERO)
+        for c in cs.commands:
+            team = _TEAMS.get(c.team)
+            if team is not None:
+                self.recorded_commands[(team, c.id)] = (t_ns, c)
+
+    def commands_view(self) -> list[contract.RecordedCommand]:
+        """The recorded commands in force at the playhead (the relay would still repeat
+        them): those not older than its command timeout."""
+        now = self.player.delivered_ns()
+        out: list[contract.RecordedCommand] = []
+        for (team, rid), (t_ns, c) in sorted(self.recorded_commands.items()):
+            age = (now - t_ns) / 1e9
+            if age > RECORDED_COMMAND_TTL_S:
+                continue
+            out.append({"team": team, "id": rid,
+                        "forward_mps": c.forward_mps, "left_mps": c.left_mps,
+                        "angular_radps": c.angular_radps, "kick_speed_mps": c.kick_speed_mps,
+                        "chip": c.chip, "dribbler_rpm": c.dribbler_rpm,
+                        "age_s": max(0.0, age)})
+        return out
 
     def _reset_pipeline(self) -> None:
         """Time jumped (a log opened or seeked, or back to live): the world model and the
@@ -93,6 +138,7 @@ class ReplayControl:
             else time.monotonic
         self.referee_watch.last_heard = None
         self.recorded_tracked = b""
+        self.recorded_commands.clear()
 
     def command(self, fn: Callable[..., T], *args: Any) -> T:
         """A player command on the station thread; the feed is woken to act on it."""

@@ -238,6 +238,7 @@ class OctaveRunner(Runner):
         self.run.loaded_version = self.found.version
         self.run.reloaded_at_unix = time.time()
         self.run.reloads += 1
+        self.fresh = True
         if not self.failed:  # (a save that does not parse may have come meanwhile)
             self.run.state = "running"
 
@@ -278,7 +279,7 @@ class OctaveRunner(Runner):
             return ("out", 0, plain, wall, version)
 
         task = asyncio.get_running_loop().create_task(call())
-        p = Pending(task, now, timeout)
+        p = self._warmup(Pending(task, now, timeout))
         self.inflight = p
         self._calls.add(task)
         task.add_done_callback(lambda t: self._replied(p, t))

@@ -602,14 +602,35 @@ export interface RawRobot {
 }
 
 /**
+ * In replay: the command the live station sent one robot at this time, as recorded
+ * (TYPE_TL_COMMANDS), in the robot's frame: what the robot was told, beside what the
+ * strategy in force now commands it (what-if).
+ */
+export interface RecordedCommand {
+  team: Team;
+  id: number;
+  forward_mps: number;
+  left_mps: number;
+  angular_radps: number;
+  kick_speed_mps: number;
+  chip: boolean;
+  dribbler_rpm: number;
+  /** log time from the recorded command to the playhead (a robot sent nothing for longer than the relay's command timeout, 0.1 s, is not listed: the relay sent it zero) */
+  age_s: number;
+}
+
+/**
  * In replay: the world the live station estimated at this time, as recorded (tracked
- * vision, type 5), drawn beside today's estimate of the same vision (what-if).
+ * vision, type 5), drawn beside today's estimate of the same vision (what-if); and the
+ * commands it sent then (type 1001), beside the commands computed now.
  */
 export interface RecordedWorld {
-  /** the tracker's source name, e.g. Touchline */
+  /** the tracker's source name, e.g. Touchline ("" when the log has no tracked vision) */
   source: string;
   ball: Vec | null;
   robots: RawRobot[];
+  /** the commands recorded for the robots at the playhead (empty when the log has none: only Touchline's logs record them) */
+  commands: RecordedCommand[];
 }
 
 /** The session recorder (SSL log files in var/logs/, docs/logformat.md). */
@@ -1046,6 +1067,8 @@ export interface TeamFile {
   errors: number;
   /** ticks over the time budget (output discarded) */
   overruns: number;
+  /** ticks whose answer came after the tick stopped waiting (the budget + a grace, wall clock: a busy machine), not over the budget (output discarded) */
+  late: number;
   /** targets the safety envelope moved out of a forbidden area, or capped */
   moved_out: number;
   /** CPU time of a tick, ms */
@@ -1137,7 +1160,7 @@ export interface World {
   internal_referee: InternalReferee;
   /** set while the station replays a log (nothing is sent to robots then) */
   replay: ReplayClock | null;
-  /** in replay, the estimate recorded in the log (null live, or if none) */
+  /** in replay, the estimate and the commands recorded in the log (null live, or if the log has neither) */
   recorded: RecordedWorld | null;
   /** the team's processors' latest outputs (team/<name>.py: {key: number}; booleans as 0/1), plotted as team.<name>.<key> */
   team: Record<string, Record<string, number>>;

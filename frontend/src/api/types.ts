@@ -52,6 +52,7 @@ export type {
   ProcessorHealth,
   RawCamera,
   RawRobot,
+  RecordedCommand,
   RecordedWorld,
   Recording,
   RecordingIn,
