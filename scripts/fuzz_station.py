@@ -59,6 +59,7 @@ from backend.world.referee import decode_referee  # noqa: E402
 from sslnet import streams  # noqa: E402
 from sslnet.multicast import open_multicast_sender  # noqa: E402
 from sslnet.streams import parse_message as parse_into  # noqa: E402
+from sslnet.wire import key, varint  # noqa: E402
 from sslpb.ssl_gc_referee_message_pb2 import Referee  # noqa: E402
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket  # noqa: E402
 
@@ -79,22 +80,6 @@ REFEREE_KINDS = {
 
 
 # --------------------------------------------------------------------------- datagrams
-
-def _varint(v: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = v & 0x7F
-        v >>= 7
-        if v:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def _key(field_no: int, wire: int) -> bytes:
-    return _varint(field_no << 3 | wire)
-
 
 def _weird_float(rng: random.Random) -> float:
     return rng.choice([math.nan, math.inf, -math.inf, 1e308, -1e308, 3.4e38, -0.0])
@@ -171,10 +156,10 @@ def make_datagram(stream: str, kind: str, rng: random.Random) -> bytes:
         base = _valid_bytes(stream, rng)
         # an unknown length-delimited field pads it past the limit: well-formed protobuf
         pad = rng.randrange(MAX_DATAGRAM + 1, 60000) - len(base) - 8
-        return base + _key(1000, 2) + _varint(pad) + b"\0" * pad
+        return base + key(1000, 2) + varint(pad) + b"\0" * pad
     if kind == "no content":
         w = SSL_WrapperPacket()
-        return w.SerializeToString() + _key(900, 0) + _varint(1)  # only an unknown field
+        return w.SerializeToString() + key(900, 0) + varint(1)  # only an unknown field
     if stream == "vision":
         return _vision_kind(kind, rng)
     return _referee_kind(kind, rng)
@@ -220,14 +205,14 @@ def _with_bad_shape(w: SSL_WrapperPacket, rng: random.Random) -> bytes:
     ln = g.field_lines.add()
     ln.name = "CenterLine"
     ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = 0, -3000, 0, 3000, 10
-    raw = ln.SerializeToString() + _key(4, 0) + _varint(rng.choice([99, 999, 1 << 31]))
+    raw = ln.SerializeToString() + key(4, 0) + varint(rng.choice([99, 999, 1 << 31]))
     del g.field_lines[-1]
     # re-nest by hand: field_lines is field 6 of SSL_GeometryFieldSize, field 1 of geometry,
     # geometry is field 2 of the wrapper
-    gfield = g.SerializeToString() + _key(6, 2) + _varint(len(raw)) + raw
-    geo = _key(1, 2) + _varint(len(gfield)) + gfield
+    gfield = g.SerializeToString() + key(6, 2) + varint(len(raw)) + raw
+    geo = key(1, 2) + varint(len(gfield)) + gfield
     w.ClearField("geometry")
-    return w.SerializeToString() + _key(2, 2) + _varint(len(geo)) + geo
+    return w.SerializeToString() + key(2, 2) + varint(len(geo)) + geo
 
 
 def _referee_kind(kind: str, rng: random.Random) -> bytes:
@@ -248,7 +233,7 @@ def _referee_kind(kind: str, rng: random.Random) -> bytes:
         # a required enum (closed, proto2) out of range: missing; an optional one: unknown
         which = rng.choice(["command", "stage", "next_command"])
         no = Referee.DESCRIPTOR.fields_by_name[which].number
-        bad = _key(no, 0) + _varint(rng.choice([99, 1 << 20]))
+        bad = key(no, 0) + varint(rng.choice([99, 1 << 20]))
         if which == "next_command" or rng.random() < 0.5:
             # a valid value first, then the out-of-range one (kept as an unknown field)
             return r.SerializeToString() + bad
