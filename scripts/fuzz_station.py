@@ -38,15 +38,12 @@ import math
 import os
 import random
 import re
-import signal
 import socket
 import struct
-import subprocess
 import sys
-import threading
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -56,6 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from backend.world.referee import decode_referee  # noqa: E402
+from launcher.started import Started, start_isolated  # noqa: E402
 from sslnet import streams  # noqa: E402
 from sslnet.multicast import open_multicast_sender  # noqa: E402
 from sslnet.streams import parse_message as parse_into  # noqa: E402
@@ -313,54 +311,19 @@ def build_pool(seed: int, size: int, only: set[str] | None = None) -> list[Entry
 
 # --------------------------------------------------------------------------- the station
 
-@dataclass
-class Station:
-    proc: subprocess.Popen[str]
-    url: str
-    ports: dict[str, Any]
-    pids: dict[str, int]
-    log: list[str] = field(default_factory=list)
-
+class Station(Started):
     def get(self, path: str) -> Any:
         r = httpx.get(self.url + path, timeout=10.0)
         r.raise_for_status()
         return r.json()
 
-    def stop(self) -> int | None:
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            return None
-
 
 def launch(extra: list[str]) -> Station:
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", *extra], cwd=ROOT,
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    lines: list[str] = []
-    info: dict[str, Any] = {}
-    ready = threading.Event()
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            if line.startswith("TOUCHLINE_PORTS "):
-                info["ports"] = json.loads(line.split(" ", 1)[1])
-            elif line.startswith("TOUCHLINE_PIDS "):
-                info["pids"] = json.loads(line.split(" ", 1)[1])
-            elif line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise SystemExit("station did not start:\n" + "\n".join(lines[-40:]))
-    return Station(proc, info["url"], info["ports"], info["pids"], lines)
+    try:
+        st = start_isolated(extra)
+    except RuntimeError as exc:
+        raise SystemExit(str(exc)) from None
+    return Station(**vars(st))
 
 
 def kernel_drops(group: str, port: int) -> tuple[int, int]:
@@ -507,7 +470,7 @@ def main(argv: list[str] | None = None) -> int:
         time.sleep(args.settle)
         samples.append(sample(st, t0, "after"))
         samples.append(sample(st, t0, "after"))
-        exit_code = st.stop()
+        exit_code = st.stop(20)
         report = account(args, sent, expect, before, after, drops0, drops1, send_s,
                          send_blocked, samples, failures)
         if exit_code not in (0, None):
@@ -517,14 +480,14 @@ def main(argv: list[str] | None = None) -> int:
         if args.json:
             args.json.write_text(json.dumps(report, indent=1))
     except BaseException:
-        st.stop()
-        print("\n".join(st.log[-40:]), file=sys.stderr)
+        st.stop(20)
+        print("\n".join(st.lines[-40:]), file=sys.stderr)
         raise
     if failures:
         print("\nFAILED:")
         for f in failures:
             print("  - " + f)
-        print("\nstation log (tail):\n" + "\n".join(st.log[-30:]))
+        print("\nstation log (tail):\n" + "\n".join(st.lines[-30:]))
         return 1
     print("\nPASS: 0 crashes, every malformed datagram counted or accounted as lost")
     return 0

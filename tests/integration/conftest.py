@@ -3,12 +3,7 @@ free, non-standard ports, once for the integration tests."""
 
 from __future__ import annotations
 
-import json
-import os
-import signal
 import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -18,6 +13,8 @@ from typing import Any
 
 import httpx
 import pytest
+
+from launcher.started import start_isolated
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -43,48 +40,16 @@ def launched(*extra_args: str, state_dir: Path | None = None) -> Iterator[Statio
     (it stays after the stop: a later start on it is the same station started anew); by
     default a temporary folder of the launcher's, removed at its stop."""
     keep = ["--state-dir", str(state_dir)] if state_dir is not None else []
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", *keep, *extra_args],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-    lines: list[str] = []
-    ready = threading.Event()
-    info: dict[str, Any] = {}
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            if line.startswith("TOUCHLINE_PORTS "):
-                info["ports"] = json.loads(line.split(" ", 1)[1])
-            if line.startswith("TOUCHLINE_PIDS "):
-                info["pids"] = json.loads(line.split(" ", 1)[1])
-            if line.startswith("TOUCHLINE_STATE_DIR "):
-                info["state_dir"] = line.split(" ", 1)[1].strip()
-            if line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
+    started = start_isolated([*keep, *extra_args])
     try:
-        own = info.get("state_dir")
-        yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}),
-                            Path(own) if own else state_dir)
+        yield StationHandle(started.url, started.ports, started.lines, started.pids,
+                            started.state_dir or state_dir)
     finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        else:
-            if state_dir is None:
-                # an orderly stop leaves no temporary state folder behind
-                assert "state_dir" in info, "the launcher did not say where its state went"
-                assert not Path(info["state_dir"]).exists(), info["state_dir"]
+        if started.stop() is not None and state_dir is None:
+            # an orderly stop leaves no temporary state folder behind
+            assert started.state_dir is not None, \
+                "the launcher did not say where its state went"
+            assert not started.state_dir.exists(), started.state_dir
 
 
 @pytest.fixture(scope="session")
