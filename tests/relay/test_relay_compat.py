@@ -11,10 +11,10 @@ import zmq
 import zmq.asyncio
 
 from sslpb import ssl_gc_referee_message_pb2, ssl_simulation_robot_control_pb2
+from tests.ports import free_udp_port
 from tests.relay.conftest import (
     Harness,
     drain_udp,
-    free_udp_port,
     recv_udp,
     running_relay,
     subscribed,

@@ -548,7 +548,7 @@ async def test_robot_box_mode_never_drives_a_robot_for_the_other_team() -> None:
 
 
 async def test_tracker_input_when_enabled() -> None:
-    from tests.relay.conftest import random_multicast_port
+    from tests.ports import random_multicast_port
 
     async with running_relay(tracker_enabled=True, tracker_port=random_multicast_port()) as h:
         sub = h.subscriber(b"tracker")

@@ -100,7 +100,7 @@ async def test_loopback_output_has_ttl_zero() -> None:
 async def test_own_frames_heard_back_on_the_tracker_input_are_not_forwarded() -> None:
     """With the tracker input on the same group and port (loopback), the relay hears its own
     tracked vision: it is not taken for another tracker's."""
-    from tests.relay.conftest import random_multicast_port
+    from tests.ports import random_multicast_port
 
     port = random_multicast_port()
     async with running_relay(tracker_enabled=True, tracker_port=port,
