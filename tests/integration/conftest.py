@@ -3,6 +3,7 @@ free, non-standard ports, once for the integration tests."""
 
 from __future__ import annotations
 
+import socket
 import subprocess
 import time
 from collections.abc import Iterator
@@ -63,6 +64,21 @@ def bare() -> Iterator[StationHandle]:
     """Relay + backend and no simulator: the test program is the camera and the robots."""
     with launched("--sim", "none") as st:
         yield st
+
+
+@pytest.fixture(scope="module")
+def box_station() -> Iterator[tuple[StationHandle, socket.socket]]:
+    """Relay + backend in robot-box mode (real robots: the seed's 13-byte datagram per robot,
+    no team field) and no simulator, the test's socket as the robot box (non-blocking)."""
+    box = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    box.bind(("127.0.0.1", 0))
+    box.setblocking(False)
+    try:
+        with launched("--sim", "none", "--output", "robot-box",
+                      f"--relay-arg=--robot-box=127.0.0.1:{box.getsockname()[1]}") as st:
+            yield st, box
+    finally:
+        box.close()
 
 
 def stop_process(proc: subprocess.Popen[str], timeout_s: float = 10.0) -> None:
