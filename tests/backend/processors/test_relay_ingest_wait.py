@@ -213,3 +213,60 @@ def test_each_message_is_read_whole_and_a_message_not_of_two_parts_is_counted() 
         pub.close()
         sub.close()
         ctx.term()
+
+
+def test_an_undecodable_message_is_counted_by_its_reason_and_the_next_goes_through() -> None:
+    """Stats, feedback and an envelope cut short: each counted as truncated with what it was,
+    nothing of them on the bus; the good messages after them are."""
+    ctx = zmq.Context()
+    pub, sub = ctx.socket(zmq.PUB), ctx.socket(zmq.SUB)
+    try:
+        for s in (pub, sub):
+            s.setsockopt(zmq.LINGER, 0)
+        pub.bind("inproc://relay-ingest-bad")
+        sub.connect("inproc://relay-ingest-bad")
+        sub.setsockopt(zmq.SUBSCRIBE, b"")
+        bus = DataBus({})
+        ingest = RelayIngest(bus)
+        ingest.attach(sub)  # type: ignore[arg-type]
+        for _ in range(200):  # the subscription joins (inproc: at once, bounded all the same)
+            pub.send_multipart([b"vision", envelope(0)])
+            if sub.poll(10):
+                break
+        while sub.poll(0):
+            sub.recv_multipart()
+        stats = tl.RelayStats(time_ns=7, output_mode="sim").SerializeToString()
+        feedback = tl.RobotFeedbackEnvelope(receive_time_ns=5).SerializeToString()
+        for topic, body in ((b"stats", stats), (b"feedback", feedback),
+                            (b"vision", envelope(1))):
+            pub.send_multipart([topic, body[:-1]])  # the last byte missing
+            assert sub.poll(1000)
+            ingest.step()
+            assert ingest._zmq.last_error is not None
+            assert ingest._zmq.last_error.startswith(
+                {b"stats": "truncated: stats: ", b"feedback": "truncated: feedback: ",
+                 b"vision": "truncated: envelope: "}[topic]), ingest._zmq.last_error
+        assert ingest._zmq.by_reason == {"truncated": 3}
+        assert not Reader(bus.of(topics.RELAY_STATS), from_start=True).read_new()
+        assert not Reader(bus.of(topics.FEEDBACK_PACKETS), from_start=True).read_new()
+        assert not Reader(bus.of(topics.VISION_PACKETS), from_start=True).read_new()
+        for topic, body in ((b"stats", stats), (b"feedback", feedback),
+                            (b"vision", envelope(2))):
+            pub.send_multipart([topic, body])
+        assert sub.poll(1000)
+        for _ in range(100):  # bounded: the three are in the socket within moments (inproc)
+            ingest.step()
+            if ingest._zmq.packets == 6:
+                break
+            sub.poll(10)
+        assert ingest._zmq.by_reason == {"truncated": 3}
+        assert [s["time_ns"] for s in
+                Reader(bus.of(topics.RELAY_STATS), from_start=True).read_new()] == [7]
+        assert [f.receive_time_ns for f in
+                Reader(bus.of(topics.FEEDBACK_PACKETS), from_start=True).read_new()] == [5]
+        assert [e.sequence for e in
+                Reader(bus.of(topics.VISION_PACKETS), from_start=True).read_new()] == [2]
+    finally:
+        pub.close()
+        sub.close()
+        ctx.term()
