@@ -18,9 +18,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
-from typing import Any
 
 import httpx
 
@@ -29,16 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 from launcher.started import Started, start_isolated  # noqa: E402
 from tests.integration.blind import Camera, Simulator  # noqa: E402
-
-
-def wait(cond: Any, timeout_s: float, what: str, interval_s: float = 0.02) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        got = cond()
-        if got:
-            return got
-        time.sleep(interval_s)
-    raise SystemExit(f"timed out after {timeout_s} s waiting for {what}")
+from tests.waiting import wait_until  # noqa: E402
 
 
 def launch() -> Started:
@@ -60,17 +49,17 @@ def main() -> int:
     client = httpx.Client(base_url=url, timeout=5.0)
     took: list[float] = []
     try:
-        wait(lambda: any(r["id"] == 0 for r in client.get("/api/world").json()["robots"]), 30,
-             "blue 0 seen")
-        wait(lambda: client.post("/api/arm", json={"armed": True}).status_code == 200, 20,
-             "armed")
+        wait_until(lambda: any(r["id"] == 0 for r in client.get("/api/world").json()["robots"]),
+                   30, 0.02, "blue 0 seen")
+        wait_until(lambda: client.post("/api/arm", json={"armed": True}).status_code == 200, 20,
+                   0.02, "armed")
         r = client.post("/api/robots/blue/0/target", json={"x": 3000.0, "y": 0.0})
         r.raise_for_status()
         load0 = Path("/proc/loadavg").read_text().split()[:3]
         for k in range(args.losses):
-            wait(sim.driving, 10, f"blue 0 driven ({k})")
-            after = wait(lambda: client.get("/api/health").json()["world"]["lost_after_s"],
-                         10, "the camera's rate measured")
+            wait_until(sim.driving, 10, 0.02, f"blue 0 driven ({k})")
+            after = wait_until(lambda: client.get("/api/health").json()["world"]["lost_after_s"],
+                               10, 0.02, "the camera's rate measured")
             sim.read()
             last = cam.silence()
             stop, _ = sim.stop_after(last)

@@ -16,6 +16,10 @@ import httpx
 import pytest
 
 from launcher.started import start_isolated
+from tests.waiting import wait_until
+
+__all__ = ["StationHandle", "arm", "launched", "next_relay_stats", "stop_process",
+           "wait_until"]
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -89,18 +93,6 @@ def stop_process(proc: subprocess.Popen[str], timeout_s: float = 10.0) -> None:
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait(timeout=timeout_s)
-
-
-def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") -> Any:  # type: ignore[no-untyped-def]
-    """Polls ``cond`` until it returns a truthy value; bounded."""
-    deadline = time.monotonic() + timeout_s
-    last = None
-    while time.monotonic() < deadline:
-        last = cond()
-        if last:
-            return last
-        time.sleep(interval_s)
-    raise AssertionError(f"timed out after {timeout_s} s waiting for {what or cond}: {last!r}")
 
 
 def next_relay_stats(st: StationHandle, span_s: float = 0.5,

@@ -32,15 +32,6 @@ def udp_server() -> socket.socket:
     return s
 
 
-async def wait_for(cond: Callable[[], bool], timeout: float = 3.0, what: str = "") -> None:
-    """Poll ``cond`` until true; fail after ``timeout`` seconds."""
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what or cond}")
-        await asyncio.sleep(0.005)
-
-
 async def recv_udp(sock: socket.socket, timeout: float = 2.0) -> tuple[bytes, float]:
     """One datagram and its arrival time (kernel timestamp, Unix seconds, ``time.time()``
     clock), so that a busy test event loop does not distort measured timing."""
