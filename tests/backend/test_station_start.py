@@ -14,6 +14,7 @@ from backend.config import Settings
 from backend.station import Station
 from backend.world.state import BallState, RobotState, WorldState
 from launcher.supervisor import free_tcp_port
+from tests.waiting import wait_until
 
 
 def _settings(tmp_path: Path, **kw: Any) -> Settings:
@@ -25,16 +26,6 @@ def _settings(tmp_path: Path, **kw: Any) -> Settings:
 def _world() -> WorldState:
     robots = (RobotState("blue", 3, -1000.0, 0.0, 0.0, t_seen=10.0),)
     return WorldState(10.0, time.time_ns(), BallState(1.0, 2.0, t_seen=10.0), robots)
-
-
-def _wait(cond: Any, timeout_s: float = 20.0) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        got = cond()
-        if got:
-            return got
-        time.sleep(0.01)
-    raise AssertionError(f"timed out waiting for {cond}")
 
 
 def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Path) -> None:
@@ -57,7 +48,7 @@ def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Pat
         assert isinstance(steps, dict)
         assert steps["first targets"] <= steps["first command"] <= steps["recorder open"]
         assert st.recording.recorder is not None and st.recording.recorder.status()["enabled"]
-        _wait(lambda: st.strategy.engine is not None)  # the numpy engine's worker
+        wait_until(lambda: st.strategy.engine is not None, 20.0, 0.01)  # the numpy engine's worker
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert steps["first command"] < steps["engine started"]
