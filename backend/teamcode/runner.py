@@ -20,7 +20,7 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
@@ -70,6 +70,11 @@ class Runner:
     Subclasses: ``PythonRunner`` (a worker process), ``teamcode.octave.OctaveRunner``."""
 
     language = "python"
+    #: the (re)start under way (``_start_soon``), the starts asked for and the ones begun
+    #: (set by each subclass)
+    _task: asyncio.Task[None] | None
+    _want: int
+    _done: int
 
     def __init__(self, found: Found, run: FileRun) -> None:
         self.found = found
@@ -144,6 +149,29 @@ class Runner:
             return
         p.reason = "failed"
         self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}", self.name))
+
+    # ---- (re)starting: a save during a start is one more start, not one each ----
+
+    def _start_soon(self, start: Callable[[], Awaitable[None]]) -> None:
+        self._want += 1
+        if self._task is None:
+            self._task = asyncio.get_running_loop().create_task(self._starts(start))
+
+    async def _starts(self, start: Callable[[], Awaitable[None]]) -> None:
+        try:
+            while self._done < self._want and not self.closed:
+                self._done = self._want
+                await start()
+        finally:
+            self._task = None
+
+    async def _close_start(self) -> None:
+        """Closed: the start under way is cancelled (and awaited)."""
+        self.closed = True
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
 
     # ---- what each kind of runner does its own way ----
 
@@ -252,19 +280,9 @@ class PythonRunner(Runner):
         self._load_soon()
 
     def _load_soon(self) -> None:
-        self._want += 1
-        if self._task is None:
-            if self.run.state != "running":
-                self.run.state = "starting"
-            self._task = asyncio.get_running_loop().create_task(self._loads())
-
-    async def _loads(self) -> None:
-        try:
-            while self._done < self._want and not self.closed:
-                self._done = self._want
-                await self._load()
-        finally:
-            self._task = None
+        if self._task is None and self.run.state != "running":
+            self.run.state = "starting"
+        self._start_soon(self._load)
 
     async def _load(self) -> None:
         found = self.found
@@ -400,11 +418,7 @@ class PythonRunner(Runner):
         self.accept(p, f.result())
 
     async def close(self) -> None:
-        self.closed = True
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self._task
+        await self._close_start()
         w, self.worker = self.worker, None
         if w is not None:
             w.on_gone = None

@@ -98,10 +98,10 @@ def _line(pts: Sequence[Sample]) -> tuple[Sample, tuple[float, float], float] | 
     return (t, xm + vx * (t - tm), ym + vy * (t - tm)), (vx, vy), rms
 
 
-def fit_rolling(pts: Sequence[Sample], decel: float,
-                u: tuple[float, float] | None = None) -> tuple[Sample, tuple[float, float]] | None:
-    """Fit p(tau) = p0 + w tau - u decel tau^2 / 2 (tau from the first point's time; u the unit
-    direction, the plain slope's if not given): ((t0, x0, y0), w), or None."""
+def _rolling_points(pts: Sequence[Sample], decel: float, u: tuple[float, float] | None
+                    ) -> tuple[float, list[Sample]] | None:
+    """The points with the deceleration along ``u`` taken out, on a time axis from the first
+    point's (t0, the points): a straight line for a ball rolling as the model says."""
     if len(pts) < 2:
         return None
     if u is None:
@@ -113,8 +113,18 @@ def fit_rolling(pts: Sequence[Sample], decel: float,
             return None
         u = (s[0] / n, s[1] / n)
     t0 = pts[0][0]
-    corr = [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
-             p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+    return t0, [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
+                 p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+
+
+def fit_rolling(pts: Sequence[Sample], decel: float,
+                u: tuple[float, float] | None = None) -> tuple[Sample, tuple[float, float]] | None:
+    """Fit p(tau) = p0 + w tau - u decel tau^2 / 2 (tau from the first point's time; u the unit
+    direction, the plain slope's if not given): ((t0, x0, y0), w), or None."""
+    c = _rolling_points(pts, decel, u)
+    if c is None:
+        return None
+    t0, corr = c
     f = _fit(corr)
     if f is None:
         return None
