@@ -128,5 +128,27 @@ def test_the_readme_is_a_front_door() -> None:
     text = (ROOT / "README.md").read_text()
     lines = text.splitlines()
     assert len(lines) <= README_MAX_LINES, f"README.md: {len(lines)} lines"
-    commands = re.findall(r"^make (\w+)", FENCE.findall(text)[0], re.M)
+    fences = FENCE.findall(text)
+    commands = re.findall(r"^make (\w+)", fences[0], re.M)
     assert commands == ["run", "test"], commands
+    assert len(fences) == 1, f"commands besides the two: {fences[1:]}"
+
+
+def test_the_readme_s_first_screen_tells_a_team_how_to_bring_its_code() -> None:
+    """In the first 50 lines, after the two commands: the folder to copy, make run TEAM=...,
+    and the walkthrough, in a few lines (no third command block)."""
+    lines = (ROOT / "README.md").read_text().splitlines()
+    first = "\n".join(lines[:50])
+    assert "make run TEAM=" in first and "`team/`" in first
+    assert "(docs/team-code.md)" in first
+    at = next(i for i, ln in enumerate(lines) if "make run TEAM=" in ln)
+    k = at
+    while k > 0 and lines[k - 1].strip():  # the paragraph it is in
+        k -= 1
+    end = at
+    while end + 1 < len(lines) and lines[end + 1].strip():
+        end += 1
+    para = "\n".join(lines[k:end + 1])
+    assert 3 <= end + 1 - k <= 5, para
+    assert lines.index("make test    # installs what is missing, runs every test (Python, "
+                       "TypeScript, Playwright)") < k
