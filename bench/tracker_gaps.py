@@ -37,11 +37,8 @@ import contextlib
 import itertools
 import json
 import os
-import select
 import shutil
 import signal
-import socket
-import struct
 import subprocess
 import sys
 import tempfile
@@ -55,40 +52,10 @@ from typing import Any
 import httpx
 
 from bench.station_run import ROOT, full_scale_args, start_station
-from sslnet.multicast import open_multicast_receiver
+from tests.integration.standins import Arrivals
 
 PLAYS = ("match", "defend", "attack-drill", "formation", "simple", "idle")
 FIXTURE = ROOT / "tests" / "data" / "fieldsim-2s.log.gz"
-SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
-
-
-class Arrivals(threading.Thread):
-    """Every datagram on a multicast group and port with the kernel's receive time (wall
-    clock, s)."""
-
-    def __init__(self, group: str, port: int) -> None:
-        super().__init__(daemon=True)
-        self.sock = open_multicast_receiver(group, port, "127.0.0.1", rcvbuf=8 << 20)
-        self.sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
-        self.times: list[float] = []
-        self.halt = threading.Event()
-
-    def run(self) -> None:
-        while not self.halt.is_set():
-            ready, _, _ = select.select([self.sock], [], [], 0.2)
-            if not ready:
-                continue
-            while True:
-                try:
-                    _, anc, _, _ = self.sock.recvmsg(65536, 64)
-                except BlockingIOError:
-                    break
-                t = time.time()
-                for level, kind, data in anc:
-                    if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS:
-                        sec, nsec = struct.unpack("qq", data[:16])
-                        t = sec + nsec / 1e9
-                self.times.append(t)
 
 
 @dataclass
@@ -260,10 +227,8 @@ def main() -> None:
     os.environ.clear()
     os.environ.update(env_before)
     ports, url = st.ports, st.url
-    tracker = Arrivals(ports["tracker_group"], ports["tracker"])
-    vision = Arrivals(ports["vision_group"], ports["vision"])
-    tracker.start()
-    vision.start()
+    tracker = Arrivals(ports["tracker_group"], ports["tracker"], rcvbuf=8 << 20)
+    vision = Arrivals(ports["vision_group"], ports["vision"], rcvbuf=8 << 20)
     act = Activity()
     stop = threading.Event()
     threads: list[threading.Thread] = []
@@ -356,8 +321,8 @@ def main() -> None:
             st.proc.wait(30)
         except subprocess.TimeoutExpired:
             st.proc.kill()
-        tracker.halt.set()
-        vision.halt.set()
+        tracker.close()
+        vision.close()
         restarts = [line.strip() for line in launcher_log.read_text(errors="replace")
                     .splitlines() if "restarting" in line]
         shutil.rmtree(work, ignore_errors=True)

@@ -6,13 +6,15 @@ in."""
 from __future__ import annotations
 
 import math
+import select
 import socket
 import threading
 import time
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from sslnet.multicast import open_multicast_sender
+from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
+from sslnet.multicast import open_multicast_receiver, open_multicast_sender
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
@@ -72,6 +74,35 @@ class CommandLog:
     def close(self) -> None:
         self.stop.set()
         self.thread.join(5)
+        self.sock.close()
+
+
+class Arrivals:
+    """Every datagram on a multicast group and port (tracked vision, a camera's frames): the
+    kernel's receive time (wall clock, s), read on a thread of its own."""
+
+    def __init__(self, group: str, port: int, rcvbuf: int = 1 << 21) -> None:
+        self.sock = open_multicast_receiver(group, port, "127.0.0.1", rcvbuf=rcvbuf)
+        enable_kernel_timestamps(self.sock)
+        self.times: list[float] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            if not select.select([self.sock], [], [], 0.1)[0]:
+                continue
+            while True:
+                try:
+                    _, anc, _, _ = self.sock.recvmsg(65536, 64)
+                except BlockingIOError:
+                    break
+                self.times.append(kernel_time(anc) or time.time())
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(2)
         self.sock.close()
 
 

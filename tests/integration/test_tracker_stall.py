@@ -17,10 +17,6 @@ from __future__ import annotations
 
 import itertools
 import json
-import select
-import socket
-import struct
-import threading
 import time
 from pathlib import Path
 
@@ -29,46 +25,15 @@ import httpx
 from ssllog.format import TYPE_TL_ACTION
 from ssllog.logfile import LogFile
 from ssllog.writer import LogWriter
-from sslnet.multicast import open_multicast_receiver
 
 from .conftest import StationHandle, launched, wait_until
+from .standins import Arrivals
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "fieldsim-2s.log.gz"
 #: below the game controller's 300 ms
 MAX_GAP_S = 0.25
 #: the slow step: an operator action whose JSON takes long to parse (3.3 M empty arrays)
 HUGE = b'{"action": "note", "values": [' + b"[]," * 3_333_333 + b"[]]}"
-SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
-
-
-class Arrivals:
-    """The kernel's receive time (wall clock) of every datagram on a group and port."""
-
-    def __init__(self, group: str, port: int) -> None:
-        self.sock = open_multicast_receiver(group, port, "127.0.0.1")
-        self.sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
-        self.times: list[float] = []
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            if not select.select([self.sock], [], [], 0.1)[0]:
-                continue
-            while True:
-                try:
-                    _, anc, _, _ = self.sock.recvmsg(65536, 64)
-                except BlockingIOError:
-                    break
-                stamps = [struct.unpack("qq", data[:16]) for level, kind, data in anc
-                          if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS]
-                self.times.append(stamps[0][0] + stamps[0][1] / 1e9 if stamps else time.time())
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(2)
-        self.sock.close()
 
 
 def slow_log(path: Path, tmp: Path) -> None:

@@ -54,12 +54,13 @@ def test_feedback_interval_flag() -> None:
             config_from_args(build_parser().parse_args(["--feedback-interval", bad])).validate()
 
 
-def test_profile_written_on_stop(tmp_path: Path) -> None:
-    """--profile FILE: the cProfile stats are there after a normal stop (bench/ reads them)."""
-    out = tmp_path / "relay.prof"
+def _run_until_stats(*extra: str, sig: signal.Signals = signal.SIGTERM) -> tuple[int, str, bytes]:
+    """``python -m larcmacs_relay`` on free ports with ``extra`` flags, stopped with ``sig``
+    once its first statistics arrive (bounded): its exit status, its stderr and the first
+    message's topic."""
     pub = f"tcp://127.0.0.1:{free_udp_port()}"
     cmd = [
-        sys.executable, "-m", "larcmacs_relay", "--profile", str(out),
+        sys.executable, "-m", "larcmacs_relay", *extra,
         "--vision", f"224.5.23.2:{random_multicast_port()}",
         "--referee", f"224.5.23.1:{random_multicast_port()}",
         "--pub", pub, "--sub", f"tcp://127.0.0.1:{free_udp_port()}",
@@ -75,14 +76,22 @@ def test_profile_written_on_stop(tmp_path: Path) -> None:
         sub.setsockopt(zmq.SUBSCRIBE, b"stats")
         sub.connect(pub)
         assert sub.poll(10_000), "no stats from the relay process"
-        proc.send_signal(signal.SIGTERM)
+        topic = sub.recv_multipart()[0]
+        proc.send_signal(sig)
         _, err = proc.communicate(timeout=10)
-        assert proc.returncode == 0, err
+        return proc.returncode, err, topic
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
         ctx.destroy(linger=0)
+
+
+def test_profile_written_on_stop(tmp_path: Path) -> None:
+    """--profile FILE: the cProfile stats are there after a normal stop (bench/ reads them)."""
+    out = tmp_path / "relay.prof"
+    code, err, _ = _run_until_stats("--profile", str(out))
+    assert code == 0, err
     stats = pstats.Stats(str(out))
     profiled = stats.stats  # type: ignore[attr-defined]
     assert any(f.endswith("relay.py") and fn == "_stats_loop" for (f, _, fn) in profiled)
@@ -90,31 +99,7 @@ def test_profile_written_on_stop(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_cli_runs_and_stops_cleanly(sig: signal.Signals) -> None:
-    pub = f"tcp://127.0.0.1:{free_udp_port()}"
-    cmd = [
-        sys.executable, "-m", "larcmacs_relay",
-        "--vision", f"224.5.23.2:{random_multicast_port()}",
-        "--referee", f"224.5.23.1:{random_multicast_port()}",
-        "--pub", pub, "--sub", f"tcp://127.0.0.1:{free_udp_port()}",
-        "--sim-blue-port", str(free_udp_port()), "--sim-yellow-port", str(free_udp_port()),
-        "--sim-control-port", str(free_udp_port()),
-    ]  # fmt: skip
-    env = dict(os.environ, PYTHONPATH=os.getcwd())
-    proc = subprocess.Popen(cmd, env=env, stderr=subprocess.PIPE, text=True)
-    ctx = zmq.Context()
-    try:
-        sub = ctx.socket(zmq.SUB)
-        sub.setsockopt(zmq.LINGER, 0)
-        sub.setsockopt(zmq.SUBSCRIBE, b"stats")
-        sub.connect(pub)
-        assert sub.poll(10_000), "no stats from the relay process"
-        assert sub.recv_multipart()[0] == b"stats"
-        proc.send_signal(sig)
-        _, err = proc.communicate(timeout=10)
-        assert proc.returncode == 0, err
-        assert "relay stopped" in err
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        ctx.destroy(linger=0)
+    code, err, topic = _run_until_stats(sig=sig)
+    assert topic == b"stats"
+    assert code == 0, err
+    assert "relay stopped" in err

@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import socket
 import time
+from collections.abc import Callable
 
 import zmq.asyncio
 
@@ -25,6 +26,17 @@ async def next_feedback(sub: zmq.asyncio.Socket,
             return touchline_pb2.RobotFeedbackEnvelope.FromString(body)
 
 
+async def first_feedback(sub: zmq.asyncio.Socket, send: Callable[[], object],
+                         what: str) -> touchline_pb2.RobotFeedbackEnvelope:
+    """Sends until the subscriber hears a feedback envelope (the ZeroMQ slow joiner: the
+    first messages may go nowhere), at most 100 times; that envelope."""
+    for _ in range(100):
+        send()
+        if await sub.poll(30):
+            return await next_feedback(sub)
+    raise AssertionError(f"no {what} forwarded")
+
+
 async def test_sim_responses_forwarded_with_team_and_sent() -> None:
     async with running_relay() as h:
         sub = h.subscriber(b"feedback")
@@ -36,14 +48,7 @@ async def test_sim_responses_forwarded_with_team_and_sent() -> None:
         resp.feedback.add(id=3, dribbler_ball_contact=True)
         data = resp.SerializeToString()
         before = time.time_ns()
-        # the ZeroMQ slow joiner: answer until the subscriber hears one
-        env = None
-        for _ in range(100):
-            h.sim_yellow.sendto(data, addr)
-            if await sub.poll(30):
-                env = await next_feedback(sub)
-                break
-        assert env is not None, "no feedback forwarded"
+        env = await first_feedback(sub, lambda: h.sim_yellow.sendto(data, addr), "feedback")
         assert env.kind == touchline_pb2.FEEDBACK_SIM_RESPONSE
         assert env.team == YELLOW and env.payload == data
         assert env.receive_time_ns >= before and env.sequence >= 1
@@ -81,13 +86,8 @@ async def test_grsim_status_forwarded_bad_counted() -> None:
         data = status.SerializeToString()
         grsim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
-            env = None
-            for _ in range(100):
-                grsim.sendto(data, ("127.0.0.1", ports["yellow"]))
-                if await sub.poll(30):
-                    env = await next_feedback(sub)
-                    break
-            assert env is not None, "no grSim status forwarded"
+            env = await first_feedback(
+                sub, lambda: grsim.sendto(data, ("127.0.0.1", ports["yellow"])), "grSim status")
             assert env.kind == touchline_pb2.FEEDBACK_GRSIM_STATUS
             assert env.team == YELLOW and env.payload == data
             grsim.sendto(data, ("127.0.0.1", ports["blue"]))
@@ -119,13 +119,7 @@ async def test_repeated_answers_coalesced_a_change_at_once() -> None:
             return resp.SerializeToString()
 
         no, yes = answer(False), answer(True)
-        env = None
-        for _ in range(100):  # the ZeroMQ slow joiner
-            h.sim_blue.sendto(no, addr)
-            if await sub.poll(30):
-                env = await next_feedback(sub)
-                break
-        assert env is not None, "no feedback forwarded"
+        env = await first_feedback(sub, lambda: h.sim_blue.sendto(no, addr), "feedback")
         # everything answered so far has been forwarded or is held: wait for the held one
         while env.sequence < h.relay.streams["sim_responses"].packets:
             env = await next_feedback(sub)
