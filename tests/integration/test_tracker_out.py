@@ -100,8 +100,10 @@ def test_tracked_vision_on_loopback_and_silent_in_replay() -> None:
             worlds = seq1 - seq0
             assert worlds > 60, worlds  # fieldsim: > 30 Hz of worlds
             expected = min(worlds, 100.0 * (t1 - t0))
-            # a frame waits for the first world 10 ms after the last one sent: 70-100 Hz
-            assert 0.6 * expected <= len(got) <= 1.1 * expected, (len(got), worlds, expected)
+            # a frame waits for the first world 10 ms after the last one sent: worlds just under
+            # 10 ms apart send every other one (50 Hz, half the expected; a CI run saw 61 Hz of
+            # 101 Hz of worlds), worlds further apart send each one
+            assert 0.45 * expected <= len(got) <= 1.1 * expected, (len(got), worlds, expected)
 
             frames = [p for _, p in list(rx.frames)]
             assert rx.bad == 0
