@@ -47,7 +47,7 @@ class StrategyProcessor(Processor):
     name = "strategy"
 
     def __init__(self, bus: DataBus, our_team: Team, params: StrategyParams | None = None,
-                 hz: float = 20.0) -> None:
+                 hz: float = 20.0, clock: Callable[[], float] = time.monotonic) -> None:
         super().__init__(Every(hz))
         self.world = bus.of(topics.WORLD)
         self.geometry = bus.of(topics.GEOMETRY)
@@ -74,7 +74,9 @@ class StrategyProcessor(Processor):
         self.engine_last_error = ""
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
-        self._t0 = time.monotonic()
+        #: monotonic seconds (a virtual clock headless: evaluate/)
+        self.clock = clock
+        self._t0 = clock()
         self._record: BinaryIO | None = None
 
     def ball_contact(self, team: Team, rid: int) -> bool:
@@ -117,7 +119,7 @@ class StrategyProcessor(Processor):
         }
         world = self.world.latest_value()
         if world is not None and self.params.play != "idle":
-            now = time.monotonic() - self._t0
+            now = self.clock() - self._t0
             prep = self.core.prepare(world, self.geometry.latest_value(), self.referee_source(),
                                      self.params, self.our_team, self.our_side_negative,
                                      self.side_from_referee, now, self.contacts(self.our_team))
@@ -154,7 +156,7 @@ class StrategyProcessor(Processor):
             self._engine_task = None
             try:
                 point = task.result()
-                self._engine_point = (time.monotonic(), point)
+                self._engine_point = (self.clock(), point)
             except Exception as exc:
                 self.engine_fallbacks += 1
                 msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -167,7 +169,7 @@ class StrategyProcessor(Processor):
             self._engine_task = asyncio.get_running_loop().create_task(
                 self._call_keeper(eng, prep))
         got = self._engine_point
-        if got is None or time.monotonic() - got[0] > ENGINE_MAX_AGE_S:
+        if got is None or self.clock() - got[0] > ENGINE_MAX_AGE_S:
             if got is not None:
                 self.engine_fallbacks += 1  # the engine is late: use the built-in code
             return None
