@@ -1,0 +1,74 @@
+"""Evaluation speed (issue 28): a headless 6 v 6 match against real time on one core, the
+exercise suite's runs per minute on the local pool and on a Dask LocalCluster at 1 and 2
+workers, and the whole 30-scenario exercise suite's wall time on 2 cores.
+
+    PYTHONPATH=. .venv/bin/python bench/evaluate_bench.py [--half-s 45] [--quick]
+
+The machine is shared: the load average is printed with every number.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+from evaluate.jobs import run_suite
+from evaluate.pool import DaskCluster, LocalPool
+from evaluate.runner import Entrant, MatchTask, run_match_task
+from evaluate.scenario import load_suite
+
+
+def load() -> str:
+    return open("/proc/loadavg").read().split(" ", 3)[:3].__str__()
+
+
+def match_speed(half_s: float) -> None:
+    task = MatchTask("bench", Entrant("match"), Entrant("simple"), 1, half_s)
+    t0, c0 = time.perf_counter(), time.process_time()
+    res = run_match_task(task)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    sim = float(res.get("sim_s") or 0.0)
+    print(f"match 6 v 6 (match v simple, {half_s:g} s halves, interludes): {sim:.1f} s of game "
+          f"in {wall:.1f} s wall / {cpu:.1f} s CPU: {sim / wall:.1f}x real time (wall), "
+          f"{sim / cpu:.1f}x (CPU); score {res.get('score')}; load {load()}")
+
+
+def suite_speed(backend: LocalPool | DaskCluster, label: str, out: Path, play: str) -> None:
+    suite = load_suite("exercises")
+    t0 = time.perf_counter()
+    rep = run_suite(suite, Entrant(play), out, backend, keep_logs=True)
+    wall = time.perf_counter() - t0
+    t = rep["timing"]
+    print(f"exercises ({len(suite.scenarios)} scenarios, {t['runs']} runs, play {play}) on "
+          f"{label}: {wall:.1f} s wall, {t['runs_per_minute']} runs/min, "
+          f"{t['runs_per_minute_per_worker']} runs/min per worker-busy minute, "
+          f"{t['speed_vs_real_time']}x real time a run; load {load()}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--half-s", type=float, default=45.0)
+    ap.add_argument("--play", default="match")
+    ap.add_argument("--quick", action="store_true", help="the pool at 2 workers only")
+    args = ap.parse_args()
+    match_speed(args.half_s)
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        configs: list[tuple[str, object]] = [("pool, 2 workers", lambda: LocalPool(2))]
+        if not args.quick:
+            configs = [("pool, 1 worker", lambda: LocalPool(1)),
+                       ("pool, 2 workers", lambda: LocalPool(2)),
+                       ("dask LocalCluster, 1 worker", lambda: DaskCluster("local:1")),
+                       ("dask LocalCluster, 2 workers", lambda: DaskCluster("local:2"))]
+        for i, (label, make) in enumerate(configs):
+            backend = make()  # type: ignore[operator]
+            try:
+                suite_speed(backend, label, root / f"r{i}", args.play)
+            finally:
+                backend.close()
+
+
+if __name__ == "__main__":
+    main()
