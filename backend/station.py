@@ -25,6 +25,7 @@ from .config import Settings
 from .control.goto import Target
 from .engine.switch import EngineSwitch
 from .estop import EstopLatch
+from .evaluation import Evaluation
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .operators import Operators
@@ -150,6 +151,9 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        # the Evaluate tab's jobs: a pool of processes driven from a thread of its own
+        self.evaluation = Evaluation(settings, self.params.diff_from_defaults,
+                                     lambda: self.params.current, settings.eval_workers)
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
@@ -247,6 +251,12 @@ class Station:
     async def open_log(self, path: str) -> contract.Player:
         return await self.replay.open_log(path)
 
+    async def open_evaluation_log(self, report: str, run: str) -> contract.Player:
+        """A run's log from the Evaluate tab (by names; the evaluation finds it in the
+        reports folder) in the player."""
+        real = await asyncio.to_thread(self.evaluation.run_log, report, run)
+        return await self.replay.open_checked(real)
+
     @property
     def recorder(self) -> SessionRecorder | None:
         return self.recording.recorder
@@ -270,6 +280,7 @@ class Station:
 
     async def stop(self) -> None:
         self.replay.close()
+        await asyncio.to_thread(self.evaluation.close)
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):

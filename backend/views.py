@@ -435,6 +435,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "evaluation": st.evaluation.job(),
     }
     return out
 

@@ -38,7 +38,8 @@ export default defineConfig({
   },
   webServer: {
     // --log-dir: the replay spec opens the recorded fixture (tests/data) from the Logs dialog.
-    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data`,
+    // --suite-dir: the Evaluate spec runs the quick suite (tests/evaluate/quick).
+    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data --suite-dir tests/evaluate`,
     cwd: "..",
     url: `${baseURL}/api/health`,
     timeout: 60_000,

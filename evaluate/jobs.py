@@ -110,7 +110,8 @@ def students_of(class_dir: Path) -> list[Path]:
 
 def run_class(class_dir: Path, suite: Suite, out: Path, backend: Backend,
               progress: Progress | None = None, keep_logs: bool = True,
-              params: dict[str, Any] | None = None) -> dict[str, Any]:
+              params: dict[str, Any] | None = None,
+              cancelled: Callable[[], bool] = lambda: False) -> dict[str, Any]:
     """The suite for every student (one sub-folder each: their team folder, the plays each
     scenario names in ``[ours] play``): the grade table student x exercise."""
     students = students_of(class_dir)
@@ -124,7 +125,7 @@ def run_class(class_dir: Path, suite: Suite, out: Path, backend: Backend,
                              else None):
             tasks.append(t)
             owner.append(st.name)
-    results, timing = execute(backend, tasks, progress)
+    results, timing = execute(backend, tasks, _with_student(progress, owner, tasks), cancelled)
     for r, who in zip(results, owner, strict=True):
         r["student"] = who
     exercises = [s.name for s in suite.scenarios]
@@ -155,6 +156,19 @@ def run_class(class_dir: Path, suite: Suite, out: Path, backend: Backend,
                                   for s in suite.scenarios})
     write_report(out, rep)
     return rep
+
+
+def _with_student(progress: Progress | None, owner: list[str],
+                  tasks: list[Any]) -> Progress | None:
+    """Progress that says whose run it was (results carry the task's log path)."""
+    if progress is None:
+        return None
+    by_log = {t.log_path: who for t, who in zip(tasks, owner, strict=True) if t.log_path}
+
+    def tell(done: int, total: int, res: dict[str, Any]) -> None:
+        who = by_log.get(res.get("log"))
+        progress(done, total, {**res, "student": who} if who else res)
+    return tell
 
 
 def load(name_or_path: str) -> Suite:

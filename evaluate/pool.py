@@ -39,13 +39,15 @@ def run_task(task: Task) -> dict[str, Any]:
     return run_scenario_task(task)
 
 
-def _worker_init(memory_mb: int) -> None:
+def _worker_init(memory_mb: int, nice: int = 0) -> None:
     # one thread per worker: the pool is the parallelism (numpy's BLAS would add its own)
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"
     if memory_mb > 0:
         limit = memory_mb * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    if nice > 0:  # (the station's own job: its live loop comes first)
+        os.nice(nice)
 
 
 def _write_log(res: dict[str, Any]) -> None:
@@ -72,9 +74,11 @@ class Backend:
 
 
 class LocalPool:
-    def __init__(self, workers: int | None = None, memory_mb: int = DEFAULT_MEMORY_MB) -> None:
+    def __init__(self, workers: int | None = None, memory_mb: int = DEFAULT_MEMORY_MB,
+                 nice: int = 0) -> None:
         self.workers = max(1, workers or os.cpu_count() or 1)
         self.memory_mb = memory_mb
+        self.nice = nice
         self.backend = Backend("pool", self.workers)
         self.retried = 0
 
@@ -82,7 +86,7 @@ class LocalPool:
         return concurrent.futures.ProcessPoolExecutor(
             max_workers=min(self.workers, max(1, n)),
             mp_context=multiprocessing.get_context("spawn"),
-            initializer=_worker_init, initargs=(self.memory_mb,))
+            initializer=_worker_init, initargs=(self.memory_mb, self.nice))
 
     def run(self, tasks: Sequence[Task], on_result: OnResult | None = None,
             cancelled: Callable[[], bool] = lambda: False) -> list[dict[str, Any]]:

@@ -91,6 +91,11 @@ class ReplayControl:
         progress and then the log come in the "player" messages."""
         return await self.station.read(self._start_open, path, False)
 
+    async def open_checked(self, real_path: str) -> contract.Player:
+        """Opens a log the station found in one of its own folders itself (an evaluation
+        run's, in the reports folder): no further check of the path."""
+        return await self.station.read(self._start_open, real_path, True)
+
     def open_at_start(self, path: str) -> None:
         """``make run LOG=...``: the log instead of live input, from the start."""
         self._opening = asyncio.get_running_loop().create_task(self._open_log(path))

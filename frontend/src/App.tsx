@@ -1,5 +1,6 @@
 import { useEffect } from "react";
 import { sameRobot } from "./api/types";
+import { EvaluatePanel } from "./components/EvaluatePanel";
 import { FieldView } from "./components/FieldView";
 import { HealthPanel } from "./components/HealthPanel";
 import { HelpOverlay } from "./components/HelpOverlay";
@@ -93,6 +94,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
             </div>
             {tab === "referee" && <RefereePanel />}
             {tab === "health" && <HealthPanel />}
+            {tab === "evaluate" && <EvaluatePanel />}
           </div>
         </aside>
       </main>

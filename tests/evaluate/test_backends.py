@@ -19,7 +19,7 @@ from evaluate.scenario import load_suite
 from evaluate.series import strip_volatile
 
 ROOT = Path(__file__).resolve().parents[2]
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parent / "quick"
 pytestmark = pytest.mark.timeout(240)
 
 

@@ -20,7 +20,7 @@ from evaluate.scenario import load_scenario
 from ssllog.format import TYPE_REFEREE_2013, TYPE_TL_COMMANDS, TYPE_VISION_2014
 from ssllog.reader import LogReader
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parent / "quick"
 
 
 def _run(name: str, log: Path | None, **changes: Any) -> dict[str, Any]:

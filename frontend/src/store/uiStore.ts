@@ -5,13 +5,14 @@ import { useSyncExternalStore } from "react";
 import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
 import { createStore } from "./createStore";
 
-export type Tab = "robots" | "params" | "plots" | "referee" | "health";
+export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "evaluate";
 export const TABS: { key: Tab; label: string }[] = [
   { key: "robots", label: "Robots" },
   { key: "params", label: "Params" },
   { key: "plots", label: "Plots" },
   { key: "referee", label: "Referee" },
   { key: "health", label: "Health" },
+  { key: "evaluate", label: "Evaluate" },
 ];
 
 /** The field layers the user can toggle: exactly what the field drawing takes. */

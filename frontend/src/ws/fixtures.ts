@@ -1,5 +1,6 @@
 // Test fixtures (only imported by tests).
 import type {
+  EvaluationJob,
   ArmingInfo,
   EngineHealth,
   Geometry,
@@ -99,8 +100,28 @@ export function health(rate = 60): Health {
     operators: [],
     driving: [],
     operator_actions: [],
+    evaluation: evaluationJob(),
   };
 }
+
+export const evaluationJob = (extra: Partial<EvaluationJob> = {}): EvaluationJob => ({
+  id: 0,
+  state: "idle",
+  kind: null,
+  suite: "",
+  play: null,
+  done: 0,
+  total: 0,
+  passed: 0,
+  failed: 0,
+  started_unix: null,
+  finished_unix: null,
+  report: null,
+  by: "",
+  error: "",
+  last: "",
+  ...extra,
+});
 
 export const stream = (extra: Partial<StreamHealth> = {}): StreamHealth => ({
   packets: 100,
