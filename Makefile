@@ -8,13 +8,16 @@ PORT ?= 8000
 RUN_ARGS ?=
 # make run LOG=path/to/file.log[.gz]: replay a log instead of live input
 LOG ?=
+# make run TEAM=path/to/folder: the team's own plays, processors and libraries (default team/)
+TEAM ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
         test-e2e bench soak experiments clean match fuzz evaluate
 
 run: build multicast
-	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") $(RUN_ARGS)
+	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") \
+	  $(if $(TEAM),--team-dir "$(TEAM)") $(RUN_ARGS)
 
 test: build multicast chromium octave lint typecheck test-py test-ts test-e2e
 	@scripts/test-summary.sh
@@ -38,9 +41,11 @@ sslpb/__init__.py: .venv/.ok node_modules/.ok $(wildcard proto/sslpb/*.proto) sc
 proto: .venv/.ok node_modules/.ok
 	TOUCHLINE_REQUIRE_TS_PROTO=1 $(PY) scripts/gen_proto.py
 
-# The browser contract: TypeScript types and the docs/api.md reference from backend/contract.py.
+# The browser contract: TypeScript types and the docs/api.md reference from backend/contract.py;
+# and docs/team-api.md, the team-code interface, from the touchline package.
 contract: .venv/.ok
 	$(PY) scripts/gen_contract.py
+	$(PY) scripts/gen_team_api.py
 
 build: setup
 	npm run build

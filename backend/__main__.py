@@ -93,6 +93,16 @@ def main() -> None:
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")
+    p.add_argument("--team-dir", type=Path, default=d.team_dir, metavar="DIR",
+                   help="the team's code: plays, processors and libraries (default "
+                        "%(default)s, the example folder; TOUCHLINE_TEAM_DIR; "
+                        "docs/team-code.md)")
+    p.add_argument("--allow-code-edit", action="store_true",
+                   help="operators on other machines may save team code from the page (it "
+                        "runs on this machine: docs/security.md); from loopback it always may")
+    p.add_argument("--team-memory-mb", type=int, default=d.team_memory_mb, metavar="MB",
+                   help="address-space limit of each team-code worker process "
+                        "(default %(default)s)")
     p.add_argument("--log-level", default="INFO")
     a = p.parse_args()
     logging.basicConfig(level=a.log_level.upper(),
@@ -108,7 +118,10 @@ def main() -> None:
                         reports_dir=a.reports_dir, class_dir=a.class_dir,
                         suite_dirs=d.suite_dirs if a.suite_dirs is None else a.suite_dirs,
                         eval_workers=a.eval_workers,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all)
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        team_dir=a.team_dir,
+                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
+                        freeze_gc=True)
     app = create_app(settings)
     rule: AccessRule = app.state.access
     if rule.required:

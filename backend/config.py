@@ -62,6 +62,10 @@ class Settings(BaseModel):
     state_dir: Path | None = station_folder(
         ROOT / "var", "--state-dir", "State",
         "parameters, presets, tokens, the e-stop latch; None: nothing persisted (tests)")
+    team_dir: Path = station_folder(
+        ROOT / "team", "--team-dir", "Team code",
+        "the team's own plays, processors and libraries, run in worker processes and "
+        "reloaded on every save (make run TEAM=...; docs/team-code.md)")
     #: None: reports/ in the state folder
     reports_dir: Path | None = station_folder(
         None, "--reports-dir", "Evaluation reports",
@@ -94,12 +98,20 @@ class Settings(BaseModel):
     view_token: bool = False
     #: a viewer (no operator token) may press the emergency stop (a class)
     estop_for_all: bool = False
+    #: the page may save team code from another machine (an operator, with the token); from
+    #: loopback it always may. It runs code on this machine: docs/security.md
+    allow_code_edit: bool = False
+    #: the address-space limit of each team-code worker process (RLIMIT_AS), MB
+    team_memory_mb: int = Field(default=1024, ge=64, le=65536)
+    #: keep the start-up objects out of the garbage collector (backend.station_loop.
+    #: freeze_start_up); ``python -m backend`` sets it, a test process with many stations not
+    freeze_gc: bool = False
     allowed_origins: list[str] = Field(
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )
 
-    @field_validator("scripts_dir", "record_dir", "state_dir", "log_dirs", "reports_dir",
-                     "suite_dirs", "class_dir")
+    @field_validator("scripts_dir", "record_dir", "state_dir", "log_dirs", "team_dir",
+                     "reports_dir", "suite_dirs", "class_dir")
     @classmethod
     def _absolute(cls, v: Path | list[Path] | None) -> Path | list[Path] | None:
         # shown to the operator and compared with the page's paths: absolute, ~ expanded

@@ -23,8 +23,9 @@ ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
 #: the filter in use for an object: "raw", "median", "paper", "kalman", "adaptive" ("" before any)
 FilterName = Annotated[str, Field(
     description='"raw", "median", "paper", "kalman" or "adaptive"')]
-#: who set a robot's target: an operator's click, or the strategy
-TargetSource = Literal["operator", "strategy"]
+#: who set a robot's target: an operator's click, the strategy (a built-in play), or a play of
+#: the team's own code (team/)
+TargetSource = Literal["operator", "strategy", "team"]
 
 _STRICT = ConfigDict(extra="forbid")
 
@@ -322,6 +323,16 @@ class ArmingInfo(TypedDict):
 
 
 @with_config(_STRICT)
+class StoppedRobot(TypedDict):
+    """One of our robots stopped because its play (team code) failed."""
+
+    id: int
+    play: str
+    reason: Annotated[str, Field(description='the error in one line ("exception at '
+                                             'pass_drill.py:12: ZeroDivisionError ...")')]
+
+
+@with_config(_STRICT)
 class StrategyState(TypedDict):
     """What the strategy is doing now (sent with every world update)."""
 
@@ -333,6 +344,12 @@ class StrategyState(TypedDict):
     side_from_referee: Annotated[bool, Field(
         description="our side comes from the referee (blue_team_on_positive_half)")]
     tick_ms: float
+    robot_plays: Annotated[dict[str, str], Field(
+        description='the play each of our robots runs now, keyed by id ("3"); robots an '
+        'operator drives and robots not on the field are left out')]
+    stopped: Annotated[list[StoppedRobot], Field(
+        description="robots held still because the team-code play that drives them failed "
+        "(marked on the field)")]
 
 
 @with_config(_STRICT)
@@ -399,6 +416,9 @@ class World(TypedDict):
         description="set while the station replays a log (nothing is sent to robots then)")]
     recorded: Annotated[RecordedWorld | None, Field(
         description="in replay, the estimate recorded in the log (null live, or if none)")]
+    team: Annotated[dict[str, dict[str, float]], Field(
+        description="the team's processors' latest outputs (team/<name>.py: {key: number}; "
+        "booleans as 0/1), plotted as team.<name>.<key>")]
 
 
 # ------------------------------------------------------------------------------ geometry
@@ -853,6 +873,100 @@ class OperatorAction(TypedDict):
     details: str
 
 
+# ------------------------------------------------------------------------------ team code
+
+
+TeamFileKind = Literal["play", "processor", "library"]
+TeamLanguage = Literal["python", "octave"]
+TeamFileState = Literal["idle", "starting", "running", "error"]
+TeamErrorKind = Literal["import", "exception", "output", "budget", "crash", "missing"]
+
+
+@with_config(_STRICT)
+class TeamError(TypedDict):
+    """Why a file of the team's code does not run (it stays so until the file, or a library
+    it uses, is saved again)."""
+
+    kind: Annotated[TeamErrorKind, Field(
+        description='"import": does not load (syntax, import, a name taken); "exception": '
+        'raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); '
+        '"budget": over its time budget 3 ticks in a row, or stuck (killed); "crash": its '
+        'worker process died; "missing": the file of a chosen play is gone')]
+    message: str
+    file: Annotated[str, Field(description='the team file it happened in ("lib/util.py")')]
+    line: int | None
+    traceback: str
+    at_unix: float
+
+
+@with_config(_STRICT)
+class TeamFile(TypedDict):
+    """One file of the team folder and how it runs."""
+
+    name: Annotated[str, Field(description='path in the team folder: "pass_drill.py", '
+                                           '"lib/util.m"')]
+    kind: TeamFileKind
+    language: TeamLanguage
+    play: Annotated[str | None, Field(description="the play's name (a play's file stem)")]
+    title: Annotated[str, Field(description="TITLE (Python) or the first help line (.m)")]
+    description: str
+    state: Annotated[TeamFileState, Field(
+        description='"idle": not in use (a play nobody runs, a library); "starting": its '
+        'worker is starting; "running"; "error": see error')]
+    error: TeamError | None
+    version: Annotated[str, Field(description="12 hex digits of the content's SHA-256")]
+    mtime_unix: float
+    size_bytes: int
+    reloaded_at_unix: Annotated[float | None, Field(
+        description="when the running version was loaded (null: not loaded)")]
+    reloads: int
+    ticks: int
+    errors: int
+    overruns: Annotated[int, Field(description="ticks over the time budget (output discarded)")]
+    moved_out: Annotated[int, Field(
+        description="targets the safety envelope moved out of a forbidden area, or capped")]
+    tick_ms_p50: Annotated[float | None, Field(description="CPU time of a tick, ms")]
+    tick_ms_p99: float | None
+    robots: Annotated[list[int], Field(description="our robots it drives now (plays)")]
+    outputs: Annotated[dict[str, float], Field(
+        description="a processor's latest outputs (booleans as 0/1)")]
+
+
+@with_config(_STRICT)
+class TeamEdit(TypedDict):
+    allowed: Annotated[bool, Field(description="this caller may save files from the page")]
+    reason: Annotated[str | None, Field(description="why not (null when allowed)")]
+
+
+@with_config(_STRICT)
+class TeamCode(TypedDict):
+    """GET /api/team: the team folder (a start-time setting: --team-dir, make run TEAM=)."""
+
+    dir: str
+    api_version: Annotated[int, Field(description="touchline.API_VERSION the station speaks")]
+    edit: TeamEdit
+    files: list[TeamFile]
+
+
+@with_config(_STRICT)
+class TeamFileText(TypedDict):
+    """GET /api/team/files/{name}."""
+
+    name: str
+    text: str
+    version: str
+    language: TeamLanguage
+
+
+@with_config(_STRICT)
+class TeamFileSaved(TypedDict):
+    """The answer of PUT /api/team/files/{name}: saved, and being reloaded."""
+
+    name: str
+    version: str
+    saved_at_unix: float
+
+
 @with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
@@ -886,6 +1000,8 @@ class Health(TypedDict):
     driving: Annotated[list[DrivingInfo], Field(description="who drives which team")]
     operator_actions: Annotated[list[OperatorAction], Field(
         description="the latest operator actions, newest first")]
+    team_code: Annotated[list[TeamFile], Field(
+        description="the team folder's files and their states (as GET /api/team)")]
     evaluation: EvaluationJob
 
 
@@ -904,6 +1020,10 @@ class PlayInfo(TypedDict):
     name: str
     title: str
     description: str
+    source: Annotated[Literal["builtin", "team"], Field(
+        description='"team": a play of the team folder (its file stem)')]
+    file: Annotated[str | None, Field(description="the team file (null for built-in plays)")]
+    language: TeamLanguage | None
 
 
 @with_config(_STRICT)
@@ -980,6 +1100,14 @@ class EstopAnswer(EstopInfo):
 
 # ------------------------------------------------------------------------------ request bodies
 # (pydantic models: FastAPI validates each request against them; NaN and unknown keys refused)
+
+
+class TeamFileIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    text: str = Field(description="the whole file (UTF-8; at most 256 KB)")
+    base_version: str | None = Field(
+        default=None, description="the version the edit started from (409 when the file "
+        "changed on disk since); null: a new file")
 
 
 class TargetIn(BaseModel):
@@ -1297,7 +1425,9 @@ EXPORTS: dict[str, object] = {
     "PresetDetail": PresetDetail, "Player": Player, "PlayerEvent": PlayerEvent,
     "ReplayClock": ReplayClock, "Recording": Recording, "LogList": LogList,
     "StationFolders": StationFolders,
-    "PlayerHistory": PlayerHistory,
+    "PlayerHistory": PlayerHistory, "TeamCode": TeamCode, "TeamFile": TeamFile,
+    "TeamError": TeamError, "TeamFileText": TeamFileText, "TeamFileSaved": TeamFileSaved,
+    "StoppedRobot": StoppedRobot,
     "EvaluationJob": EvaluationJob, "EvaluationView": EvaluationView,
     "EvaluationReport": EvaluationReport,
     # request bodies (their optional fields are optional in TypeScript too)
@@ -1308,6 +1438,7 @@ EXPORTS: dict[str, object] = {
     "PlayerPlayIn": PlayerPlayIn,
     "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
     "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,
+    "TeamFileIn": TeamFileIn,
     "EvaluateStartIn": EvaluateStartIn, "EvaluateCancelIn": EvaluateCancelIn,
     "EvaluateReplayIn": EvaluateReplayIn,
 }

@@ -44,6 +44,11 @@ class TargetEntry:
     chip: bool = False
     dribbler_rpm: float = 0.0
     max_speed_mps: float | None = None
+    #: a velocity order in the robot's frame (a team play's ``Velocity``) instead of driving
+    #: to ``target`` (then the robot's position): limited like every command
+    velocity: LocalVelocity | None = None
+    #: stand still now: zero commanded, no deceleration ramp (a team play that failed)
+    stop: bool = False
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,7 +19,7 @@ from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, topics, views
+from . import contract, stalldump, topics, views
 from .bus import DataBus
 from .config import Settings
 from .control.goto import Target
@@ -29,7 +29,7 @@ from .evaluation import Evaluation
 from .jsonsafe import dumps
 from .messages import OperatorTarget
 from .operators import Operators
-from .params.model import StationParams
+from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
 from .processor import Processor, Runner
 from .processors import (
@@ -52,7 +52,11 @@ from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
-from .station_loop import StationLoop
+from .station_loop import StationLoop, freeze_start_up
+from .teamcode.plays import TeamPlays
+from .teamcode.processors import TeamProcessors
+from .teamcode.registry import TeamRegistry
+from .teamcode.watcher import FolderWatcher
 from .viewhub import ViewHub, ViewPublisher, Views
 from .world.state import Team
 from .zmqio import pub_socket, sub_socket
@@ -78,7 +82,14 @@ class Station:
         self.access_health: Callable[[], contract.AccessHealth] = lambda: {
             "token_required": False, "view_token": False, "estop_for_all": False,
             "refused": {}, "blocked_clients": 0}
+        # the team's own code (issue 27): found now (read, never run here), watched from start
+        self.team = TeamRegistry(settings.team_dir, PLAYS)
+        self.team.rescan()
+        self.team_watcher = FolderWatcher(settings.team_dir, self._team_folder_changed)
+        self.team_plays = TeamPlays(self.team, settings.team_memory_mb)
         self.params = ParamStore(settings.state_dir)
+        # a play is chosen among the built-in ones and the team folder's (known now)
+        self.params.play_names = lambda: [*PLAYS, *sorted(self.team.plays())]
         overrides: dict[str, Any] = {}
         if settings.our_team is not None:
             overrides["our_team"] = settings.our_team
@@ -139,6 +150,7 @@ class Station:
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
+        self.strategy.team = self.team_plays
         # the compute engine for the strategy (started and replaced in the background)
         self.engine = EngineSwitch(self.strategy, settings.scripts_dir)
         # the session recorder (made in start(): it opens a file; closed in stop())
@@ -151,6 +163,16 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        self.strategy.replaying = lambda: self.replay.replaying
+        # the team's processors (their topics team/<name>; the plays read them as topics)
+        self.team_processors = TeamProcessors(self.bus, self.team, settings.team_memory_mb)
+        self.team_processors.referee_source = self.control.active_referee
+        self.team_processors.contacts = self.strategy.contacts
+        self.team_processors.replaying = lambda: self.replay.replaying
+        self.strategy.team_topics = lambda: self.team_processors.outputs
+        stalls = stalldump.from_env()
+        if stalls is not None:
+            self.tracker.after_send = stalls.beat
         # the Evaluate tab's jobs: a pool of processes driven from a thread of its own
         self.evaluation = Evaluation(settings, self.params.diff_from_defaults,
                                      lambda: self.params.current, settings.eval_workers)
@@ -160,7 +182,7 @@ class Station:
         self.processors: tuple[Processor, ...] = (
             self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
-            ViewPublisher(self.hub),
+            self.team_processors, ViewPublisher(self.hub),
             RecordingProcessor(self))
 
     # ---- the station thread (backend/station_loop.py): the web side changes station state
@@ -197,6 +219,7 @@ class Station:
         prm = self.params.current
         rec = self.recording.open(prm)
         self.ingest.record = self.publisher.record = self.tracker.record = rec.record
+        self.team_processors.record = rec.record
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
@@ -204,9 +227,12 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        self.team_watcher.start(self.team_watcher_listing())
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
+        if s.freeze_gc:
+            freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
 
@@ -278,7 +304,21 @@ class Station:
     def engine_error(self) -> str:
         return self.engine.error
 
+    # ---- the team folder (backend/teamcode): a save is seen by the watcher's thread and
+    # handled here, on the station loop ----
+
+    def team_watcher_listing(self) -> dict[str, Any]:
+        return {f.name: f.stat for f in self.team.found.values()}
+
+    def _team_folder_changed(self, listing: dict[str, Any]) -> None:
+        self.loop.schedule(self.team.rescan, listing)
+
+    def team_rescan(self) -> set[str]:
+        """Looks at the team folder at once (after a save from the page)."""
+        return self.team.rescan()
+
     async def stop(self) -> None:
+        self.team_watcher.stop()
         self.replay.close()
         await asyncio.to_thread(self.evaluation.close)
         # a last stop to every robot we drive, then shut down
@@ -286,6 +326,7 @@ class Station:
             with contextlib.suppress(zmq.ZMQError):
                 await self.publisher.sock.send_multipart([b"commands", _stop_all_bytes()])
         await self.runner.stop()
+        await self.team_plays.close()
         await self.engine.close()
         if self.ctx is not None:
             self.ctx.destroy(linger=0)

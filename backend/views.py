@@ -58,6 +58,9 @@ def strategy_state(st: Station) -> contract.StrategyState:
         "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
         "side_from_referee": bool(core and core.side_from_referee),
         "tick_ms": core.last_tick_ms if core is not None else 0.0,
+        "robot_plays": {str(rid): play for rid, play in st.strategy.robot_plays.items()},
+        "stopped": [{"id": rid, "play": play, "reason": why}
+                    for rid, play, why in st.strategy.stopped],
     }
 
 
@@ -65,13 +68,18 @@ def strategy_view(st: Station) -> contract.StrategyView:
     """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
     core = st.strategy.core
     team = st.params.current.team.our_team
+    plays: list[contract.PlayInfo] = [
+        {"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1],
+         "source": "builtin", "file": None, "language": None} for n in PLAYS]
+    plays += [{"name": n, "title": f.title or n, "description": f.description,
+               "source": "team", "file": f.name, "language": f.language}
+              for n, f in sorted(st.team.plays().items())]
     return {
         **strategy_state(st),
-        "plays": [{"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1]}
-                  for n in PLAYS],
+        "plays": plays,
         "roles": {f"{team}/{rid}": role
                   # a copy: the strategy's worker thread may be assigning roles now
-                  for rid, role in (dict(core.strategy.roles).items() if core else [])},
+                  for rid, role in (core.roles.items() if core else [])},
     }
 
 
@@ -240,6 +248,7 @@ def world(st: Station) -> contract.World:
         "internal_referee": referee_view(st)["internal"],
         "replay": st.player.clock(),
         "recorded": recorded_world(st.recorded_tracked) if st.player.log is not None else None,
+        "team": st.team_processors.world_view(),
     }
     out["strategy"] = strategy_state(st)
     if ref is not None:
@@ -409,6 +418,13 @@ def health(st: Station) -> contract.Health:
     if access["blocked_clients"]:
         station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
                              "wrong tokens (someone is guessing the operator token)")
+    team_files = st.team.files_view()
+    # a team file that failed while running (its robots are stopped, its topic stale)
+    station_lines += [f"team code {f['name']}: {f['error']['kind']} at {f['error']['file']}"
+                      f"{':' + str(f['error']['line']) if f['error']['line'] else ''}"
+                      for f in team_files if f["state"] == "error" and f["error"] is not None
+                      and st.team.runs.get(f["name"]) is not None
+                      and st.team.runs[f["name"]].state == "error"]
     out: contract.Health = {
         "ok": ok,
         "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
@@ -435,6 +451,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "team_code": team_files,
         "evaluation": st.evaluation.job(),
     }
     return out

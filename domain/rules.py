@@ -24,6 +24,8 @@ STOPPED_DEFENSE_AREA_DISTANCE_MM = 200.0
 PLACEMENT_TOLERANCE_MM = 150.0
 #: A collision at a relative speed above this is a foul
 COLLISION_SPEED_MPS = 1.5
+#: The ball may leave a kicker at most this fast
+MAX_KICK_SPEED_MPS = 6.5
 
 #: The game is stopped: no kicks, the ball is not in play
 STOPPED_COMMANDS = frozenset({

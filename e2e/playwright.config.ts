@@ -1,3 +1,6 @@
+import { cpSync, mkdtempSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
 import { defineConfig } from "@playwright/test";
 
 // The end-to-end tests run against the real three processes (fieldsim, larcmacs_relay,
@@ -7,6 +10,15 @@ import { defineConfig } from "@playwright/test";
 process.env.E2E_PORT ??= String(18000 + (process.pid % 1000));
 const port = Number(process.env.E2E_PORT);
 const baseURL = `http://127.0.0.1:${port}`;
+// The station's team folder: a copy of the shipped team/ (the team-code spec writes and edits
+// its files; the repository's own stay as they are), removed when the run ends.
+if (!process.env.E2E_TEAM_DIR) {
+  const dir = mkdtempSync(join(tmpdir(), "touchline-e2e-team-"));
+  cpSync(new URL("../team", import.meta.url).pathname, dir, { recursive: true });
+  process.env.E2E_TEAM_DIR = dir;
+  process.on("exit", () => rmSync(dir, { recursive: true, force: true }));
+}
+const teamDir = process.env.E2E_TEAM_DIR;
 
 export default defineConfig({
   testDir: "tests",
@@ -39,7 +51,7 @@ export default defineConfig({
   webServer: {
     // --log-dir: the replay spec opens the recorded fixture (tests/data) from the Logs dialog.
     // --suite-dir: the Evaluate spec runs the quick suite (tests/evaluate/quick).
-    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data --suite-dir tests/evaluate`,
+    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data --team-dir ${JSON.stringify(teamDir)} --suite-dir tests/evaluate`,
     cwd: "..",
     url: `${baseURL}/api/health`,
     timeout: 60_000,

@@ -130,6 +130,14 @@ def main() -> int:
                    help="viewing needs a token too (see python -m backend --help)")
     p.add_argument("--estop-for-all", action="store_true",
                    help="a viewer without the operator token may press the emergency stop")
+    p.add_argument("--team-dir", default=None, metavar="DIR",
+                   help="the team's code: plays, processors, libraries (make run TEAM=DIR; "
+                        "default $TOUCHLINE_TEAM_DIR, else the example folder team/)")
+    p.add_argument("--allow-code-edit", action="store_true",
+                   help="operators on other machines may save team code from the page (it "
+                        "runs on this machine: docs/security.md)")
+    p.add_argument("--team-memory-mb", type=int, default=None, metavar="MB",
+                   help="address-space limit of each team-code worker (default 1024)")
     a = p.parse_args()
     logging.basicConfig(level=logging.INFO,
                         format="%(asctime)s %(levelname)s launcher: %(message)s")
@@ -152,6 +160,15 @@ def main() -> int:
         replay_args.append(f"--log={os.path.abspath(a.log)}")
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
     replay_args += [f"--suite-dir={os.path.abspath(d)}" for d in a.suite_dirs]
+    if a.team_dir is not None:
+        if not os.path.isdir(a.team_dir):
+            log.error("no such team folder: %s", a.team_dir)
+            return 2
+        replay_args.append(f"--team-dir={os.path.abspath(a.team_dir)}")
+    if a.allow_code_edit:
+        replay_args.append("--allow-code-edit")
+    if a.team_memory_mb is not None:
+        replay_args.append(f"--team-memory-mb={a.team_memory_mb}")
     if a.no_record:
         replay_args.append("--no-record")
     replay_args += [f"--{flag.replace('_', '-')}" for flag in

@@ -1,5 +1,6 @@
 """``python -m ssllog``: ``info FILE`` summarises a log, ``export FILE --csv OUT`` writes the
-raw vision detections as CSV (one row per object per camera frame)."""
+raw vision detections as CSV (one row per object per camera frame), ``index FILE`` builds the
+cache a replay player opens at once later (the station runs it as a child process)."""
 
 from __future__ import annotations
 
@@ -176,6 +177,25 @@ def export_filtered(
     return rows
 
 
+def index(path: str, cache_dir: str, nice: int, lines: bool,
+          printer: Callable[[float], None] | None) -> int:
+    """Builds the cache of ``path`` (the slow pass) and closes it. With ``lines``, progress
+    goes to stdout as 'progress F' (a parent that has gone away ends this one at the next
+    line: the write fails)."""
+    if nice:
+        os.nice(nice)
+    def line(fraction: float) -> None:
+        sys.stdout.write(f"progress {fraction:.4f}\n")
+        sys.stdout.flush()
+
+    try:
+        LogFile.open(path, cache_dir, line if lines else printer).close()
+    except (OSError, LogFormatError) as e:
+        sys.stderr.write(f"ssllog: {e}\n")
+        return 1
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m ssllog", description=__doc__)
     p.add_argument("--cache-dir", default=os.path.join(tempfile.gettempdir(), "ssllog-cache"),
@@ -184,6 +204,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = p.add_subparsers(dest="cmd", required=True)
     pi = sub.add_parser("info", help="duration, messages, cameras, teams, stages, commands, gaps")
     pi.add_argument("file")
+    px = sub.add_parser("index", help="only build the gzip copy and the index in the cache")
+    px.add_argument("file")
+    px.add_argument("--progress-lines", action="store_true",
+                    help="'progress F' lines (F in 0..1) on stdout, for a parent process")
+    px.add_argument("--nice", type=int, default=0,
+                    help="lower this process's priority by N first (background work)")
     pe = sub.add_parser("export", help="vision detections as CSV")
     pe.add_argument("file")
     pe.add_argument("--from", dest="t_from", type=float, help="seconds from the log's start")
@@ -195,6 +221,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "them with this filter for every object (default kalman; 'paper' is "
                          "the paper's median + weighted average): positions and velocities")
     args = p.parse_args(argv)
+    if args.cmd == "index":
+        return index(args.file, args.cache_dir, args.nice, args.progress_lines,
+                     _progress_printer(args.progress or sys.stderr.isatty(), "indexing"))
     show = args.progress or sys.stderr.isatty()
     try:
         lf = LogFile.open(args.file, args.cache_dir, _progress_printer(show, "indexing"))

@@ -28,7 +28,8 @@ TYPE_TL_PARAMS: Final = 1002  # UTF-8 JSON {"version", "changes", "by"}
 TYPE_TL_ACTION: Final = 1003  # UTF-8 JSON {"action", "by", ...details}: an operator action
 TYPE_TL_HEALTH: Final = 1004  # UTF-8 JSON: the station's health, once a second
 TYPE_TL_SESSION: Final = 1005  # UTF-8 JSON, first in each file: {"touchline": 1, ...}
-TOUCHLINE_TYPES: Final = frozenset(range(1001, 1006))
+TYPE_TL_TEAM: Final = 1006  # UTF-8 JSON {"name", "values"}: a team processor's outputs
+TOUCHLINE_TYPES: Final = frozenset(range(1001, 1007))
 INDEX_TRAILER: Final = b"INDEXED"
 # a payload larger than this is taken as corruption, not data
 MAX_PAYLOAD: Final = 64 * 1024 * 1024

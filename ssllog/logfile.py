@@ -53,9 +53,15 @@ TYPE_NAMES = {
     1003: "touchline action",
     1004: "touchline health",
     1005: "touchline session",
+    1006: "touchline team",
 }
 
 _Referee = ssl_gc_referee_message_pb2.Referee
+
+
+class NotCached(LookupError):
+    """``LogFile.open(..., build=False)`` found no index (or gzip copy) of the file as it is now
+    in the cache."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -431,10 +437,12 @@ class LogFile:
 
     @classmethod
     def open(
-        cls, path: str, cache_dir: str | Path, progress: Progress | None = None
+        cls, path: str, cache_dir: str | Path, progress: Progress | None = None,
+        *, build: bool = True,
     ) -> LogFile:
         """Opens ``path``; the gzip copy and the index are taken from ``cache_dir`` when a
-        previous open of the same (unchanged) file left them there."""
+        previous open of the same (unchanged) file left them there. ``build=False``: only
+        from the cache (``NotCached`` if it has not got them: the slow pass is not done)."""
         cache = Path(cache_dir)
         cache.mkdir(parents=True, exist_ok=True)
         key = cache_key(path)
@@ -444,6 +452,8 @@ class LogFile:
             done = cache / f"{key}.gunzip.json"
             marker = _read_json(done) if copy.exists() else None
             if marker is None or "warning" not in marker:
+                if not build:
+                    raise NotCached(f"{path} has no decompressed copy in {cache}")
                 gz_warning = _gunzip_copy(path, copy, _scaled(progress, 0.0, GUNZIP_SHARE))
                 _write_json(done, {"warning": gz_warning})
             else:
@@ -462,6 +472,8 @@ class LogFile:
             if index is not None and index.data_size != os.path.getsize(data_path):
                 index = None
         if index is None:
+            if not build:
+                raise NotCached(f"{path} has no index in {cache}")
             share = GUNZIP_SHARE if data_path != path else 0.0
             index = build_index(data_path, _scaled(progress, share, 1.0))
             if gz_warning and not index.warning:

@@ -9,6 +9,13 @@ A team's play, role or processor imports only from here::
     def play(game: Game) -> dict[int, Target]:
         ...
 
+A play is a file of the team folder with a top-level ``def play(game)``, or a ``class Play``
+whose ``tick(self, game)`` is called (one instance; its ``keep()`` / ``restore(kept)``, when
+it defines them, carry its state across a save of the file, as a ``Processor``'s do).
+
+``touchline.lib`` lends a play Touchline's own pieces: the geometry library, the path planner
+(``plan_path(game, rid, x, y)``) and the built-in roles (goalkeeper, attacker, defenders).
+
 Everything in this package is a stable promise: fields are added, never renamed or removed
 within one ``API_VERSION``; Touchline's internals (``backend``) may change freely. The station
 builds a ``Game`` snapshot for every tick, hands it to the team's code in a worker process of

@@ -65,12 +65,12 @@ class Kick:
     by: Literal["ours", "theirs"] | None
     by_id: int | None  #: the kicker's id, when known
     start_x: float  #: mm, where the kick started
-    start_y: float
+    start_y: float  #: mm
     start_t: float  #: s, on ``Game.t``'s clock
     vx: float  #: mm/s, initial ground velocity
-    vy: float
+    vy: float  #: mm/s
     stop_x: float  #: mm, where the ball is predicted to stop
-    stop_y: float
+    stop_y: float  #: mm
     stop_t: float  #: s, when (on ``Game.t``'s clock)
     chip: bool = False  #: the ball flies (a chip kick)
 
@@ -112,24 +112,24 @@ class Referee:
     stage: str = ""  #: the game stage ("NORMAL_FIRST_HALF", ...); "" unknown
     goalkeeper: int | None = None  #: our goalkeeper's id as the referee knows it
     max_robots: int | None = None  #: how many robots we may have on the field (cards)
-    score_ours: int = 0
-    score_theirs: int = 0
+    score_ours: int = 0  #: goals
+    score_theirs: int = 0  #: goals
 
 
 @dataclass(frozen=True, slots=True)
 class FieldSize:
     """The field, from the geometry packet (mm)."""
 
-    length: float = 9000.0
-    width: float = 6000.0
-    goal_width: float = 1000.0
-    goal_depth: float = 180.0
-    boundary_width: float = 300.0
-    penalty_area_depth: float = 1000.0
-    penalty_area_width: float = 2000.0
-    center_circle_radius: float = 500.0
-    robot_radius: float = 90.0
-    ball_radius: float = 21.5
+    length: float = 9000.0  #: mm, goal line to goal line (division B by default)
+    width: float = 6000.0  #: mm, touch line to touch line
+    goal_width: float = 1000.0  #: mm, inside the posts
+    goal_depth: float = 180.0  #: mm
+    boundary_width: float = 300.0  #: mm, between the field lines and the walls
+    penalty_area_depth: float = 1000.0  #: mm, the defence area's depth from the goal line
+    penalty_area_width: float = 2000.0  #: mm, the defence area's width
+    center_circle_radius: float = 500.0  #: mm
+    robot_radius: float = 90.0  #: mm, the largest robot radius allowed
+    ball_radius: float = 21.5  #: mm
 
     @property
     def half_length(self) -> float:
@@ -164,14 +164,14 @@ class Game:
     version: int  #: ``API_VERSION`` of the station that built it
     #: s: the station's clock (starts near 0; in a replay, the log's time from its start)
     t: float
-    our_team: Literal["blue", "yellow"]
+    our_team: Literal["blue", "yellow"]  #: the team the station drives
     #: where our goal is in the *vision* frame; the snapshot itself is always in our frame
     our_side: Literal["negative-x", "positive-x"]
     ours: tuple[Robot, ...]  #: our robots on the field, by id
     theirs: tuple[Robot, ...]  #: the other team's robots, by id
     ball: Ball | None  #: None while no ball is known
-    referee: Referee
-    field: FieldSize
+    referee: Referee  #: what the referee says, as our team sees it
+    field: FieldSize  #: the field's sizes (the geometry packet's)
     #: the ids of our robots this play drives (the operator may give other robots other plays,
     #: or drive them by hand); a processor gets every robot of ours here
     mine: tuple[int, ...] = ()

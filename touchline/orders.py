@@ -38,13 +38,13 @@ class Velocity:
     """Drive with a velocity in the robot's own frame (forward, left, turn), as the paper's
     speed controllers do; limited like every command (speed, acceleration, STOP)."""
 
-    forward_mps: float
-    left_mps: float
-    turn_radps: float
-    kick_mps: float = 0.0
-    chip: bool = False
-    dribble: bool = False
-    role: str = ""
+    forward_mps: float  #: m/s, along the robot's heading
+    left_mps: float  #: m/s, to the robot's left
+    turn_radps: float  #: rad/s, counter-clockwise
+    kick_mps: float = 0.0  #: m/s, as ``Target.kick_mps``
+    chip: bool = False  #: the kick is a chip
+    dribble: bool = False  #: spin the dribbler
+    role: str = ""  #: shown on the field next to the robot
 
 
 #: Stand still.

@@ -29,6 +29,8 @@ class Processor:
     rate_hz: float = 10.0
     #: "world": run on every new world state instead (at most ``max_hz``)
     trigger: str | None = None
+    #: with ``trigger = "world"``: at most this often (Hz); the station runs processors at
+    #: most 100 times a second
     max_hz: float = 100.0
     #: the station's Data Bus topics to read besides the game (their latest values as plain
     #: data: dicts, lists, numbers), e.g. ("robot-commands", "robot-feedback", "targets")

@@ -49,6 +49,7 @@ PHASE_SETTLE = 4  # Algorithm 1 after T (feedback only), others: approaching wit
 PHASE_HOLD = 5  # inside the position tolerance: commanded zero
 PHASE_LOST = 6  # robot not seen: commanded zero, restart when seen again
 PHASE_BLOCKED = 7  # commanded but not moving: the profile restarted this tick
+PHASE_VELOCITY = 8  # a velocity order (a team play's): limited, no move of its own
 PHASE_NAMES: dict[int, str] = {
     PHASE_IDLE: "idle",
     PHASE_ACCELERATE: "accelerate",
@@ -58,6 +59,7 @@ PHASE_NAMES: dict[int, str] = {
     PHASE_HOLD: "hold",
     PHASE_LOST: "lost",
     PHASE_BLOCKED: "blocked",
+    PHASE_VELOCITY: "velocity",
 }
 
 TELEMETRY_KEYS: tuple[str, ...] = (
@@ -266,6 +268,36 @@ class LineController:
         self._t += dt
         c, sn = math.cos(heading), math.sin(heading)  # global_to_local, inline
         # (the tuple made as such: without the named tuple's __new__, a Python call)
+        return _tuple_new(LocalVelocity, (vx * c + vy * sn, -vx * sn + vy * c, omega))
+
+    def step_velocity(self, heading: float, wanted: LocalVelocity,
+                      dt_s: float) -> LocalVelocity:
+        """A velocity order in the robot's frame (a team play's ``Velocity``) through the
+        same limiter as every move: max speed, max change of the velocity vector per second,
+        max angular speed. The move in progress is forgotten (a target after it starts from
+        where the robot is then); the limiter's state carries on, so nothing jumps."""
+        dt = (0.0 if dt_s < 0.0 else 0.1 if dt_s > 0.1 else dt_s) if math.isfinite(dt_s) \
+            else 0.0
+        lim = self.params.limits
+        c, sn = math.cos(heading), math.sin(heading)
+        fwd, left = wanted.forward_mps, wanted.left_mps
+        vx, vy = fwd * c - left * sn, fwd * sn + left * c
+        s = math.hypot(vx, vy)
+        if s > lim.max_speed_mps:
+            vx, vy = vx * lim.max_speed_mps / s, vy * lim.max_speed_mps / s
+        dvx, dvy = vx - self._vx, vy - self._vy
+        dv = math.hypot(dvx, dvy)
+        max_dv = lim.max_accel_mps2 * dt
+        if dv > max_dv:
+            k = max_dv / dv
+            vx, vy = self._vx + dvx * k, self._vy + dvy * k
+        self._vx, self._vy = vx, vy
+        wmax = lim.max_angular_radps
+        omega = wanted.angular_radps
+        omega = -wmax if omega < -wmax else wmax if omega > wmax else omega
+        self._clear()
+        self._phase = PHASE_VELOCITY
+        self._cmd_along = math.hypot(vx, vy)
         return _tuple_new(LocalVelocity, (vx * c + vy * sn, -vx * sn + vy * c, omega))
 
     def telemetry(self) -> dict[str, float]:
@@ -567,6 +599,11 @@ class RobotMotion:
                 dt_s: float) -> LocalVelocity:
         """``step`` for a robot seen there (LineController.step_at)."""
         return self._ctrl.step_at(x_mm, y_mm, heading, target, dt_s)
+
+    def step_velocity(self, heading: float, wanted: LocalVelocity,
+                      dt_s: float) -> LocalVelocity:
+        """A velocity order through the limiter (LineController.step_velocity)."""
+        return self._ctrl.step_velocity(heading, wanted, dt_s)
 
     def telemetry(self) -> dict[str, float]:
         return self._ctrl.telemetry()

@@ -53,7 +53,9 @@ class ProcessWorker(Worker):
         if self.proc is None:
             return
         if self.proc.stdin is not None:
+            # closed, not waited for: its close waiter is one future shared by every caller,
+            # and a caller cancelled while awaiting it (a worker's reaper, stopped by the
+            # engine's close) cancels it for the next one, which then never got to wait()
+            # for the process (left running past its event loop)
             self.proc.stdin.close()
-            with contextlib.suppress(Exception):
-                await self.proc.stdin.wait_closed()
         await self.proc.wait()

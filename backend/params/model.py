@@ -7,7 +7,7 @@ that excludes '/', '\\' and '..' (tests/backend/test_params_paths.py walks the s
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -33,18 +33,34 @@ class TeamParams(Group):
 
 
 PlayName = Literal["match", "defend", "attack-drill", "formation", "simple", "idle"]
+#: the built-in plays; the team folder's plays come beside them (a play is checked against
+#: both when it is chosen: ``ParamStore.play_names``)
 PLAYS: tuple[PlayName, ...] = ("match", "defend", "attack-drill", "formation", "simple", "idle")
+#: a play's name: a built-in one, or a team file's stem
+PLAY_NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_-]{0,62}$"
+#: a robot id as a key of a per-robot map ("0" .. "15")
+RobotKey = Annotated[str, Field(pattern=r"^(1[0-5]|[0-9])$")]
 
 
 class StrategyParams(Group):
     """What our robots do on their own (operator targets always come first), and the compute
     engine that may compute a role (its scripts folder is set at start: --scripts-dir)."""
 
-    play: PlayName = Field(
-        default="formation",
+    play: str = Field(
+        default="formation", pattern=PLAY_NAME_PATTERN,
         description="match: full game; defend: keeper + defenders only; attack-drill: go for "
                     "the ball and score; formation: classroom formations; simple: the simple "
-                    "opponent; idle: robots only move on operator targets")
+                    "opponent; idle: robots only move on operator targets; or a play of the "
+                    "team folder (its file name, e.g. pass_drill for team/pass_drill.py)")
+    robot_plays: dict[RobotKey, Annotated[str, Field(pattern=PLAY_NAME_PATTERN)]] = Field(
+        default_factory=dict, max_length=16,
+        description='a play per robot of ours, by id ({"3": "pass_drill"}); the others run '
+                    "strategy.play (null for an id removes it)")
+    team_budget_ms: float = num(10.0, 1.0, 200.0, "ms", 1.0,
+                                "CPU time a team play may use per tick: over it, that tick's "
+                                "orders are discarded (the robots stop); 3 ticks in a row, "
+                                "or stuck for 10 budgets (at least 0.25 s), and the play "
+                                "stops until its file is saved again")
     formation_period_s: float = num(5.0, 1.0, 60.0, "s", 0.5, "time on each formation")
     kick_speed_mps: float = num(5.5, 1.0, 6.5, "m/s", 0.1, "shot speed (the rules allow 6.5)")
     pass_speed_mps: float = num(3.0, 0.5, 6.5, "m/s", 0.1, "pass and free-kick speed")

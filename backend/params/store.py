@@ -53,7 +53,7 @@ def _errors(exc: ValidationError) -> list[dict[str, Any]]:
 
 
 # Maps keyed by robot ("blue/3"): in a patch, ``null`` for a key removes that override.
-OVERRIDE_MAPS = frozenset({"robots", "robot_overrides"})
+OVERRIDE_MAPS = frozenset({"robots", "robot_overrides", "robot_plays"})
 
 #: parameters that named a folder until issue 30, and the start-up setting (backend/config.py)
 #: that sets it now. Files the station wrote before (params.json, presets) still load: these
@@ -202,6 +202,9 @@ class ParamStore:
         #: made on an older version of the page is refused for the leaves changed since
         self.changed_in: dict[str, int] = {}
         self._listeners: list[Callable[[StationParams, int], None]] = []
+        #: the plays that may be chosen now (built-in and the team folder's); None: any name
+        #: the schema's pattern takes (a store without a station)
+        self.play_names: Callable[[], Sequence[str]] | None = None
         #: problems with the state folder found at start-up (health shows them)
         self.warnings: list[str] = []
         if state_dir is not None:
@@ -266,7 +269,35 @@ class ParamStore:
         return self.current.model_dump(mode="json")
 
     def schema(self) -> dict[str, Any]:
-        return StationParams.model_json_schema()
+        """The JSON schema, with the plays known now as ``strategy.play``'s choices (the
+        team folder's plays come and go with its files)."""
+        schema = StationParams.model_json_schema()
+        if self.play_names is not None:
+            strategy = schema.get("$defs", {}).get("StrategyParams", {})
+            play = strategy.get("properties", {}).get("play")
+            if isinstance(play, dict):
+                play["enum"] = list(self.play_names())
+        return schema
+
+    def _check_plays(self, new: StationParams) -> None:
+        """A play chosen (for the team or a robot) must be known now; one already in force
+        may stay (its file may be gone for a moment: its robots stop meanwhile)."""
+        if self.play_names is None:
+            return
+        known = set(self.play_names())
+        old, sp = self.current.strategy, new.strategy
+        errors: list[dict[str, Any]] = []
+        if sp.play != old.play and sp.play not in known:
+            errors.append({"loc": ["body", "strategy", "play"], "type": "enum",
+                           "msg": f"no play named {sp.play!r}; plays: "
+                                  f"{', '.join(sorted(known))}"})
+        for rid, play in sp.robot_plays.items():
+            if play != old.robot_plays.get(rid) and play not in known:
+                errors.append({"loc": ["body", "strategy", "robot_plays", rid], "type": "enum",
+                               "msg": f"no play named {play!r}; plays: "
+                                      f"{', '.join(sorted(known))}"})
+        if errors:
+            raise ParamError(errors)
 
     def patch(self, changes: dict[str, Any]) -> StationParams:
         """Validates the whole result, then applies it at once; nothing applied on error."""
@@ -279,6 +310,7 @@ class ParamStore:
             new = StationParams.model_validate(merged)
         except ValidationError as exc:
             raise ParamError(_errors(exc)) from None
+        self._check_plays(new)
         return self._set(new)
 
     def replace(self, values: dict[str, Any]) -> StationParams:
@@ -294,6 +326,7 @@ class ParamStore:
             new = StationParams.model_validate(deep_merge(base, values))
         except ValidationError as exc:
             raise ParamError(_errors(exc)) from None
+        self._check_plays(new)
         return self._set(new)
 
     def _refuse_paths(self, changes: dict[str, Any]) -> None:

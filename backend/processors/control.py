@@ -239,9 +239,16 @@ class ControlProcessor(Processor):
                 continue
             basis[key] = (robot, entry, now)
             x, y = robot.x, robot.y
-            # (next_waypoint's own first test inline: most targets have no path)
-            aim = entry.target if len(entry.path) <= 1 else next_waypoint(entry, x, y)
-            vel = m.step_at(x, y, robot.orientation, aim, dt)
+            if entry.stop:  # a team play that failed: zero, never the last command
+                m.reset()
+                out.append(Command(key[0], key[1], zero))
+                continue
+            if entry.velocity is not None:  # a team play's velocity order, limited
+                vel = m.step_velocity(robot.orientation, entry.velocity, dt)
+            else:
+                # (next_waypoint's own first test inline: most targets have no path)
+                aim = entry.target if len(entry.path) <= 1 else next_waypoint(entry, x, y)
+                vel = m.step_at(x, y, robot.orientation, aim, dt)
             # referee_limits: the command's cap (once per tick), then the robot's own
             cap = entry.max_speed_mps
             vel = capped(vel, cmd_cap if cap is None else min(cmd_cap, cap))

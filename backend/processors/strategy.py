@@ -6,23 +6,29 @@ import asyncio
 import os
 import pickle
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import BinaryIO
 
 import numpy as np
 
 from .. import topics
 from ..bus import DataBus, Reader
-from ..control.goto import Target
+from ..control.goto import LocalVelocity, Target
 from ..engine import EngineError, PoolEngine
 from ..messages import TargetEntry
-from ..params.model import StationParams, StrategyParams
+from ..params.model import PLAYS, StationParams, StrategyParams
 from ..processor import Every, Processor
 from ..strategy.core import Prepared, StrategyCore
+from ..strategy.model import Move
+from ..teamcode.envelope import Rules
+from ..teamcode.game import build_game
+from ..teamcode.plays import TeamPlays, TeamTick
 from ..world.referee import RefereeState
-from ..world.state import Team
+from ..world.state import Team, WorldState
 from .common import badlog
 
+#: our goalkeeper while no referee names one (the game controller's default)
+KEEPER_DEFAULT = 0
 #: an engine answer older than this is not used (the built-in code is, as a fallback)
 ENGINE_MAX_AGE_S = 0.25
 DRIBBLER_RPM = 3000.0
@@ -78,6 +84,14 @@ class StrategyProcessor(Processor):
         self.clock = clock
         self._t0 = clock()
         self._record: BinaryIO | None = None
+        #: the team's own plays (backend/teamcode; the station sets it), and what they need
+        self.team: TeamPlays | None = None
+        self.replaying: Callable[[], bool] = lambda: False
+        self.team_topics: Callable[[], Mapping[str, Mapping[str, float]]] = dict
+        #: for the world message: the play each robot of ours runs, and robots held still
+        #: because their team play failed (id, play, reason)
+        self.robot_plays: dict[int, str] = {}
+        self.stopped: list[tuple[int, str, str]] = []
 
     def ball_contact(self, team: Team, rid: int) -> bool:
         """The robot reports the ball at its dribbler (False when it reports nothing)."""
@@ -118,29 +132,111 @@ class StrategyProcessor(Processor):
             for k, t in self.operator_targets.items()
         }
         world = self.world.latest_value()
-        if world is not None and self.params.play != "idle":
+        p = self.params
+        robot_plays = p.robot_plays
+        if world is not None and (p.play != "idle" or robot_plays):
             now = self.clock() - self._t0
-            prep = self.core.prepare(world, self.geometry.latest_value(), self.referee_source(),
-                                     self.params, self.our_team, self.our_side_negative,
-                                     self.side_from_referee, now, self.contacts(self.our_team))
+            contacts = self.contacts(self.our_team)
+            referee = self.referee_source()
+            prep = self.core.prepare(world, self.geometry.latest_value(), referee, p,
+                                     self.our_team, self.our_side_negative,
+                                     self.side_from_referee, now, contacts)
             keeper = await self._engine_keeper(prep)
             if self._record is not None:
                 pickle.dump((prep, keeper), self._record)
                 self._record.flush()
             team = self.our_team
-            # roles and paths in a worker thread: a slow decision never holds up a control
-            # tick on the station loop (control goes on with the previous targets meanwhile)
-            moves = await asyncio.to_thread(self.core.decide, prep, keeper)
+            if not robot_plays and p.play in PLAYS:
+                # the built-in play for the whole team: roles and paths in a worker thread,
+                # so a slow decision never holds up a control tick on the station loop
+                # (control goes on with the previous targets meanwhile)
+                self.robot_plays = {b.id: p.play for b in prep.inp.ours
+                                    if (team, b.id) not in out} if p.play != "idle" else {}
+                self.stopped = []
+                if self.team is not None and self.team.runners:
+                    self.team.release()  # no team play in use: their workers go in a while
+                moves = await asyncio.to_thread(self.core.decide, prep, keeper)
+            else:
+                moves = await self._mixed_tick(prep, world, referee, contacts, keeper, out)
             for rid, mv in moves.items():
                 key = (team, rid)
                 if key in out:
                     continue
                 out[key] = TargetEntry(
-                    Target(mv.x, mv.y, mv.orientation), "strategy", role=mv.role,
+                    Target(mv.x, mv.y, mv.orientation),
+                    "team" if self._team_robot(rid) else "strategy", role=mv.role,
                     path=mv.path, kick_speed_mps=mv.kick_speed_mps, chip=mv.chip,
                     dribbler_rpm=DRIBBLER_RPM if mv.dribbler else 0.0,
                     max_speed_mps=mv.max_speed_mps)
+        else:
+            self.robot_plays, self.stopped = {}, []
+            if self.team is not None and self.team.runners:
+                self.team.release()
         self.targets.write(out)
+
+    def _team_robot(self, rid: int) -> bool:
+        play = self.robot_plays.get(rid)
+        return play is not None and play not in PLAYS
+
+    async def _mixed_tick(self, prep: Prepared, world: WorldState,
+                          referee: RefereeState | None, contacts: dict[int, bool],
+                          keeper: tuple[float, float] | None,
+                          out: dict[tuple[Team, int], TargetEntry]) -> dict[int, Move]:
+        """Robots grouped by the play they run (``strategy.play``, ``strategy.robot_plays``):
+        the team's plays are asked in their workers while the built-in plays decide in a
+        worker thread, for their own robots; the team's answers are checked and kept within
+        the safety envelope; then every intent is navigated. Robots whose team play failed
+        (or did not answer in time) get a stop entry written into ``out``."""
+        p = self.params
+        team = self.our_team
+        groups: dict[str, list[int]] = {}
+        for b in prep.inp.ours:
+            if (team, b.id) in out:
+                continue  # an operator drives it
+            groups.setdefault(p.robot_plays.get(str(b.id), p.play), []).append(b.id)
+        builtin: dict[str, list[int]] = {play: ids for play, ids in groups.items()
+                                         if play in PLAYS}
+        theirs = {play: tuple(sorted(ids)) for play, ids in groups.items()
+                  if play not in PLAYS}
+        self.robot_plays = {rid: play for play, ids in groups.items() for rid in ids
+                            if play != "idle"}
+        tick: TeamTick | None = None
+        if theirs:
+            if self.team is None:
+                raise RuntimeError("team plays chosen but no team code host")
+            game = build_game(prep, world, referee, team, contacts, self.team_topics(),
+                              self.replaying())
+            tick = self.team.ask(game, theirs, p.team_budget_ms / 1000.0, p.engine_timeout_s)
+        intents = await asyncio.to_thread(self.core.builtin_intents, prep, builtin, keeper)
+        stopped: list[tuple[int, str, str]] = []
+        if tick is not None:
+            await tick.wait()
+            sit = prep.inp.situation
+            rules = Rules(prep.inp.fs, sit.kind, sit.ours,
+                          prep.inp.ball.xy if prep.inp.ball is not None else None,
+                          sit.designated, KEEPER_DEFAULT if prep.inp.keeper_id is None
+                          else prep.inp.keeper_id, p.stop_distance_mm)
+            bots = {b.id: b for b in prep.inp.ours}
+            orders = tick.orders(rules, bots)
+            intents.update(orders.intents)
+            frame = prep.frame
+            for rid, why in orders.stops.items():
+                b = bots[rid]
+                fx, fy = frame.point(b.x, b.y)
+                out[(team, rid)] = TargetEntry(Target(fx, fy, None), "team", role="stopped",
+                                               stop=True)
+                if why is not None:
+                    stopped.append((rid, orders.plays.get(rid, ""), why))
+            for rid, v in orders.velocities.items():
+                b = bots[rid]
+                fx, fy = frame.point(b.x, b.y)
+                out[(team, rid)] = TargetEntry(
+                    Target(fx, fy, None), "team", role=v.role or "team",
+                    kick_speed_mps=v.kick_mps, chip=v.chip,
+                    dribbler_rpm=DRIBBLER_RPM if v.dribble else 0.0,
+                    velocity=LocalVelocity(v.forward_mps, v.left_mps, v.turn_radps))
+        self.stopped = stopped
+        return await asyncio.to_thread(self.core.navigate_intents, prep, intents)
 
     async def _engine_keeper(self, prep: Prepared) -> tuple[float, float] | None:
         """The keeper's spot (field frame) from the compute engine, or None (built-in code).

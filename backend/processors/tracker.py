@@ -47,6 +47,8 @@ class TrackerPublisher(SocketProcessor):
         self.sent = RateCounter()
         self.min_period_s = 0.01  # tracker.max_hz
         self._last_t = -math.inf  # capture time of the last frame published
+        #: called after each frame sent (a stall hunt: backend/stalldump.py)
+        self.after_send: Callable[[], None] | None = None
 
     def configure(self, params: StationParams) -> None:
         self.publish = params.tracker.publish
@@ -76,3 +78,5 @@ class TrackerPublisher(SocketProcessor):
         if send:
             self.send([TOPIC, pkt])
             self.sent.add()
+            if self.after_send is not None:
+                self.after_send()

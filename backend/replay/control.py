@@ -1,4 +1,4 @@
-"""The station's side of replay: opening a log (indexed in a worker thread, the loop goes on
+"""The station's side of replay: opening a log (indexed in a child process, the loop goes on
 meanwhile), feeding its records onto the ingest topics like the relay would, and restarting
 the pipeline when time jumps. Commands run on the station thread."""
 
@@ -14,7 +14,7 @@ from ssllog.format import TYPE_TRACKER_2020
 from sslpb import touchline_pb2 as tl
 
 from .. import contract
-from .logs import LogFolders, open_log_file
+from .logs import LogFolders, index_log, open_indexed
 from .player import PLAYED_TYPES, LogPlayer, LogSource, PlayerError
 
 if TYPE_CHECKING:
@@ -112,21 +112,22 @@ class ReplayControl:
         return self.player.view()
 
     async def _open_log(self, path: str) -> None:
-        loop = asyncio.get_running_loop()
         self.player.loading, self.player.loading_path = 0.0, path
         self.player.serial += 1
         last = [0.0]
 
-        def progress(frac: float) -> None:  # in the worker thread: hand over, a step a time
+        def progress(frac: float) -> None:  # from the indexing process, a step a time
             if frac - last[0] >= 0.02 or frac >= 1.0:
                 if int(frac * 4) > int(last[0] * 4):  # the terminal too, every quarter
                     log.info("indexing %s: %.0f %%", path, frac * 100)
                 last[0] = frac
-                loop.call_soon_threadsafe(self._loading, frac)
+                self._loading(frac)
 
+        cache = self.folders.cache_dir()
         try:
-            log_ = await asyncio.to_thread(open_log_file, path, self.folders.cache_dir(),
-                                           progress)
+            # the slow pass in a process of its own, then its result read in a thread
+            await index_log(path, cache, progress)
+            log_ = await asyncio.to_thread(open_indexed, path, cache)
         except Exception as exc:  # a bad file: said in the player, the station goes on
             self.player.loading = None
             self.player.error = f"cannot open {path}: {exc}"

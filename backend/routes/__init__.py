@@ -18,6 +18,7 @@ from . import (
     robots,
     sim,
     strategy,
+    team,
     token,
     views,
     ws,
@@ -27,4 +28,4 @@ from . import (
 ROUTERS: tuple[APIRouter, ...] = (
     views.router, ws.router, robots.router, sim.router, strategy.router, referee.router,
     estop.router, arming.router, params.router, replay.router, recording.router,
-    token.router, login.router, operators.router, evaluate.router)
+    token.router, login.router, operators.router, team.router, evaluate.router)

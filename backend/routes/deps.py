@@ -149,10 +149,39 @@ def estop(conn: HTTPConnection, rule: RuleDep) -> Caller:
     return viewer(conn, rule)
 
 
+#: why a caller off this machine may not save team code (docs/security.md)
+CODE_EDIT_REFUSED = ("saving team code from another machine needs a station started with "
+                     "--allow-code-edit: the code runs on the station's machine "
+                     "(docs/security.md)")
+
+
+def code_edit_refusal(caller: Caller, settings: Settings) -> str | None:
+    """Why ``caller`` may not save team code, or None: an operator (as for parameters) on
+    loopback; from another machine an operator of a station started with
+    ``--allow-code-edit`` only."""
+    if caller.role != "operator":
+        return NEED_OPERATOR
+    if not is_loopback(caller.address) and not settings.allow_code_edit:
+        return CODE_EDIT_REFUSED
+    return None
+
+
+def code_editor(conn: HTTPConnection, caller: Annotated[Caller, Depends(operator)],
+                settings: SettingsDep) -> Caller:
+    """Saving team code: the operator (``operator``, 401 without the token), and off
+    loopback only with ``--allow-code-edit`` (403 with the reason)."""
+    why = code_edit_refusal(caller, settings)
+    if why is not None:
+        rule = get_rule(conn)
+        raise _refuse(conn, rule, 403, why, "code edit")
+    return caller
+
+
 PublicDep = Annotated[Caller, Depends(anyone)]
 ViewerDep = Annotated[Caller, Depends(viewer)]
 OperatorDep = Annotated[Caller, Depends(operator)]
 EstopDep = Annotated[Caller, Depends(estop)]
+CodeEditorDep = Annotated[Caller, Depends(code_editor)]
 #: for ``dependencies=[...]`` where the route does not use the caller
 PUBLIC, VIEWER, OPERATOR = Depends(anyone), Depends(viewer), Depends(operator)
 

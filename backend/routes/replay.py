@@ -13,6 +13,7 @@ from .. import contract
 from ..contract import PlayerIn
 from ..filters.params import FilterSettings
 from ..replay.history import history
+from ..replay.logs import list_logs
 from ..replay.player import LogSource, PlayerError
 from .deps import OPERATOR, VIEWER, StationDep
 
@@ -81,4 +82,6 @@ async def player_history(
 
 @router.get("/logs", dependencies=[VIEWER])
 async def logs(st: StationDep) -> contract.LogList:
-    return await st.read(st.log_folders.listing)
+    # the folders from the station, the scan in a worker thread (not the station's)
+    folders = await st.read(st.log_folders.folders)
+    return await asyncio.to_thread(list_logs, folders)

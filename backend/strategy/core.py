@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,7 +25,7 @@ from ..geometry import fit_motion_lsq
 from ..params.model import StrategyParams
 from ..world.referee import RefereeState
 from ..world.state import Team, WorldState
-from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Move
+from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Intent, Move
 from .navigate import PathMemory, navigate
 from .plays import Strategy, StrategyInput, Tuning
 from .situation import Situation, SituationTracker
@@ -50,6 +50,8 @@ class StrategyCore:
     def __init__(self) -> None:
         self.tracker = SituationTracker()
         self.strategy = Strategy()
+        #: built-in plays given to some robots only (strategy.robot_plays), by name
+        self.strategies: dict[str, Strategy] = {}
         self.ball_history: deque[tuple[float, float, float]] = deque(maxlen=30)
         self.situation = Situation("running", None, "")
         self.frame = Frame(1)
@@ -145,11 +147,53 @@ class StrategyCore:
 
     def decide(self, prep: Prepared,
                keeper_point_field: tuple[float, float] | None = None) -> dict[int, Move]:
+        """The team's play (``strategy.play``, a built-in one) for every robot, with paths."""
         t0 = time.perf_counter()
         inp = prep.inp
         if keeper_point_field is not None:
             inp = replace(inp, keeper_point=prep.frame.point(*keeper_point_field))
         intents = self.strategy.decide(inp)
+        return self._navigate(prep, intents, t0)
+
+    def builtin_intents(self, prep: Prepared, groups: Mapping[str, Collection[int]],
+                        keeper_point_field: tuple[float, float] | None = None,
+                        ) -> dict[int, Intent]:
+        """Each built-in play decides for its own robots (``groups``: play -> ids); the
+        other robots of ours are not its to place (they are obstacles when navigating).
+        The team's play (``strategy.play``) keeps ``self.strategy``; a play given to some
+        robots only has a ``Strategy`` of its own (its roles and memory)."""
+        inp = prep.inp
+        if keeper_point_field is not None:
+            inp = replace(inp, keeper_point=prep.frame.point(*keeper_point_field))
+        out: dict[int, Intent] = {}
+        for play, ids in groups.items():
+            strategy = self.strategy if play == inp.play else \
+                self.strategies.setdefault(play, Strategy())
+            if strategy is not self.strategy:
+                strategy.configure(self.strategy.assigner.mode,
+                                   self.strategy.assigner.hysteresis_mm)
+            chosen = set(ids)
+            out.update(strategy.decide(replace(inp, play=play, ours=[
+                b for b in inp.ours if b.id in chosen])))
+        for play in [p for p in self.strategies if p not in groups]:
+            del self.strategies[play]  # no robot runs it: its memory goes
+        return out
+
+    def navigate_intents(self, prep: Prepared, intents: dict[int, Intent]) -> dict[int, Move]:
+        """Paths for ``intents`` (any play's, the team's code's too) around everything."""
+        return self._navigate(prep, intents, time.perf_counter())
+
+    @property
+    def roles(self) -> dict[int, str]:
+        """Each robot's role, whichever built-in play gave it (a copy)."""
+        out = dict(self.strategy.roles)
+        for s in list(self.strategies.values()):
+            out.update(s.roles)
+        return out
+
+    def _navigate(self, prep: Prepared, intents: dict[int, Intent], t0: float
+                  ) -> dict[int, Move]:
+        inp = prep.inp
         corridor = None
         sit = inp.situation
         if sit.kind == "placement" and not sit.ours and sit.designated is not None \

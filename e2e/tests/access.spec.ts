@@ -51,3 +51,31 @@ test("the login URL makes an operator; a browser without it is told how to log i
   await operator.close();
   await stranger.close();
 });
+
+test("team code: a browser without the operator token sees the code read-only, with the reason; the operator may save", async ({ browser }) => {
+  const stranger = await browser.newContext({ baseURL: base });
+  const other = await stranger.newPage();
+  await other.goto("/");
+  await expect(other.getByTestId("connection-status")).toContainText("connected");
+  await other.getByTestId("tab-code").click();
+  await other.getByTestId("code-file-pass_drill.py").click();
+  await expect(other.locator(".cm-content")).toContainText("Pass drill");
+  await expect(other.getByTestId("code-readonly")).toContainText("requires the operator token");
+  await expect(other.getByTestId("code-editor")).toHaveAttribute("data-readonly", "true");
+  await expect(other.locator(".cm-content")).toHaveAttribute("contenteditable", "false");
+  await expect(other.getByTestId("code-save")).toBeDisabled();
+  await expect(other.getByTestId("code-new")).toBeDisabled();
+  await stranger.close();
+
+  // the operator (logged in, on loopback) may edit
+  const operator = await browser.newContext({ baseURL: base });
+  const op = await operator.newPage();
+  await op.goto(loginUrl);
+  await expect(op.getByTestId("connection-status")).toContainText("connected");
+  await op.getByTestId("tab-code").click();
+  await op.getByTestId("code-file-pass_drill.py").click();
+  await expect(op.locator(".cm-content")).toHaveAttribute("contenteditable", "true");
+  await expect(op.getByTestId("code-readonly")).toHaveCount(0);
+  await expect(op.getByTestId("code-save")).toBeEnabled();
+  await operator.close();
+});

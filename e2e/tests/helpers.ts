@@ -11,6 +11,8 @@ export interface Robot {
   /** Strategy (absent on a station without it): role, planned waypoints, kicker, dribbler. */
   role?: string | null; path?: { x: number; y: number }[] | null;
   kick?: { speed_mps: number; chip: boolean } | null; dribbler?: boolean;
+  /** The velocity the station commands (robot frame), null when not commanded. */
+  command?: { forward_mps: number; left_mps: number; angular_radps: number } | null;
 }
 export interface Strategy {
   play: string; situation: string; situation_text: string; our_team: "blue" | "yellow";
@@ -32,6 +34,10 @@ export interface Hooks {
     designatedDrawn: { x: number; y: number } | null;
     /** Objects of the estimate recorded in a replayed log the last field frame drew. */
     recordedDrawn: number;
+    /** Our robots the last field frame marked as stopped by a failed team-code play ("blue 3"). */
+    stoppedDrawn: string[];
+    /** Command arrows the last field frame drew (replay's what-if). */
+    commandsDrawn: number;
   };
   /** The world the page holds (as received over the websocket). */
   getWorld(): World | null;

@@ -1,4 +1,4 @@
-import { useEffect } from "react";
+import { lazy, Suspense, useEffect } from "react";
 import { sameRobot } from "./api/types";
 import { EvaluatePanel } from "./components/EvaluatePanel";
 import { FieldView } from "./components/FieldView";
@@ -18,6 +18,10 @@ import { useReplaying } from "./components/PlayerBar";
 import { installShortcuts } from "./shortcuts";
 import { useAppState, useThrottledWorld } from "./store/hooks";
 import { setTab, TABS, useUi } from "./store/uiStore";
+
+// The Code tab (and, one step later, its editor) is loaded when first opened: the first
+// screen does not carry it.
+const CodePanel = lazy(() => import("./components/CodePanel"));
 
 function RobotsTab() {
   const world = useThrottledWorld(200);
@@ -94,6 +98,11 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
             </div>
             {tab === "referee" && <RefereePanel />}
             {tab === "health" && <HealthPanel />}
+            {tab === "code" && (
+              <Suspense fallback={<p className="muted code-pad">loading…</p>}>
+                <CodePanel />
+              </Suspense>
+            )}
             {tab === "evaluate" && <EvaluatePanel />}
           </div>
         </aside>

@@ -4,6 +4,7 @@ import { App } from "./App";
 import { appStore } from "./store/appStore";
 import { installTestHooks } from "./testHooks";
 import { startSampler } from "./plots/sampler";
+import { followTeamPlays } from "./strategy/playsStore";
 import { defaultWsUrl, startWsClient } from "./ws/client";
 import { request } from "./api/http";
 import "./styles.css";
@@ -26,6 +27,7 @@ document.addEventListener("visibilitychange", () => {
 });
 
 startSampler(appStore);
+followTeamPlays(appStore);
 installTestHooks();
 
 const rootEl = document.getElementById("root");

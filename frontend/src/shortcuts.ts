@@ -22,7 +22,7 @@ export const SHORTCUTS: [string, string][] = [
   ["H", "internal referee HALT"],
   ["S", "internal referee STOP"],
   ["G", "internal referee FORCE START"],
-  ["Alt + 1 – 5", "switch panel: Robots, Params, Plots, Referee, Health"],
+  ["Alt + 1 – 6", "switch panel: Robots, Params, Plots, Referee, Health, Code"],
   ["L", "large text (projector)"],
   ["?", "this help"],
   ["wheel", "zoom the field at the cursor"],
@@ -71,6 +71,8 @@ function handleReplayKey(ev: KeyboardEvent): boolean {
 
 export function handleKey(ev: KeyboardEvent): boolean {
   if (ev.ctrlKey || ev.metaKey) return false;
+  // taken already by the element (the code editor's Escape closing its search, say)
+  if (ev.defaultPrevented) return false;
   // Outside text inputs only: "e" is a letter when typing (the E-stop button is always one click away).
   if (typing(ev)) {
     if (ev.key === "Escape") (ev.target as HTMLElement).blur();

@@ -26,6 +26,10 @@ export interface TouchlineTestApi {
     designatedDrawn: { x: number; y: number } | null;
     /** Objects (robots + ball) of the recorded estimate the last field frame drew (replay). */
     recordedDrawn: number;
+    /** Our robots the last field frame marked as stopped by a failed team-code play ("blue 3"). */
+    stoppedDrawn: string[];
+    /** Command arrows the last field frame drew (in replay: what control would command now). */
+    commandsDrawn: number;
   };
   /** The strategy's state in the latest world (null before the station reports one). */
   strategy(): StrategyState | null;
@@ -80,6 +84,8 @@ export function installTestHooks(): void {
       rolesDrawn: fieldStats.rolesDrawn,
       designatedDrawn: fieldStats.designatedDrawn,
       recordedDrawn: fieldStats.recordedDrawn,
+      stoppedDrawn: [...fieldStats.stoppedDrawn],
+      commandsDrawn: fieldStats.commandsDrawn,
     }),
     strategy: () => appStore.getState().world?.strategy ?? null,
     roles: (ours = false) => {

@@ -18,7 +18,7 @@ def test_the_generated_files_are_up_to_date() -> None:
 
 def test_the_typescript_names_every_message() -> None:
     ts = (ROOT / "frontend/src/api/contract.gen.ts").read_text(encoding="utf-8")
-    assert 'export type TargetSource = "operator" | "strategy";' in ts
+    assert 'export type TargetSource = "operator" | "strategy" | "team";' in ts
     for name in ("World", "Health", "Geometry", "SnapshotMessage", "WorldMessage",
                  "HealthMessage", "GeometryMessage", "ParamsMessage"):
         assert f"export interface {name} {{" in ts, name

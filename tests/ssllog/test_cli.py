@@ -126,3 +126,29 @@ def test_export_filtered_reruns_the_world_model(tmp_path: Path) -> None:
     assert len(last) == 12
     for key, x in last.items():
         assert math.dist((float(x["x_mm"]), float(x["y_mm"])), raw[key]) < 60, key
+
+
+def test_index_builds_the_cache_with_progress_lines(tmp_path: Path) -> None:
+    """``index`` (what the station runs as a child process): the cache afterwards opens
+    without a scan; progress as 'progress F' lines on stdout, rising to 1; a bad file is one
+    line on stderr and exit status 1."""
+    import gzip
+
+    from ssllog.logfile import LogFile
+
+    p = tmp_path / "m.log.gz"
+    plain = tmp_path / "plain.log"
+    small_log(plain)
+    p.write_bytes(gzip.compress(plain.read_bytes()))
+    r = run("--cache-dir", str(tmp_path / "c"), "index", "--progress-lines", str(p))
+    assert r.returncode == 0, r.stderr
+    fractions = [float(line.split()[1]) for line in r.stdout.splitlines()]
+    assert r.stdout.splitlines()[0].startswith("progress ")
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    with LogFile.open(str(p), tmp_path / "c", build=False) as lf:
+        assert lf.counts[4] == 156
+    bad = tmp_path / "bad.log"
+    bad.write_bytes(b"garbage garbage garbage")
+    r = run("--cache-dir", str(tmp_path / "c"), "index", "--progress-lines", str(bad))
+    assert r.returncode == 1
+    assert r.stderr.startswith("ssllog: corrupt SSL log at byte 0") and r.stderr.count("\n") == 1

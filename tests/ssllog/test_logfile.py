@@ -348,3 +348,25 @@ def test_operator_actions_are_timeline_events(tmp_path: Path) -> None:
     ops = [e for e in lf.events if e.kind == "operator"]
     assert [(e.time_ns, e.label) for e in ops] == [
         (T0 + S, "referee STOP (operator at 127.0.0.1)")]
+
+
+def test_open_from_the_cache_only(tmp_path: Path) -> None:
+    """build=False (the station, after its indexing process): the cache's index is used, a
+    file without one (or changed since) is refused, never scanned."""
+    import gzip as gz_
+
+    p = tmp_path / "m.log"
+    p.write_bytes(vision_log(100))
+    with pytest.raises(logfile.NotCached):
+        LogFile.open(str(p), tmp_path / "c", build=False)
+    LogFile.open(str(p), tmp_path / "c").close()
+    with LogFile.open(str(p), tmp_path / "c", build=False) as lf:
+        assert lf.counts == {4: 100}
+    p.write_bytes(vision_log(120))  # changed: its key differs
+    with pytest.raises(logfile.NotCached):
+        LogFile.open(str(p), tmp_path / "c", build=False)
+    g = tmp_path / "m.log.gz"
+    g.write_bytes(gz_.compress(vision_log(50)))
+    with pytest.raises(logfile.NotCached, match="no decompressed copy"):
+        LogFile.open(str(g), tmp_path / "c", build=False)
+    assert not list((tmp_path / "c").glob("*.log"))  # nothing decompressed for it

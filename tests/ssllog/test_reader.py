@@ -57,7 +57,8 @@ def test_a_gzip_stream_cut_short_is_a_warning(tmp_path: Path) -> None:
 
 def test_touchline_types_are_read(tmp_path: Path) -> None:
     p = tmp_path / "a.log"
-    p.write_bytes(HEAD + rec(1, 1005, b"{}") + rec(2, 1001, b"\x0a\x00") + rec(3, 1006, b""))
+    p.write_bytes(HEAD + rec(1, 1005, b"{}") + rec(2, 1001, b"\x0a\x00")
+                  + rec(3, 1006, b'{"name": "p", "values": {}}') + rec(4, 1007, b""))
     r = LogReader(str(p))
-    assert [(x.time_ns, x.type) for x in r] == [(1, 1005), (2, 1001)]
-    assert r.unknown_types == {1006: 1}
+    assert [(x.time_ns, x.type) for x in r] == [(1, 1005), (2, 1001), (3, 1006)]
+    assert r.unknown_types == {1007: 1}

@@ -7,7 +7,7 @@ export type Side = "negative-x" | "positive-x";
 
 export type ControlAlgorithm = "algorithm1" | "algorithm2" | "proportional";
 
-export type TargetSource = "operator" | "strategy";
+export type TargetSource = "operator" | "strategy" | "team";
 
 export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage | PlayerMessage;
 
@@ -453,6 +453,8 @@ export interface Health {
   driving: DrivingInfo[];
   /** the latest operator actions, newest first */
   operator_actions: OperatorAction[];
+  /** the team folder's files and their states (as GET /api/team) */
+  team_code: TeamFile[];
   evaluation: EvaluationJob;
 }
 
@@ -599,6 +601,11 @@ export interface PlayInfo {
   name: string;
   title: string;
   description: string;
+  /** "team": a play of the team folder (its file stem) */
+  source: "builtin" | "team";
+  /** the team file (null for built-in plays) */
+  file: string | null;
+  language: ("python" | "octave") | null;
 }
 
 /** The log player (GET/POST /api/player; the websocket's "player" message). */
@@ -1039,6 +1046,14 @@ export interface StationFolders {
   folders: StationFolder[];
 }
 
+/** One of our robots stopped because its play (team code) failed. */
+export interface StoppedRobot {
+  id: number;
+  play: string;
+  /** the error in one line ("exception at pass_drill.py:12: ZeroDivisionError ...") */
+  reason: string;
+}
+
 /** What the strategy is doing now (sent with every world update). */
 export interface StrategyState {
   play: string;
@@ -1049,6 +1064,10 @@ export interface StrategyState {
   /** our side comes from the referee (blue_team_on_positive_half) */
   side_from_referee: boolean;
   tick_ms: number;
+  /** the play each of our robots runs now, keyed by id ("3"); robots an operator drives and robots not on the field are left out */
+  robot_plays: Record<string, string>;
+  /** robots held still because the team-code play that drives them failed (marked on the field) */
+  stopped: StoppedRobot[];
 }
 
 /** GET /api/strategy: the strategy state, the plays to choose from and the roles. */
@@ -1061,6 +1080,10 @@ export interface StrategyView {
   /** our side comes from the referee (blue_team_on_positive_half) */
   side_from_referee: boolean;
   tick_ms: number;
+  /** the play each of our robots runs now, keyed by id ("3"); robots an operator drives and robots not on the field are left out */
+  robot_plays: Record<string, string>;
+  /** robots held still because the team-code play that drives them failed (marked on the field) */
+  stopped: StoppedRobot[];
   plays: PlayInfo[];
   /** role of each robot, keyed "blue/3" */
   roles: Record<string, string>;
@@ -1107,6 +1130,95 @@ export interface TargetPoint {
   x: number;
   y: number;
   orientation: number | null;
+}
+
+/** GET /api/team: the team folder (a start-time setting: --team-dir, make run TEAM=). */
+export interface TeamCode {
+  dir: string;
+  /** touchline.API_VERSION the station speaks */
+  api_version: number;
+  edit: TeamEdit;
+  files: TeamFile[];
+}
+
+export interface TeamEdit {
+  /** this caller may save files from the page */
+  allowed: boolean;
+  /** why not (null when allowed) */
+  reason: string | null;
+}
+
+/**
+ * Why a file of the team's code does not run (it stays so until the file, or a library
+ * it uses, is saved again).
+ */
+export interface TeamError {
+  /** "import": does not load (syntax, import, a name taken); "exception": raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); "budget": over its time budget 3 ticks in a row, or stuck (killed); "crash": its worker process died; "missing": the file of a chosen play is gone */
+  kind: "import" | "exception" | "output" | "budget" | "crash" | "missing";
+  message: string;
+  /** the team file it happened in ("lib/util.py") */
+  file: string;
+  line: number | null;
+  traceback: string;
+  at_unix: number;
+}
+
+/** One file of the team folder and how it runs. */
+export interface TeamFile {
+  /** path in the team folder: "pass_drill.py", "lib/util.m" */
+  name: string;
+  kind: "play" | "processor" | "library";
+  language: "python" | "octave";
+  /** the play's name (a play's file stem) */
+  play: string | null;
+  /** TITLE (Python) or the first help line (.m) */
+  title: string;
+  description: string;
+  /** "idle": not in use (a play nobody runs, a library); "starting": its worker is starting; "running"; "error": see error */
+  state: "idle" | "starting" | "running" | "error";
+  error: TeamError | null;
+  /** 12 hex digits of the content's SHA-256 */
+  version: string;
+  mtime_unix: number;
+  size_bytes: number;
+  /** when the running version was loaded (null: not loaded) */
+  reloaded_at_unix: number | null;
+  reloads: number;
+  ticks: number;
+  errors: number;
+  /** ticks over the time budget (output discarded) */
+  overruns: number;
+  /** targets the safety envelope moved out of a forbidden area, or capped */
+  moved_out: number;
+  /** CPU time of a tick, ms */
+  tick_ms_p50: number | null;
+  tick_ms_p99: number | null;
+  /** our robots it drives now (plays) */
+  robots: number[];
+  /** a processor's latest outputs (booleans as 0/1) */
+  outputs: Record<string, number>;
+}
+
+export interface TeamFileIn {
+  /** the whole file (UTF-8; at most 256 KB) */
+  text: string;
+  /** the version the edit started from (409 when the file changed on disk since); null: a new file */
+  base_version?: string | null;
+}
+
+/** The answer of PUT /api/team/files/{name}: saved, and being reloaded. */
+export interface TeamFileSaved {
+  name: string;
+  version: string;
+  saved_at_unix: number;
+}
+
+/** GET /api/team/files/{name}. */
+export interface TeamFileText {
+  name: string;
+  text: string;
+  version: string;
+  language: "python" | "octave";
 }
 
 export interface TeleportBallIn {
@@ -1169,6 +1281,8 @@ export interface World {
   replay: ReplayClock | null;
   /** in replay, the estimate recorded in the log (null live, or if none) */
   recorded: RecordedWorld | null;
+  /** the team's processors' latest outputs (team/<name>.py: {key: number}; booleans as 0/1), plotted as team.<name>.<key> */
+  team: Record<string, Record<string, number>>;
 }
 
 /** The world model: its age by the receive clock, what it dropped and why. */

@@ -35,6 +35,10 @@ import type {
   StrategyInfo,
   TargetAnswer,
   Team,
+  TeamCode,
+  TeamFileIn,
+  TeamFileSaved,
+  TeamFileText,
 } from "./types";
 import { pushToast } from "../store/toasts";
 
@@ -208,6 +212,24 @@ export const deletePreset = (name: string) => request<PresetList>("DELETE", `/ap
 
 /** The plays the strategy offers and the current one. A play is chosen with PATCH /api/params. */
 export const getStrategy = () => request<StrategyInfo>("GET", "/api/strategy");
+
+// ---- the team's own code (team/, issue 27) ----
+
+/** The team folder: its files and their states, and whether this browser may edit. */
+export const getTeam = () => request<TeamCode>("GET", "/api/team");
+
+/** A team file's path in the URL: its folder's slash stays a slash ("lib/util.py"). */
+const teamFileUrl = (name: string) => `/api/team/files/${name.split("/").map(encodeURIComponent).join("/")}`;
+
+/** The text and version of a team file. */
+export const getTeamFile = (name: string) => request<TeamFileText>("GET", teamFileUrl(name));
+
+/** Save a team file (created when `base_version` is null). 409: it changed on disk since
+ * `base_version`; 403: this browser may not edit code (the reason in the message). */
+export function putTeamFile(name: string, text: string, base_version: string | null): Promise<TeamFileSaved> {
+  const body: TeamFileIn = { text, base_version };
+  return request<TeamFileSaved>("PUT", teamFileUrl(name), body);
+}
 
 // ---- referee and simulator ----
 

@@ -1,12 +1,34 @@
 import { useEffect } from "react";
 import { useParamForm } from "../params/paramsStore";
 import { useAppState } from "../store/hooks";
-import { currentPlay, playList } from "../strategy/plays";
+import type { PlayInfo } from "../api/types";
+import { currentPlay, playGroups, playList, showGroups } from "../strategy/plays";
 import { choosePlay, ensurePlays, usePlays } from "../strategy/playsStore";
 
+/** The options of a play select: grouped "Built-in" / "Team" when the team has plays. */
+export function PlayOptions({ list }: { list: readonly PlayInfo[] }) {
+  const groups = playGroups(list);
+  const option = (p: PlayInfo) => (
+    <option key={p.name} value={p.name} title={p.description || undefined} data-source={p.source}>
+      {p.title}
+    </option>
+  );
+  if (!showGroups(groups)) return <>{list.map(option)}</>;
+  return (
+    <>
+      {groups.map((g) => (
+        <optgroup key={g.label} label={g.label} data-testid={`play-group-${g.label === "Team" ? "team" : "builtin"}`}>
+          {g.plays.map(option)}
+        </optgroup>
+      ))}
+    </>
+  );
+}
+
 /**
- * The play of our team: a select labelled "Play" listing the station's plays by title, the
- * current one selected, its description as tooltip (and as text in the panel variant).
+ * The play of our team: a select labelled "Play" listing the station's plays by title (the
+ * team's own plays in a group of their own), the current one selected, its description as
+ * tooltip (and as text in the panel variant).
  * Changing it PATCHes `strategy.play`; every browser follows through the pushed parameters.
  * Renders nothing while the station offers no plays.
  */
@@ -55,11 +77,7 @@ export function PlaySelector({ variant }: { variant: "bar" | "panel" }) {
         }}
       >
         {shown === "" && <option value="">—</option>}
-        {list.map((p) => (
-          <option key={p.name} value={p.name} title={p.description || undefined}>
-            {p.title}
-          </option>
-        ))}
+        <PlayOptions list={list} />
       </select>
       {variant === "panel" ? (
         <p id={descId} className="play-desc" data-testid="play-description">

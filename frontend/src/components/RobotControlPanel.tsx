@@ -19,6 +19,7 @@ import {
 import { useAppState } from "../store/hooks";
 import { pushToast } from "../store/toasts";
 import { setTab } from "../store/uiStore";
+import { RobotPlayChoice } from "./RobotPlayChoice";
 import { Row } from "./Row";
 
 
@@ -50,6 +51,7 @@ export function RobotControlPanel({ robotKey, robot }: { robotKey: RobotKey; rob
 
   return (
     <div className="robot-control" data-testid="robot-control">
+      <RobotPlayChoice robotKey={robotKey} />
       <div className="robot-choice">
         <label>
           <span>Controller</span>

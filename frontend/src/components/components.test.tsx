@@ -275,7 +275,7 @@ describe("Arming", () => {
     vi.stubGlobal("fetch", fetchMock);
     act(() => t.root.render(<TopBar onRetryNow={() => {}} />));
     const w = disarmed();
-    w.strategy = { play: "idle", situation: "", situation_text: "", our_team: "blue", our_side: "negative-x", side_from_referee: false, tick_ms: 0 };
+    w.strategy = { play: "idle", situation: "", situation_text: "", our_team: "blue", our_side: "negative-x", side_from_referee: false, tick_ms: 0, robot_plays: {}, stopped: [] };
     act(() => appStore.setState({ world: w }));
     act(() => (q("arm-button") as HTMLButtonElement).click());
     expect(q("arm-dialog")?.textContent).toContain("Robots will move: arm blue?");

@@ -243,6 +243,8 @@ describe("roles in the robot table and panel, situation banner", () => {
       our_side: "positive-x",
       side_from_referee: true,
       tick_ms: 2,
+      robot_plays: {},
+      stopped: [],
     };
     act(() => t.root.render(<SituationBanner />));
     expect(q("situation-banner")).toBeNull();

@@ -1,6 +1,6 @@
 import { describe, expect, it } from "vitest";
 import type { Robot, StrategyState } from "../api/types";
-import { geometry, referee, world } from "../ws/fixtures";
+import { geometry, referee, replayClock, world } from "../ws/fixtures";
 import { roleColor } from "../strategy/roles";
 import type { RecordedWorld } from "../api/types";
 import {
@@ -8,7 +8,9 @@ import {
   COLORS,
   drawField,
   chipLanding,
+  commandVelocity,
   drawRecorded,
+  stoppedBanners,
   flyingLabel,
   KICK_CROSS_PX,
   KICK_DASH,
@@ -53,6 +55,8 @@ const strategy: StrategyState = {
   our_side: "negative-x",
   side_from_referee: false,
   tick_ms: 1.2,
+  robot_plays: {},
+  stopped: [],
 };
 
 function input(robots: Robot[], layers = ALL_LAYERS, extra: Partial<DrawInput> = {}): DrawInput {
@@ -115,7 +119,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0 });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -353,5 +357,61 @@ describe("a chip's landing point", () => {
     drawField(f.ctx, { ...input([]), world: { ...w, ball: { ...w.ball!, x: 0, y: 0, kick: chip } } });
     const p = worldToCanvas(t, 1200, 0);
     expect(f.calls.some((c) => c.name === "arc" && c.args[0] === p.x && c.args[1] === p.y && c.args[2] === KICK_CROSS_PX)).toBe(true);
+  });
+});
+
+describe("drawField: robots a failed team-code play holds still", () => {
+  const stopped = { ...strategy, stopped: [{ id: 1, play: "pass_drill", reason: "exception at pass_drill.py:12: ZeroDivisionError" }] };
+  const robots = [...ours, robot("yellow", 1, 2500, 0)];
+
+  it("rings each of our stopped robots in red and names the play in a banner", () => {
+    const { ctx, calls } = fakeCtx();
+    const counts = drawField(ctx, { ...input(robots), world: world(1, { robots, strategy: stopped }) });
+    // ours only: the yellow robot with the same id is not the one stopped
+    expect(counts.stopped).toEqual(["blue 1"]);
+    expect(calls.filter((c) => c.name === "stroke" && c.style === COLORS.stopped)).toHaveLength(1);
+    expect(calls.filter((c) => c.name === "fillText").map((c) => c.args[0])).toContain("pass_drill failed: blue 1 stopped");
+  });
+
+  it("banners each failed play once with its robots, at most two lines", () => {
+    const s = (stopped: { id: number; play: string }[]) => stoppedBanners({ our_team: "yellow", stopped });
+    expect(s([{ id: 4, play: "b" }, { id: 2, play: "b" }, { id: 1, play: "a" }])).toEqual(["a failed: yellow 1 stopped", "b failed: yellow 2, 4 stopped"]);
+    expect(s([{ id: 1, play: "a" }, { id: 2, play: "b" }, { id: 3, play: "c" }])).toEqual(["a failed: yellow 1 stopped", "2 more plays failed: see the Code tab"]);
+    expect(s([])).toEqual([]);
+  });
+
+  it("marks nothing while every play runs, or when the stopped robot is not on the field", () => {
+    const a = fakeCtx();
+    expect(drawField(a.ctx, input(robots)).stopped).toEqual([]);
+    expect(a.calls.some((c) => c.name === "stroke" && c.style === COLORS.stopped)).toBe(false);
+    const b = fakeCtx();
+    const gone = { ...strategy, stopped: [{ id: 9, play: "pass_drill", reason: "x" }] };
+    expect(drawField(b.ctx, { ...input(robots), world: world(1, { robots, strategy: gone }) }).stopped).toEqual([]);
+  });
+});
+
+describe("drawField: the commands in replay (what-if)", () => {
+  const cmd = (forward_mps: number, left_mps: number) => ({ forward_mps, left_mps, angular_radps: 0 });
+
+  it("turns a robot-frame command into the field's frame", () => {
+    const v = commandVelocity({ orientation: Math.PI / 2, command: cmd(1, 0) })!;
+    expect(v.vx).toBeCloseTo(0, 9);
+    expect(v.vy).toBeCloseTo(1000, 9);
+    const w = commandVelocity({ orientation: Math.PI, command: cmd(0, 0.5) })!;
+    expect(w.vx).toBeCloseTo(0, 9);
+    expect(w.vy).toBeCloseTo(-500, 9);
+    expect(commandVelocity({ orientation: 0, command: null })).toBeNull();
+  });
+
+  it("draws an arrow per moving command in replay only, and not with the layer off", () => {
+    const robots = [robot("blue", 0, 0, 0, { command: cmd(1.5, 0) }), robot("blue", 1, 500, 0, { command: cmd(0, 0) }), robot("blue", 2, 900, 0)];
+    const replay = world(1, { robots, strategy, replay: replayClock() });
+    const on = fakeCtx();
+    expect(drawField(on.ctx, { ...input(robots), world: replay }).commands).toBe(1);
+    expect(on.calls.some((c) => c.name === "stroke" && c.style === COLORS.command)).toBe(true);
+    const live = fakeCtx();
+    expect(drawField(live.ctx, { ...input(robots), world: world(1, { robots, strategy }) }).commands).toBe(0);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input(robots, { ...ALL_LAYERS, commands: false }), world: replay }).commands).toBe(0);
   });
 });

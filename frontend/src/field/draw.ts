@@ -34,9 +34,13 @@ export const COLORS = {
   ballContact: "#fb923c",
   /** The robot does not answer its commands (feedback.no_answer). */
   noAnswer: "#f87171",
+  /** The velocity control commands (what-if arrows in replay). */
+  command: "#e879f9",
   bluePath: "rgba(147,197,253,0.9)",
   yellowPath: "rgba(253,224,71,0.9)",
   roleBg: "rgba(15,23,42,0.82)",
+  /** A robot held still because its team-code play failed (world.strategy.stopped). */
+  stopped: "#ef4444",
   /** The estimate recorded in a replayed log (what-if ghosts): neutral, unlike the lost grey. */
   recorded: "rgba(241,245,249,0.9)",
 } as const;
@@ -82,11 +86,13 @@ export interface DrawLayers {
   recorded: boolean;
   /** A kick in progress (ball.kick): dashed line to the predicted stop point, a cross there, the kicker. */
   kicks: boolean;
+  /** In replay: the velocity control commands now for each robot (what-if: nothing is sent), as arrows. */
+  commands: boolean;
 }
 
 export const ALL_LAYERS: DrawLayers = {
   raw: false, filtered: true, velocity: false, targets: true, trails: false, referee: true, paths: true, roles: true,
-  recorded: true, kicks: true,
+  recorded: true, kicks: true, commands: true,
 };
 
 export interface DrawInput {
@@ -126,10 +132,14 @@ export interface DrawCounts {
   kickStop: { x: number; y: number } | null;
   /** Other balls drawn faintly (a second ball left on the field). */
   otherBalls: number;
+  /** Our robots marked as stopped because their team-code play failed ("blue 3"). */
+  stopped: string[];
+  /** Command arrows drawn (replay only). */
+  commands: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0 };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -175,6 +185,8 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
     // The recorded estimate over today's: a ring just outside each robot, so both stay visible.
     if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
+    // Always (not a layer): robots standing still because their play failed must not look idle.
+    if (L.filtered && world.strategy?.stopped?.length) counts.stopped = drawStopped(ctx, t, robots, world.strategy);
     const kick = world.ball?.kick;
     if (L.kicks && world.ball && kick) {
       // Under the ball: the line leaves from under it.
@@ -189,6 +201,8 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       }
       if (world.ball) drawBall(ctx, t, world.ball, br);
     }
+    // What-if: what control would command now, beside what the robots did (the log).
+    if (L.commands && world.replay) counts.commands = drawCommands(ctx, t, robots);
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
       if (world.ball?.visible) drawVelocity(ctx, t, world.ball.x, world.ball.y, world.ball.vx, world.ball.vy, COLORS.ball);
@@ -201,6 +215,9 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
   const halt = world?.halt_reason;
   if (world && !world.estop && typeof halt === "string" && halt) {
     drawBanner(ctx, t, `robots held: ${halt}`, "rgba(146,64,14,0.92)", "#fef3c7", slot++);
+  }
+  if (world?.strategy?.stopped?.length) {
+    for (const line of stoppedBanners(world.strategy)) drawBanner(ctx, t, line, "rgba(127,29,29,0.92)", "#fee2e2", slot++);
   }
   if (input.stale && world) {
     drawBanner(ctx, t, "connection lost: showing the last data received", "rgba(120,53,15,0.92)", "#fef3c7", slot++);
@@ -652,6 +669,27 @@ function drawVelocity(ctx: CanvasRenderingContext2D, t: FieldTransform, x: numbe
   arrow(ctx, a, b, color, 2);
 }
 
+/** The commanded velocity in the field's frame (mm/s): the robot-frame command turned by the heading. */
+export function commandVelocity(r: Pick<Robot, "orientation" | "command">): { vx: number; vy: number } | null {
+  const c = r.command;
+  if (!c || !Number.isFinite(c.forward_mps) || !Number.isFinite(c.left_mps) || !Number.isFinite(r.orientation)) return null;
+  const cos = Math.cos(r.orientation);
+  const sin = Math.sin(r.orientation);
+  return { vx: (c.forward_mps * cos - c.left_mps * sin) * 1000, vy: (c.forward_mps * sin + c.left_mps * cos) * 1000 };
+}
+
+/** Each commanded robot's command as an arrow of 0.5 s of travel. Returns the number drawn. */
+function drawCommands(ctx: CanvasRenderingContext2D, t: FieldTransform, robots: readonly Robot[]): number {
+  let n = 0;
+  for (const r of robots) {
+    const v = commandVelocity(r);
+    if (!v || Math.hypot(v.vx, v.vy) < 20) continue;
+    drawVelocity(ctx, t, r.x, r.y, v.vx, v.vy, COLORS.command);
+    n++;
+  }
+  return n;
+}
+
 function arrow(ctx: CanvasRenderingContext2D, a: { x: number; y: number }, b: { x: number; y: number }, color: string, width: number) {
   const ang = Math.atan2(b.y - a.y, b.x - a.x);
   const head = 8;
@@ -880,4 +918,43 @@ function drawRoleTags(
   }
   ctx.restore();
   return n;
+}
+
+/**
+ * Robots a failed team-code play holds still: a solid red ring around each (the robot's own
+ * no-answer ring is dashed); the play's name is in a banner over the field (stoppedBanners)
+ * and in the tooltip. Returns the robots marked ("blue 3").
+ */
+function drawStopped(
+  ctx: CanvasRenderingContext2D,
+  t: FieldTransform,
+  robots: readonly Robot[],
+  strategy: { our_team: Team; stopped: readonly { id: number; play: string }[] },
+): string[] {
+  const out: string[] = [];
+  const rad = Math.max(MIN_ROBOT_PX, ROBOT_RADIUS_MM * t.scale);
+  ctx.save();
+  ctx.lineWidth = Math.max(2.5, rad * 0.22);
+  ctx.strokeStyle = COLORS.stopped;
+  for (const s of strategy.stopped) {
+    const r = robots.find((x) => x.team === strategy.our_team && x.id === s.id);
+    if (!r || !Number.isFinite(r.x) || !Number.isFinite(r.y)) continue;
+    const c = worldToCanvas(t, r.x, r.y);
+    ctx.beginPath();
+    ctx.arc(c.x, c.y, rad + Math.max(4, rad * 0.35), 0, 2 * Math.PI);
+    ctx.stroke();
+    out.push(`${r.team} ${r.id}`);
+  }
+  ctx.restore();
+  return out;
+}
+
+/** One line per failed play over the field: "pass_drill failed: blue 1, 2 stopped" (two at most). */
+export function stoppedBanners(strategy: { our_team: Team; stopped: readonly { id: number; play: string }[] }): string[] {
+  const by = new Map<string, number[]>();
+  for (const s of strategy.stopped) by.set(s.play, [...(by.get(s.play) ?? []), s.id]);
+  const lines = [...by.entries()]
+    .sort(([a], [b]) => a.localeCompare(b))
+    .map(([play, ids]) => `${play} failed: ${strategy.our_team} ${ids.sort((a, b) => a - b).join(", ")} stopped`);
+  return lines.length > 2 ? [lines[0]!, `${lines.length - 1} more plays failed: see the Code tab`] : lines;
 }

@@ -8,6 +8,7 @@ import { sameRobot } from "../api/types";
 import { giveRefereeCommand, selectRobot, sendTarget } from "../actions";
 import { appStore, type AppState } from "../store/appStore";
 import { uiStore, type UiState } from "../store/uiStore";
+import { stoppedEntry, stoppedText } from "../team/stopped";
 import { decideClick } from "./clickAction";
 import { effectiveGeometry } from "./defaultGeometry";
 import { drawField, MIN_ROBOT_PX } from "./draw";
@@ -21,6 +22,10 @@ export const fieldStats = {
   rafs: 0, draws: 0, robotsDrawn: 0, rawDrawn: 0, pathsDrawn: 0, rolesDrawn: 0, recordedDrawn: 0,
   designatedDrawn: null as { x: number; y: number } | null,
   kickStopDrawn: null as { x: number; y: number } | null,
+  /** Our robots the last frame marked as stopped by a failed team-code play ("blue 3"). */
+  stoppedDrawn: [] as string[],
+  /** Command arrows the last frame drew (replay's what-if). */
+  commandsDrawn: 0,
 };
 
 /** Pixels a press may move and still count as a click. */
@@ -128,6 +133,8 @@ export function useFieldDrawing(wrapRef: RefObject<HTMLDivElement | null>, canva
       fieldStats.designatedDrawn = counts.designated;
       fieldStats.recordedDrawn = counts.recorded;
       fieldStats.kickStopDrawn = counts.kickStop;
+      fieldStats.stoppedDrawn = counts.stopped;
+      fieldStats.commandsDrawn = counts.commands;
     };
     raf = requestAnimationFrame(frame);
     return () => {
@@ -189,9 +196,14 @@ export function useFieldInput(canvasRef: RefObject<HTMLCanvasElement | null>, ia
           return;
         }
       }
-      const hit = hitTestRobot(appStore.getState().world?.robots ?? [], p, hitRadiusMm(t.scale, MIN_ROBOT_PX + 2));
+      const w = appStore.getState().world;
+      const hit = hitTestRobot(w?.robots ?? [], p, hitRadiusMm(t.scale, MIN_ROBOT_PX + 2));
       const key = hit ? { team: hit.team, id: hit.id } : null;
       if (!sameRobot(key, ia.hovered) && !(key === null && ia.hovered === null)) ia.hovered = key;
+      // a robot whose play failed says why on hover
+      const held = hit ? stoppedEntry(w?.strategy, hit.team, hit.id) : null;
+      const tip = held ? `${hit!.team} ${hit!.id}: ${stoppedText(held)}` : "";
+      if (canvas.title !== tip) canvas.title = tip;
       canvas.style.cursor = hit ? "pointer" : appStore.getState().selected || uiStore.getState().placing ? "crosshair" : "grab";
     };
 

@@ -70,4 +70,12 @@ describe("replay shortcuts", () => {
     expect(key("Escape")).toBe(true);
     expect(key("?")).toBe(true);
   });
+
+  it("leaves a key alone that the element took already (the code editor's Escape, say)", () => {
+    appStore.setState({ player: logPlayer(), world: world(1, { replay: replayClock() }) });
+    const ev = new KeyboardEvent("keydown", { key: " ", cancelable: true });
+    ev.preventDefault();
+    expect(handleKey(ev)).toBe(false);
+    expect(calls).toEqual([]);
+  });
 });

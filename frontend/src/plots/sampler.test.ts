@@ -112,4 +112,11 @@ describe("sampler while replaying", () => {
     store.setState({ world: world(2, { replay: replayClock({ t_unix: 1_600_000_010, epoch: 2 }) }) });
     expect(plotsStore.getState().pausedAt).toBe(1_600_000_010);
   });
+
+  it("lists a team processor's outputs among the Plots tab's signals and samples them", () => {
+    store.setState({ world: world(1, { team: { possession: { ours: 0.5 } } }) });
+    store.setState({ world: world(2, { team: { possession: { ours: 0.75 } } }) });
+    expect(samples.keys()).toContain("team.possession.ours");
+    expect(samples.latest("team.possession.ours")?.v).toBe(0.75);
+  });
 });

@@ -118,3 +118,14 @@ describe("kick signals", () => {
     expect([...none.keys()].some((k) => k.startsWith("ball.kick"))).toBe(false);
   });
 });
+
+describe("team processors' outputs (world.team)", () => {
+  it("are signals team.<processor>.<key>, booleans as 0/1, with no code per processor", () => {
+    const s = worldSignals({ ...world, team: { possession: { ours: 0.7, near_ours_mm: 240 }, my_filter: { locked: true, id: 4, bad: Number.NaN } } });
+    expect(s.get("team.possession.ours")).toBe(0.7);
+    expect(s.get("team.possession.near_ours_mm")).toBe(240);
+    expect(s.get("team.my_filter.locked")).toBe(1);
+    expect(s.get("team.my_filter.id")).toBe(4); // an output's own name, not a record's identity
+    expect(s.has("team.my_filter.bad")).toBe(false);
+  });
+});

@@ -49,6 +49,10 @@ export function worldSignals(world: unknown, out: Map<string, number> = new Map(
   if (typeof world !== "object" || world === null) return out;
   const w = world as Record<string, unknown>;
   for (const [k, v] of Object.entries(w)) {
+    if (k === "team") {
+      teamSignals(v, out);
+      continue;
+    }
     if (k === "cameras" || SKIP_KEYS.has(k)) continue; // raw detections are drawn, not plotted
     if (k === "robots" && Array.isArray(v)) {
       for (const r of v) {
@@ -68,6 +72,22 @@ export function worldSignals(world: unknown, out: Map<string, number> = new Map(
     }
   }
   return out;
+}
+
+/**
+ * The team's processors' outputs (world.team: {processor: {key: number}}) as
+ * team.<processor>.<key>, every key as the processor names it (an output called "id" or
+ * "team" is a signal like any other here, unlike the identity fields of records).
+ */
+function teamSignals(team: unknown, out: Map<string, number>): void {
+  if (typeof team !== "object" || team === null || Array.isArray(team)) return;
+  for (const [name, outputs] of Object.entries(team as Record<string, unknown>)) {
+    if (typeof outputs !== "object" || outputs === null || Array.isArray(outputs)) continue;
+    for (const [key, v] of Object.entries(outputs as Record<string, unknown>)) {
+      if (typeof v === "number" && Number.isFinite(v)) out.set(`team.${name}.${key}`, v);
+      else if (typeof v === "boolean") out.set(`team.${name}.${key}`, v ? 1 : 0);
+    }
+  }
 }
 
 /** Signals of a health message: health.processors.<name>.measured_hz, health.streams.vision.rate_hz, ... */

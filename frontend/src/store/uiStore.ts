@@ -5,13 +5,14 @@ import { useSyncExternalStore } from "react";
 import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
 import { createStore } from "./createStore";
 
-export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "evaluate";
+export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "code" | "evaluate";
 export const TABS: { key: Tab; label: string }[] = [
   { key: "robots", label: "Robots" },
   { key: "params", label: "Params" },
   { key: "plots", label: "Plots" },
   { key: "referee", label: "Referee" },
   { key: "health", label: "Health" },
+  { key: "code", label: "Code" },
   { key: "evaluate", label: "Evaluate" },
 ];
 
@@ -31,6 +32,11 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
     key: "kicks",
     label: "Kicks",
     help: "a kick in progress: dashed line to where the ball is predicted to stop, a cross there, the kicker and the kick speed",
+  },
+  {
+    key: "commands",
+    label: "Commands (replay)",
+    help: "in replay: the velocity control would command now for each robot (an arrow of 0.5 s of travel; nothing is sent), beside what the robots did",
   },
   {
     key: "recorded",

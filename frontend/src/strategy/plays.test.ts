@@ -1,7 +1,8 @@
 import { describe, expect, it } from "vitest";
-import type { StrategyInfo } from "../api/types";
+import type { StrategyInfo, TeamFile } from "../api/types";
 import { strategyView } from "../ws/fixtures";
-import { currentPlay, humanizePlay, playList, situationLine } from "./plays";
+import { currentPlay, humanizePlay, playGroups, playList, robotPlayPatch, robotPlays, showGroups, situationLine, teamPlaysKey } from "./plays";
+import { teamFile } from "../ws/fixtures";
 
 const info: StrategyInfo = strategyView([
     { name: "match", title: "Match", description: "Full game: keeper, attackers, supporters, defenders" },
@@ -53,5 +54,60 @@ describe("situationLine", () => {
   });
   it("humanizes play names", () => {
     expect(humanizePlay("attack-drill")).toBe("Attack drill");
+  });
+});
+
+describe("team plays beside the built-in ones", () => {
+  const withTeam: StrategyInfo = strategyView([
+    { name: "match", title: "Match", description: "" },
+    { name: "defend", title: "Defend", description: "" },
+    { name: "pass_drill", title: "Pass drill", description: "Two robots pass", source: "team", file: "pass_drill.py", language: "python" },
+    { name: "keeper_wall", title: "Keeper and wall (Octave)", description: "", source: "team", file: "keeper_wall.m", language: "octave" },
+  ]);
+
+  it("groups them Built-in / Team, titles from the station, in its order", () => {
+    const g = playGroups(playList(withTeam, undefined, "match"));
+    expect(g.map((x) => [x.label, x.plays.map((p) => p.title)])).toEqual([
+      ["Built-in", ["Match", "Defend"]],
+      ["Team", ["Pass drill", "Keeper and wall (Octave)"]],
+    ]);
+    expect(showGroups(g)).toBe(true);
+  });
+
+  it("shows no group labels while the team has no plays", () => {
+    const g = playGroups(playList(info, undefined, "match"));
+    expect(g).toHaveLength(1);
+    expect(showGroups(g)).toBe(false);
+    expect(playGroups([])).toEqual([]);
+  });
+
+  it("keeps a chosen team play whose file is gone in the list (taken as built-in: the station says why it fails)", () => {
+    const l = playList(info, undefined, "old_drill");
+    expect(l.at(-1)).toMatchObject({ name: "old_drill", source: "builtin" });
+  });
+
+  it("asks for the plays again when a team play is added, removed or retitled, not on a save of code", () => {
+    const files = [
+      teamFile("pass_drill.py", { kind: "play", play: "pass_drill", title: "Pass drill", version: "aaaaaaaaaaaa" }),
+      teamFile("lib/util.py"),
+    ];
+    const k = teamPlaysKey(files);
+    const saved: TeamFile = { ...files[0]!, version: "bbbbbbbbbbbb", state: "error" };
+    expect(teamPlaysKey([saved, files[1]!])).toBe(k);
+    expect(teamPlaysKey([...files, teamFile("lib/more.py")])).toBe(k); // a library: no play
+    expect(teamPlaysKey([files[1]!])).not.toBe(k);
+    expect(teamPlaysKey([{ ...files[0]!, title: "Passing" }, files[1]!])).not.toBe(k);
+    expect(teamPlaysKey([...files, teamFile("wall.m", { kind: "play", play: "wall" })])).not.toBe(k);
+    expect(teamPlaysKey(undefined)).toBe("");
+  });
+});
+
+describe("per-robot plays", () => {
+  it("reads strategy.robot_plays and makes the PATCH that sets or removes one", () => {
+    expect(robotPlays({ strategy: { play: "match", robot_plays: { "3": "pass_drill", "4": "", "5": null } } })).toEqual({ "3": "pass_drill" });
+    expect(robotPlays({ strategy: { play: "match" } })).toEqual({});
+    expect(robotPlays(null)).toEqual({});
+    expect(robotPlayPatch(3, "pass_drill")).toEqual({ strategy: { robot_plays: { "3": "pass_drill" } } });
+    expect(robotPlayPatch(3, null)).toEqual({ strategy: { robot_plays: { "3": null } } });
   });
 });

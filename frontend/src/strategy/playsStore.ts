@@ -1,13 +1,15 @@
-// The plays of the station (GET /api/strategy, fetched once per connection) and choosing one
-// (PATCH /api/params {"strategy": {"play": name}}; a refusal shows the server's reason).
+// The plays of the station (GET /api/strategy, fetched once per connection and again when the
+// team folder's plays change: health.team_code) and choosing one (PATCH /api/params
+// {"strategy": {"play": name}}; a refusal shows the server's reason).
 
 import { useSyncExternalStore } from "react";
 import { ApiError, getStrategy } from "../api/http";
+import type { AppStore } from "../store/appStore";
 import type { StrategyInfo } from "../api/types";
 import { commitPatch, ensureSchema } from "../params/paramsStore";
 import { createStore } from "../store/createStore";
 import { pushToast } from "../store/toasts";
-import { PLAY_PATH, humanizePlay } from "./plays";
+import { PLAY_PATH, humanizePlay, robotPlayPatch, teamPlaysKey } from "./plays";
 
 export interface PlaysState {
   info: StrategyInfo | null;
@@ -20,18 +22,51 @@ export interface PlaysState {
 
 export const playsStore = createStore<PlaysState>({ info: null, error: null, loading: false, pending: null });
 
+/** A forced fetch asked for while one was under way: its answer may be older than the change. */
+let again = false;
+
 /** Fetch the plays unless they are loaded (or `force`). Also loads the parameter schema (fallback list). */
 export async function ensurePlays(force = false): Promise<void> {
   const s = playsStore.getState();
-  if (s.loading || (s.info && !force)) return;
+  if (s.loading) {
+    if (force) again = true;
+    return;
+  }
+  if (s.info && !force) return;
   playsStore.setState({ loading: true });
-  void ensureSchema();
+  void ensureSchema(force);
   try {
     const info = await getStrategy();
     playsStore.setState({ info, error: null, loading: false });
   } catch (e) {
     playsStore.setState({ error: e instanceof Error ? e.message : String(e), loading: false });
   }
+  if (again) {
+    again = false;
+    await ensurePlays(true);
+  }
+}
+
+/**
+ * Keeps the play lists in step with the team folder: when a health message shows team plays
+ * added, removed or retitled (health.team_code), the plays and the parameter schema (whose
+ * `strategy.play` choices list them) are fetched again. No page reload. Returns the unsubscribe.
+ */
+export function followTeamPlays(store: AppStore): () => void {
+  let last: string | null = null;
+  let lastFiles: unknown = undefined;
+  return store.subscribe(() => {
+    const files = store.getState().health?.team_code;
+    if (files === lastFiles) return; // world messages: nothing to look at
+    lastFiles = files;
+    if (!Array.isArray(files)) return;
+    const key = teamPlaysKey(files);
+    const first = last === null;
+    if (key === last) return;
+    last = key;
+    // the first sight of the folder: the fetch once per connection (PlaySelector) has it
+    if (!first && playsStore.getState().info !== null) void ensurePlays(true);
+  });
 }
 
 export function usePlays(): PlaysState {
@@ -54,4 +89,17 @@ export async function choosePlay(name: string, title = humanizePlay(name)): Prom
   }
   pushToast("info", `Play: ${title}`);
   return true;
+}
+
+/** Give robot `id` of our team its own play (null: the team's play again). Resolves to null or
+ * the server's reason for refusing (also shown as a toast). */
+export async function chooseRobotPlay(id: number, play: string | null): Promise<string | null> {
+  let err: string | null;
+  try {
+    err = await commitPatch(robotPlayPatch(id, play));
+  } catch (e) {
+    err = e instanceof Error ? e.message : String(e);
+  }
+  if (err) pushToast("error", `Play for robot ${id} refused: ${err}`);
+  return err;
 }

@@ -14,6 +14,10 @@ describe("roleTag", () => {
     expect(roleTag("parked")).toBe("PRK");
     expect(roleTag("operator")).toBe("OP");
     expect(roleTag("substitution")).toBe("SUB");
+    // team code: a robot its failed play leaves standing, a team play's robot without a role
+    expect(roleTag("stopped")).toBe("STOP");
+    expect(roleTag("team")).toBe("TEAM");
+    expect(roleColor("stopped")).not.toBe(roleColor("team"));
   });
   it("is case and space tolerant", () => {
     expect(roleTag(" Goalkeeper ")).toBe("GK");

@@ -13,6 +13,9 @@ export const ROLE_TAGS: Readonly<Record<string, string>> = {
   parked: "PRK",
   operator: "OP",
   substitution: "SUB",
+  // a robot held still because its team-code play failed (marked on the field too)
+  stopped: "STOP",
+  team: "TEAM",
 };
 
 function norm(role: string): string {
@@ -55,6 +58,8 @@ export function roleColor(role: string | null | undefined): string {
       return "#cbd5e1";
     case "substitution":
       return "#fb923c";
+    case "stopped":
+      return "#fca5a5";
     default:
       return "#f1f5f9";
   }

@@ -7,6 +7,8 @@ import type {
   Health,
   InternalReferee,
   Player,
+  PlayInfo,
+  TeamFile,
   Recording,
   Referee,
   RefereeTeam,
@@ -39,6 +41,7 @@ export function world(seq: number, extra: Partial<World> = {}): World {
     halt_reason: "",
     strategy: null,
     internal_referee: internalReferee(),
+    team: {},
     replay: null,
     recorded: null,
     ...extra,
@@ -100,6 +103,7 @@ export function health(rate = 60): Health {
     operators: [],
     driving: [],
     operator_actions: [],
+    team_code: [],
     evaluation: evaluationJob(),
   };
 }
@@ -196,16 +200,21 @@ export const referee = (command: string, extra: Partial<Referee> = {}): Referee 
   ...extra,
 });
 
-/** GET /api/strategy with three plays (`plays` replaces them). */
-export const strategyView = (plays: StrategyView["plays"], extra: Partial<StrategyView> = {}): StrategyView => ({
+/** GET /api/strategy with three plays (`plays` replaces them; built-in unless they say). */
+export const strategyView = (
+  plays: Array<Pick<PlayInfo, "name" | "title" | "description"> & Partial<PlayInfo>>,
+  extra: Partial<StrategyView> = {},
+): StrategyView => ({
   play: "match",
-  plays,
+  plays: plays.map((p) => ({ source: "builtin", file: null, language: null, ...p })),
   situation: "running",
   situation_text: "Game running",
   our_team: "blue",
   our_side: "negative-x",
   side_from_referee: false,
   tick_ms: 0.5,
+  robot_plays: {},
+  stopped: [],
   roles: {},
   ...extra,
 });
@@ -270,3 +279,32 @@ export const replayClock = (extra: Partial<ReplayClock> = {}): ReplayClock => ({
   epoch: 1,
   ...extra,
 });
+
+/** A team file as GET /api/team and health.team_code list it (a library unless `extra` says). */
+export function teamFile(name: string, extra: Partial<TeamFile> = {}): TeamFile {
+  const py = name.endsWith(".py");
+  return {
+    name,
+    kind: "library",
+    language: py ? "python" : "octave",
+    play: null,
+    title: "",
+    description: "",
+    state: "idle",
+    error: null,
+    version: "0123456789ab",
+    mtime_unix: 1_700_000_000,
+    size_bytes: 100,
+    reloaded_at_unix: null,
+    reloads: 0,
+    ticks: 0,
+    errors: 0,
+    overruns: 0,
+    moved_out: 0,
+    tick_ms_p50: null,
+    tick_ms_p99: null,
+    robots: [],
+    outputs: {},
+    ...extra,
+  };
+}

@@ -92,6 +92,34 @@ async def test_timeout_kills_and_replaces_the_worker(engine: NumpyEngine) -> Non
     assert h["timeouts"] == 1 and h["restarts"] == 1 and h["workers"] == 1
 
 
+async def test_a_cancelled_waiter_does_not_stop_the_next_one_from_waiting() -> None:
+    """The reaper of a killed worker cancelled while it waits (the engine closing), then the
+    engine's own close waits for the same worker: that wait completes."""
+    import sys
+
+    from backend.engine._process import ProcessWorker, worker_env
+
+    class Sleeper(ProcessWorker):
+        async def start(self) -> None:
+            await self._spawn(sys.executable, "-c", "import time; time.sleep(60)",
+                              env=worker_env())
+
+        async def request(self, name: str, args: tuple[object, ...],
+                          kwargs: dict[str, object]) -> object:
+            raise NotImplementedError
+
+    w = Sleeper()
+    await w.start()
+    w.kill()
+    reaper = asyncio.create_task(w.wait_closed())
+    await asyncio.sleep(0)  # the reaper is now waiting inside wait_closed
+    reaper.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await reaper
+    await w.wait_closed()  # raised CancelledError before (the shared stdin waiter)
+    assert w.proc is not None and w.proc.returncode is not None
+
+
 async def test_worker_crash_is_an_error_and_the_worker_is_replaced(engine: NumpyEngine) -> None:
     old = await engine.call("t.pid")
     t0 = time.monotonic()

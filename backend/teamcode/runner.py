@@ -1,0 +1,385 @@
+"""One team file running: start its worker, load it, send it a tick, account for the answer
+(its CPU time against the budget), reload it on a save, fail it and say why.
+
+A failed file (import error, exception, malformed output, over budget 3 ticks in a row,
+stuck, crashed) stays failed until it (or a library) is saved again; then it is loaded again
+and resumes. Its robots are stopped meanwhile by whoever asked (the strategy).
+
+Budget: the worker's CPU time for a call (``time.thread_time``), so a busy machine does not
+make a play late; over budget, that tick's output is discarded. A call that does not return
+within the hard limit (``hard_limit_s``: at least 0.25 s, ten budgets) is stuck: the worker's
+faulthandler writes the stack and ends it (the station kills it half a second later if not),
+and the error says on which line it was.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, cast
+
+from sslnet.ratelog import RateLimitedLog
+
+from .discovery import Found
+from .pyworker import PyWorker, WorkerGone
+from .state import ErrorInfo, ErrorKind, FileRun
+
+log = logging.getLogger("touchline.team")
+_ratelog = RateLimitedLog(log, interval_s=10.0)
+
+#: the longest a file may take to import (numpy, scipy, a library of the team's...)
+LOAD_LIMIT_S = 10.0
+#: the station kills a worker this long after its own hard limit (faulthandler's) passed
+KILL_GRACE_S = 0.5
+#: this many ticks in a row over budget: failed until the next save
+OVER_BUDGET_IN_A_ROW = 3
+
+
+def hard_limit_s(budget_s: float) -> float:
+    """A call still running after this long is stuck (wall clock)."""
+    return max(0.25, 10.0 * budget_s)
+
+
+@dataclass
+class Pending:
+    """One tick's request: ``fut`` gets the reply; ``output`` is set when it was usable."""
+
+    fut: asyncio.Future[Any]
+    sent_mono: float
+    budget_s: float
+    output: Any = None
+    version: str = ""
+    reason: str = "no answer yet"  # why there is no output
+    done: bool = False
+    cpu_ms: float | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class Runner:
+    """What every kind of runner shares: the file, its ``FileRun``, failing and accounting.
+    Subclasses: ``PythonRunner`` (a worker process), ``teamcode.octave.OctaveRunner``."""
+
+    language = "python"
+
+    def __init__(self, found: Found, run: FileRun) -> None:
+        self.found = found
+        self.run = run
+        self.over_in_a_row = 0
+        self.inflight: Pending | None = None
+        self.closed = False
+
+    @property
+    def name(self) -> str:
+        return self.found.name
+
+    @property
+    def failed(self) -> bool:
+        return self.run.state == "error"
+
+    def fail(self, err: ErrorInfo) -> None:
+        if self.run.fail(err):
+            _ratelog.warning(f"team-{self.name}", "team code %s failed: %s", self.name,
+                             err.one_line())
+
+    def accept(self, p: Pending, reply: Any) -> None:
+        """Accounts for one tick's reply (called when it arrives, late or not)."""
+        p.done = True
+        if self.inflight is p:
+            self.inflight = None
+        if self.closed:
+            p.reason = "closed"
+            return
+        kind = reply[0] if isinstance(reply, tuple) and reply else None
+        if kind == "out" and len(reply) == 5:
+            _, _, payload, cpu, version = reply
+            cpu_s = float(cpu) if isinstance(cpu, int | float) else 0.0
+            p.cpu_ms = cpu_s * 1000.0
+            p.version = str(version)
+            self.run.tick_ms.append(p.cpu_ms)
+            self.run.ticks += 1
+            if cpu_s > p.budget_s:
+                self.run.overruns += 1
+                self.over_in_a_row += 1
+                p.reason = f"over its budget ({p.cpu_ms:.1f} ms of {p.budget_s * 1000:.0f} ms)"
+                if self.over_in_a_row >= OVER_BUDGET_IN_A_ROW:
+                    self.fail(ErrorInfo(
+                        "budget", f"over its time budget {self.over_in_a_row} ticks in a row "
+                        f"(the last: {p.cpu_ms:.1f} ms of CPU time; strategy.team_budget_ms "
+                        f"= {p.budget_s * 1000:.0f})", self.name))
+                return
+            self.over_in_a_row = 0
+            if self.failed:  # a reply from before the failure (a reload was under way)
+                p.reason = "failed"
+                return
+            p.output = payload
+            p.reason = ""
+            return
+        if kind == "error" and len(reply) == 4 and isinstance(reply[2], dict):
+            _, _, err, cpu = reply
+            if isinstance(cpu, int | float):
+                p.cpu_ms = float(cpu) * 1000.0
+            self.fail(error_from(err, self.name))
+            p.reason = "failed"
+            return
+        p.reason = "failed"
+        self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}", self.name))
+
+    # ---- what each kind of runner does its own way ----
+
+    def ensure(self) -> None:
+        """Starts and loads the file unless it runs, is starting, or failed."""
+        raise NotImplementedError
+
+    def update(self, found: Found) -> None:
+        """The file (or a library) changed: load it again."""
+        raise NotImplementedError
+
+    def send(self, game: Any, inputs: Any, budget_s: float,
+             now: float | None = None) -> Pending | None:
+        """Sends one tick's request (None: nothing asked)."""
+        raise NotImplementedError
+
+    async def close(self) -> None:
+        raise NotImplementedError
+
+    def late(self, p: Pending) -> None:
+        """The tick stopped waiting for ``p``: its output, whenever it comes, is discarded."""
+        if not p.done:
+            p.reason = "late (no answer within the budget and the grace)"
+            self.run.overruns += 1
+
+
+def error_from(err: dict[str, Any], name: str) -> ErrorInfo:
+    """An error dict from a worker (plain data, checked) as ErrorInfo."""
+    kind = err.get("kind")
+    if kind not in ("import", "exception", "output", "budget", "crash", "missing"):
+        kind = "crash"
+    line = err.get("line")
+    return ErrorInfo(cast(ErrorKind, kind), str(err.get("message", ""))[:4000],
+                     str(err.get("file") or name),
+                     line if isinstance(line, int) and not isinstance(line, bool) else None,
+                     str(err.get("traceback", ""))[:20000])
+
+
+class PythonRunner(Runner):
+    """A Python play or processor in a worker process of its own."""
+
+    language = "python"
+
+    def __init__(self, found: Found, run: FileRun, team_dir: Path, memory_mb: int,
+                 kind: str = "play") -> None:
+        super().__init__(found, run)
+        self.team_dir = team_dir
+        self.memory_mb = memory_mb
+        self.kind = kind
+        self.worker: PyWorker | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._lock = asyncio.Lock()
+        self._want = 0  # loads asked for (a save during a load loads again)
+        self._done = 0
+        self._loading = False  # a load request is with the worker
+        #: what the loaded file says of itself (a processor: rate_hz, trigger, max_hz,
+        #: reads), checked by ``info_check``
+        self.info: dict[str, Any] = {}
+        self.info_check: Callable[[dict[str, Any]], str | None] | None = None
+
+    def check_info(self, info: Any) -> str | None:
+        """What the loaded file says of itself (a processor's schedule): kept in ``info``
+        when usable; else why not. ``info_check`` (set by the processors' host) judges."""
+        if not isinstance(info, dict):
+            return "the worker described the file wrongly"
+        why = self.info_check(info) if self.info_check is not None else None
+        if why is None:
+            self.info = info
+        return why
+
+    @property
+    def pid(self) -> int:
+        return self.worker.pid if self.worker is not None and self.worker.alive else 0
+
+    # ---- start, load, reload ----
+
+    def ensure(self) -> None:
+        """Starts the worker and loads the file, unless it runs, is starting, or failed."""
+        if self.closed or self.failed or self._task is not None:
+            return
+        if self.worker is not None and self.worker.alive and self.run.state == "running":
+            return
+        self._load_soon()
+
+    def update(self, found: Found) -> None:
+        """The file (or a library) changed: load it again, in the same worker if it lives
+        (``keep``/``restore`` carry a class's state over); a file that cannot load fails at
+        once (its old version stops too: never the last command repeated)."""
+        self.found = found
+        self.over_in_a_row = 0
+        if found.error is not None:
+            self.fail(ErrorInfo(found.error.kind, found.error.message, found.name,
+                                found.error.line, at_unix=time.time()))
+            return
+        if self.run.state == "error":
+            self.run.state = "starting"
+            self.run.error = None
+        self._load_soon()
+
+    def _load_soon(self) -> None:
+        self._want += 1
+        if self._task is None:
+            if self.run.state != "running":
+                self.run.state = "starting"
+            self._task = asyncio.get_running_loop().create_task(self._loads())
+
+    async def _loads(self) -> None:
+        try:
+            while self._done < self._want and not self.closed:
+                self._done = self._want
+                await self._load()
+        finally:
+            self._task = None
+
+    async def _load(self) -> None:
+        found = self.found
+        if self.worker is None or not self.worker.alive:
+            self.run.state = "starting"
+            w = PyWorker(self.team_dir, self.memory_mb)
+            try:
+                await w.start()
+            except WorkerGone as exc:
+                await w.close()
+                self.fail(ErrorInfo("crash", str(exc), found.name,
+                                    traceback=exc.dump[-4000:]))
+                return
+            if self.closed:
+                await w.close()
+                return
+            w.on_gone = self._gone
+            self.worker = w
+        w = self.worker
+        fut = w.request("load", found.name, self.kind, found.entry, LOAD_LIMIT_S)
+        self._loading = True
+        try:
+            async with asyncio.timeout(LOAD_LIMIT_S + KILL_GRACE_S):
+                reply = await asyncio.shield(fut)
+        except TimeoutError:
+            w.kill(f"stuck: loading took longer than {LOAD_LIMIT_S:g} s")
+            return  # _gone says it
+        except WorkerGone:
+            return  # _gone says it
+        finally:
+            self._loading = False
+        if self.closed or self._done < self._want:
+            return  # saved again meanwhile: the next load counts
+        if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:
+            problem = self.check_info(reply[3])
+            if problem is not None:
+                self.fail(ErrorInfo("import", problem, found.name))
+                return
+            self.run.loaded_version = str(reply[2])
+            self.run.reloaded_at_unix = time.time()
+            self.run.reloads += 1
+            self.run.error = None
+            self.run.state = "running"
+            log.info("team code %s loaded (version %s)", found.name, reply[2])
+        elif isinstance(reply, tuple) and reply[:1] == ("error",) and len(reply) == 4 \
+                and isinstance(reply[2], dict):
+            self.fail(error_from(reply[2], found.name))
+        else:
+            self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}",
+                                found.name))
+
+    def _gone(self, gone: WorkerGone) -> None:
+        """The worker ended without being asked: stuck (faulthandler or the station ended
+        it), or crashed. Failed until the next save, which starts a new one."""
+        self.worker = None
+        inflight, self.inflight = self.inflight, None
+        if self.closed:
+            return
+        limit = f" of {hard_limit_s(inflight.budget_s):g} s" if inflight is not None else ""
+        file, line, stack = gone.where(_team_namer(self.team_dir))
+        at = f" at {file}:{line}" if file is not None else ""
+        loading, self._loading = self._loading, False
+        if gone.timed_out or gone.reason.startswith("stuck"):
+            what = (gone.reason.removeprefix("stuck: ") if not gone.timed_out else
+                    f"did not finish loading within {LOAD_LIMIT_S:g} s" if loading else
+                    f"did not return within its hard limit{limit}")
+            self.fail(ErrorInfo("import" if loading else "budget",
+                                f"stuck: {what}{at} (its worker was stopped)",
+                                file or self.name, line, stack))
+        elif gone.reason:
+            self.fail(ErrorInfo("crash", f"{gone.reason}{at}", file or self.name, line, stack))
+        else:
+            self.fail(ErrorInfo("crash", f"{gone.describe()}{at}", file or self.name, line,
+                                stack or gone.dump[-4000:]))
+
+    # ---- ticks ----
+
+    def send(self, game: Any, inputs: Any, budget_s: float,
+             now: float | None = None) -> Pending | None:
+        """Sends this tick's request; None when there is nothing to ask (not running, or the
+        previous call still runs: then it is stopped once past its hard limit)."""
+        now = time.monotonic() if now is None else now
+        w = self.worker
+        if self.closed or self.run.state != "running" or w is None or not w.alive:
+            return None
+        if self.inflight is not None:
+            return None  # still running (stopped at its hard limit: see _stuck)
+        hard = hard_limit_s(budget_s)
+        fut = w.request("tick", game, inputs, hard)
+        p = Pending(fut, now, budget_s)
+        self.inflight = p
+        fut.add_done_callback(lambda f: self._replied(p, f))
+        # the worker's faulthandler ends a stuck call at ``hard``; should it not (team code
+        # can switch it off), the station ends the worker a little later
+        asyncio.get_running_loop().call_later(hard + KILL_GRACE_S, self._stuck, w, p)
+        return p
+
+    def _stuck(self, w: PyWorker, p: Pending, final: bool = False) -> None:
+        if p.done or not w.alive:
+            return
+        if not final:
+            # once more a moment later: a reply that came while the station's loop was busy
+            # (its timer runs before the reader's next step) is read first, not killed
+            asyncio.get_running_loop().call_later(0.02, self._stuck, w, p, True)
+            return
+        w.kill(f"stuck: no answer within {hard_limit_s(p.budget_s) + KILL_GRACE_S:.2f} s")
+
+    def _replied(self, p: Pending, f: asyncio.Future[Any]) -> None:
+        if f.cancelled():
+            return
+        exc = f.exception()
+        if exc is not None:
+            p.done = True
+            p.reason = "its worker ended"
+            if self.inflight is p:
+                self.inflight = None
+            return
+        self.accept(p, f.result())
+
+    async def close(self) -> None:
+        self.closed = True
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
+        w, self.worker = self.worker, None
+        if w is not None:
+            w.on_gone = None
+            await w.close()
+        if self.run.state in ("running", "starting"):
+            self.run.state = "idle"
+
+
+def _team_namer(team_dir: Path) -> Any:
+    root = team_dir.resolve()
+
+    def name(filename: str) -> str | None:
+        try:
+            return Path(filename).resolve().relative_to(root).as_posix()
+        except (ValueError, OSError):
+            return None
+    return name

@@ -1,0 +1,358 @@
+"""A team file's worker process: ``python -m backend.teamcode.worker CONFIG_JSON``.
+
+It runs ONE play or processor of the team folder, never in the station's process: a
+``while True:``, a crash or a memory hog in team code stalls nothing of the station's.
+
+Protocol on stdin/stdout, as the compute engine's (``backend.engine._numpy_worker``): frames
+of a 4-byte big-endian length and a pickle. The first frame out is ``("ready", pid)``; then
+each request carries a sequence number its reply repeats:
+
+* ``("load", seq, name, kind, entry, hard_s)`` -> ``("loaded", seq, version, info)`` (a
+  processor's ``rate_hz``, ``trigger``, ``max_hz``, ``reads``; {} for a play) or
+  ``("error", seq, error, 0.0)``: imports the file (again: a reload drops every module of the
+  team folder and imports it anew, keeping numpy and touchline loaded; a class play or
+  processor that defines ``keep()``/``restore()`` carries its state across).
+* ``("tick", seq, game, inputs, hard_s)`` -> ``("out", seq, output, cpu_s, version)`` or
+  ``("error", seq, error, cpu_s)``: one call of ``play(game)``, ``Play().tick(game)`` or the
+  processor's ``tick(game, inputs)``. ``cpu_s`` is this thread's CPU time for the call (the
+  budget is judged on it: a busy machine does not make a play late), with the garbage
+  collector off during the call and a young-generation collection after the reply.
+  ``output``: plain data (``plain_orders``, ``plain_outputs``); the station checks it again.
+
+A call that runs longer than ``hard_s`` (wall clock) is stuck: ``faulthandler`` writes every
+thread's stack to the dump file named in the config (so the station can say on which line
+it was) and ends the process. The station kills it too if it does not answer. The
+address space is limited (RLIMIT_AS, ``memory_mb``); team code's prints go to stderr (the
+station's log): fd 1 is pointed there so nothing can corrupt the protocol.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import gc
+import hashlib
+import json
+import operator
+import os
+import pickle
+import resource
+import struct
+import sys
+import time
+import traceback
+import types
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, BinaryIO
+
+from touchline import Target, Velocity
+
+#: a reply that is not an order: ("?", what it is), for the station's message
+Plain = tuple[Any, ...]
+
+
+def _read_exact(f: BinaryIO, n: int) -> bytes | None:
+    buf = b""
+    while len(buf) < n:
+        chunk = f.read(n - len(buf))
+        if not chunk:
+            return None
+        buf += chunk
+    return buf
+
+
+def _send(out: BinaryIO, obj: Any) -> None:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    out.write(struct.pack(">I", len(data)) + data)
+    out.flush()
+
+
+class OutputError(Exception):
+    """The team code returned something that is not what the interface asks."""
+
+
+def _describe(v: Any) -> str:
+    r = repr(v)
+    return f"{type(v).__name__} {r[:60]}{'...' if len(r) > 60 else ''}"
+
+
+def _num(v: Any, what: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        try:  # numpy scalars and the like: anything float() takes without a string
+            if isinstance(v, str | bytes):
+                raise TypeError
+            return float(v)
+        except (TypeError, ValueError):
+            raise OutputError(f"{what} is {_describe(v)}, not a number") from None
+    return float(v)
+
+
+def _opt_num(v: Any, what: str) -> float | None:
+    return None if v is None else _num(v, what)
+
+
+def plain_orders(result: Any) -> list[Plain]:
+    """A play's answer as plain tuples (the station checks values, ids and limits):
+    ``("T", id, x, y, orientation|None, max_speed|None, kick, chip, dribble, avoid, role)``
+    or ``("V", id, forward, left, turn, kick, chip, dribble, role)``."""
+    if not isinstance(result, Mapping):
+        raise OutputError(f"the play returned {_describe(result)}: expected a dict "
+                          "{robot id: Target or Velocity}")
+    out: list[Plain] = []
+    for rid, order in result.items():
+        try:  # an int, or an integer numpy scalar (never a bool, a float, a string)
+            if isinstance(rid, bool):
+                raise TypeError
+            rid = operator.index(rid)
+        except TypeError:
+            raise OutputError(f"a key of the play's dict is {_describe(rid)}: expected a "
+                              "robot id (int)") from None
+        what = f"robot {rid}'s order"
+        if isinstance(order, Target):
+            out.append(("T", rid, _num(order.x, f"{what} x"), _num(order.y, f"{what} y"),
+                        _opt_num(order.orientation, f"{what} orientation"),
+                        _opt_num(order.max_speed_mps, f"{what} max_speed_mps"),
+                        _num(order.kick_mps, f"{what} kick_mps"), bool(order.chip),
+                        bool(order.dribble), bool(order.avoid), str(order.role)[:40]))
+        elif isinstance(order, Velocity):
+            out.append(("V", rid, _num(order.forward_mps, f"{what} forward_mps"),
+                        _num(order.left_mps, f"{what} left_mps"),
+                        _num(order.turn_radps, f"{what} turn_radps"),
+                        _num(order.kick_mps, f"{what} kick_mps"), bool(order.chip),
+                        bool(order.dribble), str(order.role)[:40]))
+        else:
+            raise OutputError(f"{what} is {_describe(order)}: expected a touchline Target or "
+                              "Velocity")
+    return out
+
+
+def plain_outputs(result: Any) -> dict[str, float]:
+    """A processor's answer as {name: float} (booleans as 0/1)."""
+    if not isinstance(result, Mapping):
+        raise OutputError(f"tick returned {_describe(result)}: expected a dict "
+                          "{name: number}")
+    out: dict[str, float] = {}
+    for k, v in result.items():
+        if not isinstance(k, str) or not k.isidentifier():
+            raise OutputError(f"an output name is {_describe(k)}: expected a name like "
+                              "'ours' (letters, digits, _)")
+        out[k] = 1.0 if v is True else 0.0 if v is False else _num(v, f"output {k!r}")
+    return out
+
+
+class Loaded:
+    """The team file as loaded: its module, the object called each tick, its version."""
+
+    def __init__(self, module: types.ModuleType, call: Any, instance: Any, version: str) -> None:
+        self.module, self.call, self.instance, self.version = module, call, instance, version
+
+
+class Host:
+    """The worker's state: the team folder, the file it runs, what it loaded."""
+
+    def __init__(self, team_dir: Path) -> None:
+        self.team_dir = team_dir.resolve()
+        self.lib_dir = self.team_dir / "lib"
+        self.loaded: Loaded | None = None
+        #: what the last instance's keep() gave, until a version loads that restores it (a
+        #: save that does not import keeps it for the next one)
+        self.kept: Any = None
+        self.kind = "play"
+        self.base_modules = set(sys.modules)
+        for p in (str(self.lib_dir), str(self.team_dir)):
+            if p not in sys.path:
+                sys.path.insert(0, p)
+
+    # ---- where an error happened, in team terms ----
+
+    def team_name(self, filename: str) -> str | None:
+        """``filename`` as a team file name ("pass_drill.py", "lib/util.py"), or None when it
+        is not in the team folder."""
+        try:
+            rel = Path(filename).resolve().relative_to(self.team_dir)
+        except (ValueError, OSError):
+            return None
+        return rel.as_posix()
+
+    def error(self, kind: str, exc: BaseException, name: str) -> dict[str, Any]:
+        """An exception as the station shows it: the deepest frame in the team folder."""
+        file, line = name, None
+        frames = traceback.extract_tb(exc.__traceback__)
+        team_frames = [(i, f) for i, f in enumerate(frames) if self.team_name(f.filename)]
+        if isinstance(exc, SyntaxError) and exc.filename and self.team_name(exc.filename):
+            file, line = self.team_name(exc.filename) or name, exc.lineno
+        elif team_frames:
+            f = team_frames[-1][1]
+            file, line = self.team_name(f.filename) or name, f.lineno
+        # the traceback from the first team frame on (the worker's own frames say nothing)
+        first = team_frames[0][0] if team_frames else len(frames)
+        lines = ["Traceback (most recent call last):\n",
+                 *traceback.format_list(frames[first:]),
+                 *traceback.format_exception_only(type(exc), exc)]
+        text = "".join(lines)
+        for root in (str(self.team_dir) + os.sep,):
+            text = text.replace(root, "")
+        message = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        return {"kind": kind, "message": message, "file": file, "line": line,
+                "traceback": text}
+
+    # ---- load, reload ----
+
+    def drop_team_modules(self) -> None:
+        """Forgets every module imported from the team folder (numpy, touchline stay)."""
+        for mod_name, mod in list(sys.modules.items()):
+            f = getattr(mod, "__file__", None)
+            if mod_name not in self.base_modules and f and self.team_name(f) is not None:
+                del sys.modules[mod_name]
+        sys.path_importer_cache.clear()
+
+    def load(self, name: str, kind: str, entry: str) -> str:
+        """Imports team file ``name`` (again); returns its version. Raises on failure."""
+        self.kind = kind
+        old = self.loaded
+        self.loaded = None
+        if old is not None and old.instance is not None and hasattr(old.instance, "keep"):
+            self.kept = old.instance.keep()
+        self.drop_team_modules()
+        path = self.team_dir / name
+        data = path.read_bytes()
+        version = hashlib.sha256(data).hexdigest()[:12]
+        mod_name = name.rsplit("/", 1)[-1][:-3]
+        module = types.ModuleType(mod_name)
+        module.__file__ = str(path)
+        sys.modules[mod_name] = module
+        try:
+            code = compile(data, str(path), "exec")
+            exec(code, module.__dict__)  # team code: the point of this process
+        except BaseException:
+            sys.modules.pop(mod_name, None)
+            raise
+        instance: Any = None
+        if kind == "processor":
+            cls = getattr(module, entry, None)
+            if not isinstance(cls, type):
+                raise ImportError(f"{name} has no processor class {entry}")
+            instance = cls()
+            call = instance.tick
+        elif entry == "class" or (not hasattr(module, "play") and hasattr(module, "Play")):
+            cls = getattr(module, "Play", None)
+            if not isinstance(cls, type):
+                raise ImportError(f"{name} defines no class Play")
+            instance = cls()
+            call = getattr(instance, "tick", None)
+            if not callable(call):
+                raise ImportError(f"{name}: class Play has no method tick(self, game)")
+        else:
+            call = getattr(module, "play", None)
+            if not callable(call):
+                raise ImportError(f"{name} defines no function play(game)")
+        if self.kept is not None and instance is not None and hasattr(instance, "restore"):
+            instance.restore(self.kept)
+        self.kept = None
+        self.loaded = Loaded(module, call, instance, version)
+        return version
+
+    def info(self) -> dict[str, Any]:
+        """What the station needs to know of a processor to schedule it (its class
+        attributes, as plain data; the station checks them)."""
+        inst = self.loaded.instance if self.loaded is not None else None
+        if self.kind != "processor" or inst is None:
+            return {}
+        out: dict[str, Any] = {}
+        for key in ("rate_hz", "max_hz"):
+            v = getattr(inst, key, None)
+            out[key] = float(v) if isinstance(v, int | float) and not isinstance(v, bool) \
+                else repr(v)[:60]
+        trigger = getattr(inst, "trigger", None)
+        out["trigger"] = trigger if trigger is None or isinstance(trigger, str) \
+            else repr(trigger)[:60]
+        reads = getattr(inst, "reads", ())
+        out["reads"] = [r if isinstance(r, str) else repr(r)[:60] for r in reads] \
+            if isinstance(reads, list | tuple) else repr(reads)[:60]
+        return out
+
+    # ---- one tick ----
+
+    def tick(self, game: Any, inputs: Any) -> Any:
+        loaded = self.loaded
+        if loaded is None:
+            raise RuntimeError("nothing loaded")
+        if self.kind == "processor":
+            return plain_outputs(loaded.call(game, inputs))
+        return plain_orders(loaded.call(game))
+
+
+def main() -> None:
+    config = json.loads(sys.argv[1])
+    proto_out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)  # print() and C-level writes to fd 1 now go to stderr
+    sys.stdout = sys.stderr
+    proto_in = sys.stdin.buffer
+    mb = int(config.get("memory_mb", 0))
+    if mb > 0:
+        limit = mb * (1 << 20)
+        _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+        if hard != resource.RLIM_INFINITY:
+            limit = min(limit, hard)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    dump = open(config["dump"], "w")  # noqa: SIM115 (open for the process's life)
+    faulthandler.enable(file=dump)  # a crash in C (a segfault) says where it was too
+    host = Host(Path(config["team_dir"]))
+    name = ""
+    _send(proto_out, ("ready", os.getpid()))
+    while True:
+        head = _read_exact(proto_in, 4)
+        if head is None:
+            return
+        (n,) = struct.unpack(">I", head)
+        body = _read_exact(proto_in, n)
+        if body is None:
+            return
+        msg = pickle.loads(body)
+        op, seq = msg[0], msg[1]
+        if op == "load":
+            _, _, name, kind, entry, hard_s = msg
+            faulthandler.dump_traceback_later(hard_s, exit=True, file=dump)
+            try:
+                version = host.load(name, kind, entry)
+                reply: Any = ("loaded", seq, version, host.info())
+            except BaseException as exc:  # SystemExit from team code's import too
+                reply = ("error", seq, host.error("import", exc, name), 0.0)
+            faulthandler.cancel_dump_traceback_later()
+            _send(proto_out, reply)
+        elif op == "tick":
+            _, _, game, inputs, hard_s = msg
+            gc.disable()
+            faulthandler.dump_traceback_later(hard_s, exit=True, file=dump)
+            t0 = time.thread_time()
+            try:
+                out = host.tick(game, inputs)
+                cpu = time.thread_time() - t0
+                faulthandler.cancel_dump_traceback_later()
+                version = host.loaded.version if host.loaded else ""
+                reply = ("out", seq, out, cpu, version)
+            except OutputError as exc:
+                cpu = time.thread_time() - t0
+                faulthandler.cancel_dump_traceback_later()
+                reply = ("error", seq, {"kind": "output", "message": str(exc), "file": name,
+                                        "line": None, "traceback": ""}, cpu)
+            except BaseException as exc:  # SystemExit and KeyboardInterrupt from team code too
+                cpu = time.thread_time() - t0
+                faulthandler.cancel_dump_traceback_later()
+                reply = ("error", seq, host.error("exception", exc, name), cpu)
+            try:
+                _send(proto_out, reply)
+            except (pickle.PicklingError, TypeError, AttributeError) as exc:
+                _send(proto_out, ("error", seq, {
+                    "kind": "output", "message": f"the answer cannot be sent: {exc}",
+                    "file": name, "line": None, "traceback": ""}, cpu))
+            gc.collect(0)
+            gc.enable()
+        else:
+            _send(proto_out, ("error", seq, {"kind": "crash", "message": f"unknown request "
+                                             f"{op!r}", "file": name, "line": None,
+                                             "traceback": ""}, 0.0))
+
+
+if __name__ == "__main__":
+    main()
