@@ -19,8 +19,14 @@ after ``command_latency_ms``), the referee. The run is recorded as an SSL log li
 station's recorder writes (vision packets, referee, our commands as TYPE_TL_COMMANDS) so the
 station's Logs/replay open it.
 
+A team play (backend/teamcode) runs in its worker process as in the station, in real time:
+its worker is started and its file loaded before the game's clock starts, and each strategy
+tick waits for its answer (the budget + a grace, as live) while the virtual clock stands
+still; a play that crashes, spins or answers wrongly stops its robots and fails as live.
+
 Not simulated: robot feedback (ball contact from the robots; the strategy judges contact from
-positions, as on a legacy grSim port) and the compute engine (the built-in keeper code runs).
+positions, as on a legacy grSim port), the compute engine (the built-in keeper code runs) and
+the team's processors (a play's ``game.topics`` is empty).
 """
 
 from __future__ import annotations
@@ -35,18 +41,22 @@ import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from backend import topics
 from backend.bus import DataBus, Reader
 from backend.control.goto import Target
 from backend.messages import CommandSet, OperatorTarget
-from backend.params.model import StationParams
+from backend.params.model import PLAYS, StationParams
 from backend.params.store import ParamError, ParamStore
 from backend.processors.control import ControlProcessor
 from backend.processors.publisher import encode_command_set
 from backend.processors.strategy import StrategyProcessor
 from backend.processors.world import WorldProcessor
+from backend.teamcode.plays import TeamPlays
+from backend.teamcode.registry import TeamRegistry
+from backend.teamcode.runner import KILL_GRACE_S, LOAD_LIMIT_S, hard_limit_s
 from backend.world.decode import decode_detection, geometry_to_dict
 from backend.world.referee import decode_referee
 from backend.world.state import CameraFrame
@@ -74,6 +84,8 @@ EPOCH_NS = EPOCH_UNIX_S * 1_000_000_000
 MONO0 = 1000.0
 #: the relay's defaults (output rate, command timeout, chip angle)
 RELAY = RelayConfig()
+#: a team play's worker's memory (MB), as the station's --team-memory-mb default
+TEAM_MEMORY_MB = 1024
 #: the referee is recorded this often besides every change (the game controller: ~40 Hz)
 REFEREE_LOG_HZ = 10.0
 SIDES = ("blue", "yellow")
@@ -151,6 +163,70 @@ class Side:
         self._control_at = -math.inf
         self.record_commands = record_commands
         self.command_seq = 0
+        #: the team's play host when the side runs a team play (its name): a worker process
+        #: per play file (backend/teamcode), real time for the team's code itself
+        self.team_plays: TeamPlays | None = None
+        self.team_play = ""
+        #: (t, robot (-1: the file), why), each once: the play's failures (its file's error:
+        #: import, exception, output, budget, crash) and why its robots were stopped
+        self.team_errors: list[tuple[float, int, str]] = []
+        self._said: set[str] = set()
+
+    def use_team_play(self, team_dir: str | None, play: str,
+                      memory_mb: int = TEAM_MEMORY_MB) -> None:
+        """The side's play is the team folder's ``play`` (RunError when there is none)."""
+        if not team_dir:
+            raise RunError(f"play {play!r} is not a built-in play ({', '.join(PLAYS)}) and "
+                           "no team folder is given (--team-dir)")
+        folder = Path(team_dir)
+        if not folder.is_dir():
+            raise RunError(f"no team folder {team_dir}")
+        reg = TeamRegistry(folder, PLAYS)
+        reg.rescan()
+        plays = reg.plays()
+        if play not in plays:
+            raise RunError(f"missing: no play {play!r} in the team folder {folder.name} "
+                           f"(its plays: {', '.join(sorted(plays)) or 'none'})")
+        self.team_plays = TeamPlays(reg, memory_mb)
+        # the game's clock stands still while a tick waits: wait for the answer up to the
+        # call's hard limit (then its worker is stopped), never "late" on a busy machine
+        budget = self.params.strategy.team_budget_ms / 1000.0
+        self.team_plays.grace_s = hard_limit_s(budget) + KILL_GRACE_S + 0.05
+        self.team_play = play
+        self.strategy.team = self.team_plays
+
+    async def start_team(self) -> None:
+        """The team play's worker started and its file loaded before the game's clock runs
+        (loading takes real time; the virtual clock would run on without it)."""
+        tp = self.team_plays
+        if tp is None:
+            return
+        r = tp.runner(tp.registry.plays()[self.team_play])
+        r.ensure()
+        deadline = time.monotonic() + LOAD_LIMIT_S + 5.0
+        while r.run.state not in ("running", "error") and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)  # a real process starting: its state, bounded
+        if r.run.error is not None:
+            self.team_error(-1, r.run.error.one_line())
+
+    def team_error(self, rid: int, why: str) -> None:
+        if why not in self._said:
+            self._said.add(why)
+            self.team_errors.append((self.clock.t, rid, why))
+
+    def after_strategy(self) -> None:
+        tp = self.team_plays
+        if tp is None:
+            return
+        for r in tp.runners.values():
+            if r.run.error is not None:
+                self.team_error(-1, r.run.error.one_line())
+        for rid, _play, why in self.strategy.stopped:
+            self.team_error(rid, why)
+
+    async def close_team(self) -> None:
+        if self.team_plays is not None:
+            await self.team_plays.close()
 
     def vision(self, frame: CameraFrame) -> list[CommandSet]:
         """A camera frame arrives: the world model merges it, control runs on a new world."""
@@ -306,8 +382,9 @@ class Engine:
     def _geometry(self) -> None:
         self.record(TYPE_VISION_2014, self._geometry_bytes)
 
-    def _strategy(self, side: Side) -> Any:
-        return side.strategy.tick()  # a coroutine: run() awaits it
+    async def _strategy(self, side: Side) -> None:
+        await side.strategy.tick()
+        side.after_strategy()
 
     def _control_wake(self, side: Side) -> None:
         if side.control_due():
@@ -392,7 +469,13 @@ class Engine:
         # the strategy decides in ``asyncio.to_thread`` (live: beside the station thread);
         # here nothing runs beside it, so it runs inline: no thread hand-over per tick
         asyncio.get_running_loop().set_default_executor(_InlineExecutor())
-        await self._loop(until)
+        try:
+            for side in self.sides.values():
+                await side.start_team()
+            await self._loop(until)
+        finally:
+            for side in self.sides.values():
+                await side.close_team()
 
     def close(self) -> None:
         if self.log is not None:

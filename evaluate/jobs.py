@@ -137,7 +137,8 @@ def run_class(class_dir: Path, suite: Suite, out: Path, backend: Backend,
         for s in summ["scenarios"]:
             mine = [r for r in rs if r["scenario"] == s["scenario"]]
             first_fail = next((r for r in mine if not r.get("passed")), None)
-            err = next((r["error"] for r in mine if r.get("error")), None)
+            err = next((r.get("error") or r.get("team_error") for r in mine
+                        if r.get("error") or r.get("team_error")), None)
             cells[s["scenario"]] = {
                 "passed": s["passed"] == s["runs"], "score": s["score"],
                 "runs": s["runs"], "runs_passed": s["passed"],

@@ -51,13 +51,6 @@ class Entrant:
         return (self.play or "?") + (f"[{extra}]" if extra else "")
 
 
-def _check_play(play: str, entrant: Entrant) -> None:
-    if play in PLAYS:
-        return
-    raise RunError(f"play {play!r} is not a built-in play ({', '.join(PLAYS)}); team plays "
-                   f"run through the team code host (team folder {entrant.team_dir or 'none'})")
-
-
 # -- scenarios --------------------------------------------------------------------------------
 
 
@@ -110,7 +103,6 @@ class ScenarioRun(Engine):
         play = entrant.play or sc.play
         if play is None:
             raise RunError("no play: give one (--play) or name it in the scenario's [ours]")
-        _check_play(play, entrant)
         self.play = play
         self.sign = 1.0 if sc.our_side == "negative-x" else -1.0
         self.ours = sc.our_team
@@ -139,8 +131,13 @@ class ScenarioRun(Engine):
         params = station_params({**dict(sc.params), **dict(entrant.params),
                                  "strategy.play": play}, self.ours, sc.our_side)
         self.our_side = self.add_side(self.ours, params, record=True)
+        if play not in PLAYS:
+            self.our_side.use_team_play(entrant.team_dir, play)
+            self.our_side.strategy.task = dict(sc.task)
         if sc.opponent_play is not None:
-            _check_play(sc.opponent_play, Entrant(sc.opponent_play))
+            if sc.opponent_play not in PLAYS:
+                raise RunError(f"opponent play {sc.opponent_play!r}: an opponent plays a "
+                               f"built-in play ({', '.join(PLAYS)})")
             their_side = "positive-x" if sc.our_side == "negative-x" else "negative-x"
             self.add_side(self.theirs, station_params(
                 {**dict(sc.opponent_params), "strategy.play": sc.opponent_play}, self.theirs,
@@ -323,6 +320,8 @@ class ScenarioRun(Engine):
         finally:
             self.close()
         self.rb.ended_by = self.ended_by
+        for t, rid, why in self.our_side.team_errors:
+            self.rb.event(t, "team_error", "ours", rid if rid >= 0 else None, why)
         return self.rb.build(self.clock.t)
 
 
@@ -391,6 +390,10 @@ def run_scenario_task(task: ScenarioTask) -> dict[str, Any]:
         res.update(score_run(sc, run, task.checks_py))
         res["sim_s"] = round(run.duration_s, 3)
         res["ended_by"] = run.ended_by
+        errs = run.of("team_error")
+        # the file's own error (with its line) says most; else why its robots stood still
+        files = [e for e in errs if e.robot is None]
+        res["team_error"] = (files or errs)[0].detail if errs else None
         res["events"] = _events_summary(run)
     except RunError as exc:
         res.update(passed=False, score=0.0, checks=[], error=str(exc))
@@ -462,12 +465,13 @@ class MatchRun(Engine):
         for colour, ent in (("blue", task.blue), ("yellow", task.yellow)):
             if ent.play is None:
                 raise RunError(f"{colour}: no play")
-            _check_play(ent.play, ent)
             positive = task.blue_on_positive == (colour == "blue")
             params = station_params({**speed, **dict(ent.params), "strategy.play": ent.play},
                                     colour, "positive-x" if positive else "negative-x",
                                     f"{colour}.params")
-            self.add_side(colour, params, record=colour == "blue")
+            side = self.add_side(colour, params, record=colour == "blue")
+            if ent.play not in PLAYS:
+                side.use_team_play(ent.team_dir, ent.play)
         self.director = Director(MatchConfig(
             half_s=task.half_s, division=task.division, blue_on_positive=task.blue_on_positive,
             plays=task.labels, interludes=task.interludes), wall_offset_s=float(EPOCH_UNIX_S))
@@ -495,6 +499,9 @@ class MatchRun(Engine):
             self.close()
         res = self.director.result()
         res["timeline"] = self.director.timeline[-400:]
+        res["team_errors"] = {c: [{"t": round(t, 3), "robot": r, "why": w}
+                                  for t, r, w in s.team_errors[:20]]
+                              for c, s in self.sides.items() if s.team_errors}
         res["sim_s"] = round(self.clock.t, 3)
         return res
 

@@ -7,7 +7,8 @@ import os
 import pickle
 import time
 from collections.abc import Callable, Mapping
-from typing import BinaryIO
+from dataclasses import replace
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -91,6 +92,8 @@ class StrategyProcessor(Processor):
         #: for the world message: the play each robot of ours runs, and robots held still
         #: because their team play failed (id, play, reason)
         self.robot_plays: dict[int, str] = {}
+        #: an exercise's parameters for the team's plays (Game.task; evaluate/ sets it)
+        self.task: Mapping[str, Any] = {}
         self.stopped: list[tuple[int, str, str]] = []
 
     def ball_contact(self, team: Team, rid: int) -> bool:
@@ -206,6 +209,8 @@ class StrategyProcessor(Processor):
                 raise RuntimeError("team plays chosen but no team code host")
             game = build_game(prep, world, referee, team, contacts, self.team_topics(),
                               self.replaying())
+            if self.task:
+                game = replace(game, task=self.task)
             tick = self.team.ask(game, theirs, p.team_budget_ms / 1000.0, p.engine_timeout_s)
         intents = await asyncio.to_thread(self.core.builtin_intents, prep, builtin, keeper)
         stopped: list[tuple[int, str, str]] = []
