@@ -24,13 +24,14 @@ def load() -> str:
     return open("/proc/loadavg").read().split(" ", 3)[:3].__str__()
 
 
-def match_speed(half_s: float) -> None:
-    task = MatchTask("bench", Entrant("match"), Entrant("simple"), 1, half_s)
+def match_speed(half_s: float, cameras: int = 4) -> None:
+    task = MatchTask("bench", Entrant("match"), Entrant("simple"), 1, half_s, cameras=cameras)
     t0, c0 = time.perf_counter(), time.process_time()
     res = run_match_task(task)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     sim = float(res.get("sim_s") or 0.0)
-    print(f"match 6 v 6 (match v simple, {half_s:g} s halves, interludes): {sim:.1f} s of game "
+    print(f"match 6 v 6 (match v simple, {half_s:g} s halves, interludes, {cameras} cameras): "
+          f"{sim:.1f} s of game "
           f"in {wall:.1f} s wall / {cpu:.1f} s CPU: {sim / wall:.1f}x real time (wall), "
           f"{sim / cpu:.1f}x (CPU); score {res.get('score')}; load {load()}")
 
@@ -52,8 +53,12 @@ def main() -> None:
     ap.add_argument("--half-s", type=float, default=45.0)
     ap.add_argument("--play", default="match")
     ap.add_argument("--quick", action="store_true", help="the pool at 2 workers only")
+    ap.add_argument("--match-only", action="store_true")
     args = ap.parse_args()
     match_speed(args.half_s)
+    match_speed(args.half_s, cameras=2)
+    if args.match_only:
+        return
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         configs: list[tuple[str, object]] = [("pool, 2 workers", lambda: LocalPool(2))]

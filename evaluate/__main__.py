@@ -98,6 +98,9 @@ def main(argv: list[str] | None = None) -> int:
     m.add_argument("--seed", type=int, default=1)
     m.add_argument("--no-interludes", action="store_true",
                    help="no scripted HALT/STOP/free kick/penalty interludes")
+    m.add_argument("--cameras", type=int, choices=[1, 2, 4, 8], default=4,
+                   help="fieldsim's cameras (default 4, as make match; 2 halves the vision "
+                        "work of both teams' world models)")
     _backend_args(m)
     c = sub.add_parser("class", help="a suite for every student of a class folder")
     c.add_argument("class_dir", type=Path, help="one sub-folder per student (their plays)")
@@ -151,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
         elif args.cmd == "matches":
             ea = _entrant(args.a, args.a_param, args.team_dir, "A:" + args.a)
             eb = _entrant(args.b, args.b_param, args.team_dir, "B:" + args.b)
-            kw = {"interludes": not args.no_interludes}
+            kw = {"interludes": not args.no_interludes, "cameras": args.cameras}
             if args.opponent:
                 out = args.out or default_out(REPORTS, f"ab-vs-{args.opponent}")
                 rep = run_ab_matches(ea, eb, Entrant(args.opponent, {}, args.team_dir),

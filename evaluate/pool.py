@@ -7,9 +7,10 @@ they finished in; ``on_result`` is called as each one comes back (progress).
 The pool: ``concurrent.futures.ProcessPoolExecutor`` with spawned workers, each limited in
 memory (RLIMIT_AS) and to one BLAS thread; a worker that dies (a crash in C code, the kernel's
 OOM killer) breaks the pool: the runs it had are tried once more in a fresh pool, then failed.
-Dask: ``client.submit(..., retries=2)`` (a lost worker's runs are run again elsewhere),
-``as_completed`` for progress; a run's log comes back as bytes (the worker may be another
-machine) and is written here.
+Dask: ``client.submit(..., retries=2)`` (a run that raised in its worker is run again; a
+worker that dies has its runs rescheduled on the others by the scheduler, up to its
+``allowed-failures``), ``as_completed`` for progress; a run's log comes back as bytes (the
+worker may be another machine) and is written here.
 """
 
 from __future__ import annotations

@@ -437,6 +437,7 @@ class MatchTask:
     ship_log: bool = False
     division: str = "B"
     robots: int = 6
+    cameras: int = 4  #: fieldsim's default (make match); 2 halves the vision work
     #: every speed controller's limit (m/s), as ``make match`` sets it (None: the defaults)
     robot_speed_mps: float | None = 2.0
     interludes: bool = True
@@ -453,7 +454,8 @@ class MatchRun(Engine):
     def __init__(self, task: MatchTask, log_path: str | None) -> None:
         self.task = task
         cfg = SimConfig(seed=task.seed, division=task.division, blue=task.robots,
-                        yellow=task.robots, blue_on_positive_half=task.blue_on_positive)
+                        yellow=task.robots, blue_on_positive_half=task.blue_on_positive,
+                        cameras=task.cameras)
         super().__init__(cfg, 0.0, 0.0, log_path,
                          {"our_team": "blue", "match": task.name, "seed": task.seed,
                           "blue": task.blue.name(), "yellow": task.yellow.name()},

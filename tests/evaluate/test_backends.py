@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -23,9 +24,12 @@ DATA = Path(__file__).parent / "quick"
 pytestmark = pytest.mark.timeout(240)
 
 
-@pytest.fixture
-def cluster(tmp_path: Path) -> Iterator[str]:
-    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1."""
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """``dask scheduler`` and two ``dask worker`` processes (each under its nanny, which
+    starts a killed worker again) on 127.0.0.1, shared by this module's tests (a cluster
+    takes ~15 s to start on this machine)."""
+    tmp_path = tmp_path_factory.mktemp("cluster")
     dask = Path(sys.executable).with_name("dask")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     sched_file = tmp_path / "scheduler.json"
@@ -47,15 +51,25 @@ def cluster(tmp_path: Path) -> Iterator[str]:
             address = c.scheduler.address
         yield address
     finally:
+        # the workers first, the scheduler after: a worker that lost its scheduler waits
+        # for it a while before it exits
         for p in reversed(procs):
             p.terminate()
-        for p in procs:
             try:
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 p.kill()
+                p.wait()
         for log in logs:
             log.close()
+
+
+def _two_workers(address: str) -> None:
+    """Wait (bounded) for both workers: one the other test killed comes back by its nanny."""
+    from dask.distributed import Client
+
+    with Client(address, timeout=60) as c:
+        c.wait_for_workers(2, timeout=90)
 
 
 def test_pool_and_cluster_give_the_same_report(tmp_path: Path, cluster: str) -> None:
@@ -63,6 +77,7 @@ def test_pool_and_cluster_give_the_same_report(tmp_path: Path, cluster: str) -> 
     entrant = Entrant()
     pool = LocalPool(2)
     a = run_suite(suite, entrant, tmp_path / "pool", pool)
+    _two_workers(cluster)
     dc = DaskCluster(cluster)
     try:
         assert dc.backend.workers == 2
@@ -85,3 +100,49 @@ def test_pool_and_cluster_give_the_same_report(tmp_path: Path, cluster: str) -> 
     assert saved["backend"] == {"kind": "dask", "workers": 2, "address": cluster}
     page = (tmp_path / "dask" / "report.html").read_text()
     assert "<svg" in page and "<script" not in page and "href=" not in page
+
+
+def test_a_lost_worker_s_runs_are_run_again(tmp_path: Path, cluster: str) -> None:
+    """A worker killed while it runs: its runs are retried on the other (retries=2) and the
+    series completes with every result."""
+    import signal
+    import threading
+
+    suite = load_suite(str(DATA))
+    _two_workers(cluster)
+    dc = DaskCluster(cluster)
+    results: list[dict[str, object]] = []
+    try:
+        client = dc.client
+        pids = client.run(os.getpid)  # worker address -> its process id
+        box: dict[str, object] = {}
+
+        def series() -> None:
+            try:
+                box["rep"] = run_suite(suite, Entrant(), tmp_path / "lost", dc)
+            except BaseException as exc:  # (shown by the assertion below)
+                box["rep"] = exc
+
+        thread = threading.Thread(target=series)
+        thread.start()
+        deadline = time.monotonic() + 60
+        victim = None
+        while victim is None:  # a worker with a run in hand (the condition), bounded
+            assert time.monotonic() < deadline, "no worker ever took a run"
+            busy = [w for w, keys in client.processing().items() if keys]
+            if busy:
+                victim = pids[busy[0]]
+            else:
+                time.sleep(0.05)
+        os.kill(victim, signal.SIGKILL)
+        thread.join(180)
+        assert not thread.is_alive()
+        rep = box["rep"]
+        assert isinstance(rep, dict), rep
+        results = rep["runs"]
+        assert victim not in client.run(os.getpid).values()  # it did die mid-series
+    finally:
+        dc.close()
+    assert len(results) == 3
+    assert all(r["error"] is None for r in results), [r["error"] for r in results]
+    assert all(Path(str(r["log"])).is_file() for r in results)
