@@ -1,21 +1,100 @@
-"""`python -m backend`: the strategy-bridge and the web station on one port."""
+"""`python -m backend`: the strategy-bridge and the web station on one port.
+
+The start is ordered for the robots (after a crash the first command counts): the station
+(ZeroMQ, the processors, the e-stop and arming from the state folder) starts first, and what
+its first command does not need (the web side's imports and server, the session recorder's
+file, the compute engine) once that command went to the relay (backend/startup.py).
+
+``--standby`` (the launcher's warm spare): the process imports everything, then waits for a
+line on its standard input and starts only then, with that line's flags added after its
+own (the supervisor sends ``start --restarted`` when the running backend has crashed). The
+imports, most of a start on a busy machine, are then done before the crash."""
 
 from __future__ import annotations
 
 import argparse
 import logging
 import os
+import signal
+import sys
+import threading
+import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import uvicorn
-
-from .access import AccessRule, base_url, print_login
-from .api import create_app
 from .config import Settings
 from .security import MAX_BODY_BYTES, MAX_JSON_DEPTH
+from .startup import StartupTimeline, process_start_mono
+
+if TYPE_CHECKING:
+    from .access import AccessRule
+
+log = logging.getLogger("touchline.startup")
+
+#: the web side waits at most this long for the station's first command (no vision: it
+#: starts anyway)
+LATE_START_MAX_S = 2.0
+
+
+#: the first word of the line that starts a standby backend (then its flags)
+STANDBY_START = "start"
 
 
 def main() -> None:
+    t0 = process_start_mono()
+    p = _parser()
+    argv = sys.argv[1:]
+    a = p.parse_args(argv)
+    logging.basicConfig(level=a.log_level.upper(),
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    if a.standby:
+        words = _stand_by()
+        if words is None:
+            return
+        a = p.parse_args([*argv, *words])
+        t0 = time.monotonic()  # the steps count from the word to start
+    timeline = StartupTimeline(t0)
+    timeline.standby = a.standby
+    settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
+                        our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
+                        relay_output=a.relay_output, require_arming=a.require_arming,
+                        play="idle" if a.no_demo else a.play,
+                        set_params=a.set_params, state_dir=a.state_dir, log=a.log,
+                        log_dirs=(Settings.from_env().log_dirs if a.log_dirs is None
+                                  else a.log_dirs),
+                        record=not a.no_record, scripts_dir=a.scripts_dir,
+                        record_dir=a.record_dir, require_token=a.require_token,
+                        reports_dir=a.reports_dir, class_dir=a.class_dir,
+                        suite_dirs=(Settings.from_env().suite_dirs if a.suite_dirs is None
+                                    else a.suite_dirs),
+                        eval_workers=a.eval_workers,
+                        view_token=a.view_token, estop_for_all=a.estop_for_all,
+                        team_dir=a.team_dir,
+                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
+                        freeze_gc=True, restarted=a.restarted,
+                        late_start_max_s=LATE_START_MAX_S)
+    run(settings, timeline, a.log_level)
+
+
+def _stand_by() -> list[str] | None:
+    """A warm spare: imports what a start imports (the station and the web side), then waits
+    for the supervisor's line. Returns its flags, or None when told nothing (standard input
+    closed: the station stops, or the spare is not needed)."""
+    import uvicorn  # noqa: F401
+
+    from . import api, station  # noqa: F401
+
+    log.info("standby (pid %d): imported, waiting for the word to start", os.getpid())
+    line = sys.stdin.readline()
+    words = line.split()
+    if not words or words[0] != STANDBY_START:
+        log.info("standby: not needed, exiting")
+        return None
+    log.warning("standby: starting (%s)", " ".join(words[1:]) or "no flags added")
+    return words[1:]
+
+
+def _parser() -> argparse.ArgumentParser:
     d = Settings.from_env()  # the folders may come from TOUCHLINE_* variables (config.py)
     p = argparse.ArgumentParser(
         prog="python -m backend", description=__doc__,
@@ -103,33 +182,55 @@ def main() -> None:
     p.add_argument("--team-memory-mb", type=int, default=d.team_memory_mb, metavar="MB",
                    help="address-space limit of each team-code worker process "
                         "(default %(default)s)")
+    p.add_argument("--restarted", action="store_true",
+                   help="the launcher's supervisor restarts this backend after a crash (it "
+                        "adds this flag): the operator's arming is taken back from the state "
+                        "folder. Any other start is disarmed (docs/security.md)")
+    p.add_argument("--standby", action="store_true",
+                   help="a warm spare (the launcher starts one): import, then wait for a line "
+                        f"'{STANDBY_START} [FLAGS]' on standard input and start with FLAGS "
+                        "added; any other line, or none, exits")
     p.add_argument("--log-level", default="INFO")
-    a = p.parse_args()
-    logging.basicConfig(level=a.log_level.upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
-    settings = Settings(host=a.host, port=a.port, relay_pub=a.relay_pub, relay_sub=a.relay_sub,
-                        our_team=a.our_team, our_side=a.our_side, allowed_hosts=a.allow_hosts,
-                        relay_output=a.relay_output, require_arming=a.require_arming,
-                        play="idle" if a.no_demo else a.play,
-                        set_params=a.set_params, state_dir=a.state_dir, log=a.log,
-                        log_dirs=d.log_dirs if a.log_dirs is None else a.log_dirs,
-                        record=not a.no_record, scripts_dir=a.scripts_dir,
-                        record_dir=a.record_dir, require_token=a.require_token,
-                        reports_dir=a.reports_dir, class_dir=a.class_dir,
-                        suite_dirs=d.suite_dirs if a.suite_dirs is None else a.suite_dirs,
-                        eval_workers=a.eval_workers,
-                        view_token=a.view_token, estop_for_all=a.estop_for_all,
-                        team_dir=a.team_dir,
-                        allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
-                        freeze_gc=True)
-    app = create_app(settings)
+    return p
+
+
+def run(settings: Settings, timeline: StartupTimeline, log_level: str) -> None:
+    """The station first, the web side once its first command is out."""
+    # a stop asked for before the web side runs (uvicorn's own handlers take over then) is
+    # still an orderly one: the station sends its last stop
+    stopping = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stopping.set())
+    from .station import Station  # numpy, scipy, ZeroMQ, the strategy: the first command's
+
+    timeline.mark("imports")
+    station = Station(settings, timeline)
+    timeline.mark("station built")
+    station.start_thread()
+    # the web side once the first command is out: its imports and start would otherwise take
+    # the CPU and the GIL from it
+    while not station.late_started.wait(0.05) and not stopping.is_set():
+        pass
+    if stopping.is_set():
+        station.stop_thread()
+        return
+    import uvicorn
+
+    from .access import base_url, print_login
+    from .api import create_app
+
+    timeline.mark("web imports")
+    if stopping.is_set():
+        station.stop_thread()
+        return
+    app = create_app(settings, station)
     rule: AccessRule = app.state.access
     if rule.required:
         # the URL to open once per laptop (the launcher's output shows it)
         print_login(rule, base_url(settings.host, settings.port, settings.allowed_hosts))
     # the page sends nothing on the websocket: a client's message is capped like a body
     uvicorn.run(app, host=settings.host, port=settings.port, ws_per_message_deflate=False,
-                ws_max_size=MAX_BODY_BYTES, log_level=a.log_level.lower(), access_log=False)
+                ws_max_size=MAX_BODY_BYTES, log_level=log_level.lower(), access_log=False)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,10 @@ def create_app(settings: Settings, station: Station | None = None,
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        await asyncio.to_thread(st.start_thread)
+        if not st.loop.running:  # python -m backend starts it before the web side
+            await asyncio.to_thread(st.start_thread)
+        st.startup.mark("web serving")  # (uvicorn binds its socket right after this)
+        st.startup.log_once()
         try:
             yield
         finally:

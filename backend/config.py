@@ -98,6 +98,14 @@ class Settings(BaseModel):
     view_token: bool = False
     #: a viewer (no operator token) may press the emergency stop (a class)
     estop_for_all: bool = False
+    #: restarted by the launcher's supervisor after a crash (``--restarted``): the
+    #: operator's arming is taken back from the state folder; any other start is disarmed
+    restarted: bool = False
+    #: what the first command does not need (the recorder's file, the compute engine, the
+    #: web side in ``python -m backend``) starts once the first command set went to the
+    #: relay, or this many seconds after the station runs without one (no vision yet);
+    #: 0: everything at once (tests that build a station in-process)
+    late_start_max_s: float = 0.0
     #: the page may save team code from another machine (an operator, with the token); from
     #: loopback it always may. It runs code on this machine: docs/security.md
     allow_code_edit: bool = False

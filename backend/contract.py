@@ -17,7 +17,10 @@ from typing import Annotated, Literal, NotRequired
 from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
-Team = Literal["blue", "yellow"]
+# the contract's names for the domain's types (one definition each, in domain/)
+from domain.rules import RefereeCommand as RefereeCommand
+from domain.teams import Team as Team
+
 Side = Literal["negative-x", "positive-x"]
 ControlAlgorithm = Literal["algorithm1", "algorithm2", "proportional"]
 #: the filter in use for an object: "raw", "median", "paper", "kalman", "adaptive" ("" before any)
@@ -272,7 +275,7 @@ class Referee(TypedDict):
 
     source: Annotated[str, Field(description='"game-controller", "internal" or "none"')]
     source_identifier: str
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     stage_time_left_s: float | None
@@ -366,13 +369,14 @@ class InternalReferee(TypedDict):
     disabled_reason: str
     foreign_source: Annotated[str | None, Field(
         description="a game controller heard on the network (the internal referee steps aside)")]
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     designated_position: Vec | None
     score: Score
     max_allowed_bots: Score
-    commands: Annotated[list[str], Field(description="the commands an operator may give")]
+    commands: Annotated[list[RefereeCommand], Field(
+        description="the commands an operator may give")]
 
 
 @with_config(_STRICT)
@@ -968,6 +972,24 @@ class TeamFileSaved(TypedDict):
 
 
 @with_config(_STRICT)
+class StartupInfo(TypedDict):
+    """The backend's start (backend/startup.py): the first command's steps first, then what
+    it does not need."""
+
+    restarted: Annotated[bool, Field(
+        description="restarted by the launcher's supervisor after a crash (arming taken back)")]
+    standby: Annotated[bool, Field(
+        description="a warm spare the supervisor told to start: imported before the crash; "
+                    "its steps count from the word to start")]
+    steps_s: Annotated[dict[str, float], Field(
+        description="seconds from the backend's process start (a warm spare: from the word to "
+                    "start) at which each step was done: "
+                    "imports, station built, station running, first frame, first targets, "
+                    "first command; then recorder open, engine started, web imports, web "
+                    "serving (a step not done yet is absent)")]
+
+
+@with_config(_STRICT)
 class Health(TypedDict):
     """The station's health (GET /api/health and the websocket)."""
 
@@ -1000,6 +1022,7 @@ class Health(TypedDict):
     driving: Annotated[list[DrivingInfo], Field(description="who drives which team")]
     operator_actions: Annotated[list[OperatorAction], Field(
         description="the latest operator actions, newest first")]
+    startup: StartupInfo
     team_code: Annotated[list[TeamFile], Field(
         description="the team folder's files and their states (as GET /api/team)")]
     evaluation: EvaluationJob
@@ -1125,7 +1148,8 @@ class Point(BaseModel):
 
 class RefereeCommandIn(BaseModel):
     model_config = ConfigDict(allow_inf_nan=False, extra="forbid")
-    command: str = Field(description="HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ...")
+    command: RefereeCommand = Field(description="a referee command the operator may give "
+                                    "(InternalReferee.commands)")
     designated_position: Point | None = Field(default=None, description="for ball placement")
 
 
@@ -1416,6 +1440,7 @@ ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessag
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {
     "Team": Team, "Side": Side, "ControlAlgorithm": ControlAlgorithm,
+    "RefereeCommand": RefereeCommand,
     "TargetSource": TargetSource, "Vec": Vec, "World": World, "Geometry": Geometry,
     "Health": Health, "ServerMessage": ServerMessage, "ParamsState": ParamsState,
     "StrategyView": StrategyView, "RefereeView": RefereeView, "EstopAnswer": EstopAnswer,

@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from domain.wallclock import date_clock
+
 from .params.store import atomic_write_json
 
 log = logging.getLogger("touchline.estop")
@@ -48,7 +50,7 @@ class EstopLatch:
         if self.state.active:
             log.warning("emergency stop ACTIVE (latched since %s by %s): the robots stay "
                         "stopped until an operator releases it",
-                        time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(self.state.since)),
+                        date_clock(self.state.since),
                         self.state.by or "?")
 
     @property

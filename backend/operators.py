@@ -27,6 +27,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from domain.wallclock import clock
+
 from .contract import DrivingInfo, OperatorAction, OperatorInfo
 
 MAX_NAME = 32
@@ -76,9 +78,8 @@ class DrivingRefused(Exception):
     """Another operator drives this team (the message names them)."""
 
     def __init__(self, team: str, holder: Who, since_unix: float) -> None:
-        at = time.strftime("%H:%M:%S", time.gmtime(since_unix))
-        super().__init__(f"{team} is driven by {holder.name} ({holder.address}, since {at} "
-                         f"UTC): ask for driving, or take over")
+        super().__init__(f"{team} is driven by {holder.name} ({holder.address}, since "
+                         f"{clock(since_unix)}): ask for driving, or take over")
         self.team = team
         self.holder = holder
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from domain.wallclock import file_stamp
 from ssllog.format import TYPE_TL_SESSION
 from ssllog.writer import LogWriter
 
@@ -256,7 +257,7 @@ class SessionRecorder:
     def _open(self, reason: str) -> None:
         folder = self._file_folder
         folder.mkdir(parents=True, exist_ok=True)
-        stamp = time.strftime("%Y%m%d-%H%M%S")
+        stamp = file_stamp()
         for n in range(10000):
             name = f"{self.prefix}-{stamp}{f'-{n}' if n else ''}.log"
             path = folder / name

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import threading
 import time
 import uuid
 from collections.abc import Callable
@@ -15,11 +16,13 @@ from typing import Any, TypeVar, cast
 import zmq
 import zmq.asyncio
 
+from domain.wallclock import clock
 from sslnet.proc import CpuMeter
 from sslpb import ssl_gc_common_pb2
 from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
 from . import contract, stalldump, topics, views
+from .arming import ArmingStore
 from .bus import DataBus
 from .config import Settings
 from .control.goto import Target
@@ -52,6 +55,7 @@ from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
 from .replay.player import LogPlayer
+from .startup import StartupTimeline, process_start_mono
 from .station_loop import StationLoop, freeze_start_up
 from .teamcode.plays import TeamPlays
 from .teamcode.processors import TeamProcessors
@@ -66,8 +70,15 @@ T = TypeVar("T")
 
 
 class Station:
-    def __init__(self, settings: Settings) -> None:
+    def __init__(self, settings: Settings, startup: StartupTimeline | None = None) -> None:
         self.settings = settings
+        #: when each step of the start was done (health's ``startup``)
+        self.startup = startup or StartupTimeline(process_start_mono())
+        self.startup.restarted = settings.restarted
+        #: set once the parts the first command does not need have been started
+        #: (``start_late``): the web side starts after it (``python -m backend``)
+        self.late_started = threading.Event()
+        self._late_timer: asyncio.TimerHandle | None = None
         self.ctx: zmq.asyncio.Context | None = None
         #: the station thread and its event loop (the command queue)
         self.loop = StationLoop(self.start, self.stop, self._after_command)
@@ -112,10 +123,18 @@ class Station:
         self._estop_mono = time.monotonic()
         if self.estop_latch.active:
             self.estop_topic.write(True)
-        #: arming (a relay with --require-arming): the station starts disarmed, never persisted
-        self._armed = False
-        self.armed_by = ""
-        self.armed_since = 0.0  # Unix s of the last arm or disarm (0: never)
+        #: arming (a relay with --require-arming): the operator's, persisted; a start
+        #: disarmed, a restart by the supervisor as the operator left it (backend/arming.py)
+        self.arming_store = ArmingStore(settings.state_dir, settings.restarted)
+        armed = self.arming_store.state
+        if armed.armed and self.estop_latch.active:  # the stop wins: disarmed
+            armed = self.arming_store.set(False, "e-stop active at start")
+        self._armed = armed.armed
+        self.armed_by = armed.by
+        self.armed_since = armed.since  # Unix s of the last arm or disarm (0: never)
+        if self.arming_store.restored and self._armed:
+            log.warning("restarted after a crash: ARMED as the operator left it (by %s at %s)",
+                        armed.by or "?", clock(armed.since))
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
         self.world_topic = self.bus.of(topics.WORLD)
         self.geometry_topic = self.bus.of(topics.GEOMETRY)
@@ -163,6 +182,10 @@ class Station:
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
         self.tracker = TrackerPublisher(self.bus, uuid.uuid4().hex)
         self.tracker.replaying = lambda: self.replay.replaying
+        # the start's milestones (each hook is called once, then removed)
+        self.world.on_world = self._first_frame
+        self.strategy.on_first_targets = lambda: self.startup.mark("first targets")
+        self.publisher.on_first_command = self._first_command
         self.strategy.replaying = lambda: self.replay.replaying
         # the team's processors (their topics team/<name>; the plays read them as topics)
         self.team_processors = TeamProcessors(self.bus, self.team, settings.team_memory_mb)
@@ -211,15 +234,16 @@ class Station:
             self.publish_views(force=True)
 
     async def start(self) -> None:
+        """What the first command needs: the ZeroMQ sockets, the parameters applied and the
+        processors running (the e-stop and the arming were loaded when the station was
+        built). The rest (``start_late``) follows the first command set sent to the relay,
+        or ``settings.late_start_max_s`` without one (no vision); at once with 0."""
         s = self.settings
         self.ctx = zmq.asyncio.Context()
         self.ingest.attach(sub_socket(self.ctx, s.relay_pub, [b"vision", b"referee", b"stats",
                                                                 b"feedback"]))
         self.publisher.attach(pub_socket(self.ctx, s.relay_sub))
         prm = self.params.current
-        rec = self.recording.open(prm)
-        self.ingest.record = self.publisher.record = self.tracker.record = rec.record
-        self.team_processors.record = rec.record
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
         # the store validates and persists in the web thread; the station applies on its loop
@@ -231,18 +255,55 @@ class Station:
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))
         self.publish_views(force=True)
+        self.startup.mark("station running")
         if s.freeze_gc:
             freeze_start_up(asyncio.get_running_loop())
         log.info("station started: relay pub %s, relay sub %s, our team %s, parameters v%d",
                  s.relay_pub, s.relay_sub, prm.team.our_team, self.params.version)
+        if s.late_start_max_s <= 0 or self.startup.done("first command"):
+            self.start_late()
+        else:
+            self._late_timer = asyncio.get_running_loop().call_later(
+                s.late_start_max_s, self.start_late)
+
+    def _first_frame(self, _world: object) -> None:
+        self.world.on_world = _no_world_hook
+        self.startup.mark("first frame")
+
+    def _first_command(self) -> None:
+        """The first command set for robots went to the relay: the rest starts now (after
+        this pass: the pass that sent it is not delayed by it)."""
+        self.startup.mark("first command")
+        if self.loop.loop is not None:
+            self.loop.loop.call_soon(self.start_late)
+
+    def start_late(self) -> None:
+        """On the station loop, once: what the first command does not need. The session
+        recorder opens its file (what came before is not in it), the compute engine starts
+        (the strategy uses the built-in code until it runs), and the web side may start."""
+        if self.late_started.is_set():
+            return
+        if self._late_timer is not None:
+            self._late_timer.cancel()
+            self._late_timer = None
+        prm = self.params.current
+        rec = self.recording.open(prm)
+        self.ingest.record = self.publisher.record = self.tracker.record = rec.record
+        self.team_processors.record = rec.record
+        self.recording.configure(prm, self.params.version)  # the parameters, recorded
+        self.startup.mark("recorder open")
+        self.engine.started = lambda: self.startup.mark("engine started")
+        self.engine.configure(prm.strategy)
+        self.late_started.set()
 
     def apply_params(self, p: StationParams, version: int) -> None:
         """Applies a validated parameter set to every part at once (between two ticks: the
         event loop runs one thing at a time), then tells the clients."""
         for proc in self.processors:
             proc.configure(p)
-        self.engine.configure(p.strategy)
-        self.recording.configure(p, version)
+        if self.late_started.is_set():  # else start_late starts them with these parameters
+            self.engine.configure(p.strategy)
+            self.recording.configure(p, version)
         self.referee_state.blue_team_on_positive_half = (
             (p.team.our_team == "blue") == (p.team.our_side == "positive-x"))
         sized = {s.name: s for s in topics.ALL}
@@ -318,6 +379,9 @@ class Station:
         return self.team.rescan()
 
     async def stop(self) -> None:
+        if self._late_timer is not None:
+            self._late_timer.cancel()
+            self._late_timer = None
         self.team_watcher.stop()
         self.replay.close()
         await asyncio.to_thread(self.evaluation.close)
@@ -429,13 +493,15 @@ class Station:
             return why
         if not self._armed:
             log.warning("ARMED by %s: commands go to the robots", by or "?")
-            self._armed, self.armed_by, self.armed_since = True, by, time.time()
+            state = self.arming_store.set(True, by)
+            self._armed, self.armed_by, self.armed_since = True, by, state.since
         return None
 
     def disarm(self, by: str = "") -> None:
         if self._armed:
             log.warning("disarmed by %s: only stops go to the robots", by or "?")
-            self._armed, self.armed_by, self.armed_since = False, by, time.time()
+            state = self.arming_store.set(False, by)
+            self._armed, self.armed_by, self.armed_since = False, by, state.since
 
     def adopt_relay_estop(self, by: str) -> None:
         """The relay is latched although this backend is not (its file was lost, or another
@@ -527,6 +593,10 @@ class Station:
         g = self.geometry_topic.latest_value()
         return None if g is None else cast(contract.Geometry, g)
 
+
+
+def _no_world_hook(_world: object) -> None:
+    pass
 
 
 def _stop_all_bytes() -> bytes:

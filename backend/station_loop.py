@@ -71,6 +71,11 @@ class StationLoop:
         self.thread: threading.Thread | None = None
         self._stop_event: asyncio.Event | None = None
 
+    @property
+    def running(self) -> bool:
+        """The station thread runs (started, not stopped)."""
+        return self.thread is not None and self.thread.is_alive()
+
     def start_thread(self) -> None:
         """Starts the station loop in its own thread and returns once it runs."""
         ready = threading.Event()

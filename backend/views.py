@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from google.protobuf.message import DecodeError
 
+from domain.wallclock import clock
 from sslnet.proc import rss_mb
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
@@ -124,15 +125,17 @@ def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
 
 
 def arming_warnings(st: Station) -> list[str]:
-    """Health lines: the relay's arming differs from the station's for a while."""
+    """Health lines: the relay's arming differs from the station's for a while; the arming
+    file could not be read or written (backend/arming.py)."""
+    out = [st.arming_store.warning] if st.arming_store.warning else []
     rs = st.relay_stats.latest_value()
     if rs is None or not st.arming_required \
             or time.monotonic() - rs["received_mono"] > RELAY_STATS_FRESH_S:
-        return []
+        return out
     if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
-        return ["the relay is armed although the station is not (another backend armed it?): "
-                "it is disarmed again within 0.5 s"]
-    return []
+        out.append("the relay is armed although the station is not (another backend armed "
+                   "it?): it is disarmed again within 0.5 s")
+    return out
 
 
 def estop_warnings(st: Station) -> list[str]:
@@ -141,7 +144,7 @@ def estop_warnings(st: Station) -> list[str]:
     out: list[str] = []
     s = st.estop_latch.state
     if st.estop:
-        when = time.strftime("%H:%M:%S", time.localtime(s.since)) if s.since > 0 else "?"
+        when = clock(s.since) if s.since > 0 else "?"
         out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
                    f"held at zero until an operator releases it")
         rs = st.relay_stats.latest_value()
@@ -451,6 +454,7 @@ def health(st: Station) -> contract.Health:
         "driving": st.operators.driving(),
         "operator_actions": st.operators.actions()[:20],
         "supervisor": sup,
+        "startup": cast(contract.StartupInfo, st.startup.view()),
         "team_code": team_files,
         "evaluation": st.evaluation.job(),
     }

@@ -8,6 +8,7 @@ and the match director (what to judge)."""
 from __future__ import annotations
 
 import math
+from typing import Literal, get_args
 
 ROBOT_RADIUS_MM = 90.0
 BALL_RADIUS_MM = 21.5
@@ -27,22 +28,24 @@ COLLISION_SPEED_MPS = 1.5
 #: The ball may leave a kicker at most this fast
 MAX_KICK_SPEED_MPS = 6.5
 
-#: The game is stopped: no kicks, the ball is not in play
-STOPPED_COMMANDS = frozenset({
-    "HALT", "STOP", "GOAL_BLUE", "GOAL_YELLOW", "BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW",
-    "TIMEOUT_BLUE", "TIMEOUT_YELLOW",
-})
-#: Every robot at most STOP_SPEED_MPS. GOAL_* are the old (deprecated) goal commands, which the
-#: game controller follows with STOP semantics.
-SLOW_COMMANDS = frozenset({"STOP", "GOAL_BLUE", "GOAL_YELLOW"})
-#: Every command the game controller sends (Referee.Command), in the proto's order
-COMMANDS = (
+#: Every command the game controller sends (Referee.Command's names, in the proto's order):
+#: the one list; the browser contract types commands with it and the page's type is generated
+RefereeCommand = Literal[
     "HALT", "STOP", "NORMAL_START", "FORCE_START", "PREPARE_KICKOFF_YELLOW",
     "PREPARE_KICKOFF_BLUE", "PREPARE_PENALTY_YELLOW", "PREPARE_PENALTY_BLUE",
     "DIRECT_FREE_YELLOW", "DIRECT_FREE_BLUE", "INDIRECT_FREE_YELLOW", "INDIRECT_FREE_BLUE",
     "TIMEOUT_YELLOW", "TIMEOUT_BLUE", "GOAL_YELLOW", "GOAL_BLUE", "BALL_PLACEMENT_YELLOW",
     "BALL_PLACEMENT_BLUE",
-)
+]
+COMMANDS: tuple[RefereeCommand, ...] = get_args(RefereeCommand)
+#: The game is stopped: no kicks, the ball is not in play
+STOPPED_COMMANDS: frozenset[RefereeCommand] = frozenset({
+    "HALT", "STOP", "GOAL_BLUE", "GOAL_YELLOW", "BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW",
+    "TIMEOUT_BLUE", "TIMEOUT_YELLOW",
+})
+#: Every robot at most STOP_SPEED_MPS. GOAL_* are the old (deprecated) goal commands, which the
+#: game controller follows with STOP semantics.
+SLOW_COMMANDS: frozenset[RefereeCommand] = frozenset({"STOP", "GOAL_BLUE", "GOAL_YELLOW"})
 
 
 def command_team(command: str) -> str | None:

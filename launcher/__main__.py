@@ -130,6 +130,10 @@ def main() -> int:
                    help="viewing needs a token too (see python -m backend --help)")
     p.add_argument("--estop-for-all", action="store_true",
                    help="a viewer without the operator token may press the emergency stop")
+    p.add_argument("--no-standby", action="store_true",
+                   help="keep no warm spare backend: a crashed backend is then started cold "
+                        "(its imports take 1-8 s on a busy 2-core machine instead of none; "
+                        "the spare costs the memory of an idle backend)")
     p.add_argument("--team-dir", default=None, metavar="DIR",
                    help="the team's code: plays, processors, libraries (make run TEAM=DIR; "
                         "default $TOUCHLINE_TEAM_DIR, else the example folder team/)")
@@ -190,7 +194,7 @@ def main() -> int:
         relay_args=a.relay_args,
         backend_args=[*(f"--allow-host={h}" for h in a.allow_hosts), *replay_args,
                       *a.backend_args]), ports),
-        restart=True,
+        restart=True, standby=not a.no_standby,
         status_file=Path(a.state_dir or Settings.from_env().state_dir or ROOT_VAR)
         / "supervisor.json")
     stopping = False
@@ -226,7 +230,7 @@ def main() -> int:
             if why is not None:
                 log.error("%s", why)
                 break
-            time.sleep(0.2)
+            sup.wait_exit(0.2)  # a child's exit wakes it at once
     finally:
         sup.stop(timeout_s=5.0)
         if own_state_dir is not None:

@@ -13,6 +13,7 @@ import json
 import logging
 import os
 import random
+import select
 import signal
 import socket
 import subprocess
@@ -120,6 +121,28 @@ class StationConfig:
         return not (self.sim == "builtin" and self.output == "sim")
 
 
+#: a child that ran this long before it exited crashed in use, not at its start: it is
+#: restarted at once (a child that exits sooner is restarted after a growing pause)
+STEADY_S = 10.0
+#: the pause before restarting a child that keeps exiting soon after its start, per restart
+#: in the last minute, and at most
+BACKOFF_STEP_S = 0.2
+BACKOFF_MAX_S = 2.0
+#: what the backend is told on a restart by the supervisor (not on a start of the station):
+#: it takes the operator's arming back from its state folder (docs/security.md)
+RESTARTED_FLAG = "--restarted"
+#: a child with ``standby_args`` (the backend) gets a warm spare once it has run this long
+#: (the spare's imports then do not compete with its start); a spare that exited on its own
+#: is tried again ``SPARE_RETRY_S`` later
+SPARE_AFTER_S = 5.0
+SPARE_RETRY_S = 60.0
+#: after a spare took over (its start is over within a few hundred ms: nothing to import),
+#: the next spare comes sooner, ready for a second crash
+SPARE_AFTER_WARM_S = 1.0
+#: the line that starts a spare (then the restart's flags): backend/__main__.py
+SPARE_START = "start"
+
+
 @dataclass
 class Child:
     name: str
@@ -128,6 +151,26 @@ class Child:
     restarts: int = 0
     started: float = 0.0
     history: list[float] = field(default_factory=list)
+    #: added to ``argv`` when the supervisor restarts the child (after a crash)
+    restart_args: list[str] = field(default_factory=list)
+    #: the running process's pidfd (Linux): the supervisor waits on it for the exit
+    pidfd: int | None = None
+    #: with the supervisor's ``standby``: ``argv`` plus these start a warm spare, a process
+    #: that imports and waits for a line on its standard input (``SPARE_START`` and the
+    #: restart's flags); a crash then costs no imports
+    standby_args: list[str] = field(default_factory=list)
+    spare: subprocess.Popen[bytes] | None = None
+    #: no spare is started before this (monotonic): the child's start, a spare's failure
+    spare_after: float = 0.0
+
+    def restart_delay_s(self, now: float) -> float:
+        """The pause before the restart due now: none for a child that ran ``STEADY_S``
+        (a crash in use: the robots wait for it), else growing with the restarts of the last
+        minute (a child that cannot start is not restarted in a tight loop)."""
+        if now - self.started >= STEADY_S:
+            return 0.0
+        recent = sum(1 for t in self.history if now - t < 60)
+        return min(BACKOFF_MAX_S, BACKOFF_STEP_S * recent)
 
 
 def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
@@ -171,7 +214,7 @@ def command_lines(cfg: StationConfig, ports: Ports) -> list[Child]:
         *(["--our-team", cfg.our_team] if cfg.our_team else []),
         *(["--state-dir", cfg.state_dir] if cfg.state_dir else []),
         *cfg.backend_args,
-    ]))
+    ], restart_args=[RESTARTED_FLAG], standby_args=["--standby"]))
     return children
 
 
@@ -189,13 +232,19 @@ class Supervisor:
 
     ``log_dir``: each child's output goes to ``<name>.log`` there (else it is inherited).
     ``restart``: :meth:`watch` restarts a child that exited, at most ``max_restarts`` times a
-    minute (then it gives up and says why). ``detach``: each child in its own session. Every
-    child is told by the kernel to stop (SIGTERM) when the supervisor dies, killed or not."""
+    minute (then it gives up and says why). ``standby`` (with ``restart``): a child with
+    ``standby_args`` gets a warm spare, which takes over when it crashes (the launcher: the
+    backend; kill -> first command then costs no imports). ``detach``: each child in its own
+    session. Every child is told by the kernel to stop (SIGTERM) when the supervisor dies,
+    killed or not."""
 
     def __init__(self, children: list[Child], *, log_dir: Path | None = None,
                  restart: bool = False, max_restarts: int = 5, detach: bool = False,
-                 status_file: Path | None = None) -> None:
+                 status_file: Path | None = None, standby: bool = False,
+                 spare_after_s: float = SPARE_AFTER_S) -> None:
         self.children = children
+        self.standby = standby
+        self.spare_after_s = spare_after_s
         #: where the children's pids and restarts are written (the backend's Health tab reads
         #: it), after every start and restart; atomically
         self.status_file = status_file
@@ -219,6 +268,7 @@ class Supervisor:
             return
         status = {"time_unix": time.time(), "children": [
             {"name": c.name, "pid": c.proc.pid if c.proc is not None else None,
+             "spare_pid": c.spare.pid if c.spare is not None else None,
              "restarts": c.restarts, "last_exit": self._last_exit.get(c.name),
              "started_unix": time.time() - (time.monotonic() - c.started)}
             for c in self.children]}
@@ -230,19 +280,119 @@ class Supervisor:
         except OSError as exc:  # the station runs without it; the page just shows no restarts
             log.warning("cannot write %s: %s", self.status_file, exc)
 
-    def _start(self, c: Child) -> None:
-        log.info("starting %s: %s", c.name, " ".join(c.argv[1:]))
-        out: IO[bytes] | None = None
-        if self.log_dir is not None:
-            old = self._logs.pop(c.name, None)
-            if old is not None:
-                old.close()
-            out = self._logs[c.name] = (self.log_dir / f"{c.name}.log").open("ab")
-        c.proc = subprocess.Popen(
-            c.argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
-            stdin=subprocess.DEVNULL if self.detach else None, start_new_session=self.detach,
+    def _start(self, c: Child, restart: bool = False) -> None:
+        argv = [*c.argv, *c.restart_args] if restart else c.argv
+        log.info("starting %s: %s", c.name, " ".join(argv[1:]))
+        self._close_pidfd(c)
+        c.proc = self._popen(c, argv, self._log_file(c))
+        self._running(c)
+
+    def _log_file(self, c: Child) -> IO[bytes] | None:
+        if self.log_dir is None:
+            return None
+        old = self._logs.pop(c.name, None)
+        if old is not None:
+            old.close()
+        out = self._logs[c.name] = (self.log_dir / f"{c.name}.log").open("ab")
+        return out
+
+    def _popen(self, c: Child, argv: list[str], out: IO[bytes] | None,
+               spare: bool = False) -> subprocess.Popen[bytes]:
+        stdin = subprocess.PIPE if spare else subprocess.DEVNULL if self.detach else None
+        return subprocess.Popen(
+            argv, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT if out else None,
+            stdin=stdin, start_new_session=self.detach,
             preexec_fn=_die_with_parent)  # never orphaned, even by a SIGKILL of ours
+
+    def _running(self, c: Child, warm: bool = False) -> None:
+        """``c.proc`` runs as the child from now on (``warm``: a spare that took over)."""
+        assert c.proc is not None
         c.started = time.monotonic()
+        after = min(self.spare_after_s, SPARE_AFTER_WARM_S) if warm else self.spare_after_s
+        c.spare_after = max(c.spare_after, c.started + after)
+        with contextlib.suppress(AttributeError, OSError):  # not Linux >= 5.3: polled
+            c.pidfd = os.pidfd_open(c.proc.pid)
+
+    def _keep_spares(self) -> None:
+        """A warm spare for each child that has ``standby_args`` and has run a while; a
+        spare that exited on its own is said, and tried again a minute later."""
+        now = time.monotonic()
+        for c in self.children:
+            if not c.standby_args or c.proc is None:
+                continue
+            if c.spare is not None and c.spare.poll() is not None:
+                log.warning("the warm spare of %s exited with %s; another in %.0f s", c.name,
+                            c.spare.returncode, SPARE_RETRY_S)
+                c.spare = None
+                c.spare_after = now + SPARE_RETRY_S
+            if c.spare is None and now >= c.spare_after and c.proc.poll() is None:
+                argv = [*c.argv, *c.standby_args]
+                out = self._logs.get(c.name)
+                c.spare = self._popen(c, argv, out, spare=True)
+                log.info("warm spare of %s started (pid %d)", c.name, c.spare.pid)
+                self.write_status()
+
+    def _take_spare(self, c: Child) -> bool:
+        """The crashed child's warm spare becomes the child, told to start with the
+        restart's flags; False when there is none (or it is gone)."""
+        spare, c.spare = c.spare, None
+        if spare is None:
+            return False
+        line = " ".join([SPARE_START, *c.restart_args]) + "\n"
+        try:
+            assert spare.stdin is not None
+            spare.stdin.write(line.encode())
+            spare.stdin.close()
+        except (OSError, ValueError):  # it died just now
+            self._end_spare(spare)
+            return False
+        if spare.poll() is not None:
+            return False
+        log.info("%s: the warm spare (pid %d) takes over", c.name, spare.pid)
+        self._close_pidfd(c)
+        c.proc = spare
+        self._running(c, warm=True)
+        return True
+
+    @staticmethod
+    def _end_spare(spare: subprocess.Popen[bytes], timeout_s: float = 5.0) -> None:
+        """A spare not needed: its standard input closed (a waiting spare exits at once);
+        one still importing is stopped (SIGTERM: it has nothing to clean up), then killed."""
+        with contextlib.suppress(OSError, ValueError):
+            if spare.stdin is not None:
+                spare.stdin.close()
+        try:
+            spare.wait(timeout=min(1.0, timeout_s))
+            return
+        except subprocess.TimeoutExpired:
+            spare.terminate()
+        try:
+            spare.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            spare.kill()
+            spare.wait(timeout=timeout_s)
+
+    @staticmethod
+    def _close_pidfd(c: Child) -> None:
+        if c.pidfd is not None:
+            with contextlib.suppress(OSError):
+                os.close(c.pidfd)
+            c.pidfd = None
+
+    def wait_exit(self, timeout_s: float) -> None:
+        """Returns when a child has exited or after ``timeout_s``: the launcher's loop calls
+        :meth:`watch` right after, so a crashed child is seen at once, not at the next poll
+        (it polled every 0.2 s). Without pidfds (not Linux) it just waits."""
+        if self.dead():
+            return
+        fds = [c.pidfd for c in self.children if c.pidfd is not None]
+        if not fds:
+            time.sleep(timeout_s)
+            return
+        poller = select.poll()
+        for fd in fds:
+            poller.register(fd, select.POLLIN)  # readable: the process has exited
+        poller.poll(timeout_s * 1000)
 
     def child(self, name: str) -> Child:
         return next(c for c in self.children if c.name == name)
@@ -262,12 +412,22 @@ class Supervisor:
             c.history = [t for t in c.history if now - t < 60] + [now]
             if len(c.history) > self.max_restarts:
                 return f"{c.name} exited {code} and keeps crashing; giving up"
-            log.warning("%s exited with %s; restarting", c.name, code)
             c.restarts += 1
             self._last_exit[c.name] = code
-            time.sleep(min(2.0, 0.2 * c.restarts))
-            self._start(c)
+            if self._take_spare(c):
+                log.warning("%s exited with %s; restarting: its warm spare took over", c.name,
+                            code)
+                self.write_status()
+                continue
+            delay = c.restart_delay_s(now)
+            log.warning("%s exited with %s; restarting%s", c.name, code,
+                        f" in {delay:.1f} s" if delay else "")
+            if delay:
+                time.sleep(delay)
+            self._start(c, restart=True)
             self.write_status()
+        if self.restart and self.standby:
+            self._keep_spares()
         return None
 
     def log_tail(self, name: str, lines: int = 25) -> str:
@@ -283,6 +443,10 @@ class Supervisor:
         """Mirror order, one after the other: the backend first (it sends a last stop to the
         relay), then the relay (its own last stop to the robots), the simulator last; a child
         that does not stop within ``timeout_s`` is killed."""
+        for c in self.children:  # spares first: nothing of theirs to stop
+            if c.spare is not None:
+                self._end_spare(c.spare, timeout_s)
+                c.spare = None
         for c in reversed(self.children):
             if c.proc is None:
                 continue
@@ -295,6 +459,7 @@ class Supervisor:
                     c.proc.kill()
                     c.proc.wait(timeout=timeout_s)
             self.exit_codes[c.name] = c.proc.returncode
+            self._close_pidfd(c)
         for f in self._logs.values():
             f.close()
         self._logs.clear()

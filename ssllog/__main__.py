@@ -11,9 +11,9 @@ import sys
 import tempfile
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from datetime import UTC, datetime
 from typing import TextIO
 
+from domain.wallclock import iso_utc
 from ssllog.format import TYPE_VISION_2010, TYPE_VISION_2014
 from ssllog.logfile import TYPE_NAMES, LogFile
 from ssllog.reader import LogFormatError, Record
@@ -44,7 +44,7 @@ def _progress_printer(enabled: bool, label: str) -> Callable[[float], None] | No
 
 
 def _utc(ns: int) -> str:
-    return datetime.fromtimestamp(ns / 1e9, UTC).isoformat(timespec="milliseconds")
+    return iso_utc(ns / 1e9)
 
 
 def info(lf: LogFile, out: TextIO) -> None:

@@ -37,6 +37,7 @@ from backend.control.params import (
     ControlSettings,
 )
 from backend.control.profile import ProfilePoint, Trapezoid
+from domain.angles import wrap_angle
 
 _tuple_new = tuple.__new__
 
@@ -251,13 +252,13 @@ class LineController:
             vx, vy = self._vx + dvx * k, self._vy + dvy * k
         self._vx, self._vy = vx, vy
         self._cmd_along = vx * ux + vy * uy
-        # the heading: a P controller (wrap_angle and _clamp inline)
+        # the heading: a P controller (_clamp inline)
         if target.orientation is None:
             self._heading_err = 0.0
             omega = 0.0
         else:
             hp = params.heading
-            err = (target.orientation - heading + math.pi) % (2.0 * math.pi) - math.pi
+            err = wrap_angle(target.orientation - heading)
             self._heading_err = err
             if abs(err) <= hp.tolerance_rad:
                 omega = 0.0

@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -32,6 +33,8 @@ class EngineSwitch:
         self._key: str | None = None
         self._gen = 0
         self._tasks: set[asyncio.Task[None]] = set()
+        #: called when an engine has started (the station's start timeline)
+        self.started: Callable[[], None] = lambda: None
 
     def configure(self, sp: StrategyParams) -> None:
         key = sp.engine
@@ -71,6 +74,7 @@ class EngineSwitch:
             await eng.close()
             return
         self.strategy.engine = eng
+        self.started()
         log.info("compute engine %s started for the goalkeeper (%s)", sp.engine,
                  sp.goalkeeper_function)
 

@@ -8,12 +8,13 @@ import logging
 import os
 import re
 import tempfile
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
+
+from domain.wallclock import file_stamp
 
 from ..config import Settings
 from ..contract import ParamChange
@@ -252,7 +253,7 @@ class ParamStore:
         log.info("parameters loaded from %s (version %d)", f, self.version)
 
     def _set_aside(self, f: Path, reason: str) -> None:
-        bad = f.with_name(f"{f.stem}.invalid-{time.strftime('%Y%m%d-%H%M%S')}{f.suffix}")
+        bad = f.with_name(f"{f.stem}.invalid-{file_stamp()}{f.suffix}")
         try:
             os.replace(f, bad)
             where = f"set aside as {bad.name}"

@@ -79,6 +79,9 @@ class CommandPublisher(SocketProcessor):
         #: every command set sent (the session recorder)
         self.record: Callable[[int, int, bytes], None] = lambda t, k, b: None
         self._was_muted = False
+        #: called once, after the first command set for robots went to the relay (the
+        #: station starts what the first command does not need)
+        self.on_first_command: Callable[[], None] | None = None
 
     def step(self) -> None:
         if self.muted():
@@ -102,6 +105,9 @@ class CommandPublisher(SocketProcessor):
             self.record(now_ns, TYPE_TL_COMMANDS, raw)
             self.sent.total += 1
             self.latency.add_at(now_ns, cs.source_receive_time_ns)
+            if self.on_first_command is not None and (cs.commands or cs.stop_all):
+                hook, self.on_first_command = self.on_first_command, None
+                hook()
         for raw in self.sim_reader.read_new():
             self.send([b"sim", raw])
         for raw in self.referee_out_reader.read_new():

@@ -85,6 +85,8 @@ class StrategyProcessor(Processor):
         self.clock = clock
         self._t0 = clock()
         self._record: BinaryIO | None = None
+        #: called once, with the first targets for a robot (the station's start timeline)
+        self.on_first_targets: Callable[[], None] | None = None
         #: the team's own plays (backend/teamcode; the station sets it), and what they need
         self.team: TeamPlays | None = None
         self.replaying: Callable[[], bool] = lambda: False
@@ -176,6 +178,9 @@ class StrategyProcessor(Processor):
             if self.team is not None and self.team.runners:
                 self.team.release()
         self.targets.write(out)
+        if out and self.on_first_targets is not None:
+            hook, self.on_first_targets = self.on_first_targets, None
+            hook()
 
     def _team_robot(self, rid: int) -> bool:
         play = self.robot_plays.get(rid)

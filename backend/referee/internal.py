@@ -10,10 +10,11 @@ import time
 import uuid
 from dataclasses import dataclass, field
 
+from domain.rules import RefereeCommand
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 
 # Commands the operator may give, and the stage the game is in afterwards.
-OPERATOR_COMMANDS = (
+OPERATOR_COMMANDS: tuple[RefereeCommand, ...] = (
     "HALT", "STOP", "NORMAL_START", "FORCE_START",
     "PREPARE_KICKOFF_BLUE", "PREPARE_KICKOFF_YELLOW",
     "PREPARE_PENALTY_BLUE", "PREPARE_PENALTY_YELLOW",
@@ -62,7 +63,7 @@ STAGE_DURATION_US: dict[str, int] = {
 @dataclass
 class InternalReferee:
     source_identifier: str = field(default_factory=lambda: f"touchline-{uuid.uuid4()}")
-    command: str = "HALT"
+    command: RefereeCommand = "HALT"
     stage: str = "NORMAL_FIRST_HALF_PRE"
     command_counter: int = 0
     command_timestamp_us: int = field(default_factory=lambda: int(time.time() * 1e6))
@@ -112,7 +113,7 @@ class InternalReferee:
             raise RefereeCommandError(f"{command} needs a designated position")
         if command == "NORMAL_START" and not self.command.startswith("PREPARE_"):
             raise RefereeCommandError("NORMAL_START follows a PREPARE_KICKOFF or PREPARE_PENALTY")
-        self.command = command
+        self.command = command  # narrowed: one of OPERATOR_COMMANDS
         self.designated_position = designated_position if placement else None
         self.command_counter += 1
         self.command_timestamp_us = int(time.time() * 1e6) if now_us is None else now_us

@@ -32,6 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from domain.angles import wrap_angle
 from domain.field import Field
 
 from .assignment import StableAssigner
@@ -576,8 +577,7 @@ def _placer(bot: Bot, ball: Ball, dp: tuple[float, float], tu: Tuning,
     rx, ry = ball.x - bot.x, ball.y - bot.y
     along = rx * d[0] + ry * d[1]
     across = abs(-rx * d[1] + ry * d[0])
-    heading_err = abs(math.atan2(math.sin(bot.orientation - face),
-                                 math.cos(bot.orientation - face)))
+    heading_err = abs(wrap_angle(bot.orientation - face))
     if 0.0 < along < CONTACT_MM + 60.0 and across < 40.0 and heading_err < 0.25:
         # holding the ball: carry it so that it ends on the mark, braking on the way
         goal = (dp[0] - d[0] * CONTACT_MM, dp[1] - d[1] * CONTACT_MM)
@@ -601,8 +601,7 @@ def _pull_pose(bot: Bot, ball: Ball, dp: tuple[float, float]) -> tuple[float, fl
     rx, ry = ball.x - bot.x, ball.y - bot.y
     along = -(rx * d[0] + ry * d[1])  # how far the robot is on the mark's side of the ball
     across = abs(-rx * d[1] + ry * d[0])
-    heading_err = abs(math.atan2(math.sin(bot.orientation - face),
-                                 math.cos(bot.orientation - face)))
+    heading_err = abs(wrap_angle(bot.orientation - face))
     return along, across, heading_err
 
 

@@ -19,6 +19,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
+from domain.angles import wrap_angle
 from domain.field import Field
 
 from .model import BALL_RADIUS_MM, ROBOT_RADIUS_MM, Ball, Bot, Intent, own_defense
@@ -129,8 +130,7 @@ def kick_ball(ball: Ball, aim: tuple[float, float], speed_mps: float, role: str,
         rx, ry = ball.x - robot.x, ball.y - robot.y
         along = rx * d[0] + ry * d[1]  # how far behind the ball, along the kick
         across = abs(-rx * d[1] + ry * d[0])  # off the kick line
-        heading_err = abs(math.atan2(math.sin(robot.orientation - face),
-                                     math.cos(robot.orientation - face)))
+        heading_err = abs(wrap_angle(robot.orientation - face))
         if 0.0 < along < CONTACT_MM + 160.0 and across < 35.0 and heading_err < 0.2:
             through = (ball.x + d[0] * 80.0, ball.y + d[1] * 80.0)
             return Intent(role, through[0], through[1], face, kick_speed_mps=speed_mps,

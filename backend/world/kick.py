@@ -33,6 +33,8 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from domain.angles import wrap_angle
+
 from ..filters.core import line_sums
 from .state import BallState, KickedBall, RobotState, Team
 
@@ -127,10 +129,6 @@ def stop_of(x: float, y: float, vx: float, vy: float, t: float,
         return x, y, t
     d = v * v / (2 * decel)
     return x + vx / v * d, y + vy / v * d, t + v / decel
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 @dataclass
@@ -233,7 +231,7 @@ class KickDetector:
                 self._end("stopped")
                 return
             if speed >= cfg.turn_min_mps * 1000.0:
-                turn = abs(_wrap(math.atan2(v[1], v[0]) - math.atan2(k.u[1], k.u[0])))
+                turn = abs(wrap_angle(math.atan2(v[1], v[0]) - math.atan2(k.u[1], k.u[0])))
                 if turn > math.radians(cfg.max_turn_deg):
                     self._end("turned")
                     return
@@ -351,7 +349,7 @@ class KickDetector:
             d = math.hypot(x - r.x, y - r.y)
             if d > reach or d >= best_d:
                 continue
-            if abs(_wrap(math.atan2(y - r.y, x - r.x) - r.orientation)) > half:
+            if abs(wrap_angle(math.atan2(y - r.y, x - r.x) - r.orientation)) > half:
                 continue
             best, best_d = (r.team, r.id), d
         return best

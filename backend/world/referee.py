@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, cast
 
+from domain.rules import RefereeCommand
 from sslpb.ssl_gc_common_pb2 import Team
 from sslpb.ssl_gc_game_event_pb2 import GameEvent
 from sslpb.ssl_gc_referee_message_pb2 import MatchType, Referee
@@ -15,7 +16,7 @@ from .. import contract
 
 @dataclass(frozen=True, slots=True)
 class RefereeState:
-    command: str
+    command: RefereeCommand
     stage: str
     command_counter: int
     stage_time_left_s: float | None
@@ -150,7 +151,8 @@ def decode_referee(msg: Referee, bad: list[str] | None = None) -> RefereeState:
         if not all(math.isfinite(v) for v in dp):
             dp = None  # no place to put the ball: as if none was sent
     return RefereeState(
-        command=Referee.Command.Name(msg.command),
+        # a required enum: always one of ours (tests/domain/test_rules.py holds the two equal)
+        command=cast(RefereeCommand, Referee.Command.Name(msg.command)),
         stage=Referee.Stage.Name(msg.stage),
         command_counter=msg.command_counter,
         stage_time_left_s=msg.stage_time_left / 1e6 if msg.HasField("stage_time_left") else None,

@@ -225,3 +225,27 @@ test("field: wheel zooms, F fits; right-click teleports the ball", async ({ page
     await page.request.post("/api/sim/ball", { data: { x: 0, y: 0 } });
   }
 });
+
+// The README's pictures (only with TOUCHLINE_DOCS_SHOTS=1: the config leaves out the "docs:"
+// tests otherwise; 1280x720): the station as a newcomer first sees it, with today's top bar
+// and blue 1 selected, driving to an operator's target; then the Health tab.
+test("docs: screenshots of the station and its health", async ({ page }) => {
+  await open(page);
+  if (await page.getByTestId("name-prompt").isVisible()) await page.getByTestId("name-save").click();
+  await page.getByTestId("robot-row-blue-1").click();
+  const p = await toScreen(page, 1500, 1500);
+  try {
+    await page.mouse.click(p.x, p.y);
+    await expect.poll(async () => (await world(page)).robots.find((r) => r.team === "blue" && r.id === 1)?.target?.source ?? null)
+      .toBe("operator");
+    await expect.poll(() => maxSpeed(page), { timeout: 10_000 }).toBeGreaterThan(100);
+    await page.mouse.move(0, 0);
+    await page.screenshot({ path: new URL("../../docs/screenshot.png", import.meta.url).pathname });
+    await page.getByTestId("tab-health").click();
+    await expect(page.getByTestId("health-estop")).toBeVisible();
+    await page.mouse.move(0, 0);
+    await page.screenshot({ path: new URL("../../docs/screenshot-health.png", import.meta.url).pathname });
+  } finally {
+    await page.request.delete("/api/robots/blue/1/target", { headers: { "X-Touchline": "1" } });
+  }
+});

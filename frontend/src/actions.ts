@@ -13,7 +13,7 @@ import {
   teleportRobot,
   type Card,
 } from "./api/http";
-import type { RobotKey, Team } from "./api/types";
+import type { RefereeCommand, RobotKey, Team } from "./api/types";
 import type { Point } from "./field/transform";
 import { appStore } from "./store/appStore";
 import { pushToast } from "./store/toasts";
@@ -80,7 +80,7 @@ export async function setArmed(armed: boolean): Promise<boolean> {
 
 /** Give a command to the internal referee; resolves to an error text or null (a toast shows
  * it too). Its new state arrives with the next world message. */
-export async function giveRefereeCommand(command: string, at?: { x: number; y: number }): Promise<string | null> {
+export async function giveRefereeCommand(command: RefereeCommand, at?: { x: number; y: number }): Promise<string | null> {
   try {
     await postRefereeCommand(command, at);
     return null;

@@ -1,9 +1,9 @@
 // What the referee state means for the page (pure; no React).
 
-import type { Health, Referee, Robot, Team, Vec } from "./api/types";
+import type { Health, Referee, RefereeCommand, Robot, Team, Vec } from "./api/types";
 
 /** The commands during which the designated position is where the ball goes. */
-export const PLACEMENT_COMMANDS: readonly string[] = ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"];
+export const PLACEMENT_COMMANDS: readonly RefereeCommand[] = ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"];
 
 /**
  * The ball placement target, only while a ball placement runs. The official game controller

@@ -5,6 +5,8 @@ works; the e-stop disarms; the publisher repeats the state to the relay."""
 from __future__ import annotations
 
 import asyncio
+import errno
+import json
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,6 +19,7 @@ from fastapi.testclient import TestClient
 
 from backend import topics
 from backend.api import create_app
+from backend.arming import ArmingStore
 from backend.bus import DataBus
 from backend.config import Settings
 from backend.processors import CommandPublisher
@@ -207,3 +210,89 @@ def test_teleports_go_to_a_simulator_only_so_arming_does_not_gate_them(
             assert (ball.status_code, robot.status_code) == (status, status), ball.text
             if status == 409:
                 assert "robot-box" in ball.json()["detail"]
+
+
+# ---- arming persisted (backend/arming.py): the operator's decision survives the supervisor's
+# restart after a crash (--restarted), not a start anew; the e-stop wins over it ----
+
+
+def _armed_station(tmp_path: Path, **kw: Any) -> Station:
+    st = Station(_settings(tmp_path, require_arming=True, **kw))
+    st.world_topic.write(_fresh_world())
+    assert st.set_armed(True, "operator at 127.0.0.1") is None
+    return st
+
+
+def test_arming_survives_a_restart_by_the_supervisor(tmp_path: Path) -> None:
+    first = _armed_station(tmp_path)
+    again = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    assert again.armed and again.arming_store.restored
+    assert again.armed_by == "operator at 127.0.0.1"
+    assert again.armed_since == pytest.approx(first.armed_since)
+    # and the publisher tells the relay so from its first step
+    assert again.publisher.armed() is True
+
+
+def test_a_start_anew_is_disarmed_and_forgets_the_last_arming(tmp_path: Path) -> None:
+    _armed_station(tmp_path)
+    fresh = Station(_settings(tmp_path, require_arming=True))
+    assert not fresh.armed and not fresh.arming_store.restored
+    assert not (tmp_path / "state" / "arming.json").exists()
+    # a crash after that start does not bring the earlier arming back either
+    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).armed
+
+
+def test_a_disarm_survives_a_restart_too(tmp_path: Path) -> None:
+    st = _armed_station(tmp_path)
+    st.set_armed(False, "operator at 127.0.0.1")
+    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).armed
+
+
+def test_the_estop_disarms_for_the_restart_and_wins_over_an_armed_file(tmp_path: Path) -> None:
+    st = _armed_station(tmp_path)
+    st.set_estop(True, "operator at 127.0.0.1")
+    again = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    assert again.estop and not again.armed
+    # an armed file beside a pressed stop (written by hand, or a crash between the two): the
+    # stop wins, and the file is made to say so
+    (tmp_path / "state" / "arming.json").write_text(
+        json.dumps({"armed": True, "since": 1.0, "by": "x"}))
+    again = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    assert again.estop and not again.armed
+    assert json.loads((tmp_path / "state" / "arming.json").read_text())["armed"] is False
+
+
+@pytest.mark.parametrize("content", ["{not json", "[]", '{"armed": "true"}', '{"armed": 1}',
+                                     '{"by": "x"}'])
+def test_a_file_that_does_not_say_armed_is_disarmed(tmp_path: Path, content: str) -> None:
+    (tmp_path / "state").mkdir()
+    (tmp_path / "state" / "arming.json").write_text(content)
+    st = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    assert not st.armed
+    assert "not readable" in st.arming_store.warning
+
+
+def test_a_disarm_that_cannot_be_written_removes_the_armed_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    store = ArmingStore(tmp_path, restarted=True)
+    store.set(True, "op")
+    assert ArmingStore(tmp_path, restarted=True).state.armed
+
+    def full_disk(path: Path, data: object) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr("backend.arming.atomic_write_json", full_disk)
+    store.set(False, "op")
+    assert store.warning == ""  # said by removing the file: no file is disarmed
+    assert not (tmp_path / "arming.json").exists()
+    assert not ArmingStore(tmp_path, restarted=True).state.armed
+    store.set(True, "op")  # an arming not written: a restart comes up disarmed, and says so
+    assert "arming not persisted" in store.warning
+
+
+def test_an_unreadable_file_is_a_health_warning(tmp_path: Path) -> None:
+    (tmp_path / "state").mkdir()
+    (tmp_path / "state" / "arming.json").write_text("{not json")
+    st = Station(_settings(tmp_path, require_arming=True, restarted=True))
+    with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
+        warnings = c.get("/api/health").json()["warnings"]
+    assert any(w.startswith("arming.json is not readable") for w in warnings), warnings

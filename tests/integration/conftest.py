@@ -37,11 +37,14 @@ class StationHandle:
 
 
 @contextmanager
-def launched(*extra_args: str) -> Iterator[StationHandle]:
+def launched(*extra_args: str, state_dir: Path | None = None) -> Iterator[StationHandle]:
     """The whole station through ``python -m launcher --isolated`` with ``extra_args``;
-    stopped (SIGTERM, then kill) on exit."""
+    stopped (SIGTERM, then kill) on exit. ``state_dir``: the station keeps its state there
+    (it stays after the stop: a later start on it is the same station started anew); by
+    default a temporary folder of the launcher's, removed at its stop."""
+    keep = ["--state-dir", str(state_dir)] if state_dir is not None else []
     proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", *extra_args],
+        [sys.executable, "-m", "launcher", "--isolated", *keep, *extra_args],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
@@ -68,9 +71,9 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
         proc.kill()
         raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
     try:
-        state_dir = info.get("state_dir")
+        own = info.get("state_dir")
         yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}),
-                            Path(state_dir) if state_dir else None)
+                            Path(own) if own else state_dir)
     finally:
         proc.send_signal(signal.SIGTERM)
         try:
@@ -78,9 +81,10 @@ def launched(*extra_args: str) -> Iterator[StationHandle]:
         except subprocess.TimeoutExpired:
             proc.kill()
         else:
-            # an orderly stop leaves no temporary state folder behind
-            assert "state_dir" in info, "the launcher did not say where its state went"
-            assert not Path(info["state_dir"]).exists(), info["state_dir"]
+            if state_dir is None:
+                # an orderly stop leaves no temporary state folder behind
+                assert "state_dir" in info, "the launcher did not say where its state went"
+                assert not Path(info["state_dir"]).exists(), info["state_dir"]
 
 
 @pytest.fixture(scope="session")

@@ -44,7 +44,7 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
         station.get("/api/health")), 30, what="healthy station")
     # 4 cameras x 60 Hz; generous bounds for a loaded 2-core machine
     assert 150 < h["streams"]["vision"]["rate_hz"] < 330, h["streams"]["vision"]
-    assert h["streams"]["vision"]["errors"] == 0
+    assert h["streams"]["vision"]["errors"] == 0, h["streams"]["vision"]
     assert h["relay"]["output_rate_hz"] >= 90
     procs = {p["name"]: p for p in h["processors"]}
     # topic-triggered processors coalesce bursts of frames into one run, so they run at

@@ -7,7 +7,17 @@ import sys
 import time
 from pathlib import Path
 
-from launcher.supervisor import Child, Ports, StationConfig, Supervisor, command_lines
+from launcher.supervisor import (
+    BACKOFF_MAX_S,
+    BACKOFF_STEP_S,
+    RESTARTED_FLAG,
+    STEADY_S,
+    Child,
+    Ports,
+    StationConfig,
+    Supervisor,
+    command_lines,
+)
 
 # a child that notes when it is asked to stop, then exits
 _POLITE = """
@@ -64,6 +74,110 @@ def test_a_crashed_child_is_restarted_and_one_that_keeps_crashing_is_given_up(
     sup.stop(timeout_s=5.0)
     assert crash.restarts == 2
     assert verdicts[-1] == "relay exited 3 and keeps crashing; giving up"
+
+
+def test_a_restart_tells_the_child_and_a_start_does_not(tmp_path: Path) -> None:
+    """The backend learns it was restarted after a crash (it takes the operator's arming back
+    then, docs/security.md) from a flag only the supervisor's restart adds."""
+    argv_note = tmp_path / "argv.txt"
+    child = Child("backend", [sys.executable, "-c",
+                              "import sys; open(sys.argv[1], 'a').write(' '.join(sys.argv[2:])"
+                              " + '\\n'); sys.exit(1 if len(sys.argv) == 3 else 0)",
+                              str(argv_note), "--port=1"], restart_args=["--restarted"])
+    sup = Supervisor([child], restart=True, max_restarts=5)
+    sup.start()
+    try:
+        # the first run exits 1; the watch that restarts it passes the flag
+        deadline = time.monotonic() + 20
+        while child.restarts == 0 and time.monotonic() < deadline:
+            sup.wait_exit(1.0)
+            assert sup.watch() is None
+        _wait(lambda: argv_note.exists() and len(argv_note.read_text().splitlines()) >= 2)
+    finally:
+        sup.stop(timeout_s=5.0)
+    assert argv_note.read_text().splitlines()[:2] == ["--port=1", "--port=1 --restarted"]
+    backend = command_lines(StationConfig(), Ports.isolated(None))[-1]
+    assert backend.restart_args == [RESTARTED_FLAG] and backend.standby_args == ["--standby"]
+
+
+def test_a_child_that_crashed_in_use_is_restarted_at_once_and_a_crash_loop_backs_off() -> None:
+    now = 1000.0
+    steady = Child("backend", [], started=now - STEADY_S, history=[now])
+    assert steady.restart_delay_s(now) == 0.0  # it ran: the robots wait for it
+    young = Child("backend", [], started=now - 1.0, history=[now])
+    assert young.restart_delay_s(now) == BACKOFF_STEP_S  # it died at its start: a pause
+    looping = Child("backend", [], started=now - 1.0,
+                    history=[now - 50.0 + k for k in range(20)] + [now])
+    assert looping.restart_delay_s(now) == BACKOFF_MAX_S
+    # restarts more than a minute ago do not count
+    old = Child("backend", [], started=now - 1.0, history=[now - 300.0, now - 200.0, now])
+    assert old.restart_delay_s(now) == BACKOFF_STEP_S
+
+
+def test_the_exit_of_a_child_wakes_the_watch(tmp_path: Path) -> None:
+    """``wait_exit`` returns when a child exits, not at its timeout (the launcher's loop
+    polled every 0.2 s): with an hour's timeout, this test would hang (and time out) if the
+    exit did not wake it."""
+    gate = tmp_path / "go"
+    child = Child("relay", [sys.executable, "-c",
+                            "import os, sys, time\n"
+                            "while not os.path.exists(sys.argv[1]): time.sleep(0.01)",
+                            str(gate)])
+    sup = Supervisor([_polite("backend", tmp_path / "note"), child])
+    sup.start()
+    try:
+        assert child.pidfd is not None  # Linux >= 5.3
+        assert not sup.dead()
+        gate.write_text("")
+        sup.wait_exit(3600.0)
+        assert sup.dead() == [child]
+    finally:
+        sup.stop(timeout_s=5.0)
+
+
+# a child that notes how it runs; with --standby it waits for its line first, as the backend
+_SPARE = """
+import sys, time
+note, args = sys.argv[1], sys.argv[2:]
+if "--standby" in args:
+    line = sys.stdin.readline()
+    with open(note, "a") as f:
+        f.write("spare told " + (line.strip() or "nothing") + "\\n")
+    if not line.startswith("start"):
+        sys.exit(0)
+    args += line.split()[1:]
+with open(note, "a") as f:
+    f.write("running " + " ".join(args) + "\\n")
+time.sleep(600)
+"""
+
+
+def test_a_warm_spare_takes_over_with_the_restart_flags(tmp_path: Path) -> None:
+    import os
+    import signal
+
+    note = tmp_path / "note.txt"
+    child = Child("backend", [sys.executable, "-c", _SPARE, str(note), "--port=1"],
+                  restart_args=["--restarted"], standby_args=["--standby"])
+    sup = Supervisor([child], restart=True, standby=True, spare_after_s=0.0)
+    sup.start()
+    try:
+        _wait(lambda: note.exists() and "running" in note.read_text())
+        _wait(lambda: sup.watch() is None and child.spare is not None)
+        assert child.spare is not None and child.proc is not None
+        spare, first = child.spare.pid, child.proc.pid
+        os.kill(first, signal.SIGKILL)
+        sup.wait_exit(3600.0)
+        assert sup.watch() is None
+        assert child.proc.pid == spare and child.restarts == 1  # no new process: the spare
+        _wait(lambda: "running --port=1 --standby --restarted" in note.read_text())
+        _wait(lambda: sup.watch() is None and child.spare is not None)  # and the next spare
+    finally:
+        sup.stop(timeout_s=5.0)
+    lines = note.read_text().splitlines()
+    assert lines == ["running --port=1", "spare told start --restarted",
+                     "running --port=1 --standby --restarted", "spare told nothing"], lines
+    assert child.spare is None
 
 
 def test_command_lines_of_the_station() -> None:

@@ -7,6 +7,8 @@ export type Side = "negative-x" | "positive-x";
 
 export type ControlAlgorithm = "algorithm1" | "algorithm2" | "proportional";
 
+export type RefereeCommand = "HALT" | "STOP" | "NORMAL_START" | "FORCE_START" | "PREPARE_KICKOFF_YELLOW" | "PREPARE_KICKOFF_BLUE" | "PREPARE_PENALTY_YELLOW" | "PREPARE_PENALTY_BLUE" | "DIRECT_FREE_YELLOW" | "DIRECT_FREE_BLUE" | "INDIRECT_FREE_YELLOW" | "INDIRECT_FREE_BLUE" | "TIMEOUT_YELLOW" | "TIMEOUT_BLUE" | "GOAL_YELLOW" | "GOAL_BLUE" | "BALL_PLACEMENT_YELLOW" | "BALL_PLACEMENT_BLUE";
+
 export type TargetSource = "operator" | "strategy" | "team";
 
 export type ServerMessage = SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage | PlayerMessage;
@@ -453,6 +455,7 @@ export interface Health {
   driving: DrivingInfo[];
   /** the latest operator actions, newest first */
   operator_actions: OperatorAction[];
+  startup: StartupInfo;
   /** the team folder's files and their states (as GET /api/team) */
   team_code: TeamFile[];
   evaluation: EvaluationJob;
@@ -499,14 +502,14 @@ export interface InternalReferee {
   disabled_reason: string;
   /** a game controller heard on the network (the internal referee steps aside) */
   foreign_source: string | null;
-  command: string;
+  command: RefereeCommand;
   stage: string;
   command_counter: number;
   designated_position: Vec | null;
   score: Score;
   max_allowed_bots: Score;
   /** the commands an operator may give */
-  commands: string[];
+  commands: RefereeCommand[];
 }
 
 export interface LatencyHealth {
@@ -793,7 +796,7 @@ export interface Referee {
   /** "game-controller", "internal" or "none" */
   source: string;
   source_identifier: string;
-  command: string;
+  command: RefereeCommand;
   stage: string;
   command_counter: number;
   stage_time_left_s: number | null;
@@ -811,8 +814,8 @@ export interface Referee {
 }
 
 export interface RefereeCommandIn {
-  /** HALT, STOP, FORCE_START, PREPARE_KICKOFF_BLUE, ... */
-  command: string;
+  /** a referee command the operator may give (InternalReferee.commands) */
+  command: RefereeCommand;
   /** for ball placement */
   designated_position?: Point | null;
 }
@@ -1021,6 +1024,19 @@ export interface SnapshotMessage {
   health: Health;
   params: ParamsState;
   player: Player;
+}
+
+/**
+ * The backend's start (backend/startup.py): the first command's steps first, then what
+ * it does not need.
+ */
+export interface StartupInfo {
+  /** restarted by the launcher's supervisor after a crash (arming taken back) */
+  restarted: boolean;
+  /** a warm spare the supervisor told to start: imported before the crash; its steps count from the word to start */
+  standby: boolean;
+  /** seconds from the backend's process start (a warm spare: from the word to start) at which each step was done: imports, station built, station running, first frame, first targets, first command; then recorder open, engine started, web imports, web serving (a step not done yet is absent) */
+  steps_s: Record<string, number>;
 }
 
 /**

@@ -14,6 +14,7 @@ import type {
   EvaluationJob,
   EvaluationReport,
   EvaluationView,
+  RefereeCommand,
   RefereeCommandIn,
   LogList,
   OperatorAction,
@@ -237,7 +238,7 @@ export function putTeamFile(name: string, text: string, base_version: string | n
  * the game), or clear (withdraw the team's cards). */
 export type Card = CardIn["card"];
 
-export function postRefereeCommand(command: string, designated_position?: { x: number; y: number }): Promise<RefereeView> {
+export function postRefereeCommand(command: RefereeCommand, designated_position?: { x: number; y: number }): Promise<RefereeView> {
   const body: RefereeCommandIn = designated_position
     ? { command, designated_position: { x: Math.round(designated_position.x), y: Math.round(designated_position.y) } }
     : { command };

@@ -13,6 +13,7 @@ export type {
   EnableIn,
   EstopIn,
   Point,
+  RefereeCommand,
   RefereeCommandIn,
   TargetIn,
   TeleportBallIn,

@@ -1,7 +1,7 @@
 import { useState } from "react";
 import type { Card } from "../api/http";
 import { giveRefereeCard, giveRefereeCommand, turnInternalRefereeOff } from "../actions";
-import type { Referee, RefereeGameEvent, RefereeTeam, Robot, Team } from "../api/types";
+import type { Referee, RefereeCommand, RefereeGameEvent, RefereeTeam, Robot, Team } from "../api/types";
 import { fmtFixed, fmtInt } from "../format";
 import { placementTarget, visibleRobots } from "../referee";
 import { useThrottledWorld } from "../store/hooks";
@@ -177,7 +177,7 @@ export function RefereeState({ ref, robots }: { ref: Referee | null; robots?: re
   );
 }
 
-const GRID: { label: string; cmds: [string, string] | [string] }[] = [
+const GRID: { label: string; cmds: [RefereeCommand, RefereeCommand] | [RefereeCommand] }[] = [
   { label: "Kickoff", cmds: ["PREPARE_KICKOFF_BLUE", "PREPARE_KICKOFF_YELLOW"] },
   { label: "Free kick", cmds: ["DIRECT_FREE_BLUE", "DIRECT_FREE_YELLOW"] },
   { label: "Penalty", cmds: ["PREPARE_PENALTY_BLUE", "PREPARE_PENALTY_YELLOW"] },
@@ -200,7 +200,7 @@ export function RefereePanel() {
 
   const foreign = internal?.foreign_source ?? null;
   const disabled = foreign !== null;
-  const send = async (cmd: string) => {
+  const send = async (cmd: RefereeCommand) => {
     if (cmd.startsWith("BALL_PLACEMENT")) {
       uiStore.setState({ placing: placing === cmd ? null : cmd });
       return;
@@ -224,7 +224,7 @@ export function RefereePanel() {
       {team}
     </button>
   );
-  const btn = (cmd: string, label = pretty(cmd), cls = "") => (
+  const btn = (cmd: RefereeCommand, label = pretty(cmd), cls = "") => (
     <button
       key={cmd}
       type="button"

@@ -1,5 +1,6 @@
 import { useState } from "react";
 import { setArmed, setEstop } from "../actions";
+import type { RefereeCommand } from "../api/types";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
 import { fmtFixed } from "../format";
 import { refereeSilentFor } from "../referee";
@@ -57,7 +58,7 @@ function VisionRate() {
   );
 }
 
-function refereeClass(command: string): string {
+function refereeClass(command: RefereeCommand): string {
   if (command === "HALT") return "ref-halt";
   if (command === "STOP") return "ref-stop";
   if (command === "NORMAL_START" || command === "FORCE_START") return "ref-run";

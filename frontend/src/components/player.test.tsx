@@ -1,7 +1,7 @@
 // @vitest-environment jsdom
 import { act } from "react";
 import { describe, expect, it, vi } from "vitest";
-import type { Player } from "../api/types";
+import type { Player, Referee } from "../api/types";
 import { speedStore } from "../player/actions";
 import { appStore, initialAppState } from "../store/appStore";
 import { domPerTest } from "../testing/dom";
@@ -62,7 +62,7 @@ describe("Timeline", () => {
 
   it("shows the position, the log's wall time and the stage", () => {
     act(() => t.root.render(<Timeline />));
-    const referee = {
+    const referee: Referee = {
       source: "game-controller", source_identifier: "", command: "STOP", stage: "NORMAL_FIRST_HALF", command_counter: 1,
       stage_time_left_s: 125, blue: refereeTeam("A"), yellow: refereeTeam("B"), designated_position: null,
       blue_team_on_positive_half: null, next_command: null, status_message: "", match_type: null,

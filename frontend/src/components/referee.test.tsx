@@ -131,7 +131,7 @@ describe("the ball placement target", () => {
   it("placementTarget: the position during BALL_PLACEMENT_BLUE/YELLOW only", () => {
     expect(placementTarget(referee("BALL_PLACEMENT_BLUE", { designated_position: mark }))).toEqual(mark);
     expect(placementTarget(referee("BALL_PLACEMENT_YELLOW", { designated_position: mark }))).toEqual(mark);
-    for (const cmd of ["STOP", "HALT", "TIMEOUT_YELLOW", "NORMAL_START", "PREPARE_KICKOFF_BLUE"]) {
+    for (const cmd of ["STOP", "HALT", "TIMEOUT_YELLOW", "NORMAL_START", "PREPARE_KICKOFF_BLUE"] as const) {
       expect(placementTarget(referee(cmd, { designated_position: mark })), cmd).toBeNull();
     }
     expect(placementTarget(referee("BALL_PLACEMENT_BLUE"))).toBeNull();

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import type { Robot, StrategyState } from "../api/types";
+import type { RefereeCommand, Robot, StrategyState } from "../api/types";
 import { geometry, referee, replayClock, world } from "../ws/fixtures";
 import { roleColor } from "../strategy/roles";
 import type { RecordedWorld } from "../api/types";
@@ -177,7 +177,7 @@ describe("drawField: strategy layers", () => {
 
 describe("drawField: the ball placement mark", () => {
   const mark = { x: 1500, y: -700 };
-  const draw = (command: string, dp = mark as { x: number; y: number } | null, layers = ALL_LAYERS) => {
+  const draw = (command: RefereeCommand, dp = mark as { x: number; y: number } | null, layers = ALL_LAYERS) => {
     const f = fakeCtx();
     const counts = drawField(f.ctx, { ...input([], layers), world: world(1, { referee: referee(command, { designated_position: dp }) }) });
     const centre = worldToCanvas(t, mark.x, mark.y);
@@ -187,7 +187,7 @@ describe("drawField: the ball placement mark", () => {
   };
 
   it("is drawn during a ball placement of either team, at the designated position", () => {
-    for (const cmd of ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"]) {
+    for (const cmd of ["BALL_PLACEMENT_BLUE", "BALL_PLACEMENT_YELLOW"] as const) {
       const d = draw(cmd);
       expect(d.counts.designated).toEqual(mark);
       expect(d.circles).toBe(1);
@@ -195,7 +195,7 @@ describe("drawField: the ball placement mark", () => {
   });
 
   it("is not drawn for a position the game controller sends outside a placement (STOP, timeout, start)", () => {
-    for (const cmd of ["STOP", "TIMEOUT_BLUE", "HALT", "DIRECT_FREE_YELLOW", "FORCE_START"]) {
+    for (const cmd of ["STOP", "TIMEOUT_BLUE", "HALT", "DIRECT_FREE_YELLOW", "FORCE_START"] as const) {
       const d = draw(cmd);
       expect(d.counts.designated).toBeNull();
       expect(d.circles).toBe(0);

@@ -3,6 +3,7 @@
 
 import { useSyncExternalStore } from "react";
 import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
+import type { RefereeCommand } from "../api/types";
 import { createStore } from "./createStore";
 
 export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "code" | "evaluate";
@@ -51,7 +52,7 @@ export interface UiState {
   largeText: boolean;
   help: boolean;
   /** Ball placement waiting for a click on the field: the referee command to give. */
-  placing: string | null;
+  placing: RefereeCommand | null;
 }
 
 const LS_KEY = "touchline.ui.v1";

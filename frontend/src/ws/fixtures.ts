@@ -11,6 +11,7 @@ import type {
   TeamFile,
   Recording,
   Referee,
+  RefereeCommand,
   RefereeTeam,
   StrategyView,
   StreamHealth,
@@ -103,6 +104,7 @@ export function health(rate = 60): Health {
     operators: [],
     driving: [],
     operator_actions: [],
+    startup: { restarted: false, standby: false, steps_s: { imports: 0.6, "first command": 0.7 } },
     team_code: [],
     evaluation: evaluationJob(),
   };
@@ -180,7 +182,7 @@ export const refereeTeam = (name: string, extra: Partial<RefereeTeam> = {}): Ref
 });
 
 /** A referee state with only the basic fields (as the internal referee sends). */
-export const referee = (command: string, extra: Partial<Referee> = {}): Referee => ({
+export const referee = (command: RefereeCommand, extra: Partial<Referee> = {}): Referee => ({
   source: "game-controller",
   source_identifier: "gc-1",
   command,

@@ -1,0 +1,45 @@
+"""The referee commands are one list (domain.rules.RefereeCommand): the proto's enum, the
+station's rule sets, the internal referee's buttons and the browser contract all follow it."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from pydantic import ValidationError
+
+from backend import contract
+from backend.referee.internal import OPERATOR_COMMANDS
+from domain import rules
+from sslpb.ssl_gc_referee_message_pb2 import Referee
+
+
+def test_the_commands_are_the_protos_enum_in_its_order() -> None:
+    wire = [v.name for v in sorted(Referee.Command.DESCRIPTOR.values, key=lambda v: v.number)]
+    assert list(rules.COMMANDS) == wire
+
+
+@pytest.mark.parametrize("subset", ["STOPPED_COMMANDS", "SLOW_COMMANDS"])
+def test_every_rule_set_names_commands_that_exist(subset: str) -> None:
+    assert set(getattr(rules, subset)) <= set(rules.COMMANDS)
+
+
+def test_the_operators_commands_exist() -> None:
+    assert set(OPERATOR_COMMANDS) <= set(rules.COMMANDS)
+    assert len(set(OPERATOR_COMMANDS)) == len(OPERATOR_COMMANDS)
+
+
+def test_the_contract_takes_only_a_command_that_exists() -> None:
+    assert contract.RefereeCommandIn(command="FORCE_START").command == "FORCE_START"
+    with pytest.raises(ValidationError) as err:
+        contract.RefereeCommandIn(command="DANCE")  # type: ignore[arg-type]
+    assert err.value.errors()[0]["loc"] == ("command",)
+
+
+def test_the_page_gets_the_commands_from_the_generated_contract() -> None:
+    from scripts.gen_contract import render_ts
+
+    ts = render_ts()
+    line = next(ln for ln in ts.splitlines() if ln.startswith("export type RefereeCommand ="))
+    names = json.loads("[" + line.split("=", 1)[1].rstrip(";").replace(" | ", ", ") + "]")
+    assert names == list(rules.COMMANDS)
