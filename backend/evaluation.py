@@ -22,10 +22,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from evaluate.jobs import default_out, run_class, run_suite, students_of
-from evaluate.pool import LocalPool
+# (evaluate.jobs, .pool and .runner, which import the headless runner, are imported when a
+# job starts: not in the station's start, which is ordered for the first command)
 from evaluate.report import REPORT_HTML, REPORT_JSON, read_report
-from evaluate.runner import Entrant
 from evaluate.scenario import SUITES_DIR, ScenarioError, Suite, load_suite
 
 from . import contract
@@ -112,6 +111,8 @@ class Evaluation:
             raise EvaluationError(422, str(exc)) from None
 
     def students(self) -> list[str]:
+        from evaluate.jobs import students_of
+
         d = self.settings.class_dir
         if d is None or not d.is_dir():
             return []
@@ -212,6 +213,8 @@ class Evaluation:
     # -- jobs -----------------------------------------------------------------------------
 
     def start(self, kind: str, suite: str, play: str | None, by: str) -> contract.EvaluationJob:
+        from evaluate.jobs import default_out
+
         folder = self.reports_folder
         if folder is None:
             raise EvaluationError(409, "no reports folder: start the station with "
@@ -269,6 +272,10 @@ class Evaluation:
 
     def _run(self, kind: str, suite: Suite, play: str | None, params: dict[str, Any],
              out: Path) -> None:
+        from evaluate.jobs import run_class, run_suite
+        from evaluate.pool import LocalPool
+        from evaluate.runner import Entrant
+
         pool = LocalPool(self.workers, nice=JOB_NICE)
         state, error = "done", ""
         try:

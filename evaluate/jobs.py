@@ -4,11 +4,12 @@ runs them on a backend and writes the report (JSON + HTML) into its folder, the 
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
+
+from domain.wallclock import file_stamp
 
 from .pool import DaskCluster, LocalPool
 from .report import write_report
@@ -33,7 +34,7 @@ RUNS = "runs"
 
 def default_out(root: Path, what: str) -> Path:
     """``root/<date>-<time>-<what>`` (a new folder: a report is never overwritten)."""
-    stamp = time.strftime("%Y%m%d-%H%M%S")
+    stamp = file_stamp()
     base = root / f"{stamp}-{safe_name(what)}"
     out, n = base, 1
     while out.exists():

@@ -23,13 +23,16 @@ from pathlib import Path
 from typing import Any, Literal
 
 from backend.params.model import PLAYS
+from domain.rules import COMMANDS, command_team
 
 TeamSide = Literal["ours", "theirs"]
 
-#: referee commands a scenario may give; the team ones take ``team = "ours" | "theirs"``
-PLAIN_COMMANDS = ("HALT", "STOP", "FORCE_START", "NORMAL_START")
-TEAM_COMMANDS = ("PREPARE_KICKOFF", "PREPARE_PENALTY", "DIRECT_FREE", "BALL_PLACEMENT",
-                 "TIMEOUT")
+#: referee commands a scenario may give, from the one list (domain.rules); the team ones take
+#: ``team = "ours" | "theirs"``. Not offered: the deprecated GOAL_* and INDIRECT_FREE_*.
+_DEPRECATED = ("GOAL", "INDIRECT_FREE")
+PLAIN_COMMANDS = tuple(c for c in COMMANDS if command_team(c) is None)
+TEAM_COMMANDS = tuple(c.removesuffix("_BLUE") for c in COMMANDS if c.endswith("_BLUE")
+                      and c.removesuffix("_BLUE") not in _DEPRECATED)
 #: fieldsim settings a scenario may change (``[sim]``), each with its allowed range
 SIM_FIELDS: dict[str, tuple[float, float]] = {
     "noise_mm": (0.0, 100.0), "noise_rad": (0.0, 1.0), "miss_prob": (0.0, 1.0),
