@@ -67,7 +67,7 @@ def main() -> None:
                         reports_dir=a.reports_dir, class_dir=a.class_dir,
                         suite_dirs=(Settings.from_env().suite_dirs if a.suite_dirs is None
                                     else a.suite_dirs),
-                        eval_workers=a.eval_workers,
+                        eval_workers=a.eval_workers, eval_cluster=a.eval_cluster,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
                         team_dir=a.team_dir,
                         allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
@@ -169,6 +169,9 @@ def _parser() -> argparse.ArgumentParser:
                         "(TOUCHLINE_CLASS_DIR)")
     p.add_argument("--eval-workers", type=int, default=None, metavar="N",
                    help="the Evaluate tab's pool workers (default: cores - 1, at least 1)")
+    p.add_argument("--eval-cluster", default=None, metavar="ADDRESS",
+                   help="run the Evaluate tab's jobs on a Dask cluster: a scheduler's "
+                        "tcp://host:8786, or local:N (docs/evaluate.md)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")

@@ -92,6 +92,9 @@ class Settings(BaseModel):
     record: bool = True
     #: the Evaluate tab's pool workers (None: cores - 1, at least 1)
     eval_workers: int | None = Field(default=None, ge=1, le=256)
+    #: the Evaluate tab's jobs on a Dask cluster instead of the local pool: a scheduler's
+    #: address (tcp://host:8786) or local:N (a LocalCluster of N workers started per job)
+    eval_cluster: str | None = Field(default=None, pattern=r"^((tcp|tls)://\S+|local:\d{1,3})$")
     #: the operator token for every change even on loopback (always off loopback)
     require_token: bool = False
     #: viewing (GET /api/*, the websocket) needs a token too (implies require_token)

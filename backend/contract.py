@@ -752,7 +752,10 @@ class EvaluationView(TypedDict):
     suites: list[EvaluationSuite]
     class_dir: str | None
     students: Annotated[list[str], Field(description="the class folder's sub-folders")]
-    workers: int
+    workers: Annotated[int, Field(description="the local pool's workers")]
+    cluster: Annotated[str | None, Field(
+        description="the Dask cluster the jobs run on (--eval-cluster), or null: the local "
+                    "pool")]
     job: EvaluationJob
     reports: list[EvaluationReportInfo]
 

@@ -141,6 +141,7 @@ class Evaluation:
             "class_dir": None if self.settings.class_dir is None else str(self.settings.class_dir),
             "students": self.students(),
             "workers": self.workers,
+            "cluster": self.settings.eval_cluster,
             "job": self.job(),
             "reports": self.reports(),
         }
@@ -273,12 +274,16 @@ class Evaluation:
     def _run(self, kind: str, suite: Suite, play: str | None, params: dict[str, Any],
              out: Path) -> None:
         from evaluate.jobs import run_class, run_suite
-        from evaluate.pool import LocalPool
+        from evaluate.pool import DaskCluster, LocalPool
         from evaluate.runner import Entrant
 
-        pool = LocalPool(self.workers, nice=JOB_NICE)
         state, error = "done", ""
+        pool: LocalPool | DaskCluster | None = None
         try:
+            # a cluster (--eval-cluster) is connected to for each job: one that is down fails
+            # that job with the reason, and the next job tries again
+            pool = (DaskCluster(self.settings.eval_cluster) if self.settings.eval_cluster
+                    else LocalPool(self.workers, nice=JOB_NICE))
             if kind == "class":
                 assert self.settings.class_dir is not None
                 run_class(self.settings.class_dir, suite, out, pool, self._progress,
@@ -292,7 +297,8 @@ class Evaluation:
             log.exception("evaluation job failed")
             state, error = "failed", f"{type(exc).__name__}: {exc}"
         finally:
-            pool.close()
+            if pool is not None:
+                pool.close()
         with self._lock:
             self._job["state"] = state  # type: ignore[typeddict-item]
             self._job["error"] = error

@@ -9,8 +9,10 @@ memory (RLIMIT_AS) and to one BLAS thread; a worker that dies (a crash in C code
 OOM killer) breaks the pool: the runs it had are tried once more in a fresh pool, then failed.
 Dask: ``client.submit(..., retries=2)`` (a run that raised in its worker is run again; a
 worker that dies has its runs rescheduled on the others by the scheduler, up to its
-``allowed-failures``), ``as_completed`` for progress; a run's log comes back as bytes (the
-worker may be another machine) and is written here.
+``allowed-failures``), ``as_completed`` for progress. A worker may be another machine, so
+nothing goes by path: the team folders' code files and the suite's ``checks.py`` travel with
+the task (``Shipped``) and are written to a temporary folder there; a run's log comes back as
+bytes and is written here.
 """
 
 from __future__ import annotations
@@ -19,18 +21,22 @@ import concurrent.futures
 import multiprocessing
 import os
 import resource
+import shutil
+import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from .runner import MatchTask, ScenarioTask, run_match_task, run_scenario_task
+from .runner import Entrant, MatchTask, ScenarioTask, run_match_task, run_scenario_task
 
 Task = ScenarioTask | MatchTask
 OnResult = Callable[[int, int, dict[str, Any]], None]  # done, total, result
 
 #: a pool worker's address space by default (a run takes ~150-300 MB; team code more)
 DEFAULT_MEMORY_MB = 3072
+#: a team folder's code shipped with each of its tasks to a cluster at most this big
+MAX_SHIPPED_BYTES = 8 << 20
 
 
 def run_task(task: Task) -> dict[str, Any]:
@@ -172,11 +178,25 @@ class DaskCluster:
             cancelled: Callable[[], bool] = lambda: False) -> list[dict[str, Any]]:
         from dask.distributed import as_completed
 
-        shipped = [_shipping(t) for t in tasks]
-        futs = [self.client.submit(run_task, t, retries=2, pure=False) for t in shipped]
-        index = {f.key: i for i, f in enumerate(futs)}
         results: list[dict[str, Any] | None] = [None] * len(tasks)
-        for done, fut in enumerate(as_completed(futs), 1):
+        cache: dict[str, Files] = {}
+        index: dict[Any, int] = {}  # a future's key -> its task
+        futs = []
+        done = 0
+        for i, t in enumerate(tasks):
+            try:
+                shipped = ship(t, cache)
+            except (OSError, ValueError) as exc:  # (that run fails, the others go)
+                results[i] = res = _failed(t, str(exc))
+                done += 1
+                if on_result is not None:
+                    on_result(done, len(tasks), res)
+                continue
+            fut = self.client.submit(run_shipped, shipped, retries=2, pure=False)
+            index[fut.key] = i
+            futs.append(fut)
+        for fut in as_completed(futs):
+            done += 1
             i = index[fut.key]
             try:
                 res = fut.result()
@@ -199,11 +219,94 @@ class DaskCluster:
             self._cluster.close()
 
 
-def _shipping(task: Task) -> Task:
-    """The task with its log coming back as bytes (a worker may be another machine)."""
-    import dataclasses
+Files = tuple[tuple[str, bytes], ...]
 
-    return dataclasses.replace(task, ship_log=task.log_path is not None)
+
+@dataclass(frozen=True)
+class Shipped:
+    """A task for a cluster worker, with the code it needs by content, not by path: each
+    team folder's play files (``folders``: the folder as named in the task -> its files,
+    relative names) and the suite's checks.py."""
+
+    task: Task
+    folders: tuple[tuple[str, Files], ...] = ()
+    checks: bytes | None = None
+
+
+def team_files(folder: str) -> Files:
+    """What the team-code host reads of a team folder (backend/teamcode/discovery.py): the
+    ``*.py`` and ``*.m`` files of its top level and of ``lib/``."""
+    from backend.teamcode.discovery import NAME_RE
+
+    root = Path(folder)
+    out: list[tuple[str, bytes]] = []
+    total = 0
+    for p in sorted([*root.glob("*"), *root.glob("lib/*")]):
+        rel = p.relative_to(root).as_posix()
+        if not p.is_file() or not NAME_RE.match(rel):
+            continue
+        data = p.read_bytes()
+        total += len(data)
+        if total > MAX_SHIPPED_BYTES:
+            raise ValueError(f"team folder {folder}: its code is over "
+                             f"{MAX_SHIPPED_BYTES >> 20} MB, too big to send to a cluster")
+        out.append((rel, data))
+    return tuple(out)
+
+
+def _entrants(task: Task) -> list[Entrant]:
+    return [task.blue, task.yellow] if isinstance(task, MatchTask) else [task.entrant]
+
+
+def ship(task: Task, cache: dict[str, Files] | None = None) -> Shipped:
+    """The task with its log coming back as bytes and its code going by content (``cache``:
+    folders already read, by path, as a series reuses them)."""
+    cache = {} if cache is None else cache
+    folders: dict[str, Files] = {}
+    for e in _entrants(task):
+        if e.team_dir and e.team_dir not in folders and Path(e.team_dir).is_dir():
+            if e.team_dir not in cache:
+                cache[e.team_dir] = team_files(e.team_dir)
+            folders[e.team_dir] = cache[e.team_dir]
+    checks = None
+    if isinstance(task, ScenarioTask) and task.checks_py:
+        checks = Path(task.checks_py).read_bytes()
+    return Shipped(replace(task, ship_log=task.log_path is not None),
+                   tuple(folders.items()), checks)
+
+
+def run_shipped(shipped: Shipped) -> dict[str, Any]:
+    """What a cluster worker calls: the shipped files written to a temporary folder, the task
+    pointed at them, run, the folder removed."""
+    if not shipped.folders and shipped.checks is None:
+        return run_task(shipped.task)
+    tmp = Path(tempfile.mkdtemp(prefix="evaluate-code-"))
+    try:
+        where: dict[str, str] = {}
+        for i, (name, files) in enumerate(shipped.folders):
+            # the folder's own name kept (a class report names students by it)
+            d = tmp / str(i) / Path(name).name
+            for rel, data in files:
+                (d / rel).parent.mkdir(parents=True, exist_ok=True)
+                (d / rel).write_bytes(data)
+            d.mkdir(parents=True, exist_ok=True)
+            where[name] = str(d)
+
+        def moved(e: Entrant) -> Entrant:
+            return replace(e, team_dir=where[e.team_dir]) if e.team_dir in where else e
+
+        task = shipped.task
+        if isinstance(task, MatchTask):
+            task = replace(task, blue=moved(task.blue), yellow=moved(task.yellow))
+        else:
+            checks_py = task.checks_py
+            if shipped.checks is not None:
+                checks_py = str(tmp / "checks.py")
+                Path(checks_py).write_bytes(shipped.checks)
+            task = replace(task, entrant=moved(task.entrant), checks_py=checks_py)
+        return run_task(task)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def make_backend(cluster: str | None, workers: int | None,

@@ -120,6 +120,9 @@ def main() -> int:
                    help="a folder of scenario suites the Evaluate tab offers (repeatable)")
     p.add_argument("--class-dir", default=None, metavar="DIR",
                    help="a class: one sub-folder per student (the Evaluate tab grades them)")
+    p.add_argument("--eval-cluster", default=None, metavar="ADDRESS",
+                   help="the Evaluate tab's jobs on a Dask cluster (tcp://host:8786, or "
+                        "local:N) instead of a local pool (docs/evaluate.md)")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
@@ -164,6 +167,8 @@ def main() -> int:
         replay_args.append(f"--log={os.path.abspath(a.log)}")
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
     replay_args += [f"--suite-dir={os.path.abspath(d)}" for d in a.suite_dirs]
+    if a.eval_cluster:
+        replay_args.append(f"--eval-cluster={a.eval_cluster}")
     if a.team_dir is not None:
         if not os.path.isdir(a.team_dir):
             log.error("no such team folder: %s", a.team_dir)

@@ -41,9 +41,11 @@ def test_a_crash_and_a_spin_fail_only_their_own_runs(tmp_path: Path) -> None:
 def test_a_team_play_run_is_repeatable_and_gets_its_task() -> None:
     suite = load_suite(str(HERE / "class_suite"))
     task = ScenarioTask(suite.scenarios[0], 0, Entrant(None, {}, str(HERE / "class" / "good")),
-                        None)
+                        None, suite.checks_file)
     a, b = run_scenario_task(task), run_scenario_task(task)
     assert a["passed"], a
+    # the suite's own check (its checks.py) ran in the worker beside the built-in one
+    assert [c["name"] for c in a["checks"]] == ["reach", "stopped"]
     strip = ("wall_s",)
     assert {k: v for k, v in a.items() if k not in strip} == \
         {k: v for k, v in b.items() if k not in strip}

@@ -378,7 +378,10 @@ export interface EvaluationView {
   class_dir: string | null;
   /** the class folder's sub-folders */
   students: string[];
+  /** the local pool's workers */
   workers: number;
+  /** the Dask cluster the jobs run on (--eval-cluster), or null: the local pool */
+  cluster: string | null;
   job: EvaluationJob;
   reports: EvaluationReportInfo[];
 }

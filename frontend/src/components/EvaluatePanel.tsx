@@ -261,9 +261,11 @@ export function EvaluatePanel() {
             </button>
           )}
         </div>
-        <p className="muted">
-          Runs headless in {view?.workers ?? "?"} worker process{view?.workers === 1 ? "" : "es"} beside the station, with the station&apos;s
-          parameters; nothing is sent to robots.
+        <p className="muted" data-testid="eval-where">
+          {view?.cluster
+            ? `Runs headless on the Dask cluster ${view.cluster}`
+            : `Runs headless in ${view?.workers ?? "?"} worker process${view?.workers === 1 ? "" : "es"} beside the station`}
+          , with the station&apos;s parameters; nothing is sent to robots.
         </p>
         {job && job.state !== "idle" && (
           <div className="eval-job" data-testid="eval-job" data-state={job.state}>
