@@ -207,7 +207,9 @@ class Director:
     def _log(self, kind: str, team: str | None = None, robot: int | None = None,
              detail: str = "") -> None:
         self.timeline.append({
-            "t": round(self.now - (self.t0 or self.now), 3), "kind": kind, "team": team,
+            # (t0 is None before the start; 0.0 is a start, on the headless virtual clock)
+            "t": round(self.now - self.t0, 3) if self.t0 is not None else 0.0,
+            "kind": kind, "team": team,
             "robot": robot, "command": self.referee.command, "stage": self.referee.stage,
             "detail": detail})
 

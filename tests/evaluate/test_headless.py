@@ -92,5 +92,10 @@ def test_a_short_match_is_played_and_judged(tmp_path: Path) -> None:
     assert res["finished"] and res["stage"] == "POST_GAME"
     assert set(res["score"]) == {"blue", "yellow"}
     assert (tmp_path / "m.log").stat().st_size > 100_000
+    # the timeline's times count from the start on the virtual clock (which starts at 0)
+    ts = [e["t"] for e in res["timeline"]]
+    assert ts == sorted(ts) and ts[-1] == pytest.approx(a["sim_s"], abs=0.1), ts
+    halves = [e["t"] for e in res["timeline"] if e["kind"] == "half_end"]
+    assert len(halves) == 2 and halves[0] >= 4.0
     b = run_match_task(dataclasses.replace(task, log_path=None))
     assert a["result"] == b["result"]
