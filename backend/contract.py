@@ -782,6 +782,9 @@ class EvaluationRun(TypedDict):
     score: float
     detail: Annotated[str, Field(description="a match's score line")]
     error: str
+    team_error: Annotated[str, Field(
+        description='why the team play failed (its file\'s error with its line first, or why '
+                    'its robots were stopped), or ""')]
     sim_s: float
     replay: Annotated[bool, Field(description="its SSL log was kept")]
     checks: list[EvaluationCheck]

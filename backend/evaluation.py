@@ -326,6 +326,18 @@ def _run_id(r: dict[str, Any]) -> str:
     return f"{r['student']}.{r['name']}" if r.get("student") else str(r["name"])
 
 
+def _team_error(r: dict[str, Any]) -> str:
+    """A run's team play failure in one line: a scenario's ``team_error``, or a match's first
+    (its result's ``team_errors`` by colour)."""
+    te = r.get("team_error")
+    result = r.get("result")
+    by_colour = result.get("team_errors") if isinstance(result, dict) else None
+    if not te and isinstance(by_colour, dict):
+        te = next((f"{colour}: {errs[0]['why']}" for colour, errs in
+                   sorted(by_colour.items()) if errs), "")
+    return str(te).splitlines()[0] if te else ""
+
+
 def _num(v: Any) -> float | None:
     return float(v) if isinstance(v, int | float) and not isinstance(v, bool) \
         and math.isfinite(v) else None
@@ -354,6 +366,7 @@ def _detail(name: str, rep: dict[str, Any]) -> contract.EvaluationReport:
             "seed": int(r.get("seed") or 0),
             "passed": bool(r.get("passed")), "score": _num(r.get("score")) or 0.0,
             "detail": detail, "error": str(err).splitlines()[0] if err else "",
+            "team_error": _team_error(r),
             "sim_s": _num(r.get("sim_s")) or 0.0, "replay": bool(r.get("log")),
             "checks": [{"name": str(c["name"]), "label": str(c.get("label", c["name"])),
                         "passed": bool(c["passed"]), "score": float(c["score"]),

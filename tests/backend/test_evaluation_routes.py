@@ -68,6 +68,7 @@ def test_a_suite_runs_and_a_failed_run_opens_in_the_player(
     assert not failed["passed"] and failed["replay"]
     assert {ch["name"]: ch["passed"] for ch in failed["checks"]} == {
         "ball_in_goal": True, "no_collision": False, "no_violation": False}
+    assert failed["team_error"] == ""  # built-in plays: no team code to fail
     page = c.get(f"/api/evaluate/reports/{job['report']}/html")
     assert page.status_code == 200 and "default-src 'none'" in \
         page.headers["content-security-policy"] and "quick_goal" in page.text

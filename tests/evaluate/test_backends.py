@@ -192,6 +192,10 @@ def test_the_station_grades_a_class_on_the_cluster(tmp_path: Path, cluster: str)
                 for k, g in grades.items()} == {"crash": False, "good": True, "spin": False}
         assert grades["crash"]["cells"]["drive"]["note"].startswith(
             "exception at drive_to_point.py:7: ZeroDivisionError")
+        runs = {x["id"]: x for x in rep["runs"]}
+        assert runs["crash.drive"]["team_error"].startswith(
+            "exception at drive_to_point.py:7: ZeroDivisionError")
+        assert runs["good.drive"]["team_error"] == ""
         run = grades["spin"]["cells"]["drive"]["run"]
         assert run == "spin.drive"
         r = c.post("/api/evaluate/replay", json={"report": job["report"], "run": run})

@@ -345,6 +345,8 @@ export interface EvaluationRun {
   /** a match's score line */
   detail: string;
   error: string;
+  /** why the team play failed (its file's error with its line first, or why its robots were stopped), or "" */
+  team_error: string;
   sim_s: number;
   /** its SSL log was kept */
   replay: boolean;

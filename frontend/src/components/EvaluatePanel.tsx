@@ -47,19 +47,34 @@ async function replay(report: string, run: string): Promise<void> {
   }
 }
 
-function RunRow({ report, run }: { report: string; run: EvaluationRun }) {
+/** A match series' report: its runs are matches, with a score and no pass or fail. */
+function isMatches(report: EvaluationReport): boolean {
+  return report.kind === "matches" || report.kind === "ab-matches";
+}
+
+function RunRow({ report, run, match }: { report: string; run: EvaluationRun; match: boolean }) {
+  const failed = match ? run.error !== "" : !run.passed;
   return (
-    <tr data-testid={`eval-run-${run.id}`} className={run.passed ? "" : "eval-row-failed"}>
+    <tr data-testid={`eval-run-${run.id}`} className={failed ? "eval-row-failed" : ""}>
       <td>
         {run.student ? <div className="muted">{run.student}</div> : null}
         {run.name}
-        {run.detail ? <div className="muted">{run.detail}</div> : null}
+        {run.detail && !match ? <div className="muted">{run.detail}</div> : null}
       </td>
       <td>
-        <Pass ok={run.passed} /> {run.score.toFixed(2)}
+        {match ? run.detail || "no result" : (
+          <>
+            <Pass ok={run.passed} /> {run.score.toFixed(2)}
+          </>
+        )}
       </td>
       <td className="eval-checks">
         {run.error ? <div className="eval-fail">{run.error}</div> : null}
+        {run.team_error ? (
+          <div className="eval-fail" data-testid={`eval-team-error-${run.id}`}>
+            team play: {run.team_error}
+          </div>
+        ) : null}
         {run.checks.map((c) => (
           <div key={c.name + c.label} title={c.detail}>
             <Pass ok={c.passed} /> {c.label}: <span className="muted">{c.detail}</span>
@@ -79,7 +94,8 @@ function RunRow({ report, run }: { report: string; run: EvaluationRun }) {
 
 export function ReportView({ report }: { report: EvaluationReport }) {
   const [failedOnly, setFailedOnly] = useState(false);
-  const runs = failedOnly ? report.runs.filter((r) => !r.passed) : report.runs;
+  const match = isMatches(report);
+  const runs = failedOnly ? report.runs.filter((r) => (match ? r.error !== "" : !r.passed)) : report.runs;
   return (
     <section className="eval-report" data-testid="eval-report">
       <h3>
@@ -89,7 +105,8 @@ export function ReportView({ report }: { report: EvaluationReport }) {
         </a>
       </h3>
       <p className="muted">
-        {report.kind} · {when(report.created_unix)} · {report.passed}/{report.runs.length} runs passed
+        {report.kind} · {when(report.created_unix)} ·{" "}
+        {match ? `${report.runs.length} matches` : `${report.passed}/${report.runs.length} runs passed`}
         {report.score !== null ? ` · score ${report.score.toFixed(2)}` : ""}
       </p>
       {report.verdict && (
@@ -121,8 +138,15 @@ export function ReportView({ report }: { report: EvaluationReport }) {
                   return (
                     <td key={x} title={c.note || `${c.runs_passed}/${c.runs} runs, ${c.sim_s.toFixed(1)} s simulated`}>
                       <Pass ok={c.passed} /> {c.score.toFixed(2)}
+                      {c.note && !c.passed ? <div className="muted eval-note">{c.note}</div> : null}
                       {c.run && (
-                        <button type="button" className="eval-cell-replay" onClick={() => void replay(report.name, c.run ?? "")}>
+                        <button
+                          type="button"
+                          className="eval-cell-replay"
+                          onClick={() => void replay(report.name, c.run ?? "")}
+                          title={`replay ${c.run}`}
+                          data-testid={`eval-cell-replay-${g.student}-${x}`}
+                        >
                           ▶
                         </button>
                       )}
@@ -135,7 +159,8 @@ export function ReportView({ report }: { report: EvaluationReport }) {
         </table>
       )}
       <label className="eval-filter">
-        <input type="checkbox" checked={failedOnly} onChange={(e) => setFailedOnly(e.target.checked)} data-testid="eval-failed-only" /> failed runs only
+        <input type="checkbox" checked={failedOnly} onChange={(e) => setFailedOnly(e.target.checked)} data-testid="eval-failed-only" />{" "}
+        {match ? "matches without a result only" : "failed runs only"}
       </label>
       <table className="difftable eval-runs" data-testid="eval-runs">
         <thead>
@@ -148,7 +173,7 @@ export function ReportView({ report }: { report: EvaluationReport }) {
         </thead>
         <tbody>
           {runs.map((r) => (
-            <RunRow key={r.id} report={report.name} run={r} />
+            <RunRow key={r.id} report={report.name} run={r} match={match} />
           ))}
         </tbody>
       </table>
@@ -294,7 +319,12 @@ export function EvaluatePanel() {
         )}
       </section>
       <section>
-        <h3>Reports</h3>
+        <h3>
+          Reports{" "}
+          <button type="button" className="eval-refresh" onClick={refresh} title="list the reports folder again (python -m evaluate writes there too)" data-testid="eval-refresh">
+            Refresh
+          </button>
+        </h3>
         {view && view.reports.length === 0 ? (
           <p className="muted">none yet</p>
         ) : (
@@ -307,9 +337,7 @@ export function EvaluatePanel() {
                     <div className="muted">{when(r.created_unix)}</div>
                   </td>
                   <td>{r.kind}</td>
-                  <td>
-                    {r.passed}/{r.runs}
-                  </td>
+                  <td>{r.kind === "matches" || r.kind === "ab-matches" ? `${r.runs} matches` : `${r.passed}/${r.runs}`}</td>
                 </tr>
               ))}
             </tbody>

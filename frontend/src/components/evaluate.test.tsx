@@ -47,6 +47,7 @@ const CLASS_REPORT: EvaluationReport = {
       score: 0,
       detail: "",
       error: "",
+      team_error: "",
       sim_s: 3.5,
       replay: true,
       checks: [{ name: "keeper_saved", label: "saved", passed: false, score: 0, detail: "conceded at 0.93 s" }],
@@ -77,5 +78,32 @@ describe("Evaluate", () => {
     const [url, init] = fetchMock.mock.calls[0] as unknown as [string, RequestInit];
     expect(url).toBe("/api/evaluate/replay");
     expect(JSON.parse(String(init.body))).toEqual({ report: CLASS_REPORT.name, run: "ada.goalkeeper#1" });
+  });
+
+  it("shows a match series as matches with their scores and the verdict, not as failed runs", async () => {
+    const match = (n: number, detail: string, error = "") => ({
+      id: `A-match-00${n}`, name: `A-match-00${n}`, scenario: "", title: `A-match-00${n}`, student: null, seed: n,
+      passed: false, score: 0, detail, error, team_error: "", sim_s: 200, replay: true, checks: [],
+    });
+    const report: EvaluationReport = {
+      ...CLASS_REPORT,
+      name: "20250101-120000-ab-vs-simple",
+      title: "A/B A:match vs B:match against simple",
+      kind: "ab-matches",
+      passed: 0,
+      score: null,
+      verdict: "not significant: A:match minus B:match (win rates against simple) +0.05 has a 95 % interval -0.16 to +0.26, which contains 0",
+      exercises: [],
+      grades: [],
+      runs: [match(1, "A:match 2 : 0 simple"), match(2, "", "the match did not finish in its time bound")],
+    };
+    await act(async () => t.root.render(<ReportView report={report} />));
+    expect(q("eval-verdict")!.textContent).toContain("not significant");
+    expect(q("eval-report")!.textContent).toContain("2 matches");
+    const first = q("eval-run-A-match-001")!;
+    expect(first.textContent).toContain("A:match 2 : 0 simple");
+    expect(first.querySelector(".eval-fail")).toBeNull();
+    expect(first.className).not.toContain("eval-row-failed");
+    expect(q("eval-run-A-match-002")!.className).toContain("eval-row-failed");
   });
 });
