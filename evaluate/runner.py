@@ -476,7 +476,8 @@ class MatchRun(Engine):
                 side.use_team_play(ent.team_dir, ent.play)
         self.director = Director(MatchConfig(
             half_s=task.half_s, division=task.division, blue_on_positive=task.blue_on_positive,
-            plays=task.labels, interludes=task.interludes), wall_offset_s=float(EPOCH_UNIX_S))
+            plays=task.labels, interludes=task.interludes), wall_offset_s=float(EPOCH_UNIX_S),
+            source_identifier=f"touchline-evaluate-{task.name}-seed-{task.seed}")
         self._revision = -1
 
     def _direct(self) -> None:

@@ -96,13 +96,17 @@ class _Interlude:
 
 
 class Director:
-    def __init__(self, config: MatchConfig | None = None, *, wall_offset_s: float = 0.0) -> None:
+    def __init__(self, config: MatchConfig | None = None, *, wall_offset_s: float = 0.0,
+                 source_identifier: str | None = None) -> None:
         self.cfg = config if config is not None else MatchConfig()
         self.field = division(self.cfg.division)
         self.timing = self.cfg.timing
         self.grace = self.cfg.grace
         self.wall_offset_s = wall_offset_s
-        self.referee = MatchReferee(source_identifier=f"touchline-match-{uuid.uuid4()}")
+        # a live match is one of a kind; a headless one names itself (the same seed gives the
+        # same log, byte for byte)
+        self.referee = MatchReferee(
+            source_identifier=source_identifier or f"touchline-match-{uuid.uuid4()}")
         self.referee.blue_team_on_positive_half = self.cfg.blue_on_positive
         self.referee.blue.goalkeeper = self.cfg.goalkeepers.get("blue", 0)
         self.referee.yellow.goalkeeper = self.cfg.goalkeepers.get("yellow", 0)

@@ -4,6 +4,10 @@ log; deterministic for a seed."""
 from __future__ import annotations
 
 import dataclasses
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -97,5 +101,17 @@ def test_a_short_match_is_played_and_judged(tmp_path: Path) -> None:
     assert ts == sorted(ts) and ts[-1] == pytest.approx(a["sim_s"], abs=0.1), ts
     halves = [e["t"] for e in res["timeline"] if e["kind"] == "half_end"]
     assert len(halves) == 2 and halves[0] >= 4.0
-    b = run_match_task(dataclasses.replace(task, log_path=None))
-    assert a["result"] == b["result"]
+    # the same match in another process, whose string hashes differ (PYTHONHASHSEED): the
+    # same result and the same log, byte for byte (the referee's match id, the order of two
+    # violations found in one frame once differed)
+    other = tmp_path / "other.log"
+    code = ("import json, sys; from evaluate.runner import Entrant, MatchTask, run_match_task; "
+            "t = MatchTask('m', Entrant('match'), Entrant('simple'), 3, half_s=4.0, "
+            "interludes=False, log_path=sys.argv[1]); "
+            "print(json.dumps(run_match_task(t)['result']))")
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code, str(other)], cwd=root, check=True,
+                         capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": str(root), "PYTHONHASHSEED": "4242"})
+    assert json.loads(out.stdout.splitlines()[-1]) == json.loads(json.dumps(a["result"]))
+    assert other.read_bytes() == (tmp_path / "m.log").read_bytes()
