@@ -105,15 +105,16 @@ match: build multicast
 	$(PY) -m match --minutes $(MINUTES)
 
 # Scenario suites, headless and in parallel (docs/evaluate.md): make evaluate SUITE=exercises
-# PLAY=match OUT=folder (default var/reports/<date>-<time>-<suite>); more flags in EVAL_ARGS
-# (python -m evaluate suite --help), e.g. EVAL_ARGS="--cluster tcp://host:8786"
+# PLAY=match OUT=folder (default var/reports/<date>-<time>-<suite>); TEAM=folder: team plays
+# from there (e.g. TEAM=evaluate/solutions); more flags in EVAL_ARGS (python -m evaluate suite
+# --help), e.g. EVAL_ARGS="--cluster tcp://host:8786"
 SUITE ?= regression
 PLAY ?=
 OUT ?=
 EVAL_ARGS ?=
 evaluate: setup
 	$(PY) -m evaluate suite $(SUITE) $(if $(PLAY),--play $(PLAY)) $(if $(OUT),--out "$(OUT)") \
-	  $(EVAL_ARGS)
+	  $(if $(TEAM),--team-dir "$(TEAM)") $(EVAL_ARGS)
 
 clean:
 	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report

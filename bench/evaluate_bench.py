@@ -12,6 +12,7 @@ number; a figure whose 1-minute load moved much is not comparable with the next 
 from __future__ import annotations
 
 import argparse
+import resource
 import tempfile
 import time
 from pathlib import Path
@@ -30,26 +31,35 @@ def load() -> str:
 
 
 def match_speed(half_s: float, cameras: int = 4) -> None:
-    task = MatchTask("bench", Entrant("match"), Entrant("simple"), 1, half_s, cameras=cameras)
-    before = load()
-    t0, c0 = time.perf_counter(), time.process_time()
-    res = run_match_task(task)
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    with tempfile.TemporaryDirectory() as tmp:
+        log = Path(tmp) / "match.log"
+        task = MatchTask("bench", Entrant("match"), Entrant("simple"), 1, half_s,
+                         cameras=cameras, log_path=str(log))
+        before = load()
+        t0, c0 = time.perf_counter(), time.process_time()
+        res = run_match_task(task)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        size = log.stat().st_size if log.exists() else 0
     sim = float(res.get("sim_s") or 0.0)
     print(f"match 6 v 6 (match v simple, {half_s:g} s halves, interludes, {cameras} cameras): "
           f"{sim:.1f} s of game "
           f"in {wall:.1f} s wall / {cpu:.1f} s CPU: {sim / wall:.1f}x real time (wall), "
-          f"{sim / cpu:.1f}x (CPU); score {res.get('score')}; load {before} -> {load()}")
+          f"{sim / cpu:.1f}x (CPU); score {res.get('score')}; log {size / 1e6:.1f} MB; "
+          f"this process {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB "
+          f"at most; load {before} -> {load()}")
 
 
 def suite_speed(backend: LocalPool | DaskCluster, label: str, out: Path, play: str | None,
                 team_dir: str | None) -> None:
     suite = load_suite("exercises")
     before = load()
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     rep = run_suite(suite, Entrant(play, {}, team_dir), out, backend, keep_logs=True)
     wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = rep["timing"]
+    logs = [p.stat().st_size for p in (out / "runs").glob("*.log")]
     who = f"play {play}" if play else f"each scenario's play from {Path(team_dir or '.').name}"
     print(f"exercises ({len(suite.scenarios)} scenarios, {t['runs']} runs, {who}) on "
           f"{label}: {wall:.1f} s wall, {t['runs'] / wall:.2f} runs/s "
@@ -57,6 +67,13 @@ def suite_speed(backend: LocalPool | DaskCluster, label: str, out: Path, play: s
           f"per worker-busy minute, {t['speed_vs_real_time']}x real time a run, "
           f"{rep['summary']['totals']['passed']}/{t['runs']} passed; "
           f"load {before} -> {load()}")
+    if isinstance(backend, LocalPool):
+        # the pool's workers (and the team plays' processes they ran) have ended and been
+        # waited for: their CPU is this process's children's
+        cpu = (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime)
+        print(f"  CPU {cpu:.1f} s: {cpu / t['runs']:.2f} s a run; largest process "
+              f"{r1.ru_maxrss / 1024:.0f} MB; logs {sum(logs) / 1e6:.1f} MB "
+              f"({max(logs) / 1e6:.2f} MB the largest)")
 
 
 def main() -> None:
@@ -71,9 +88,11 @@ def main() -> None:
                          "a class's)")
     ap.add_argument("--quick", action="store_true", help="the pool at 2 workers only")
     ap.add_argument("--match-only", action="store_true")
+    ap.add_argument("--suites-only", action="store_true")
     args = ap.parse_args()
-    match_speed(args.half_s)
-    match_speed(args.half_s, cameras=2)
+    if not args.suites_only:
+        match_speed(args.half_s)
+        match_speed(args.half_s, cameras=2)
     if args.match_only:
         return
     with tempfile.TemporaryDirectory() as tmp:

@@ -179,3 +179,36 @@ def test_the_shipped_suites_load() -> None:
     for name in ("exercises", "regression"):
         suite = load_suite(name)
         assert suite.scenarios, name
+
+
+def _known_fields(text: str, field: str) -> list[str]:
+    """The fields a table reads, as the parser says them for an unknown one."""
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario_text(text, "keeper", "keeper.toml")
+    assert err.value.field.endswith(field), str(err.value)
+    return str(err.value).split("known here: ")[1].rstrip(")").split(", ")
+
+
+def test_the_documentation_names_every_field_and_check() -> None:
+    """docs/evaluate.md is where a scenario's author looks: every field the parser reads,
+    every built-in check and every referee command a scenario may give are in it."""
+    from evaluate.checks import BUILTIN
+    from evaluate.scenario import LATENCY_FIELDS, PLAIN_COMMANDS, SIM_FIELDS, TEAM_COMMANDS
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "evaluate.md").read_text()
+    top = _known_fields("zzz = 1\n" + GOOD, "zzz")
+    ours = _known_fields(GOOD.replace('[ours]\n', '[ours]\nzzz = 1\n'), "ours.zzz")
+    opponent = _known_fields(GOOD + '\n[opponent]\nzzz = 1\n', "opponent.zzz")
+    fields = _known_fields(GOOD.replace('[field]\n', '[field]\nzzz = 1\n'), "field.zzz")
+    assert len(top) >= 15 and "vary" in top and "operator_targets" in ours
+    wanted = [*top, *ours, *opponent, *fields, *SIM_FIELDS, *LATENCY_FIELDS, *BUILTIN,
+              *PLAIN_COMMANDS, *TEAM_COMMANDS]
+    missing = [w for w in wanted if w not in doc]
+    assert not missing, f"docs/evaluate.md does not mention {missing}"
+    # and its example file is one the parser takes
+    import re
+
+    example = re.search(r"```toml\n(.*?)```", doc, re.S)
+    assert example is not None
+    sc = parse_scenario_text(example.group(1), "example", "docs/evaluate.md")
+    assert sc.runs == 20 and [c.name for c in sc.checks] == ["keeper_saved"]
