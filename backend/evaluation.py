@@ -196,8 +196,7 @@ class Evaluation:
         d = self._report_dir(report)
         check_name("run", run)
         rep = read_report(d)
-        runs = [r for k in ("runs", "a_runs", "b_runs") for r in rep.get(k, [])]
-        found = next((r for r in runs if _run_id(r) == run), None)
+        found = next((r for rid, r in _all_runs(rep) if rid == run), None)
         if found is None:
             raise EvaluationError(404, f"report {report!r} has no run {run!r}")
         path = found.get("log")
@@ -321,9 +320,21 @@ def _idle(job_id: int) -> contract.EvaluationJob:
             "report": None, "by": "", "error": "", "last": ""}
 
 
-def _run_id(r: dict[str, Any]) -> str:
-    """A run's name within its report (a class report: the student's name first)."""
-    return f"{r['student']}.{r['name']}" if r.get("student") else str(r["name"])
+def _run_id(r: dict[str, Any], side: str = "") -> str:
+    """A run's name within its report: a class report's with the student's name first, an
+    A/B's with its side (``A-``, ``B-``) unless its name has it (a match series' do)."""
+    if r.get("student"):
+        return f"{r['student']}.{r['name']}"
+    name = str(r["name"])
+    return f"{side}-{name}" if side and not name.startswith(f"{side}-") else name
+
+
+def _all_runs(rep: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """Every run of a report with its id (an A/B suite runs each scenario once for A and
+    once for B under the same name)."""
+    return [(_run_id(r, side), r) for key, side in (("runs", ""), ("a_runs", "A"),
+                                                     ("b_runs", "B"))
+            for r in rep.get(key, [])]
 
 
 def _team_error(r: dict[str, Any]) -> str:
@@ -355,13 +366,13 @@ def _info(name: str, rep: dict[str, Any]) -> contract.EvaluationReportInfo:
 
 def _detail(name: str, rep: dict[str, Any]) -> contract.EvaluationReport:
     runs: list[contract.EvaluationRun] = []
-    for r in [r for k in ("runs", "a_runs", "b_runs") for r in rep.get(k, [])]:
+    for rid, r in _all_runs(rep):
         detail = ""
         if r.get("kind") == "match" and isinstance(r.get("score"), dict):
             detail = f"{r['blue']} {r['score']['blue']} : {r['score']['yellow']} {r['yellow']}"
         err = r.get("error")
         runs.append({
-            "id": _run_id(r), "name": str(r["name"]), "scenario": str(r.get("scenario", "")),
+            "id": rid, "name": str(r["name"]), "scenario": str(r.get("scenario", "")),
             "title": str(r.get("title", r["name"])), "student": r.get("student"),
             "seed": int(r.get("seed") or 0),
             "passed": bool(r.get("passed")), "score": _num(r.get("score")) or 0.0,

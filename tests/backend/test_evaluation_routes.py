@@ -98,3 +98,34 @@ def test_names_only_and_clear_refusals(client: tuple[TestClient, Station]) -> No
     assert r.status_code == 422
     r = c.post("/api/evaluate/replay", json={"report": "nosuch", "run": "a"})
     assert r.status_code == 404
+
+
+def test_an_ab_report_from_the_cli_names_each_side_s_runs(
+        client: tuple[TestClient, Station], tmp_path: Path) -> None:
+    """An A/B of two plays on a suite, written into the reports folder as python -m evaluate
+    does: listed, its verdict, each side's run by its own id (both sides run every scenario
+    under the same name), B's failed run opened in the player."""
+    from evaluate.jobs import run_ab_suite
+    from evaluate.pool import LocalPool
+    from evaluate.runner import Entrant
+    from evaluate.scenario import load_suite
+
+    c, _ = client
+    run_ab_suite(load_suite(str(QUICK)), Entrant("match", label="A:match"),
+                 Entrant("simple", label="B:simple"), tmp_path / "reports" / "ab-quick",
+                 LocalPool(2))
+    [info] = c.get("/api/evaluate").json()["reports"]
+    assert info["name"] == "ab-quick" and info["kind"] == "ab-suite" and info["runs"] == 6
+    rep = c.get("/api/evaluate/reports/ab-quick").json()
+    assert "A:match minus B:simple (pass rates)" in rep["verdict"]
+    ids = [r["id"] for r in rep["runs"]]
+    assert sorted(ids) == sorted(f"{side}-{n}" for side in "AB"
+                                 for n in ("quick_goal", "quick_keeper#1", "quick_keeper#2"))
+    r = c.post("/api/evaluate/replay", json={"report": "ab-quick", "run": "B-quick_goal"})
+    assert r.status_code == 200, r.text
+    deadline = time.monotonic() + 60
+    while (p := c.get("/api/player").json())["source"] != "log":
+        assert not p["error"], p["error"]
+        assert time.monotonic() < deadline, p
+        time.sleep(0.1)  # the player indexes the log in a worker (the condition), bounded
+    assert p["file"].endswith("B-quick_goal.log")
