@@ -52,7 +52,7 @@ def create_app(settings: Settings, station: Station | None = None,
     app.state.station = st
     app.state.access = rule
     app.state.settings = settings
-    st.access_health = rule.health
+    st.web.access = rule.health
     # the caller's role from its token (backend.access; each route's dependency decides what
     # the role allows), behind the EdgeGuard (the last added runs first)
     app.add_middleware(AccessGuard, rule=rule)

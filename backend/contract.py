@@ -18,6 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field, with_config
 from typing_extensions import TypedDict
 
 # the contract's names for the domain's types (one definition each, in domain/)
+from domain.rules import BALL_RADIUS_MM, ROBOT_RADIUS_MM
 from domain.rules import RefereeCommand as RefereeCommand
 from domain.teams import Team as Team
 
@@ -229,13 +230,39 @@ class RawCamera(TypedDict):
 
 
 @with_config(_STRICT)
+class RecordedCommand(TypedDict):
+    """In replay: the command the live station sent one robot at this time, as recorded
+    (TYPE_TL_COMMANDS), in the robot's frame: what the robot was told, beside what the
+    strategy in force now commands it (what-if)."""
+
+    team: Team
+    id: int
+    forward_mps: float
+    left_mps: float
+    angular_radps: float
+    kick_speed_mps: float
+    chip: bool
+    dribbler_rpm: float
+    age_s: Annotated[float, Field(
+        description="log time from the recorded command to the playhead (a robot sent nothing "
+                    "for longer than the relay's command timeout, 0.1 s, is not listed: the "
+                    "relay sent it zero)")]
+
+
+@with_config(_STRICT)
 class RecordedWorld(TypedDict):
     """In replay: the world the live station estimated at this time, as recorded (tracked
-    vision, type 5), drawn beside today's estimate of the same vision (what-if)."""
+    vision, type 5), drawn beside today's estimate of the same vision (what-if); and the
+    commands it sent then (type 1001), beside the commands computed now."""
 
-    source: Annotated[str, Field(description="the tracker's source name, e.g. Touchline")]
+    source: Annotated[str, Field(
+        description='the tracker\'s source name, e.g. Touchline ("" when the log has no '
+                    'tracked vision)')]
     ball: Vec | None
     robots: list[RawRobot]
+    commands: Annotated[list[RecordedCommand], Field(
+        description="the commands recorded for the robots at the playhead (empty when the log "
+                    "has none: only Touchline's logs record them)")]
 
 
 @with_config(_STRICT)
@@ -419,7 +446,8 @@ class World(TypedDict):
     replay: Annotated[ReplayClock | None, Field(
         description="set while the station replays a log (nothing is sent to robots then)")]
     recorded: Annotated[RecordedWorld | None, Field(
-        description="in replay, the estimate recorded in the log (null live, or if none)")]
+        description="in replay, the estimate and the commands recorded in the log (null live, "
+                    "or if the log has neither)")]
     team: Annotated[dict[str, dict[str, float]], Field(
         description="the team's processors' latest outputs (team/<name>.py: {key: number}; "
         "booleans as 0/1), plotted as team.<name>.<key>")]
@@ -933,6 +961,9 @@ class TeamFile(TypedDict):
     ticks: int
     errors: int
     overruns: Annotated[int, Field(description="ticks over the time budget (output discarded)")]
+    late: Annotated[int, Field(
+        description="ticks whose answer came after the tick stopped waiting (the budget + a "
+                    "grace, wall clock: a busy machine), not over the budget (output discarded)")]
     moved_out: Annotated[int, Field(
         description="targets the safety envelope moved out of a forbidden area, or capped")]
     tick_ms_p50: Annotated[float | None, Field(description="CPU time of a tick, ms")]
@@ -1442,6 +1473,10 @@ class ParamsMessage(TypedDict):
 
 ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessage | ParamsMessage
                  | PlayerMessage)
+
+#: the rules' numbers the page draws with before a geometry packet names its own (exported
+#: to TypeScript as constants: the page keeps no copy)
+CONSTANTS: dict[str, float] = {"ROBOT_RADIUS_MM": ROBOT_RADIUS_MM, "BALL_RADIUS_MM": BALL_RADIUS_MM}
 
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {

@@ -1,8 +1,8 @@
 """Several operators (issue 12): who is connected, who drives each team, what each one did.
 
-Pure (no I/O; the clocks are injected): the station keeps one ``Operators``; the web side
-(backend/routes/operators.py) calls it from the web loop and the station thread reads it for
-the health, hence the one lock inside.
+Pure (no I/O; the clocks are injected): the station keeps one ``Operators``, station state
+like any other: it is used on the station thread only (the routes, backend/routes/operators.py,
+submit their calls to the station's queue; the health reads it there), so it needs no lock.
 
 * **Identity**: an operator is a *key* (backend/routes/operators.py: the name given at login and the
   address) with a name, a role and an address. Each websocket client is a *session* (id,
@@ -19,7 +19,6 @@ the health, hence the one lock inside.
 
 from __future__ import annotations
 
-import threading
 import time
 import unicodedata
 from collections import deque
@@ -91,7 +90,6 @@ class Operators:
         self.release_after_s = release_after_s
         self.clock = clock
         self.wall = wall
-        self._lock = threading.Lock()
         self._sessions: dict[int, _Session] = {}
         self._next_id = 1
         self._gone_mono: dict[str, float] = {}  # key -> when its last session closed
@@ -102,27 +100,24 @@ class Operators:
     # ---- sessions (websocket clients) ----
 
     def connect(self, who: Who) -> int:
-        with self._lock:
-            sid = self._next_id
-            self._next_id += 1
-            self._sessions[sid] = _Session(sid, who, self.wall())
-            self._gone_mono.pop(who.key, None)
-            return sid
+        sid = self._next_id
+        self._next_id += 1
+        self._sessions[sid] = _Session(sid, who, self.wall())
+        self._gone_mono.pop(who.key, None)
+        return sid
 
     def disconnect(self, sid: int) -> None:
-        with self._lock:
-            s = self._sessions.pop(sid, None)
-            if s is not None and not self._live(s.who.key):
-                self._gone_mono[s.who.key] = self.clock()
-                if len(self._gone_mono) > 1000:  # bounded: the oldest are of no use
-                    for k in sorted(self._gone_mono, key=self._gone_mono.__getitem__)[:500]:
-                        del self._gone_mono[k]
+        s = self._sessions.pop(sid, None)
+        if s is not None and not self._live(s.who.key):
+            self._gone_mono[s.who.key] = self.clock()
+            if len(self._gone_mono) > 1000:  # bounded: the oldest are of no use
+                for k in sorted(self._gone_mono, key=self._gone_mono.__getitem__)[:500]:
+                    del self._gone_mono[k]
 
     def sessions(self) -> list[OperatorInfo]:
-        with self._lock:
-            return [{"session": s.id, "name": s.who.name, "role": s.who.role,
-                     "address": s.who.address, "since_unix": s.since_unix}
-                    for s in self._sessions.values()]
+        return [{"session": s.id, "name": s.who.name, "role": s.who.role,
+                 "address": s.who.address, "since_unix": s.since_unix}
+                for s in self._sessions.values()]
 
     def _live(self, key: str) -> bool:
         return any(s.who.key == key for s in self._sessions.values())
@@ -143,78 +138,71 @@ class Operators:
     def drive(self, who: Who, team: str) -> bool:
         """May ``who`` drive ``team``? Takes it when free (True: taken now, to be recorded);
         raises DrivingRefused when another operator holds it."""
-        with self._lock:
-            h = self._current(team)
-            if h is None:
-                self._holds[team] = _Hold(who, self.wall(), self.clock())
-                return True
-            if h.who.key != who.key:
-                raise DrivingRefused(team, h.who, h.since_unix)
-            h.last_mono = self.clock()
-            h.who = who  # a new name given at login shows at once
-            return False
+        h = self._current(team)
+        if h is None:
+            self._holds[team] = _Hold(who, self.wall(), self.clock())
+            return True
+        if h.who.key != who.key:
+            raise DrivingRefused(team, h.who, h.since_unix)
+        h.last_mono = self.clock()
+        h.who = who  # a new name given at login shows at once
+        return False
 
     def holder(self, team: str) -> Who | None:
-        with self._lock:
-            h = self._current(team)
-            return None if h is None else h.who
+        h = self._current(team)
+        return None if h is None else h.who
 
     def request(self, who: Who, team: str) -> Who | None:
         """``who`` asks the holder for ``team``: the holder (None: it was free and ``who``
         took it)."""
-        with self._lock:
-            h = self._current(team)
-            if h is None:
-                self._holds[team] = _Hold(who, self.wall(), self.clock())
-                return None
-            if h.who.key != who.key:
-                h.requested_by = who
-                h.requested_unix = self.wall()
-            return h.who
+        h = self._current(team)
+        if h is None:
+            self._holds[team] = _Hold(who, self.wall(), self.clock())
+            return None
+        if h.who.key != who.key:
+            h.requested_by = who
+            h.requested_unix = self.wall()
+        return h.who
 
     def give(self, who: Who, team: str) -> Who:
         """The holder accepts the pending request: the requester drives now (returned)."""
-        with self._lock:
-            h = self._current(team)
-            if h is None or h.who.key != who.key:
-                raise ValueError(f"{who.name} does not drive {team}: nothing to give")
-            if h.requested_by is None:
-                raise ValueError(f"nobody asked to drive {team}")
-            to = h.requested_by
-            self._holds[team] = _Hold(to, self.wall(), self.clock())
-            return to
+        h = self._current(team)
+        if h is None or h.who.key != who.key:
+            raise ValueError(f"{who.name} does not drive {team}: nothing to give")
+        if h.requested_by is None:
+            raise ValueError(f"nobody asked to drive {team}")
+        to = h.requested_by
+        self._holds[team] = _Hold(to, self.wall(), self.clock())
+        return to
 
     def take_over(self, who: Who, team: str) -> Who | None:
         """``who`` drives ``team`` from now on, whoever held it (returned, None: nobody)."""
-        with self._lock:
-            h = self._current(team)
-            self._holds[team] = _Hold(who, self.wall(), self.clock())
-            return None if h is None or h.who.key == who.key else h.who
+        h = self._current(team)
+        self._holds[team] = _Hold(who, self.wall(), self.clock())
+        return None if h is None or h.who.key == who.key else h.who
 
     def release(self, who: Who, team: str) -> bool:
         """The holder lets go (False: ``who`` did not hold it)."""
-        with self._lock:
-            h = self._current(team)
-            if h is None or h.who.key != who.key:
-                return False
-            del self._holds[team]
-            return True
+        h = self._current(team)
+        if h is None or h.who.key != who.key:
+            return False
+        del self._holds[team]
+        return True
 
     def driving(self) -> list[DrivingInfo]:
-        with self._lock:
-            out: list[DrivingInfo] = []
-            for team in sorted(self._holds):
-                h = self._current(team)
-                if h is None:
-                    continue
-                req = h.requested_by
-                out.append({"team": team, "key": h.who.key, "name": h.who.name,
-                            "address": h.who.address, "since_unix": h.since_unix,
-                            "connected": self._live(h.who.key),
-                            "requested_by": None if req is None else req.name,
-                            "requested_key": None if req is None else req.key,
-                            "requested_unix": None if req is None else h.requested_unix})
-            return out
+        out: list[DrivingInfo] = []
+        for team in sorted(self._holds):
+            h = self._current(team)
+            if h is None:
+                continue
+            req = h.requested_by
+            out.append({"team": team, "key": h.who.key, "name": h.who.name,
+                        "address": h.who.address, "since_unix": h.since_unix,
+                        "connected": self._live(h.who.key),
+                        "requested_by": None if req is None else req.name,
+                        "requested_key": None if req is None else req.key,
+                        "requested_unix": None if req is None else h.requested_unix})
+        return out
 
     # ---- actions ----
 
@@ -222,15 +210,13 @@ class Operators:
         """One operator action for the page's list (bounded: the newest are kept)."""
         summary = ", ".join(f"{k}={_short(v)}" for k, v in (details or {}).items()
                             if v is not None)
-        with self._lock:
-            self._action_seq += 1
-            self._actions.append({"seq": self._action_seq, "time_unix": self.wall(),
-                                  "action": action, "by": by, "details": summary[:200]})
+        self._action_seq += 1
+        self._actions.append({"seq": self._action_seq, "time_unix": self.wall(),
+                              "action": action, "by": by, "details": summary[:200]})
 
     def actions(self) -> list[OperatorAction]:
         """Newest first."""
-        with self._lock:
-            return list(reversed(self._actions))
+        return list(reversed(self._actions))
 
 
 def _short(v: Any) -> str:

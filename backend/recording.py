@@ -4,41 +4,42 @@ besides datagrams and commands (parameters, operator actions, health, stages), i
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ssllog.format import TYPE_TL_ACTION, TYPE_TL_HEALTH, TYPE_TL_PARAMS
 
-from . import contract
-from .config import ROOT
+from . import contract, topics
+from .bus import DataBus
+from .config import ROOT, Settings
 from .jsonsafe import dumps
 from .params.model import StationParams
-from .params.store import diff
+from .params.store import ParamStore, diff
 from .processor import Every, Processor
 from .recorder import SessionRecorder
-
-if TYPE_CHECKING:
-    from .station import Station
 
 
 class RecordingControl:
     """Makes the recorder (``open``), follows the parameters (``configure``), records
-    operator actions, answers the page's recording buttons and status."""
+    operator actions, answers the page's recording buttons and status. ``settings``: where
+    and whether to record (set at start); ``params``: the recording switch the buttons set."""
 
-    def __init__(self, station: Station) -> None:
-        self.station = station
+    def __init__(self, settings: Settings, params: ParamStore) -> None:
+        self.settings = settings
+        self.params = params
         self.recorder: SessionRecorder | None = None  # made in open() (it opens a file)
         self._params_recorded: dict[str, Any] | None = None
 
     def folder(self) -> Path:
         """Set when the station starts (--record-dir, else logs/ in the state folder), never
         by a parameter: a page must not make the station write where it likes."""
-        return self.station.settings.recording_folder() or ROOT / "var" / "logs"
+        return self.settings.recording_folder() or ROOT / "var" / "logs"
 
     def wanted(self, p: StationParams) -> bool:
         """Records live sessions unless told not to (the parameter, --no-record), when
         replaying from the command line, or for a station that keeps no state (tests)."""
-        s = self.station.settings
+        s = self.settings
         return (p.recording.enabled and s.record and s.log is None
                 and s.recording_folder() is not None)
 
@@ -82,7 +83,7 @@ class RecordingControl:
                 raise ValueError("not recording: start recording first")
             self.recorder.new_file("operator")
         else:
-            self.station.params.patch({"recording": {"enabled": action == "start"}})
+            self.params.patch({"recording": {"enabled": action == "start"}})
         return self.status()
 
     def status(self) -> contract.Recording:
@@ -104,21 +105,24 @@ class RecordingProcessor(Processor):
 
     name = "recording"
 
-    def __init__(self, station: Station) -> None:
+    def __init__(self, recording: RecordingControl, bus: DataBus,
+                 replaying: Callable[[], bool], health: Callable[[], contract.Health]) -> None:
         super().__init__(Every(10.0))
-        self.station = station
+        self.recording = recording
+        self.referee = bus.of(topics.REFEREE)
+        self.replaying = replaying
+        self.health = health
         self._next_health = 0.0
 
     async def tick(self) -> None:
-        st = self.station
-        rec = st.recorder
-        if rec is None or st.player.log is not None:
+        rec = self.recording.recorder
+        if rec is None or self.replaying():
             return
-        ref = st.referee_topic.latest_value()
+        ref = self.referee.latest_value()
         if ref is not None and ref.stage:
             rec.stage(ref.stage)
         now = time.monotonic()
         if now >= self._next_health:
             self._next_health = now + 1.0
             rec.record(time.time_ns(), TYPE_TL_HEALTH,
-                       dumps(st.health(), "health").encode())
+                       dumps(self.health(), "health").encode())

@@ -5,32 +5,25 @@ immutable ``views`` it publishes and changes state only through ``call`` (the co
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
 import logging
 import threading
 import time
 import uuid
 from collections.abc import Callable
-from typing import Any, TypeVar, cast
+from typing import Any, TypeVar
 
 import zmq
 import zmq.asyncio
 
-from domain.wallclock import clock
 from sslnet.proc import CpuMeter
-from sslpb import ssl_gc_common_pb2
-from sslpb.ssl_simulation_control_pb2 import SimulatorCommand
 
-from . import contract, stalldump, topics, views
-from .arming import ArmingStore
+from . import stalldump, topics
 from .bus import DataBus
 from .config import Settings
-from .control.goto import Target
 from .engine.switch import EngineSwitch
-from .estop import EstopLatch
 from .evaluation import Evaluation
-from .jsonsafe import dumps
-from .messages import OperatorTarget
 from .operators import Operators
 from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
@@ -40,7 +33,6 @@ from .processors import (
     ControlProcessor,
     FeedbackProcessor,
     InternalRefereeProcessor,
-    PlayerFeed,
     RefereeIngest,
     RelayIngest,
     StrategyProcessor,
@@ -48,21 +40,20 @@ from .processors import (
     VisionIngest,
     WorldProcessor,
 )
-from .recorder import SessionRecorder
 from .recording import RecordingControl, RecordingProcessor
 from .referee.internal import InternalReferee
 from .referee.watch import RefereeWatch
 from .replay.control import ReplayControl
 from .replay.logs import LogFolders
-from .replay.player import LogPlayer
+from .safety import Safety
 from .startup import StartupTimeline, process_start_mono
 from .station_loop import StationLoop, freeze_start_up
 from .teamcode.plays import TeamPlays
 from .teamcode.processors import TeamProcessors
 from .teamcode.registry import TeamRegistry
 from .teamcode.watcher import FolderWatcher
-from .viewhub import ViewHub, ViewPublisher, Views
-from .world.state import Team
+from .viewhub import ViewHub, ViewPublisher, Views, WebStats
+from .views import BrowserData, ViewParts
 from .zmqio import pub_socket, sub_socket
 
 log = logging.getLogger("touchline.station")
@@ -85,14 +76,10 @@ class Station:
         self.runner = Runner()
         self.started_mono = time.monotonic()
         self.cpu = CpuMeter()  # this process (every thread), for the Health tab
-        self.ws_clients = 0
-        self.ws_dropped = 0  # websocket clients dropped for taking nothing (stalled)
+        #: the websocket clients and the access rule's refusals (counted by the web side)
+        self.web = WebStats()
         #: who is connected, who drives which team, what each operator did (issue 12)
         self.operators = Operators()
-        #: who may do what and the refusals so far (the app sets it from its AccessRule)
-        self.access_health: Callable[[], contract.AccessHealth] = lambda: {
-            "token_required": False, "view_token": False, "estop_for_all": False,
-            "refused": {}, "blocked_clients": 0}
         # the team's own code (issue 27): found now (read, never run here), watched from start
         self.team = TeamRegistry(settings.team_dir, PLAYS)
         self.team.rescan()
@@ -113,33 +100,18 @@ class Station:
             changes = deep_merge(changes, parse_setting(item))
         if changes:
             self.params.patch(changes)
+        # from here on changes come on the station thread; their file is written by a thread
+        # of its own, in order (an fsync takes milliseconds: not on the control loop)
+        self.params.writer = concurrent.futures.ThreadPoolExecutor(
+            1, thread_name_prefix="params-writer")
         self.bus = DataBus(self.params.current.bus.sizes())
         # topics the API writes to
         self.operator_targets = self.bus.of(topics.OPERATOR_TARGETS)
-        self.estop_topic = self.bus.of(topics.ESTOP)
-        # the latched emergency stop: a persisted one is active from the first tick on
-        self.estop_latch = EstopLatch(settings.state_dir)
-        #: monotonic time of the last press (or of start-up with a persisted stop)
-        self._estop_mono = time.monotonic()
-        if self.estop_latch.active:
-            self.estop_topic.write(True)
-        #: arming (a relay with --require-arming): the operator's, persisted; a start
-        #: disarmed, a restart by the supervisor as the operator left it (backend/arming.py)
-        self.arming_store = ArmingStore(settings.state_dir, settings.restarted)
-        armed = self.arming_store.state
-        if armed.armed and self.estop_latch.active:  # the stop wins: disarmed
-            armed = self.arming_store.set(False, "e-stop active at start")
-        self._armed = armed.armed
-        self.armed_by = armed.by
-        self.armed_since = armed.since  # Unix s of the last arm or disarm (0: never)
-        if self.arming_store.restored and self._armed:
-            log.warning("restarted after a crash: ARMED as the operator left it (by %s at %s)",
-                        armed.by or "?", clock(armed.since))
         self.sim_commands = self.bus.of(topics.SIM_COMMANDS)
+        # topics the web side's checks and the tests read and write
         self.world_topic = self.bus.of(topics.WORLD)
         self.geometry_topic = self.bus.of(topics.GEOMETRY)
         self.referee_topic = self.bus.of(topics.REFEREE)
-        self.targets_topic = self.bus.of(topics.TARGETS)
         self.relay_stats = self.bus.of(topics.RELAY_STATS)
         self.params_topic = self.bus.of(topics.PARAMS)
         self.referee_state = InternalReferee()
@@ -158,14 +130,20 @@ class Station:
         self.control = ControlProcessor(self.bus, prm.processors.control_max_wait_s,
                                         prm.safety.vision_stale_s)
         self.publisher = CommandPublisher(self.bus)
-        self.publisher.adopt_estop = self.adopt_relay_estop
-        self.publisher.estop_by = lambda: self.estop_latch.state.by
-        self.publisher.armed = lambda: self._armed
-        self.publisher.armed_by = lambda: self.armed_by
         self.internal_referee = InternalRefereeProcessor(self.bus, self.referee_state)
+        # the e-stop, the arming and the other-team rule (backend/safety.py): a persisted
+        # stop is on the bus from the first tick on
+        self.safety = Safety(
+            self.bus, self.params, settings.state_dir, restarted=settings.restarted,
+            require_arming=settings.require_arming, relay_output=settings.relay_output,
+            replaying=lambda: self.replay.replaying, vision_age_s=self.control.vision_age_s)
+        self.publisher.adopt_estop = self.safety.adopt_relay_estop
+        self.publisher.estop_by = self.safety.estop_by
+        self.publisher.armed = self.safety.operator_armed
+        self.publisher.armed_by = lambda: self.safety.armed_by
         self.control.internal = self.internal_referee
         self.control.silence = self.world.silence
-        self.control.may_drive_other_team = self.drives_other_team
+        self.control.may_drive_other_team = self.safety.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None
         self.strategy.referee_source = self.control.active_referee
@@ -173,10 +151,12 @@ class Station:
         # the compute engine for the strategy (started and replaced in the background)
         self.engine = EngineSwitch(self.strategy, settings.scripts_dir)
         # the session recorder (made in start(): it opens a file; closed in stop())
-        self.recording = RecordingControl(self)
+        self.recording = RecordingControl(settings, self.params)
         # the log player: in replay the pipeline runs on the log's time and nothing is sent
-        self.replay = ReplayControl(self, LogFolders(self.recording.folder, settings.log_dirs))
-        self.player_feed = PlayerFeed(self.player)
+        self.replay = ReplayControl(
+            self.bus, LogFolders(self.recording.folder, settings.log_dirs), world=self.world,
+            feedback=self.feedback, control=self.control, referee_watch=self.referee_watch,
+            disarm=self.safety.disarm, publish=lambda: self.publish_views(force=True))
         self.ingest.live = lambda: not self.replay.replaying
         self.publisher.muted = lambda: self.replay.replaying
         # the world estimate as tracked vision: recorded, and sent to the relay (tracker-out)
@@ -199,14 +179,26 @@ class Station:
         # the Evaluate tab's jobs: a pool of processes driven from a thread of its own
         self.evaluation = Evaluation(settings, self.params.diff_from_defaults,
                                      lambda: self.params.current, settings.eval_workers)
+        # the browser's data (backend/views.py), built from the parts named here
+        self.browser = BrowserData(ViewParts(
+            params=self.params, bus=self.bus, runner=self.runner, safety=self.safety,
+            ingest=self.ingest, vision=self.vision, referee=self.referee, world=self.world,
+            feedback=self.feedback, strategy=self.strategy, control=self.control,
+            publisher=self.publisher, internal_referee=self.internal_referee,
+            referee_state=self.referee_state, referee_watch=self.referee_watch,
+            team=self.team, team_processors=self.team_processors, engine=self.engine,
+            replay=self.replay, recording=self.recording, operators=self.operators,
+            startup=self.startup, web=self.web, cpu=self.cpu, state_dir=settings.state_dir,
+            started_mono=self.started_mono, evaluation=self.evaluation))
         # what the web side reads, published at most at the rate a page can show
-        self.hub = ViewHub(self)
+        self.hub = ViewHub(self.browser, self.replay.player)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
         self.processors: tuple[Processor, ...] = (
-            self.player_feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
+            self.replay.feed, self.ingest, self.vision, self.referee, self.world, self.feedback,
             self.strategy, self.control, self.internal_referee, self.publisher, self.tracker,
             self.team_processors, ViewPublisher(self.hub),
-            RecordingProcessor(self))
+            RecordingProcessor(self.recording, self.bus, lambda: self.replay.replaying,
+                               self.browser.health))
 
     # ---- the station thread (backend/station_loop.py): the web side changes station state
     # only through ``call`` (the command queue) and reads the published views ----
@@ -246,7 +238,7 @@ class Station:
         prm = self.params.current
         self.tracker.attach(self.publisher.sock)  # the one socket to the relay's SUB
         self.apply_params(prm, self.params.version)
-        # the store validates and persists in the web thread; the station applies on its loop
+        # every change is made on the station thread (the routes submit it): applied at once
         self.params.subscribe(self._apply_params_soon)
         for p in self.processors:
             self.runner.add(p)
@@ -315,38 +307,8 @@ class Station:
     def _apply_params_soon(self, p: StationParams, version: int) -> None:
         self.loop.schedule(self.apply_params, p, version)
 
-    # ---- replay (backend/replay/control.py) and the recorder (backend/recording.py) ----
-
-    @property
-    def player(self) -> LogPlayer:
-        return self.replay.player
-
-    @property
-    def log_folders(self) -> LogFolders:
-        return self.replay.folders
-
-    @property
-    def recorded_tracked(self) -> bytes:
-        return self.replay.recorded_tracked
-
-    def player_command(self, fn: Callable[..., T], *args: Any) -> T:
-        return self.replay.command(fn, *args)
-
-    def player_view(self) -> contract.Player:
-        return self.replay.view()
-
-    async def open_log(self, path: str) -> contract.Player:
-        return await self.replay.open_log(path)
-
-    async def open_evaluation_log(self, report: str, run: str) -> contract.Player:
-        """A run's log from the Evaluate tab (by names; the evaluation finds it in the
-        reports folder) in the player."""
-        real = await asyncio.to_thread(self.evaluation.run_log, report, run)
-        return await self.replay.open_checked(real)
-
-    @property
-    def recorder(self) -> SessionRecorder | None:
-        return self.recording.recorder
+    # ---- operator actions: the page's list (backend/operators.py) and the session log
+    # (backend/recording.py) ----
 
     def operator_action(self, action: str, by: str = "",
                         details: dict[str, Any] | None = None) -> None:
@@ -354,16 +316,6 @@ class Station:
         driving) in the session log and in the page's list, with who and when."""
         self.operators.record(action, by, details)
         self.recording.operator_action(action, by, details)
-
-    def recorder_command(self, action: str) -> contract.Recording:
-        return self.recording.command(action)
-
-    def recording_status(self) -> contract.Recording:
-        return self.recording.status()
-
-    @property
-    def engine_error(self) -> str:
-        return self.engine.error
 
     # ---- the team folder (backend/teamcode): a save is seen by the watcher's thread and
     # handled here, on the station loop ----
@@ -395,190 +347,17 @@ class Station:
         if self.ctx is not None:
             self.ctx.destroy(linger=0)
             self.ctx = None
-        if self.recorder is not None:  # what is queued is written, the file gets its index
-            await asyncio.to_thread(self.recorder.close)
+        rec = self.recording.recorder
+        if rec is not None:  # what is queued is written, the file gets its index
+            await asyncio.to_thread(rec.close)
+        if self.params.writer is not None:  # the last parameter change is on disk (in order)
+            await asyncio.wrap_future(self.params.writer.submit(lambda: None))
 
-    # ---- commands from the API (written onto the bus; processors apply them) ----
-
-    def relay_output(self) -> str | None:
-        """The relay's output: what its stats say, else what the launcher said; when they
-        differ, robot-box (the one that cannot address a team) wins."""
-        rs = self.relay_stats.latest_value()
-        said = rs.get("output_mode") or None if rs is not None else None
-        flag = self.settings.relay_output
-        if said and flag and said != flag:
-            return "robot-box" if "robot-box" in (said, flag) else said
-        return said or flag
-
-    def other_team_refusal(self, team: Team, rid: int) -> str | None:
-        """Why robot ``team``/``rid`` must not be commanded, or None. Our team always may be;
-        the other team only on a simulator output and with safety.other_team_in_simulator
-        (robot-box datagrams have no team field: their robot 3 would be our robot 3)."""
-        our = self.params.current.team.our_team
-        if team == our:
-            return None
-        out = self.relay_output()
-        if out == "robot-box":
-            return (f"the relay drives real robots (robot-box), whose datagrams have no team "
-                    f"field: a command for {team} {rid} would drive our ({our}) robot {rid}; "
-                    f"only {our} robots can be commanded")
-        if out is None:
-            return (f"{team} is the other team and the relay's output is not known yet: only "
-                    f"{our} robots can be commanded")
-        if not self.params.current.safety.other_team_in_simulator:
-            return (f"{team} is the other team: set safety.other_team_in_simulator to drive it "
-                    f"in the simulator ({out})")
-        return None
-
-    def drives_other_team(self) -> bool:
-        """The control loop may command the other team (a simulator, and the operator said).
-        Asked in every control tick: the operator's switch first (off: no refusal message
-        is built), then ``other_team_refusal``."""
-        if not self.params.current.safety.other_team_in_simulator:
-            return False
-        other: Team = "yellow" if self.params.current.team.our_team == "blue" else "blue"
-        return self.other_team_refusal(other, 0) is None
-
-    def set_target(self, team: Team, rid: int, x: float, y: float,
-                   orientation: float | None) -> None:
-        self.operator_targets.write(OperatorTarget(team, rid, Target(x, y, orientation)))
-
-    def clear_target(self, team: Team, rid: int) -> None:
-        self.operator_targets.write(OperatorTarget(team, rid, None))
-
-    def set_estop(self, active: bool, by: str = "") -> None:
-        """Press (``active``) or release the emergency stop: persisted, on the bus (control
-        stops every robot), and latched in or released from the relay (CommandPublisher)."""
-        self.estop_latch.set(active, by)
-        self._estop_mono = time.monotonic()
-        self.estop_topic.write(active)
-        if active:
-            self.disarm(f"e-stop ({by or '?'})")
-
-    # ---- arming: a relay driving real robots or an external simulator sends nothing but
-    # stops until an operator arms it (CommandPublisher repeats the state to the relay) ----
-
-    @property
-    def arming_required(self) -> bool:
-        """The launcher said so (--require-arming) or the relay's stats do."""
-        rs = self.relay_stats.latest_value()
-        return self.settings.require_arming or (rs is not None
-                                                and bool(rs.get("arming_required")))
-
-    @property
-    def armed(self) -> bool:
-        """Commands may reach the robots: armed by an operator, or no arming required."""
-        return self._armed or not self.arming_required
-
-    def arm_refusal(self) -> str | None:
-        """Why arming is refused now, or None."""
-        if self.estop:
-            return "the emergency stop is active: release it first"
-        if self.player.log is not None:
-            return "replaying a log: nothing is sent to robots (go back to live first)"
-        age = self.control.vision_age_s(time.monotonic())
-        stale = self.params.current.safety.vision_stale_s
-        if age > stale:
-            seen = "no vision yet" if age == float("inf") else f"no vision for {age:.1f} s"
-            return f"vision is missing ({seen}, more than safety.vision_stale_s = {stale} s)"
-        return None
-
-    def set_armed(self, armed: bool, by: str = "") -> str | None:
-        """Arm (refused with the reason, see ``arm_refusal``) or disarm (always)."""
-        if not armed:
-            self.disarm(by)
-            return None
-        why = self.arm_refusal()
-        if why is not None:
-            return why
-        if not self._armed:
-            log.warning("ARMED by %s: commands go to the robots", by or "?")
-            state = self.arming_store.set(True, by)
-            self._armed, self.armed_by, self.armed_since = True, by, state.since
-        return None
-
-    def disarm(self, by: str = "") -> None:
-        if self._armed:
-            log.warning("disarmed by %s: only stops go to the robots", by or "?")
-            state = self.arming_store.set(False, by)
-            self._armed, self.armed_by, self.armed_since = False, by, state.since
-
-    def adopt_relay_estop(self, by: str) -> None:
-        """The relay is latched although this backend is not (its file was lost, or another
-        backend pressed it): the stop is the relay's, and the station says so."""
-        if not self.estop:
-            log.warning("the relay's emergency stop is latched (by %s): active here too", by)
-            self.set_estop(True, f"relay latch ({by or '?'})")
-
-    def teleport_ball(self, x_mm: float, y_mm: float, vx_mps: float = 0.0,
-                      vy_mps: float = 0.0) -> None:
-        """Through the simulator (SSL simulation protocol, metres)."""
-        cmd = SimulatorCommand()
-        b = cmd.control.teleport_ball
-        b.x, b.y, b.z = x_mm / 1000.0, y_mm / 1000.0, 0.0
-        b.vx, b.vy, b.vz = vx_mps, vy_mps, 0.0
-        self.sim_commands.write(cmd.SerializeToString())
-
-    def teleport_robot(self, team: Team, rid: int, x_mm: float, y_mm: float,
-                       orientation: float | None, present: bool = True) -> None:
-        cmd = SimulatorCommand()
-        t = cmd.control.teleport_robot.add()
-        t.id.id = rid
-        t.id.team = ssl_gc_common_pb2.BLUE if team == "blue" else ssl_gc_common_pb2.YELLOW
-        t.x, t.y = x_mm / 1000.0, y_mm / 1000.0
-        if orientation is not None:
-            t.orientation = orientation
-        t.v_x = t.v_y = t.v_angular = 0.0
-        t.present = present
-        self.sim_commands.write(cmd.SerializeToString())
-
-    def give_card(self, team: Team, card: str) -> None:
-        """A card from the internal referee; the division's robots per team come from the
-        field size (A: 12 m x 9 m, 11 robots)."""
-        geo = self.geometry()
-        self.referee_state.robots_per_team = \
-            11 if geo is not None and geo["field_length"] >= 11000 else 6
-        self.referee_state.card(team, card)
-
-    @property
-    def estop(self) -> bool:
-        return bool(self.estop_topic.latest_value())
-
-    # ---- views ----
-
-    # ---- the browser's data: built by backend/views.py (on the station thread) ----
-
-    def world_dict(self) -> contract.World:
-        return views.world(self)
-
-    def health(self) -> contract.Health:
-        return views.health(self)
-
-    def referee_view(self) -> contract.RefereeView:
-        return views.referee_view(self)
-
-    def strategy_state(self) -> contract.StrategyState:
-        return views.strategy_state(self)
-
-    def strategy_view(self) -> contract.StrategyView:
-        return views.strategy_view(self)
-
-    def estop_view(self) -> contract.EstopInfo:
-        return views.estop_view(self)
-
-    def arming_view(self) -> contract.ArmingInfo:
-        return views.arming_view(self)
+    # ---- the views the web side reads (backend/viewhub.py) ----
 
     @property
     def views(self) -> Views:
         return self.hub.views
-
-    def world_version(self) -> tuple[object, ...]:
-        return self.hub.world_version()
-
-    def world_json(self) -> str:
-        """The world message as JSON (what every websocket client gets)."""
-        return dumps({"type": "world", "world": self.world_dict()}, "world")
 
     def publish_views(self, force: bool = False) -> None:
         """Builds what changed of the web side's views and tells the websocket clients."""
@@ -586,13 +365,6 @@ class Station:
 
     def subscribe_views(self, listener: Callable[[], None]) -> Callable[[], None]:
         return self.hub.subscribe(listener)
-
-    def geometry(self) -> contract.Geometry | None:
-        """The field as decoded (cleaned at decode time; non-finite numbers, should any get
-        through, become null here rather than break the JSON)."""
-        g = self.geometry_topic.latest_value()
-        return None if g is None else cast(contract.Geometry, g)
-
 
 
 def _no_world_hook(_world: object) -> None:

@@ -1,21 +1,50 @@
-"""What the web side reads: the station's views, built on the station thread (from
-backend/views.py) at most at the rate someone reads them and replaced whole, never changed,
-so a web thread never sees a half-made one."""
+"""Where the web side and the station meet: the station's views, built on the station thread
+(by backend/views.py, through the ``ViewSource`` it is given) at most at the rate someone
+reads them and replaced whole, never changed, so a web thread never sees a half-made one; and
+what the web side counts for the station's health (``WebStats``)."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
 
 from . import contract
 from .jsonsafe import dumps
 from .params.model import StationParams
 from .processor import Every, Processor
+from .replay.player import LogPlayer
 
-if TYPE_CHECKING:
-    from .station import Station
+
+def _no_access_rule() -> contract.AccessHealth:
+    return {"token_required": False, "view_token": False, "estop_for_all": False,
+            "refused": {}, "blocked_clients": 0}
+
+
+@dataclass
+class WebStats:
+    """What the web side counts for the station's health: its websocket clients, those it
+    dropped for taking nothing (stalled), and who may do what with the refusals so far (the
+    app sets ``access`` from its AccessRule). Plain counters the web loop writes."""
+
+    clients: int = 0
+    dropped: int = 0
+    access: Callable[[], contract.AccessHealth] = field(default=_no_access_rule)
+
+
+class ViewSource(Protocol):
+    """What the hub publishes, built when called (backend/views.py's ``BrowserData``)."""
+
+    def world_version(self) -> tuple[object, ...]: ...
+
+    def world(self) -> contract.World: ...
+
+    def health(self) -> contract.Health: ...
+
+    def geometry(self) -> contract.Geometry | None: ...
+
+    def geometry_seq(self) -> int: ...
 
 
 @dataclass(frozen=True)
@@ -43,8 +72,9 @@ class ViewHub:
 
     health_period_s = 0.25
 
-    def __init__(self, station: Station) -> None:
-        self.station = station
+    def __init__(self, source: ViewSource, player: LogPlayer) -> None:
+        self.source = source
+        self.player = player
         self.views = Views()
         self._listeners: set[Callable[[], None]] = set()
 
@@ -52,39 +82,28 @@ class ViewHub:
     def listening(self) -> bool:
         return bool(self._listeners)
 
-    def world_version(self) -> tuple[object, ...]:
-        """Changes whenever the world message would: a new world, a referee message, the
-        e-stop, why the robots are stopped (that changes while no world is written: vision
-        lost), or the internal referee (its panel follows the world message)."""
-        st = self.station
-        ir, rs = st.internal_referee, st.referee_state
-        return (st.world_topic.seq, st.referee_topic.seq, st.estop, st.player.serial,
-                st.armed, st.arming_required,
-                st.control.halt_reason, rs.command_counter,
-                ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
-                rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
-
     def publish(self, force: bool = False) -> None:
         """Builds what changed of the views (on the station thread) and tells the clients."""
         if not force and not self._listeners:
             return
-        st, v = self.station, self.views
+        src, player, v = self.source, self.player, self.views
         changes: dict[str, Any] = {}
-        key = self.world_version()
+        key = src.world_version()
         if force or key != v.world_key:
-            world = st.world_dict()
+            world = src.world()
             changes.update(world_key=key, world=world,
                            world_json=dumps({"type": "world", "world": world}, "world"))
         now = time.monotonic()
         if force or now - v.health_mono >= self.health_period_s:
-            health = st.health()
+            health = src.health()
             changes.update(health=health, health_mono=now,
                            health_json=dumps({"type": "health", "health": health}, "health"))
-        if force or st.geometry_topic.seq != v.geometry_seq:
-            changes.update(geometry=st.geometry(), geometry_seq=st.geometry_topic.seq)
-        if force or st.player.serial != v.player_serial:
-            changes.update(player=st.player.view(), player_serial=st.player.serial,
-                           player_json=st.player.json())
+        seq = src.geometry_seq()
+        if force or seq != v.geometry_seq:
+            changes.update(geometry=src.geometry(), geometry_seq=seq)
+        if force or player.serial != v.player_serial:
+            changes.update(player=player.view(), player_serial=player.serial,
+                           player_json=player.json())
         if changes:
             self.views = replace(v, serial=v.serial + 1, **changes)
             self.notify()

@@ -1,82 +1,206 @@
-"""The browser's data, built from the station's state on the station thread: the world message,
-health, and the referee, strategy and e-stop views (their shapes are in ``contract.py``). The
-station publishes them (``Station.views``) or answers with them when asked."""
+"""The browser's data, built on the station thread from the parts it is given (``ViewParts``:
+every processor, topic and store it reads, named once): the world message, health, and the
+referee and strategy views (their shapes are in ``contract.py``; the e-stop's and the
+arming's come from ``backend/safety.py``). The station publishes them (``Station.views``,
+through ``backend/viewhub.py``) or answers with them when asked (``Station.browser``)."""
 
 from __future__ import annotations
 
 import json
 import math
 import time
-from typing import TYPE_CHECKING, Any, cast
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, cast
 
 from google.protobuf.message import DecodeError
 
-from domain.wallclock import clock
-from sslnet.proc import rss_mb
+from sslnet.proc import CpuMeter, rss_mb
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 
-from . import contract
+from . import contract, topics
+from .bus import DataBus, Topic
+from .engine.switch import EngineSwitch
+from .evaluation import Evaluation
 from .messages import TargetEntry
+from .operators import Operators
 from .params.model import PLAYS
-from .processor import Every, OnTopic
-from .referee.internal import OPERATOR_COMMANDS
+from .params.store import ParamStore
+from .processor import Every, OnTopic, Runner
+from .processors import (
+    CommandPublisher,
+    ControlProcessor,
+    FeedbackProcessor,
+    InternalRefereeProcessor,
+    RefereeIngest,
+    RelayIngest,
+    StrategyProcessor,
+    VisionIngest,
+    WorldProcessor,
+)
+from .recording import RecordingControl
+from .referee.internal import OPERATOR_COMMANDS, InternalReferee
 from .referee.watch import RefereeWatch
+from .replay.control import ReplayControl
+from .safety import RELAY_STATS_FRESH_S, Safety
+from .startup import StartupTimeline
 from .strategy.plays import PLAY_INFO
+from .teamcode.processors import TeamProcessors
+from .teamcode.registry import TeamRegistry
+from .viewhub import WebStats
 from .world.feedback import RobotFeedbackView
-from .world.state import KickedBall, Team
-
-if TYPE_CHECKING:
-    from .station import Station
+from .world.referee import RefereeState
+from .world.state import KickedBall, Team, WorldState
 
 
-def engine_health(st: Station) -> contract.EngineHealth | None:
-    sp = st.strategy.params
+@dataclass(frozen=True)
+class ViewParts:
+    """What the browser's data is built from: the parts ``station.py`` made, each named once
+    (the views read these and nothing else)."""
+
+    params: ParamStore
+    bus: DataBus
+    runner: Runner
+    safety: Safety
+    ingest: RelayIngest
+    vision: VisionIngest
+    referee: RefereeIngest
+    world: WorldProcessor
+    feedback: FeedbackProcessor
+    strategy: StrategyProcessor
+    control: ControlProcessor
+    publisher: CommandPublisher
+    internal_referee: InternalRefereeProcessor
+    referee_state: InternalReferee
+    referee_watch: RefereeWatch
+    team: TeamRegistry
+    team_processors: TeamProcessors
+    engine: EngineSwitch
+    replay: ReplayControl
+    recording: RecordingControl
+    operators: Operators
+    startup: StartupTimeline
+    web: WebStats
+    cpu: CpuMeter
+    #: the state folder (the launcher's supervisor.json), None for a station without one
+    state_dir: Path | None
+    started_mono: float
+    #: the Evaluate tab's job (its progress in every health message)
+    evaluation: Evaluation
+
+    @property
+    def world_topic(self) -> Topic[WorldState]:
+        return self.bus.of(topics.WORLD)
+
+    @property
+    def targets_topic(self) -> Topic[dict[Any, Any]]:
+        return self.bus.of(topics.TARGETS)
+
+    @property
+    def referee_topic(self) -> Topic[RefereeState]:
+        return self.bus.of(topics.REFEREE)
+
+    @property
+    def geometry_topic(self) -> Topic[dict[str, Any]]:
+        return self.bus.of(topics.GEOMETRY)
+
+    @property
+    def relay_stats(self) -> Topic[dict[str, Any]]:
+        return self.bus.of(topics.RELAY_STATS)
+
+
+class BrowserData:
+    """The browser's data of one station, each built when called (on the station thread):
+    what the routes answer with and what ``ViewHub`` publishes."""
+
+    def __init__(self, parts: ViewParts) -> None:
+        self.parts = parts
+
+    def world(self) -> contract.World:
+        return world(self.parts)
+
+    def health(self) -> contract.Health:
+        return health(self.parts)
+
+    def referee(self) -> contract.RefereeView:
+        return referee_view(self.parts)
+
+    def strategy_state(self) -> contract.StrategyState:
+        return strategy_state(self.parts)
+
+    def strategy(self) -> contract.StrategyView:
+        return strategy_view(self.parts)
+
+    def geometry(self) -> contract.Geometry | None:
+        """The field as decoded (cleaned at decode time; non-finite numbers, should any get
+        through, become null here rather than break the JSON)."""
+        g = self.parts.geometry_topic.latest_value()
+        return None if g is None else cast(contract.Geometry, g)
+
+    def geometry_seq(self) -> int:
+        return self.parts.geometry_topic.seq
+
+    def world_version(self) -> tuple[object, ...]:
+        """Changes whenever the world message would: a new world, a referee message, the
+        e-stop, why the robots are stopped (that changes while no world is written: vision
+        lost), or the internal referee (its panel follows the world message)."""
+        p = self.parts
+        ir, rs, safety = p.internal_referee, p.referee_state, p.safety
+        return (p.world_topic.seq, p.referee_topic.seq, safety.estop, p.replay.player.serial,
+                safety.armed, safety.arming_required,
+                p.control.halt_reason, rs.command_counter,
+                ir.enabled, ir.foreign_active(), rs.max_allowed_bots("blue"),
+                rs.max_allowed_bots("yellow"), rs.blue.score, rs.yellow.score)
+
+
+def engine_health(p: ViewParts) -> contract.EngineHealth | None:
+    sp = p.strategy.params
     if sp.engine == "off":
         return None
-    eng = st.strategy.engine
+    eng = p.strategy.engine
     out: dict[str, Any] = dict(eng.health()) if eng is not None else {
         "kind": sp.engine, "workers": 0, "busy": 0, "idle": 0, "calls": 0,
         "calls_per_s": 0.0, "latency_mean_ms": 0.0, "latency_p99_ms": 0.0, "ok": 0,
         "errors": 0, "timeouts": 0, "crashes": 0, "restarts": 0, "start_failures": 0,
-        "last_error": st.engine_error or "starting"}
+        "last_error": p.engine.error or "starting"}
     out["function"] = sp.goalkeeper_function
-    out["fallbacks"] = st.strategy.engine_fallbacks
+    out["fallbacks"] = p.strategy.engine_fallbacks
     out["running"] = eng is not None
-    if not out.get("last_error") and st.strategy.engine_last_error:
-        out["last_error"] = st.strategy.engine_last_error
+    if not out.get("last_error") and p.strategy.engine_last_error:
+        out["last_error"] = p.strategy.engine_last_error
     return cast(contract.EngineHealth, out)
 
 
-def strategy_state(st: Station) -> contract.StrategyState:
+def strategy_state(p: ViewParts) -> contract.StrategyState:
     """What the strategy is doing now (sent with every world update: kept small)."""
-    core = st.strategy.core
+    core = p.strategy.core
     sit = core.situation if core is not None else None
     return {
-        "play": st.params.current.strategy.play,
+        "play": p.params.current.strategy.play,
         "situation": sit.key if sit is not None else "running",
         "situation_text": sit.text() if sit is not None else "",
-        "our_team": st.params.current.team.our_team,
+        "our_team": p.params.current.team.our_team,
         "our_side": "negative-x" if core is None or core.frame.sign > 0 else "positive-x",
         "side_from_referee": bool(core and core.side_from_referee),
         "tick_ms": core.last_tick_ms if core is not None else 0.0,
-        "robot_plays": {str(rid): play for rid, play in st.strategy.robot_plays.items()},
+        "robot_plays": {str(rid): play for rid, play in p.strategy.robot_plays.items()},
         "stopped": [{"id": rid, "play": play, "reason": why}
-                    for rid, play, why in st.strategy.stopped],
+                    for rid, play, why in p.strategy.stopped],
     }
 
 
-def strategy_view(st: Station) -> contract.StrategyView:
+def strategy_view(p: ViewParts) -> contract.StrategyView:
     """``strategy_state`` plus the plays to choose from and the roles (GET /api/strategy)."""
-    core = st.strategy.core
-    team = st.params.current.team.our_team
+    core = p.strategy.core
+    team = p.params.current.team.our_team
     plays: list[contract.PlayInfo] = [
         {"name": n, "title": PLAY_INFO[n][0], "description": PLAY_INFO[n][1],
          "source": "builtin", "file": None, "language": None} for n in PLAYS]
     plays += [{"name": n, "title": f.title or n, "description": f.description,
                "source": "team", "file": f.name, "language": f.language}
-              for n, f in sorted(st.team.plays().items())]
+              for n, f in sorted(p.team.plays().items())]
     return {
-        **strategy_state(st),
+        **strategy_state(p),
         "plays": plays,
         "roles": {f"{team}/{rid}": role
                   # a copy: the strategy's worker thread may be assigning roles now
@@ -84,82 +208,9 @@ def strategy_view(st: Station) -> contract.StrategyView:
     }
 
 
-def estop_view(st: Station) -> contract.EstopInfo:
-    s = st.estop_latch.state
-    rs = st.relay_stats.latest_value()
-    return {"active": st.estop, "since": s.since, "by": s.by,
-            "relay_latched": None if rs is None else bool(rs.get("estop_latched"))}
-
-
-def arming_view(st: Station) -> contract.ArmingInfo:
-    rs = st.relay_stats.latest_value()
-    required = st.arming_required
-    return {"required": required, "armed": st.armed, "since": st.armed_since,
-            "by": st.armed_by,
-            "relay_armed": None if rs is None else bool(rs.get("armed", True)),
-            "relay_unconfirmed": relay_arming_check(st, rs)[0],
-            "refusal": st.arm_refusal() if required and not st.armed else None}
-
-
-#: statistics older than this (the relay sends them every second) no longer tell its state
-RELAY_STATS_FRESH_S = 3.0
-
-
-def relay_arming_check(st: Station, rs: dict[str, Any] | None = None,
-                       ) -> tuple[str | None, bool]:
-    """(why the relay is not known to be armed as the station is, None when its fresh
-    statistics say it is; whether the relay is alive: its fresh statistics may yet show the
-    change). ``rs``: the latest statistics (read if None)."""
-    if rs is None:
-        rs = st.relay_stats.latest_value()
-    if rs is None:
-        return "no statistics from the relay yet (is it running?)", False
-    age = time.monotonic() - rs["received_mono"]
-    if age > RELAY_STATS_FRESH_S:
-        return f"the relay's last statistics are {age:.1f} s old (is it running?)", False
-    relay = bool(rs.get("armed", True))
-    if relay != st.armed:
-        return (f"the relay reports {'armed' if relay else 'disarmed'} "
-                f"(statistics {age:.1f} s old)"), True
-    return None, True
-
-
-def arming_warnings(st: Station) -> list[str]:
-    """Health lines: the relay's arming differs from the station's for a while; the arming
-    file could not be read or written (backend/arming.py)."""
-    out = [st.arming_store.warning] if st.arming_store.warning else []
-    rs = st.relay_stats.latest_value()
-    if rs is None or not st.arming_required \
-            or time.monotonic() - rs["received_mono"] > RELAY_STATS_FRESH_S:
-        return out
-    if bool(rs.get("armed")) and not st.armed and time.time() - st.armed_since > 3.0:
-        out.append("the relay is armed although the station is not (another backend armed "
-                   "it?): it is disarmed again within 0.5 s")
-    return out
-
-
-def estop_warnings(st: Station) -> list[str]:
-    """Health lines: an active stop (every page says so), a relay that has not latched it
-    a few seconds after the press, and a latch file that could not be read or written."""
-    out: list[str] = []
-    s = st.estop_latch.state
-    if st.estop:
-        when = clock(s.since) if s.since > 0 else "?"
-        out.append(f"emergency stop active since {when} ({s.by or '?'}): every robot is "
-                   f"held at zero until an operator releases it")
-        rs = st.relay_stats.latest_value()
-        if rs is not None and time.monotonic() - rs["received_mono"] < RELAY_STATS_FRESH_S \
-                and not rs.get("estop_latched") and time.monotonic() - st._estop_mono > 3.0:
-            out.append("the relay has not latched the emergency stop (the backend holds "
-                       "every robot at zero; a backend restart would rely on estop.json)")
-    if st.estop_latch.warning:
-        out.append(st.estop_latch.warning)
-    return out
-
-
-def referee_view(st: Station) -> contract.RefereeView:
-    ir = st.internal_referee
-    state = st.referee_state
+def referee_view(p: ViewParts) -> contract.RefereeView:
+    ir = p.internal_referee
+    state = p.referee_state
     return {
         "internal": {
             "enabled": ir.enabled,
@@ -191,15 +242,20 @@ def kick_view(k: KickedBall | None, t_ref: float) -> contract.BallKick | None:
     }
 
 
-def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
-    """A tracked-vision record of the log (m) as the page draws it (mm)."""
+def recorded_world(payload: bytes, commands: list[contract.RecordedCommand] | None = None
+                   ) -> contract.RecordedWorld | None:
+    """A tracked-vision record of the log (m) as the page draws it (mm), with the commands
+    the log sent at that time."""
+    commands = commands or []
+    empty: contract.RecordedWorld | None = \
+        {"source": "", "ball": None, "robots": [], "commands": commands} if commands else None
     if not payload:
-        return None
+        return empty
     p = TrackerWrapperPacket()
     try:
         p.ParseFromString(payload)
     except DecodeError:
-        return None
+        return empty
     f = p.tracked_frame
     ball: contract.Vec | None = None
     if f.balls:
@@ -208,7 +264,7 @@ def recorded_world(payload: bytes) -> contract.RecordedWorld | None:
         {"team": "yellow" if r.robot_id.team == 1 else "blue", "id": r.robot_id.id,
          "x": r.pos.x * 1000.0, "y": r.pos.y * 1000.0, "orientation": r.orientation}
         for r in f.robots if r.visibility > 0]
-    return {"source": p.source_name, "ball": ball, "robots": robots}
+    return {"source": p.source_name, "ball": ball, "robots": robots, "commands": commands}
 
 
 def feedback_view(v: RobotFeedbackView | None) -> contract.RobotFeedback | None:
@@ -223,39 +279,41 @@ def feedback_view(v: RobotFeedbackView | None) -> contract.RobotFeedback | None:
     }
 
 
-def world(st: Station) -> contract.World:
-    world = st.world_topic.latest_value()
-    targets: dict[tuple[Team, int], TargetEntry] = st.targets_topic.latest_value() or {}
-    ref = st.referee_topic.latest()
-    if ref is not None and st.control.active_referee() is None:
+def world(p: ViewParts) -> contract.World:
+    world = p.world_topic.latest_value()
+    targets: dict[tuple[Team, int], TargetEntry] = p.targets_topic.latest_value() or {}
+    ref = p.referee_topic.latest()
+    if ref is not None and p.control.active_referee() is None:
         ref = None  # the internal referee's own state after it was switched off
-    commands = st.control.last_commands
-    feedback = st.feedback.out.latest_value() or {}
-    telemetry = st.control.telemetry
-    now_unix = st.player.now_ns() / 1e9  # the log's time in replay
+    commands = p.control.last_commands
+    feedback = p.feedback.out.latest_value() or {}
+    telemetry = p.control.telemetry
+    player = p.replay.player
+    now_unix = player.now_ns() / 1e9  # the log's time in replay
     out: contract.World = {
-        "seq": st.world_topic.seq,
+        "seq": p.world_topic.seq,
         "t_capture": world.t_capture if world else 0.0,
         "ball": None,
         "other_balls": [],
         "robots": [],
         "cameras": [],
         "referee": None,
-        "estop": st.estop,
-        "estop_info": estop_view(st),
-        "armed": st.armed,
-        "arming_required": st.arming_required,
-        "arming": arming_view(st),
-        "halt_reason": st.control.halt_reason,
+        "estop": p.safety.estop,
+        "estop_info": p.safety.estop_view(),
+        "armed": p.safety.armed,
+        "arming_required": p.safety.arming_required,
+        "arming": p.safety.arming_view(),
+        "halt_reason": p.control.halt_reason,
         "strategy": None,
-        "internal_referee": referee_view(st)["internal"],
-        "replay": st.player.clock(),
-        "recorded": recorded_world(st.recorded_tracked) if st.player.log is not None else None,
-        "team": st.team_processors.world_view(),
+        "internal_referee": referee_view(p)["internal"],
+        "replay": player.clock(),
+        "recorded": recorded_world(p.replay.recorded_tracked, p.replay.commands_view())
+        if player.log is not None else None,
+        "team": p.team_processors.world_view(),
     }
-    out["strategy"] = strategy_state(st)
+    out["strategy"] = strategy_state(p)
     if ref is not None:
-        internal = ref.value.source_identifier == st.referee_state.source_identifier
+        internal = ref.value.source_identifier == p.referee_state.source_identifier
         out["referee"] = ref.value.to_dict(time.monotonic() - ref.time_mono,
                                            "internal" if internal else None)
     if world is None:
@@ -314,17 +372,17 @@ def world(st: Station) -> contract.World:
     return out
 
 
-def world_health(st: Station) -> contract.WorldHealth | None:
+def world_health(p: ViewParts) -> contract.WorldHealth | None:
     """The world model's view: its age by the receive clock, what it dropped and why,
     each camera's clock offset."""
-    model = st.world.model
-    age = st.control.vision_age_s(time.monotonic())
-    silence, lost = st.world.silence, st.control.vision_lost
+    model = p.world.model
+    age = p.control.vision_age_s(time.monotonic())
+    silence, lost = p.world.silence, p.control.vision_lost
     return {
         "age_s": age if math.isfinite(age) else None,
-        "stale": age > st.control.vision_stale_s or lost is not None,
+        "stale": age > p.control.vision_stale_s or lost is not None,
         "rejected": dict(model.rejected),
-        "recent_rejections": st.world.recent_rejections(),
+        "recent_rejections": p.world.recent_rejections(),
         "last_rejection": model.last_rejection,
         "clock_resyncs": model.clocks.resyncs,
         "camera_clock_offsets_s": {str(c): o for c, o in model.clocks.offsets().items()},
@@ -335,51 +393,51 @@ def world_health(st: Station) -> contract.WorldHealth | None:
     }
 
 
-def latency_stages(st: Station) -> list[contract.LatencyStage]:
+def latency_stages(p: ViewParts) -> list[contract.LatencyStage]:
     """Each stage from a vision datagram's arrival at the relay, in pipeline order."""
     stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
-              for name, stage in (("decoded (vision ingest)", st.vision.latency),
-                                  ("world model written", st.world.latency),
-                                  ("commands sent to relay", st.publisher.latency))]
-    rs = st.relay_stats.latest_value()
+              for name, stage in (("decoded (vision ingest)", p.vision.latency),
+                                  ("world model written", p.world.latency),
+                                  ("commands sent to relay", p.publisher.latency))]
+    rs = p.relay_stats.latest_value()
     if rs is not None and rs.get("command_latency_ms", -1) >= 0:
         stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
                        "p50_ms": None, "p99_ms": None, "n": None})
     return stages
 
 
-def health(st: Station) -> contract.Health:
+def health(p: ViewParts) -> contract.Health:
     procs: list[contract.ProcessorHealth] = []
-    for p in st.runner.processors:
-        trig = p.trigger
-        timing = p.stats.summary()
+    for proc in p.runner.processors:
+        trig = proc.trigger
+        timing = proc.stats.summary()
         procs.append({
-            "name": p.name,
+            "name": proc.name,
             "trigger": ("rate" if isinstance(trig, Every) else
                         f"topic:{trig.topic.name}" if isinstance(trig, OnTopic) else "source"),
             "configured_hz": trig.hz if isinstance(trig, Every) else None,
             "measured_hz": timing["measured_hz"], "tick_mean_ms": timing["tick_mean_ms"],
             "tick_p99_ms": timing["tick_p99_ms"],
-            "overruns": p.stats.overruns,
-            "runs": p.stats.rate.total,
-            "errors": p.stats.errors,
-            "last_error": p.stats.last_error,
+            "overruns": proc.stats.overruns,
+            "runs": proc.stats.rate.total,
+            "errors": proc.stats.errors,
+            "last_error": proc.stats.last_error,
         })
     topics: list[contract.TopicHealth] = [
         {"name": t.name, "size": len(t), "capacity": t.capacity, "seq": t.seq,
-         "age_s": t.age_s()} for t in st.bus.topics()]
+         "age_s": t.age_s()} for t in p.bus.topics()]
     streams: dict[str, Any] = {}
-    vis = st.vision.counter.to_dict()
+    vis = p.vision.counter.to_dict()
     # what the world model dropped, by the same reasons ("time out of range", ...)
-    for reason, n in st.world.model.rejected.items():
+    for reason, n in p.world.model.rejected.items():
         vis["errors_by_reason"][reason] = vis["errors_by_reason"].get(reason, 0) + n
         vis["errors"] += n
     streams["vision"] = vis
-    streams["referee"] = st.referee.counter.to_dict()
-    streams["zmq"] = st.ingest.counters["zmq"].to_dict()
-    streams["feedback"] = st.feedback.counter.to_dict()
+    streams["referee"] = p.referee.counter.to_dict()
+    streams["zmq"] = p.ingest.counters["zmq"].to_dict()
+    streams["feedback"] = p.feedback.counter.to_dict()
     relay = None
-    rs = st.relay_stats.latest_value()
+    rs = p.relay_stats.latest_value()
     if rs is not None:
         age = time.monotonic() - rs["received_mono"]
         relay = {k: v for k, v in rs.items()
@@ -392,8 +450,8 @@ def health(st: Station) -> contract.Health:
     # ok: the loop works (fresh vision, relay alive). A silent referee leaves it true: the
     # station then does what the rules expect of a team (it keeps obeying the last
     # command); it is a warning about a system outside the station, in `warnings`.
-    replaying = st.player.log is not None
-    world = world_health(st)
+    replaying = p.replay.player.log is not None
+    world = world_health(p)
     if replaying:
         # the vision is the log's, on the log's clock: a paused replay is not vision lost
         ok = relay is not None and relay["alive"]
@@ -402,72 +460,72 @@ def health(st: Station) -> contract.Health:
             relay is not None and relay["alive"]
         if world is not None and world["stale"]:
             ok = False
-    referee = st.referee_watch.status()
+    referee = p.referee_watch.status()
     if referee is not None:
         referee["source"] = ("internal" if referee["source_identifier"]
-                             == st.referee_state.source_identifier else "game-controller")
-    recording = st.recording_status()
-    sup = supervised(st)
+                             == p.referee_state.source_identifier else "game-controller")
+    recording = p.recording.status()
+    sup = supervised(p)
     station_lines: list[str] = [
         f"{c['name']} restarted {c['restarts']} time{'s' if c['restarts'] > 1 else ''} by the "
         f"launcher (last exit {c['last_exit']}, up {c['up_s']:.0f} s)"
         for c in sup or [] if c["restarts"]]
     if recording["error"]:
         station_lines.append(f"recording stopped: {recording['error']}")
-    if st.player.log is not None:
-        station_lines.append(f"replaying {st.player.log.path}: nothing is sent to robots or "
+    if p.replay.player.log is not None:
+        station_lines.append(f"replaying {p.replay.player.log.path}: nothing is sent to robots or "
                              "a simulator")
-    access = st.access_health()
+    access = p.web.access()
     if access["blocked_clients"]:
         station_lines.append(f"{access['blocked_clients']} address(es) refused for too many "
                              "wrong tokens (someone is guessing the operator token)")
-    team_files = st.team.files_view()
+    team_files = p.team.files_view()
     # a team file that failed while running (its robots are stopped, its topic stale)
     station_lines += [f"team code {f['name']}: {f['error']['kind']} at {f['error']['file']}"
                       f"{':' + str(f['error']['line']) if f['error']['line'] else ''}"
                       for f in team_files if f["state"] == "error" and f["error"] is not None
-                      and st.team.runs.get(f["name"]) is not None
-                      and st.team.runs[f["name"]].state == "error"]
+                      and p.team.runs.get(f["name"]) is not None
+                      and p.team.runs[f["name"]].state == "error"]
     out: contract.Health = {
         "ok": ok,
-        "warnings": [*estop_warnings(st), *arming_warnings(st), *station_lines,
+        "warnings": [*p.safety.warnings(), *station_lines,
                      *_warnings(vision, relay, referee, world, replaying),
-                     *st.params.warnings],
-        "estop": estop_view(st),
-        "arming": arming_view(st),
+                     *p.params.warnings],
+        "estop": p.safety.estop_view(),
+        "arming": p.safety.arming_view(),
         "world": world,
         "referee": cast(contract.RefereeHealth | None, referee),
-        "uptime_s": time.monotonic() - st.started_mono,
+        "uptime_s": time.monotonic() - p.started_mono,
         "streams": streams,
         "processors": procs,
         "topics": topics,
         "relay": cast(contract.RelayHealth | None, relay),
-        "latency": cast(contract.LatencyHealth, st.publisher.latency_summary()),
-        "latency_stages": latency_stages(st),
-        "websocket_clients": st.ws_clients,
-        "websocket_dropped": st.ws_dropped,
-        "engine": engine_health(st),
+        "latency": cast(contract.LatencyHealth, p.publisher.latency_summary()),
+        "latency_stages": latency_stages(p),
+        "websocket_clients": p.web.clients,
+        "websocket_dropped": p.web.dropped,
+        "engine": engine_health(p),
         "recording": recording,
-        "processes": processes(st, rs),
+        "processes": processes(p, rs),
         "access": access,
-        "operators": st.operators.sessions(),
-        "driving": st.operators.driving(),
-        "operator_actions": st.operators.actions()[:20],
+        "operators": p.operators.sessions(),
+        "driving": p.operators.driving(),
+        "operator_actions": p.operators.actions()[:20],
         "supervisor": sup,
-        "startup": cast(contract.StartupInfo, st.startup.view()),
+        "startup": cast(contract.StartupInfo, p.startup.view()),
         "team_code": team_files,
-        "evaluation": st.evaluation.job(),
+        "evaluation": p.evaluation.job(),
     }
     return out
 
 
-def supervised(st: Station) -> list[contract.SupervisedProcess] | None:
+def supervised(p: ViewParts) -> list[contract.SupervisedProcess] | None:
     """The launcher's children and their restarts (``supervisor.json`` in the state folder,
     written by the launcher at every start and restart); None without a launcher."""
-    if st.settings.state_dir is None:
+    if p.state_dir is None:
         return None
     try:
-        raw = json.loads((st.settings.state_dir / "supervisor.json").read_text())
+        raw = json.loads((p.state_dir / "supervisor.json").read_text())
         now = time.time()
         return [{"name": str(c["name"]), "pid": c.get("pid"), "restarts": int(c["restarts"]),
                  "last_exit": c.get("last_exit"),
@@ -476,9 +534,9 @@ def supervised(st: Station) -> list[contract.SupervisedProcess] | None:
         return None
 
 
-def processes(st: Station, relay_stats: dict[str, Any] | None) -> list[contract.ProcessHealth]:
+def processes(p: ViewParts, relay_stats: dict[str, Any] | None) -> list[contract.ProcessHealth]:
     out: list[contract.ProcessHealth] = [
-        {"name": "backend", "cpu_percent": st.cpu.read(), "rss_mb": rss_mb()}]
+        {"name": "backend", "cpu_percent": p.cpu.read(), "rss_mb": rss_mb()}]
     if relay_stats is not None:
         out.append({"name": "relay", "cpu_percent": float(relay_stats.get("cpu_percent", 0.0)),
                     "rss_mb": float(relay_stats.get("rss_mb", 0.0))})

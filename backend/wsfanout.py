@@ -336,7 +336,7 @@ class LoopFanout:
                 c.taken_at = now  # its peer took something since the last pass
             elif now - c.taken_at >= STALLED_CLIENT_S:
                 c.stalled = True
-                st.ws_dropped += 1
+                st.web.dropped += 1
                 self.discard_direct(c)
                 with contextlib.suppress(RuntimeError, OSError):
                     sock.abort()

@@ -30,14 +30,7 @@ import zmq.asyncio
 from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
 from sslnet.multicast import open_multicast_sender
 from sslpb import ssl_simulation_robot_control_pb2, ssl_vision_wrapper_pb2, touchline_pb2
-
-
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    s = socket.socket(socket.AF_INET, kind)
-    s.bind(("127.0.0.1", 0))
-    port: int = s.getsockname()[1]
-    s.close()
-    return port
+from tests.ports import free_port
 
 
 def wrapper(frame: int, camera: int) -> bytes:
@@ -67,8 +60,8 @@ def summary(name: str, values_ms: list[float]) -> str:
 
 async def bench(seconds: float, cameras: int, fps: float) -> None:
     vport = random.randint(20000, 40000)
-    pub_ep = f"tcp://127.0.0.1:{free_port()}"
-    sub_ep = f"tcp://127.0.0.1:{free_port()}"
+    pub_ep = f"tcp://127.0.0.1:{free_port(socket.SOCK_STREAM)}"
+    sub_ep = f"tcp://127.0.0.1:{free_port(socket.SOCK_STREAM)}"
     sim = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sim.bind(("127.0.0.1", 0))
     enable_kernel_timestamps(sim)

@@ -36,7 +36,6 @@ import asyncio
 import hashlib
 import json
 import os
-import random
 import socket
 import subprocess
 import sys
@@ -49,30 +48,10 @@ from typing import Any
 
 import zmq
 
+from tests.ports import free_port, random_multicast_port
+
 ROOT = Path(__file__).resolve().parent.parent
 STEP_TIMEOUT_S = 10.0
-
-
-def free_port(kind: int = socket.SOCK_DGRAM) -> int:
-    s = socket.socket(socket.AF_INET, kind)
-    s.bind(("127.0.0.1", 0))
-    port: int = s.getsockname()[1]
-    s.close()
-    return port
-
-
-def multicast_port() -> int:
-    for _ in range(50):
-        port = random.randint(20000, 40000)
-        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            s.bind(("0.0.0.0", port))
-        except OSError:
-            continue
-        finally:
-            s.close()
-        return port
-    raise RuntimeError("no free port")
 
 
 def udp_server() -> socket.socket:
@@ -359,14 +338,14 @@ class Run:
         self.sim_blue, self.sim_yellow, self.sim_control, self.box = (
             udp_server(), udp_server(), udp_server(), udp_server())
         self.status_blue, self.status_yellow = free_port(), free_port()
-        tracker_port = multicast_port()
+        tracker_port = random_multicast_port()
         self.compat_port = free_port(socket.SOCK_STREAM)
         def port(s: socket.socket) -> int:
             p: int = s.getsockname()[1]
             return p
 
         cfg = RelayConfig(
-            vision_port=multicast_port(), referee_port=multicast_port(),
+            vision_port=random_multicast_port(), referee_port=random_multicast_port(),
             tracker_port=tracker_port, tracker_out_port=tracker_port,
             pub_endpoint="tcp://127.0.0.1:*", sub_endpoint="tcp://127.0.0.1:*",
             sim_blue_port=port(self.sim_blue), sim_yellow_port=port(self.sim_yellow),

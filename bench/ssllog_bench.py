@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ssllog.__main__ import export_csv
+from ssllog.export import export_csv
 from ssllog.format import RECORD_HEADER, file_header
 from ssllog.logfile import LogFile, _gunzip_copy
 from sslpb import ssl_gc_referee_message_pb2, ssl_vision_wrapper_pb2

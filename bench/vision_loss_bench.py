@@ -16,56 +16,25 @@ Usage: .venv/bin/python bench/vision_loss_bench.py [--losses 20] [--hz 60]
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import signal
 import statistics
-import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
-from typing import Any
 
 import httpx
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from launcher.started import Started, start_isolated  # noqa: E402
 from tests.integration.blind import Camera, Simulator  # noqa: E402
+from tests.waiting import wait_until  # noqa: E402
 
 
-def wait(cond: Any, timeout_s: float, what: str, interval_s: float = 0.02) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        got = cond()
-        if got:
-            return got
-        time.sleep(interval_s)
-    raise SystemExit(f"timed out after {timeout_s} s waiting for {what}")
-
-
-def launch() -> tuple[subprocess.Popen[str], dict[str, Any], str]:
-    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated", "--sim", "none"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    info: dict[str, Any] = {}
-    ready = threading.Event()
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            if line.startswith("TOUCHLINE_PORTS "):
-                info["ports"] = json.loads(line.split(" ", 1)[1])
-            elif line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise SystemExit("the station did not start")
-    return proc, info["ports"], info["url"]
+def launch() -> Started:
+    try:
+        return start_isolated(["--sim", "none"])
+    except RuntimeError:
+        raise SystemExit("the station did not start") from None
 
 
 def main() -> int:
@@ -73,23 +42,24 @@ def main() -> int:
     ap.add_argument("--losses", type=int, default=20)
     ap.add_argument("--hz", type=float, default=60.0)
     args = ap.parse_args()
-    proc, ports, url = launch()
+    station = launch()
+    ports, url = station.ports, station.url
     sim = Simulator(ports["sim_blue"])
     cam = Camera(ports["vision_group"], ports["vision"], hz=args.hz)
     client = httpx.Client(base_url=url, timeout=5.0)
     took: list[float] = []
     try:
-        wait(lambda: any(r["id"] == 0 for r in client.get("/api/world").json()["robots"]), 30,
-             "blue 0 seen")
-        wait(lambda: client.post("/api/arm", json={"armed": True}).status_code == 200, 20,
-             "armed")
+        wait_until(lambda: any(r["id"] == 0 for r in client.get("/api/world").json()["robots"]),
+                   30, 0.02, "blue 0 seen")
+        wait_until(lambda: client.post("/api/arm", json={"armed": True}).status_code == 200, 20,
+                   0.02, "armed")
         r = client.post("/api/robots/blue/0/target", json={"x": 3000.0, "y": 0.0})
         r.raise_for_status()
         load0 = Path("/proc/loadavg").read_text().split()[:3]
         for k in range(args.losses):
-            wait(sim.driving, 10, f"blue 0 driven ({k})")
-            after = wait(lambda: client.get("/api/health").json()["world"]["lost_after_s"],
-                         10, "the camera's rate measured")
+            wait_until(sim.driving, 10, 0.02, f"blue 0 driven ({k})")
+            after = wait_until(lambda: client.get("/api/health").json()["world"]["lost_after_s"],
+                               10, 0.02, "the camera's rate measured")
             sim.read()
             last = cam.silence()
             stop, _ = sim.stop_after(last)
@@ -104,11 +74,7 @@ def main() -> int:
         cam.close()
         sim.close()
         client.close()
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        station.stop()
     v = sorted(took)
     print(f"last frame -> first zero command at {args.hz:.0f} Hz, {len(v)} losses: "
           f"min {v[0]:.1f}  median {statistics.median(v):.1f}  max {v[-1]:.1f} ms "

@@ -10,11 +10,12 @@ Every world state (its repr: every float exactly) and its tracked-vision packet,
   robots driving, a chip (``cf``: a flat kick) and robots leaving the field; the camera
   positions known (flight estimate); a snapshot after every frame / every third / every second;
 - ``d``: the recorded session of tests/data (the regression test's log), after every frame;
+  ``d=FILE``: the same over another recording (a station's, full scale: ``--record-dir``);
 - ``e``: the pipeline (vision ingest, world, control, command publisher, tracked vision) on
   pipeline_bench's datagrams with a clock of its own: every world written, every command set,
   every message sent to the relay, every tracked packet recorded.
 
-    PYTHONPATH=. .venv/bin/python bench/world_digest.py [a1 a2 b c1 c3 cf d e]
+    PYTHONPATH=. .venv/bin/python bench/world_digest.py [a1 a2 b c1 c3 cf d e d=FILE]
 """
 
 from __future__ import annotations
@@ -135,12 +136,11 @@ def fieldsim(every: int, chip: bool) -> str:
     return f"{d} kicks {m.kicks.kicks} chips {m.flight.chips}"
 
 
-def recorded() -> str:
+def recorded(path: str = str(ROOT / "tests" / "data" / "fieldsim-2s.log.gz")) -> str:
     from ssllog.format import TYPE_VISION_2014
     from ssllog.logfile import LogFile
 
-    log = LogFile.open(str(ROOT / "tests" / "data" / "fieldsim-2s.log.gz"),
-                       Path(tempfile.mkdtemp()))
+    log = LogFile.open(path, Path(tempfile.mkdtemp()))
     d, m = Digest(), WorldModel()
     for rec in log.records():
         if rec.type != TYPE_VISION_2014:
@@ -248,7 +248,7 @@ SCENARIOS: dict[str, Callable[[], Any]] = {
 def main() -> None:
     for name in sys.argv[1:] or list(SCENARIOS):
         t0 = time.monotonic()
-        out = SCENARIOS[name]()
+        out = recorded(name[2:]) if name.startswith("d=") else SCENARIOS[name]()
         print(f"{name} {out}", file=sys.stdout, flush=True)
         print(f"  ({time.monotonic() - t0:.0f} s)", file=sys.stderr)
 

@@ -9,6 +9,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
+from .rules import BALL_RADIUS_MM, ROBOT_RADIUS_MM
+
 #: The penalty mark's distance from the goal centre (the ssl-game-controller's default
 #: geometry): 8 m in division A, 6 m in division B
 PENALTY_MARK_DISTANCE_MM = {"A": 8000.0, "B": 6000.0}
@@ -28,8 +30,8 @@ class Field:
     center_circle_radius: float = 500.0
     line_thickness: float = 10.0
     goal_height: float = 155.0
-    ball_radius: float = 21.5
-    max_robot_radius: float = 90.0
+    ball_radius: float = BALL_RADIUS_MM
+    max_robot_radius: float = ROBOT_RADIUS_MM
     penalty_mark_distance: float = 6000.0  # from the goal centre
 
     @property

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from domain.rules import ROBOT_RADIUS_MM
 from sslnet import defaults
 
 
@@ -24,7 +25,7 @@ class SimConfig:
 
     # Physics (SI units)
     physics_hz: float = 200.0
-    robot_radius_m: float = 0.09
+    robot_radius_m: float = ROBOT_RADIUS_MM / 1000.0
     robot_max_speed: float = 3.5  # m/s
     robot_max_accel: float = 3.0  # m/s^2
     robot_max_angular_speed: float = 10.0  # rad/s

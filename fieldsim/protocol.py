@@ -15,10 +15,11 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 
-from google.protobuf.message import DecodeError, Message
+from google.protobuf.message import Message
 
 from fieldsim.world import MAX_ROBOT_ID, Team, World
 from sslnet.ratelog import RateLimitedLog
+from sslnet.streams import MISSING_FIELD, parse_message
 from sslpb import grsim_packet_pb2 as grsim_pb
 from sslpb import grsim_robot_status_pb2 as grsim_status_pb
 from sslpb import ssl_gc_common_pb2 as common_pb
@@ -50,21 +51,6 @@ class ProtocolStats:
     errors: Counter[str] = field(default_factory=Counter)  # answered errors, by code
 
 
-class _Malformed(Exception):
-    pass
-
-
-def _parse(msg: Message, data: bytes) -> None:
-    try:
-        msg.ParseFromString(data)
-    except (DecodeError, RuntimeError, ValueError) as exc:
-        raise _Malformed(f"cannot decode: {exc}") from None
-    if not msg.IsInitialized():
-        finder = getattr(msg, "FindInitializationErrors", None)
-        missing = ", ".join(finder()) if finder is not None else "?"
-        raise _Malformed(f"missing required fields: {missing}")
-
-
 def _finite(*values: float) -> bool:
     return all(math.isfinite(v) for v in values)
 
@@ -88,9 +74,24 @@ class CommandHandler:
         self.stats = ProtocolStats()
         self._log = ratelog if ratelog is not None else RateLimitedLog(log)
 
-    def _malformed(self, channel: str, reason: str) -> None:
+    def _parse(self, msg: Message, data: bytes, channel: str) -> str | None:
+        """Parses ``data`` into ``msg``: None, or why not (the datagram counted as malformed
+        on ``channel`` and logged)."""
+        why = parse_message(msg, data)
+        if why is None:
+            return None
+        reason = (f"missing required fields: {why[1]}" if why[0] == MISSING_FIELD
+                  else f"cannot decode: {why[1]}")
         self.stats.malformed[channel] += 1
         self._log.warning(f"malformed-{channel}", "malformed %s datagram: %s", channel, reason)
+        return reason
+
+    def _refusal(self, response: fb_pb.RobotControlResponse | control_pb.SimulatorResponse,
+                 errors: list[error_pb.SimulatorError], what: str, reason: str) -> bytes:
+        """The answer to a malformed datagram: its errors and MALFORMED with the reason."""
+        self._error(errors, ERR_MALFORMED, f"{what}: {reason}")
+        response.errors.extend(errors)
+        return response.SerializeToString()
 
     def _error(
         self,
@@ -113,13 +114,9 @@ class CommandHandler:
         response = fb_pb.RobotControlResponse()
         errors: list[error_pb.SimulatorError] = []
         msg = rc_pb.RobotControl()
-        try:
-            _parse(msg, data)
-        except _Malformed as exc:
-            self._malformed(channel, str(exc))
-            self._error(errors, ERR_MALFORMED, f"RobotControl: {exc}")
-            response.errors.extend(errors)
-            return response.SerializeToString()
+        why = self._parse(msg, data, channel)
+        if why is not None:
+            return self._refusal(response, errors, "RobotControl", why)
         for cmd in msg.robot_commands:
             self._robot_command(team, cmd, errors)
         response.errors.extend(errors)
@@ -182,13 +179,9 @@ class CommandHandler:
         response = control_pb.SimulatorResponse()
         errors: list[error_pb.SimulatorError] = []
         msg = control_pb.SimulatorCommand()
-        try:
-            _parse(msg, data)
-        except _Malformed as exc:
-            self._malformed(CHANNEL_CONTROL, str(exc))
-            self._error(errors, ERR_MALFORMED, f"SimulatorCommand: {exc}")
-            response.errors.extend(errors)
-            return response.SerializeToString()
+        why = self._parse(msg, data, CHANNEL_CONTROL)
+        if why is not None:
+            return self._refusal(response, errors, "SimulatorCommand", why)
         if msg.HasField("control"):
             ctl = msg.control
             if ctl.HasField("teleport_ball"):
@@ -271,10 +264,7 @@ class CommandHandler:
         """Applies a grSim_Packet; the team it commands (None: no commands)."""
         self.stats.datagrams[CHANNEL_GRSIM] += 1
         msg = grsim_pb.grSim_Packet()
-        try:
-            _parse(msg, data)
-        except _Malformed as exc:
-            self._malformed(CHANNEL_GRSIM, str(exc))
+        if self._parse(msg, data, CHANNEL_GRSIM) is not None:
             return None
         errors: list[error_pb.SimulatorError] = []
         commanded: Team | None = None

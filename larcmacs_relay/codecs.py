@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from google.protobuf import empty_pb2
-from google.protobuf.message import DecodeError, Message
+from google.protobuf.message import Message
 
 from sslnet import streams
 from sslpb import (
@@ -48,14 +48,13 @@ def team_name(team: int) -> str:
 
 
 def _parse(msg: Message, data: bytes) -> str | None:
-    try:
-        msg.ParseFromString(data)
-    except (DecodeError, RuntimeError, ValueError) as exc:
-        return f"does not parse as {msg.DESCRIPTOR.name}: {exc}"
-    if not msg.IsInitialized():
-        missing = ", ".join(msg.FindInitializationErrors()[:5])  # type: ignore[attr-defined]
-        return f"{msg.DESCRIPTOR.name} misses required fields: {missing}"
-    return None
+    """The reason ``data`` is refused as ``msg`` (read back by ``classify``), or None."""
+    why = streams.parse_message(msg, data)
+    if why is None:
+        return None
+    if why[0] == streams.MISSING_FIELD:
+        return f"{msg.DESCRIPTOR.name} misses required fields: {why[1]}"
+    return f"does not parse as {msg.DESCRIPTOR.name}: {why[1]}"
 
 
 def classify(reason: str, data: bytes) -> str:

@@ -28,6 +28,7 @@ from backend.config import Settings
 from sslnet import defaults
 from sslnet.multicast import interface_multicast_flag, loopback_multicast_ok
 
+from .started import PIDS, PORTS, READY, STATE_DIR
 from .supervisor import ROOT, Ports, StationConfig, Supervisor, command_lines
 
 ROOT_VAR = ROOT / "var"  # the backend's default state folder
@@ -219,13 +220,13 @@ def main() -> int:
             hint = ("  Changes need the operator token: open the login URL printed above "
                     "once on each operator laptop (docs/security.md)\n")
             print(hint, flush=True)  # noqa: T201
-        # machine-readable lines for tests and scripts
-        announce(f"TOUCHLINE_PORTS {json.dumps(asdict(ports))}")
+        # machine-readable lines for tests and scripts (read back by launcher/started.py)
+        announce(f"{PORTS} {json.dumps(asdict(ports))}")
         if own_state_dir is not None:
-            announce(f"TOUCHLINE_STATE_DIR {own_state_dir}")
+            announce(f"{STATE_DIR} {own_state_dir}")
         pids = {c.name: c.proc.pid for c in sup.children if c.proc is not None}
-        announce(f"TOUCHLINE_PIDS {json.dumps(pids)}")
-        announce(f"TOUCHLINE_READY {url}")
+        announce(f"{PIDS} {json.dumps(pids)}")
+        announce(f"{READY} {url}")
     else:
         log.error("backend did not answer on %s within 30 s", url)
 

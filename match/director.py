@@ -17,13 +17,16 @@ import math
 import uuid
 from collections import deque
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from domain.field import division
 from domain.rules import (
     PLACEMENT_TOLERANCE_MM,
 )
+
+# re-exported: match.config is its home; callers that import it from here keep working
+from match.config import MatchConfig as MatchConfig
 from match.events import EventDetector
 from match.judge import Judge
 from match.referee import MatchReferee
@@ -33,8 +36,6 @@ from match.rules import (
     NO_PROGRESS_S,
     PLACEMENT_STILL_MMPS,
     TOUCH_DISTANCE_MM,
-    Grace,
-    Timing,
     dist,
     placement_position,
 )
@@ -52,19 +53,6 @@ PLACEMENT_INTERLUDE_MM = 1000.0  # a scripted placement moves the ball this far
 INTERLUDE_AFTER_RUNNING_S = 3.0  # an interlude waits for this much running play first
 
 MAX_DT_S = 0.5  # a gap between frames longer than this counts as this much
-
-
-@dataclass
-class MatchConfig:
-    half_s: float = 90.0
-    division: str = "B"
-    first_kickoff: str = "blue"
-    blue_on_positive: bool = False
-    goalkeepers: dict[str, int] = field(default_factory=lambda: {"blue": 0, "yellow": 0})
-    plays: dict[str, str] = field(default_factory=lambda: {"blue": "match", "yellow": "simple"})
-    interludes: bool = True
-    timing: Timing = field(default_factory=Timing)
-    grace: Grace = field(default_factory=Grace)
 
 
 @dataclass(frozen=True)

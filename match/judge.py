@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 from domain.field import Field
 from domain.rules import COLLISION_SPEED_MPS, ROBOT_RADIUS_MM
+from match.config import MatchConfig
 from match.referee import MatchReferee
 from match.rules import (
     COLLISION_DRAWN_MPS,
@@ -26,9 +27,6 @@ from match.rules import (
 )
 from match.stats import EPISODE_KINDS, TeamStats
 from match.truth import RobotKey, RobotView, Snapshot, num, other, robot_key
-
-if TYPE_CHECKING:
-    from match.director import MatchConfig
 
 
 class Game(Protocol):

@@ -29,7 +29,8 @@ from launcher.supervisor import (
     command_lines,
     free_tcp_port,
 )
-from match.director import Director, MatchConfig
+from match.config import MatchConfig
+from match.director import Director
 from match.report import format_result, write_outputs
 from match.shell import DirectorShell
 from sslnet.multicast import loopback_multicast_ok

@@ -12,7 +12,8 @@ The kinds are mixed deterministically from ``--seed`` (a pool of distinct datagr
 once, then drawn from): random bytes, truncated and byte-flipped valid packets, valid protobuf
 with required fields missing, oversized (> the relay's 32 KiB, few), empty, strings that are
 not UTF-8, enum values out of range, NaN/inf coordinates, huge repeated counts. Each datagram
-in the pool is classified beforehand with the backend's own parser (``parse_into``) into the
+in the pool is classified beforehand with the station's own parser
+(``sslnet.streams.parse_message``) into the
 reason the relay or the backend should count it under, or "accepted" (it parses: the world
 model then drops frames whose capture time is random as "time out of range"; a consistent
 fake clock would be learnt as a camera: that is spoofing, not a malformed datagram).
@@ -37,15 +38,12 @@ import math
 import os
 import random
 import re
-import signal
 import socket
 import struct
-import subprocess
 import sys
-import threading
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -54,10 +52,12 @@ import httpx
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from backend.processors.common import parse_into  # noqa: E402
 from backend.world.referee import decode_referee  # noqa: E402
+from launcher.started import Started, start_isolated  # noqa: E402
 from sslnet import streams  # noqa: E402
 from sslnet.multicast import open_multicast_sender  # noqa: E402
+from sslnet.streams import parse_message as parse_into  # noqa: E402
+from sslnet.wire import key, varint  # noqa: E402
 from sslpb.ssl_gc_referee_message_pb2 import Referee  # noqa: E402
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket  # noqa: E402
 
@@ -78,22 +78,6 @@ REFEREE_KINDS = {
 
 
 # --------------------------------------------------------------------------- datagrams
-
-def _varint(v: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = v & 0x7F
-        v >>= 7
-        if v:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def _key(field_no: int, wire: int) -> bytes:
-    return _varint(field_no << 3 | wire)
-
 
 def _weird_float(rng: random.Random) -> float:
     return rng.choice([math.nan, math.inf, -math.inf, 1e308, -1e308, 3.4e38, -0.0])
@@ -170,10 +154,10 @@ def make_datagram(stream: str, kind: str, rng: random.Random) -> bytes:
         base = _valid_bytes(stream, rng)
         # an unknown length-delimited field pads it past the limit: well-formed protobuf
         pad = rng.randrange(MAX_DATAGRAM + 1, 60000) - len(base) - 8
-        return base + _key(1000, 2) + _varint(pad) + b"\0" * pad
+        return base + key(1000, 2) + varint(pad) + b"\0" * pad
     if kind == "no content":
         w = SSL_WrapperPacket()
-        return w.SerializeToString() + _key(900, 0) + _varint(1)  # only an unknown field
+        return w.SerializeToString() + key(900, 0) + varint(1)  # only an unknown field
     if stream == "vision":
         return _vision_kind(kind, rng)
     return _referee_kind(kind, rng)
@@ -219,14 +203,14 @@ def _with_bad_shape(w: SSL_WrapperPacket, rng: random.Random) -> bytes:
     ln = g.field_lines.add()
     ln.name = "CenterLine"
     ln.p1.x, ln.p1.y, ln.p2.x, ln.p2.y, ln.thickness = 0, -3000, 0, 3000, 10
-    raw = ln.SerializeToString() + _key(4, 0) + _varint(rng.choice([99, 999, 1 << 31]))
+    raw = ln.SerializeToString() + key(4, 0) + varint(rng.choice([99, 999, 1 << 31]))
     del g.field_lines[-1]
     # re-nest by hand: field_lines is field 6 of SSL_GeometryFieldSize, field 1 of geometry,
     # geometry is field 2 of the wrapper
-    gfield = g.SerializeToString() + _key(6, 2) + _varint(len(raw)) + raw
-    geo = _key(1, 2) + _varint(len(gfield)) + gfield
+    gfield = g.SerializeToString() + key(6, 2) + varint(len(raw)) + raw
+    geo = key(1, 2) + varint(len(gfield)) + gfield
     w.ClearField("geometry")
-    return w.SerializeToString() + _key(2, 2) + _varint(len(geo)) + geo
+    return w.SerializeToString() + key(2, 2) + varint(len(geo)) + geo
 
 
 def _referee_kind(kind: str, rng: random.Random) -> bytes:
@@ -247,7 +231,7 @@ def _referee_kind(kind: str, rng: random.Random) -> bytes:
         # a required enum (closed, proto2) out of range: missing; an optional one: unknown
         which = rng.choice(["command", "stage", "next_command"])
         no = Referee.DESCRIPTOR.fields_by_name[which].number
-        bad = _key(no, 0) + _varint(rng.choice([99, 1 << 20]))
+        bad = key(no, 0) + varint(rng.choice([99, 1 << 20]))
         if which == "next_command" or rng.random() < 0.5:
             # a valid value first, then the out-of-range one (kept as an unknown field)
             return r.SerializeToString() + bad
@@ -327,54 +311,19 @@ def build_pool(seed: int, size: int, only: set[str] | None = None) -> list[Entry
 
 # --------------------------------------------------------------------------- the station
 
-@dataclass
-class Station:
-    proc: subprocess.Popen[str]
-    url: str
-    ports: dict[str, Any]
-    pids: dict[str, int]
-    log: list[str] = field(default_factory=list)
-
+class Station(Started):
     def get(self, path: str) -> Any:
         r = httpx.get(self.url + path, timeout=10.0)
         r.raise_for_status()
         return r.json()
 
-    def stop(self) -> int | None:
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            return None
-
 
 def launch(extra: list[str]) -> Station:
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", *extra], cwd=ROOT,
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    lines: list[str] = []
-    info: dict[str, Any] = {}
-    ready = threading.Event()
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            if line.startswith("TOUCHLINE_PORTS "):
-                info["ports"] = json.loads(line.split(" ", 1)[1])
-            elif line.startswith("TOUCHLINE_PIDS "):
-                info["pids"] = json.loads(line.split(" ", 1)[1])
-            elif line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise SystemExit("station did not start:\n" + "\n".join(lines[-40:]))
-    return Station(proc, info["url"], info["ports"], info["pids"], lines)
+    try:
+        st = start_isolated(extra)
+    except RuntimeError as exc:
+        raise SystemExit(str(exc)) from None
+    return Station(**vars(st))
 
 
 def kernel_drops(group: str, port: int) -> tuple[int, int]:
@@ -521,7 +470,7 @@ def main(argv: list[str] | None = None) -> int:
         time.sleep(args.settle)
         samples.append(sample(st, t0, "after"))
         samples.append(sample(st, t0, "after"))
-        exit_code = st.stop()
+        exit_code = st.stop(20)
         report = account(args, sent, expect, before, after, drops0, drops1, send_s,
                          send_blocked, samples, failures)
         if exit_code not in (0, None):
@@ -531,14 +480,14 @@ def main(argv: list[str] | None = None) -> int:
         if args.json:
             args.json.write_text(json.dumps(report, indent=1))
     except BaseException:
-        st.stop()
-        print("\n".join(st.log[-40:]), file=sys.stderr)
+        st.stop(20)
+        print("\n".join(st.lines[-40:]), file=sys.stderr)
         raise
     if failures:
         print("\nFAILED:")
         for f in failures:
             print("  - " + f)
-        print("\nstation log (tail):\n" + "\n".join(st.log[-30:]))
+        print("\nstation log (tail):\n" + "\n".join(st.lines[-30:]))
         return 1
     print("\nPASS: 0 crashes, every malformed datagram counted or accounted as lost")
     return 0

@@ -1,180 +1,24 @@
 """``python -m ssllog``: ``info FILE`` summarises a log, ``export FILE --csv OUT`` writes the
 raw vision detections as CSV (one row per object per camera frame), ``index FILE`` builds the
-cache a replay player opens at once later (the station runs it as a child process)."""
+cache a replay player opens at once later (the station runs it as a child process). The
+filters re-run over a log's vision is the backend's command: ``python -m backend.relog``."""
 
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import sys
 import tempfile
-from collections import Counter
-from collections.abc import Callable, Iterator, Sequence
-from typing import TextIO
+from collections.abc import Callable, Sequence
 
-from domain.wallclock import iso_utc
-from ssllog.format import TYPE_VISION_2010, TYPE_VISION_2014
-from ssllog.logfile import TYPE_NAMES, LogFile
-from ssllog.reader import LogFormatError, Record
-from sslpb import ssl_vision_wrapper_pb2
+from ssllog.export import export_csv, info, open_for_command, progress_printer, write_csv
+from ssllog.logfile import LogFile
+from ssllog.reader import LogFormatError
 
-CSV_COLUMNS = (
-    "t_log_s", "t_capture", "camera_id", "frame_number", "kind", "id",
-    "x_mm", "y_mm", "orientation_rad", "confidence",
-)
-
-
-def _progress_printer(enabled: bool, label: str) -> Callable[[float], None] | None:
-    """A ``\\r`` percentage line on stderr; None when disabled (no tty, no --progress)."""
-    if not enabled:
-        return None
-    last = [-1]
-
-    def show(fraction: float) -> None:
-        pct = int(fraction * 100)
-        if pct != last[0]:
-            last[0] = pct
-            sys.stderr.write(f"\r{label} {pct:3d}%")
-            if pct >= 100:
-                sys.stderr.write("\n")
-            sys.stderr.flush()
-
-    return show
-
-
-def _utc(ns: int) -> str:
-    return iso_utc(ns / 1e9)
-
-
-def info(lf: LogFile, out: TextIO) -> None:
-    w = out.write
-    w(f"file: {lf.path}\n")
-    if lf.data_path != lf.path:
-        w(f"plain copy: {lf.data_path}\n")
-    w(f"duration: {lf.duration_s:.3f} s ({_utc(lf.t_first_ns)} .. {_utc(lf.t_last_ns)})\n")
-    w("messages:\n")
-    for t, n in sorted(lf.counts.items()):
-        name = TYPE_NAMES.get(t, "unknown type")
-        w(f"  {t:5d} {name:14s} {n}\n")
-    w("cameras:\n")
-    for cam, n in sorted(lf.cameras.items()):
-        rate = n / lf.duration_s if lf.duration_s > 0 else 0.0
-        w(f"  camera {cam}: {n} frames, {rate:.1f} Hz\n")
-    teams = lf.teams
-    w(f"teams: yellow {teams.get('yellow', '?')}, blue {teams.get('blue', '?')}\n")
-    events = lf.events
-    for kind in ("stage", "command", "goal", "card"):
-        c = Counter(e.label for e in events if e.kind == kind)
-        seen = ", ".join(f"{label} x{n}" for label, n in sorted(c.items()))
-        w(f"{kind}s: {seen or '-'}\n")
-    gaps = lf.gaps
-    w(f"gaps (> 1 s without vision): {len(gaps)}\n")
-    for a, b in gaps:
-        w(f"  {(a - lf.t_first_ns) / 1e9:.3f} s .. {(b - lf.t_first_ns) / 1e9:.3f} s "
-          f"({(b - a) / 1e9:.3f} s)\n")
-    if lf.warning:
-        w(f"warning: {lf.warning}\n")
-
-
-def export_csv(
-    lf: LogFile,
-    out: TextIO,
-    t_from: float | None,
-    t_to: float | None,
-    progress: Callable[[float], None] | None = None,
-) -> int:
-    """Writes the CSV rows; returns how many. --from/--to are seconds from the log's start."""
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(CSV_COLUMNS)
-    rows = 0
-    for rec, wrapper in _vision(lf, t_from, t_to, (TYPE_VISION_2014, TYPE_VISION_2010),
-                                progress):
-        if not wrapper.HasField("detection"):
-            continue
-        d = wrapper.detection
-        t_log = f"{(rec.time_ns - lf.t_first_ns) / 1e9:.6f}"
-        head = (t_log, repr(d.t_capture), d.camera_id, d.frame_number)
-        for b in d.balls:
-            writer.writerow((*head, "ball", "", b.x, b.y, "", b.confidence))
-            rows += 1
-        for kind, robots in (("blue", d.robots_blue), ("yellow", d.robots_yellow)):
-            for r in robots:
-                orientation = r.orientation if r.HasField("orientation") else ""
-                writer.writerow((*head, kind, r.robot_id, r.x, r.y, orientation, r.confidence))
-                rows += 1
-    return rows
-
-
-def _vision(
-    lf: LogFile,
-    t_from: float | None,
-    t_to: float | None,
-    types: tuple[int, ...],
-    progress: Callable[[float], None] | None,
-) -> Iterator[tuple[Record, ssl_vision_wrapper_pb2.SSL_WrapperPacket]]:
-    """The vision records between --from and --to (s from the log's start), parsed (a garbled
-    one is skipped; the wrapper object is reused), with the progress by bytes."""
-    start = lf.offset_at(lf.t_first_ns + round(t_from * 1e9)) if t_from is not None else None
-    end_ns = lf.t_first_ns + round(t_to * 1e9) if t_to is not None else None
-    first_off = start if start is not None else 0
-    span = max(1, lf.data_end - first_off)
-    wrapper = ssl_vision_wrapper_pb2.SSL_WrapperPacket()
-    for n, rec in enumerate(lf.records(start)):
-        if end_ns is not None and rec.time_ns > end_ns:
-            break
-        if progress is not None and n % 4096 == 0:
-            progress((rec.offset - first_off) / span)
-        if rec.type not in types:
-            continue
-        try:
-            wrapper.ParseFromString(rec.payload)
-        except Exception:  # a garbled frame is skipped
-            continue
-        yield rec, wrapper
-    if progress is not None:
-        progress(1.0)
-
-
-FILTERED_COLUMNS = (
-    "t_log_s", "t_capture", "kind", "id", "x_mm", "y_mm", "orientation_rad",
-    "vx_mm_s", "vy_mm_s", "omega_rad_s", "visible",
-)
-
-
-def export_filtered(
-    lf: LogFile,
-    out: TextIO,
-    t_from: float | None,
-    t_to: float | None,
-    filter_name: str,
-    progress: Callable[[float], None] | None = None,
-) -> int:
-    """Touchline's world model re-run over the vision (the paper's filters or the Kalman
-    filter, for every object): one row per object after every camera frame merged."""
-    from backend.filters.params import FilterSettings
-    from backend.replay.history import merge_wrapper
-    from backend.world.model import WorldModel
-
-    model = WorldModel()
-    model.configure(FilterSettings(ball=filter_name, robot=filter_name))  # type: ignore[arg-type]
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(FILTERED_COLUMNS)
-    rows = 0
-    for rec, wrapper in _vision(lf, t_from, t_to, (TYPE_VISION_2014,), progress):
-        if not merge_wrapper(model, wrapper, rec.time_ns):
-            continue
-        w = model.snapshot()
-        head = (f"{(rec.time_ns - lf.t_first_ns) / 1e9:.6f}", repr(w.t_capture))
-        if w.ball is not None:
-            b = w.ball
-            writer.writerow((*head, "ball", "", b.x, b.y, "", b.vx, b.vy, "", int(b.visible)))
-            rows += 1
-        for r in w.robots:
-            writer.writerow((*head, r.team, r.id, r.x, r.y, r.orientation, r.vx, r.vy, r.omega,
-                             int(r.visible)))
-            rows += 1
-    return rows
+#: ``export --filtered`` moved to the backend (the log package does not import the backend)
+FILTERED_MOVED = ("ssllog: --filtered moved: the world model's re-run is the backend's "
+                  "command, python -m backend.relog FILE --csv OUT [--filter NAME] "
+                  "[--from S] [--to S]\n")
 
 
 def index(path: str, cache_dir: str, nice: int, lines: bool,
@@ -215,41 +59,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     pe.add_argument("--from", dest="t_from", type=float, help="seconds from the log's start")
     pe.add_argument("--to", dest="t_to", type=float, help="seconds from the log's start")
     pe.add_argument("--csv", required=True, help="output file ('-' for stdout)")
-    pe.add_argument("--filtered", nargs="?", const="kalman", default=None,
-                    choices=["raw", "median", "paper", "kalman"],
-                    help="instead of the raw detections, Touchline's world model re-run over "
-                         "them with this filter for every object (default kalman; 'paper' is "
-                         "the paper's median + weighted average): positions and velocities")
+    # kept to say where it went rather than argparse's "unrecognized arguments"
+    pe.add_argument("--filtered", nargs="?", const="", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
+    if getattr(args, "filtered", None) is not None:
+        sys.stderr.write(FILTERED_MOVED)
+        return 2
     if args.cmd == "index":
         return index(args.file, args.cache_dir, args.nice, args.progress_lines,
-                     _progress_printer(args.progress or sys.stderr.isatty(), "indexing"))
+                     progress_printer(args.progress or sys.stderr.isatty(), "indexing"))
     show = args.progress or sys.stderr.isatty()
-    try:
-        lf = LogFile.open(args.file, args.cache_dir, _progress_printer(show, "indexing"))
-    except (OSError, LogFormatError) as e:
-        sys.stderr.write(f"ssllog: {e}\n")
+    lf = open_for_command(args.file, args.cache_dir, show)
+    if lf is None:
         return 1
     with lf:
         if args.cmd == "info":
             info(lf, sys.stdout)
             return 0
-        prog = _progress_printer(show, "exporting")
-
-        def export(out: TextIO) -> int:
-            if args.filtered is not None:
-                return export_filtered(lf, out, args.t_from, args.t_to, args.filtered, prog)
-            return export_csv(lf, out, args.t_from, args.t_to, prog)
-        if args.csv == "-":
-            rows = export(sys.stdout)
-        else:
-            with open(args.csv, "w", newline="") as out:
-                rows = export(out)
-        sys.stderr.write(f"{rows} rows\n")
-        if lf.warning:
-            sys.stderr.write(f"warning: {lf.warning}\n")
+        write_csv(lf, args.csv, lambda lf, out, prog: export_csv(
+            lf, out, args.t_from, args.t_to, prog), show)
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

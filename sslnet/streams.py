@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from google.protobuf.message import DecodeError, Message
+
 from sslnet.rate import RateCounter
 
 TRUNCATED = "truncated"
@@ -119,3 +121,18 @@ def wire_problem(data: bytes) -> str:
         if i > n:
             return TRUNCATED
     return NOT_PROTOBUF  # the outer format is whole: something inside is wrong
+
+
+def parse_message(msg: Message, data: bytes) -> tuple[str, str] | None:
+    """Parses ``data`` into ``msg``. On failure (reason, detail): the reason one of this
+    module's (TRUNCATED / NOT_PROTOBUF from ``wire_problem``, MISSING_FIELD for a proto2
+    message without a required field), the detail the parser's words or the missing fields
+    (at most five). The one protobuf parse with a reason of the relay, the backend and fieldsim."""
+    try:
+        msg.ParseFromString(data)
+    except (DecodeError, RuntimeError, ValueError) as exc:
+        return wire_problem(data), str(exc)
+    if not msg.IsInitialized():
+        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
+        return MISSING_FIELD, ", ".join(errors[:5])
+    return None

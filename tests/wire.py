@@ -1,26 +1,15 @@
 """A tiny protobuf wire writer and reader for tests: bytes built by hand from the official
 field numbers, so wire compatibility is checked against the protocol, not only against our
-own generated code."""
+own generated code. The varint and the key are sslnet.wire's (the tracked-vision encoder's
+too)."""
 
 from __future__ import annotations
 
 import struct
 
+from sslnet.wire import key, varint
 
-def varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def key(field: int, wire: int) -> bytes:
-    return varint(field << 3 | wire)
+__all__ = ["f32", "f64", "key", "ld", "read_fields", "uv", "varint"]
 
 
 def uv(field: int, v: int) -> bytes:

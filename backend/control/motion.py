@@ -35,6 +35,7 @@ from backend.control.params import (
     AlgorithmName,
     ControllerParams,
     ControlSettings,
+    LimitsParams,
 )
 from backend.control.profile import ProfilePoint, Trapezoid
 from domain.angles import wrap_angle
@@ -240,17 +241,7 @@ class LineController:
             self._phase = PHASE_HOLD
         if self._blocked_now:
             self._phase = PHASE_BLOCKED
-        # the limiter: max speed, max change of the velocity vector per second
-        s = math.hypot(vx, vy)
-        if s > lim.max_speed_mps:
-            vx, vy = vx * lim.max_speed_mps / s, vy * lim.max_speed_mps / s
-        dvx, dvy = vx - self._vx, vy - self._vy
-        dv = math.hypot(dvx, dvy)
-        max_dv = lim.max_accel_mps2 * dt
-        if dv > max_dv:
-            k = max_dv / dv
-            vx, vy = self._vx + dvx * k, self._vy + dvy * k
-        self._vx, self._vy = vx, vy
+        vx, vy = self._limit(vx, vy, lim, dt)
         self._cmd_along = vx * ux + vy * uy
         # the heading: a P controller (_clamp inline)
         if target.orientation is None:
@@ -283,6 +274,19 @@ class LineController:
         c, sn = math.cos(heading), math.sin(heading)
         fwd, left = wanted.forward_mps, wanted.left_mps
         vx, vy = fwd * c - left * sn, fwd * sn + left * c
+        vx, vy = self._limit(vx, vy, lim, dt)
+        wmax = lim.max_angular_radps
+        omega = wanted.angular_radps
+        omega = -wmax if omega < -wmax else wmax if omega > wmax else omega
+        self._clear()
+        self._phase = PHASE_VELOCITY
+        self._cmd_along = math.hypot(vx, vy)
+        return _tuple_new(LocalVelocity, (vx * c + vy * sn, -vx * sn + vy * c, omega))
+
+    def _limit(self, vx: float, vy: float, lim: LimitsParams, dt: float) -> tuple[float, float]:
+        """The limiter every command goes through (a move's and a velocity order's): max
+        speed, then max change of the velocity vector per second from the last command,
+        which it becomes."""
         s = math.hypot(vx, vy)
         if s > lim.max_speed_mps:
             vx, vy = vx * lim.max_speed_mps / s, vy * lim.max_speed_mps / s
@@ -293,13 +297,7 @@ class LineController:
             k = max_dv / dv
             vx, vy = self._vx + dvx * k, self._vy + dvy * k
         self._vx, self._vy = vx, vy
-        wmax = lim.max_angular_radps
-        omega = wanted.angular_radps
-        omega = -wmax if omega < -wmax else wmax if omega > wmax else omega
-        self._clear()
-        self._phase = PHASE_VELOCITY
-        self._cmd_along = math.hypot(vx, vy)
-        return _tuple_new(LocalVelocity, (vx * c + vy * sn, -vx * sn + vy * c, omega))
+        return vx, vy
 
     def telemetry(self) -> dict[str, float]:
         ref = self._reference()

@@ -7,17 +7,14 @@ w = 3 m/s^2, K = 3, a = 1.5 m/s^2, C smoothing 0.997 / 0.003); see DESIGN.md sec
 
 from __future__ import annotations
 
-import re
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from ..params.fields import num
+from ..params.fields import check_robot_keys, num
 
 AlgorithmName = Literal["algorithm1", "algorithm2", "proportional"]
 ALGORITHMS: tuple[AlgorithmName, ...] = ("algorithm1", "algorithm2", "proportional")
-
-_ROBOT_KEY = re.compile(r"^(blue|yellow)/(1[0-5]|[0-9])$")
 
 
 class _Model(BaseModel):
@@ -132,9 +129,7 @@ class ControlSettings(_Model):
     @field_validator("robots")
     @classmethod
     def _keys(cls, v: dict[str, RobotOverride]) -> dict[str, RobotOverride]:
-        for key in v:
-            if not _ROBOT_KEY.match(key):
-                raise ValueError(f'robot key {key!r} is not "blue/<0..15>" or "yellow/<0..15>"')
+        check_robot_keys(v)
         return v
 
     def algorithm_for(self, team: str, rid: int) -> AlgorithmName:

@@ -12,30 +12,19 @@ import importlib
 import json
 import os
 import pickle
-import struct
 import sys
 import traceback
 from collections.abc import Callable
 from typing import Any, BinaryIO
 
-
-def _read_exact(f: BinaryIO, n: int) -> bytes | None:
-    buf = b""
-    while len(buf) < n:
-        chunk = f.read(n - len(buf))
-        if not chunk:
-            return None
-        buf += chunk
-    return buf
+from ..workerpipe import read_frame, send, take_stdio
 
 
 def _send(out: BinaryIO, obj: Any) -> None:
     try:
-        data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+        send(out, obj)
     except Exception as exc:  # an unpicklable result becomes an error of that call
-        data = pickle.dumps(("err", f"result not picklable: {exc!r}", traceback.format_exc()))
-    out.write(struct.pack(">I", len(data)) + data)
-    out.flush()
+        send(out, ("err", f"result not picklable: {exc!r}", traceback.format_exc()))
 
 
 class Resolver:
@@ -68,20 +57,13 @@ class Resolver:
 
 def main() -> None:
     config = json.loads(sys.argv[1])
-    proto_out = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)  # print() and C-level writes to fd 1 now go to stderr
-    sys.stdout = sys.stderr
-    proto_in = sys.stdin.buffer
+    proto_in, proto_out = take_stdio()
     resolve = Resolver(config["modules"], config["functions"])
     for mod in config.get("preload", []):
         importlib.import_module(mod)
     _send(proto_out, ("ready", os.getpid()))
     while True:
-        head = _read_exact(proto_in, 4)
-        if head is None:
-            return
-        (n,) = struct.unpack(">I", head)
-        body = _read_exact(proto_in, n)
+        body = read_frame(proto_in)
         if body is None:
             return
         try:

@@ -6,12 +6,11 @@ validates completely or is refused with a 422 naming the field.
 
 from __future__ import annotations
 
-import re
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, field_validator
 
-from ..params.fields import num
+from ..params.fields import check_robot_keys, group, num, plain
 
 FilterKind = Literal["raw", "median", "paper", "kalman", "adaptive"]
 FILTER_KINDS: tuple[FilterKind, ...] = ("raw", "median", "paper", "kalman", "adaptive")
@@ -148,43 +147,27 @@ class AdaptiveParams(BaseModel):
         "orientation: a jump faster than this is an outlier")
 
 
-_ROBOT_KEY = re.compile(r"^(blue|yellow)/([0-9]|1[0-5])$")
-
-
 class FilterSettings(BaseModel):
     """Which filter each object uses, and the parameters of every kind."""
 
     model_config = _CFG
     # adaptive: no tuning for the noise level (docs/experiments/filters, section (d), with the
     # closed-loop runs behind the choice); the others stay selectable per class and per robot
-    ball: FilterKind = Field(default="adaptive", description="filter of the ball",
-                             json_schema_extra={"unit": "", "step": None})
-    robot: FilterKind = Field(default="adaptive",
-                              description="filter of every robot without an override",
-                              json_schema_extra={"unit": "", "step": None})
-    robot_overrides: dict[str, FilterKind] = Field(
-        default_factory=dict, description='per-robot filter, keyed "team/id", e.g. "blue/3"',
-        json_schema_extra={"unit": "", "step": None})
-    raw: RawParams = Field(default=RawParams(), description="parameters of 'raw'",
-                           json_schema_extra={"unit": "", "step": None})
-    median: MedianParams = Field(default=MedianParams(),
-                                 description="parameters of 'median'",
-                                 json_schema_extra={"unit": "", "step": None})
-    paper: PaperParams = Field(default=PaperParams(), description="parameters of 'paper'",
-                               json_schema_extra={"unit": "", "step": None})
-    kalman: KalmanParams = Field(default=KalmanParams(),
-                                 description="parameters of 'kalman'",
-                                 json_schema_extra={"unit": "", "step": None})
-    adaptive: AdaptiveParams = Field(default=AdaptiveParams(),
-                                     description="parameters of 'adaptive'",
-                                     json_schema_extra={"unit": "", "step": None})
+    ball: FilterKind = plain(default="adaptive", description="filter of the ball")
+    robot: FilterKind = plain(default="adaptive",
+                              description="filter of every robot without an override")
+    robot_overrides: dict[str, FilterKind] = plain(
+        default_factory=dict, description='per-robot filter, keyed "team/id", e.g. "blue/3"')
+    raw: RawParams = group(RawParams, "parameters of 'raw'")
+    median: MedianParams = group(MedianParams, "parameters of 'median'")
+    paper: PaperParams = group(PaperParams, "parameters of 'paper'")
+    kalman: KalmanParams = group(KalmanParams, "parameters of 'kalman'")
+    adaptive: AdaptiveParams = group(AdaptiveParams, "parameters of 'adaptive'")
 
     @field_validator("robot_overrides")
     @classmethod
     def _keys(cls, v: dict[str, FilterKind]) -> dict[str, FilterKind]:
-        for k in v:
-            if not _ROBOT_KEY.match(k):
-                raise ValueError(f"robot key {k!r} is not 'blue/<0..15>' or 'yellow/<0..15>'")
+        check_robot_keys(v)
         if len(v) > 32:
             raise ValueError("at most 32 robot overrides")
         return v

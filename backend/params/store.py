@@ -9,6 +9,7 @@ import os
 import re
 import tempfile
 from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, Future
 from pathlib import Path
 from typing import Any
 
@@ -208,6 +209,13 @@ class ParamStore:
         self.play_names: Callable[[], Sequence[str]] | None = None
         #: problems with the state folder found at start-up (health shows them)
         self.warnings: list[str] = []
+        #: where params.json is written: None writes it at once (a store without a station);
+        #: the station gives one thread of its own, so a change is applied on the station
+        #: thread without its fsync holding that thread (writes stay in order)
+        self.writer: Executor | None = None
+        #: the write of the last change (None: written at once, or nothing to write): a
+        #: route answers once the change it made is on disk
+        self.saved: Future[None] | None = None
         if state_dir is not None:
             self._load()
 
@@ -336,6 +344,7 @@ class ParamStore:
             raise ParamError(errors)
 
     def _set(self, new: StationParams) -> StationParams:
+        self.saved = None
         if new == self.current:
             return new
         changed = diff(self.values(), new.model_dump(mode="json"))
@@ -344,8 +353,11 @@ class ParamStore:
         for c in changed:
             self.changed_in[c["path"]] = self.version
         if self.file is not None:
-            atomic_write_json(self.file, {"schema": FILE_SCHEMA, "version": self.version,
-                                          "values": self.values()})
+            data = {"schema": FILE_SCHEMA, "version": self.version, "values": self.values()}
+            if self.writer is None:
+                atomic_write_json(self.file, data)
+            else:
+                self.saved = self.writer.submit(atomic_write_json, self.file, data)
         for fn in self._listeners:
             fn(new, self.version)
         return new

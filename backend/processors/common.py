@@ -10,7 +10,6 @@ from typing import Any
 
 import zmq
 import zmq.asyncio
-from google.protobuf.message import DecodeError, Message
 
 from sslnet import streams
 from sslnet.ratelog import RateLimitedLog
@@ -67,18 +66,6 @@ def read_counting_missed(reader: Reader[tl.Envelope], counter: StreamCounter,
         badlog.warning(f"{what}-behind", "%s ingest behind: %d datagram(s) not decoded",
                        what, n)
     return envs
-
-
-def parse_into(msg: Message, data: bytes) -> tuple[str, str] | None:
-    """Parses ``data`` into ``msg``; on failure the reason (sslnet.streams) and the detail."""
-    try:
-        msg.ParseFromString(data)
-    except (DecodeError, RuntimeError, ValueError) as exc:
-        return streams.wire_problem(data), str(exc)
-    if not msg.IsInitialized():
-        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
-        return streams.MISSING_FIELD, ", ".join(errors[:5])
-    return None
 
 
 class SocketProcessor(Processor):

@@ -11,7 +11,7 @@ from ..bus import DataBus, Reader
 from ..processor import OnTopic, Processor
 from ..referee.watch import RefereeWatch
 from ..world.referee import decode_referee
-from .common import badlog, parse_into, read_counting_missed
+from .common import badlog, read_counting_missed
 
 
 class RefereeIngest(Processor):
@@ -32,7 +32,7 @@ class RefereeIngest(Processor):
         for env in read_counting_missed(self.reader, self.counter, "referee"):
             self.counter.rate.add()
             msg = Referee()
-            reason = parse_into(msg, env.payload)
+            reason = streams.parse_message(msg, env.payload)
             if reason is not None:
                 self.counter.error(*reason)
                 badlog.warning("referee", "bad referee packet from %s: %s", env.source,

@@ -9,7 +9,7 @@ from typing import Any
 
 import zmq
 import zmq.asyncio
-from google.protobuf.message import DecodeError
+from google.protobuf.message import DecodeError, Message
 
 from ssllog.format import TYPE_REFEREE_2013, TYPE_VISION_2014
 from sslnet import streams
@@ -157,6 +157,17 @@ class RelayIngest(SocketProcessor):
             # (the descriptor will not signal what is already there)
             self._fd_loop.call_soon(self._fd_ready)
 
+    def _parse(self, msg: Message, body: bytes, what: str) -> str | None:
+        """Parses ``body`` into ``msg``: None, or the parser's words, counted under the reason
+        ``wire_problem`` names. (Not ``streams.parse_message``: these messages are proto3,
+        with no required field to check, and every camera frame comes through here.)"""
+        try:
+            msg.ParseFromString(body)
+        except DecodeError as exc:
+            self._zmq.error(streams.wire_problem(body), f"{what}: {exc}")
+            return str(exc)
+        return None
+
     def _handle(self, frames: list[bytes]) -> None:
         c = self._zmq
         c.rate.add()
@@ -167,30 +178,21 @@ class RelayIngest(SocketProcessor):
         topic, body = frames
         if topic == b"stats":
             stats = tl.RelayStats()
-            try:
-                stats.ParseFromString(body)
-            except DecodeError as exc:
-                c.error(streams.wire_problem(body), f"stats: {exc}")
-                return
-            self.relay_stats.write(_relay_stats_dict(stats))
+            if self._parse(stats, body, "stats") is None:
+                self.relay_stats.write(_relay_stats_dict(stats))
             return
         if topic == b"feedback":
             fb = tl.RobotFeedbackEnvelope()
-            try:
-                fb.ParseFromString(body)
-            except DecodeError as exc:
-                c.error(streams.wire_problem(body), f"feedback: {exc}")
-                badlog.warning("zmq-feedback", "undecodable feedback envelope: %s", exc)
-                return
-            if self.live():  # in replay nothing is sent to robots: nothing answers for it
+            why = self._parse(fb, body, "feedback")
+            if why is not None:
+                badlog.warning("zmq-feedback", "undecodable feedback envelope: %s", why)
+            elif self.live():  # in replay nothing is sent to robots: nothing answers for it
                 self.feedback_packets.write(fb)
             return
         env = tl.Envelope()
-        try:
-            env.ParseFromString(body)
-        except DecodeError as exc:
-            c.error(streams.wire_problem(body), f"envelope: {exc}")
-            badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, exc)
+        why = self._parse(env, body, "envelope")
+        if why is not None:
+            badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, why)
             return
         if topic == b"vision":
             self.record(env.receive_time_ns, TYPE_VISION_2014, env.payload)

@@ -12,7 +12,7 @@ from .. import topics
 from ..bus import DataBus, Reader
 from ..processor import OnTopic, Processor
 from ..world.decode import decode_detection, geometry_to_dict
-from .common import LatencyStage, badlog, parse_into, read_counting_missed
+from .common import LatencyStage, badlog, read_counting_missed
 
 
 class VisionIngest(Processor):
@@ -37,7 +37,7 @@ class VisionIngest(Processor):
         for env in read_counting_missed(self.reader, counter, "vision"):
             count()
             pkt = SSL_WrapperPacket()
-            reason = parse_into(pkt, env.payload)
+            reason = streams.parse_message(pkt, env.payload)
             if reason is not None:
                 counter.error(*reason)
                 badlog.warning("vision", "bad vision packet from %s: %s", env.source,

@@ -20,7 +20,12 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
-from ssllog.format import TYPE_REFEREE_2013, TYPE_TRACKER_2020, TYPE_VISION_2014
+from ssllog.format import (
+    TYPE_REFEREE_2013,
+    TYPE_TL_COMMANDS,
+    TYPE_TRACKER_2020,
+    TYPE_VISION_2014,
+)
 from ssllog.reader import Record
 
 from .. import contract
@@ -32,6 +37,8 @@ PREROLL_S = 0.3
 #: records emitted per feed tick while catching up (the topics hold 64 vision packets; each
 #: tick lets every processor that waits on them run before the next batch)
 BATCH = 32
+#: later than any record's time
+_END_OF_TIME = 2**63 - 1
 #: the speeds a page may choose (0 = as fast as possible)
 MIN_SPEED, MAX_SPEED = 0.1, 10.0
 #: step back: how far back one camera frame may be looked for (a gap in the log is longer)
@@ -67,7 +74,8 @@ class LogSource(Protocol):
 
     def offset_at(self, time_ns: int) -> int: ...
 
-    def records(self, from_offset: int | None = None) -> Iterator[Record]: ...
+    def records(self, from_offset: int | None = None,
+                include_unknown: bool = False) -> Iterator[Record]: ...
 
     def close(self) -> None: ...
 
@@ -309,6 +317,10 @@ class LogPlayer:
             until = lg.t_last_ns if self.speed == 0 else self.position_ns()
         else:
             return []
+        if until >= lg.t_last_ns:
+            # at the end: all the rest, a record stamped a little after the one that follows it
+            # too (the commands are stamped when sent, up to ms after the next vision record)
+            until = _END_OF_TIME
         out: list[Record] = []
         while len(out) < BATCH and feed.ahead is not None and feed.ahead.time_ns <= until:
             out.append(feed.ahead)
@@ -361,7 +373,8 @@ class LogPlayer:
         lg = self._need_log()
         t_ns = min(max(t_ns, lg.t_first_ns), lg.t_last_ns)
         start = max(lg.t_first_ns, t_ns - int(PREROLL_S * 1e9))
-        records = lg.records(lg.offset_at(start))
+        # Touchline's own types too (the commands sent, drawn beside the what-if's)
+        records = _played(lg.records(lg.offset_at(start), include_unknown=True))
         self._feed = _Feed(records, next(records, None))
         self._vision_times.clear()
         self._last_emitted_ns = start
@@ -438,5 +451,11 @@ def _kind(kind: str) -> contract.PlayerEventKind:
     return "operator"
 
 
-#: the record types that go onto the bus (the rest of a log is skipped by the feed)
-PLAYED_TYPES = frozenset({TYPE_VISION_2014, TYPE_REFEREE_2013, TYPE_TRACKER_2020})
+#: the record types the feed emits (the rest of a log is skipped): vision and referee go onto
+#: the bus; the log's tracked vision and commands are kept to be drawn beside today's
+PLAYED_TYPES = frozenset({TYPE_VISION_2014, TYPE_REFEREE_2013, TYPE_TRACKER_2020,
+                          TYPE_TL_COMMANDS})
+
+
+def _played(records: Iterator[Record]) -> Iterator[Record]:
+    return (r for r in records if r.type in PLAYED_TYPES)

@@ -9,7 +9,7 @@ import time
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
-from .. import contract, views
+from .. import contract
 from ..contract import ArmIn
 from .deps import VIEWER, OperatorDep, StationDep
 
@@ -25,7 +25,7 @@ _POLL_S = 0.02
 
 @router.get("", dependencies=[VIEWER])
 async def arm_get(st: StationDep) -> contract.ArmingInfo:
-    return await st.call(st.arming_view)
+    return await st.call(st.safety.arming_view)
 
 
 @router.post("", response_model=None)
@@ -34,7 +34,7 @@ async def arm(body: ArmIn, st: StationDep,
     """Arms the station (real robots: commands reach them; refused with 409 and the
     reason while vision is missing, the e-stop is active or a log is replayed) or
     disarms it (always)."""
-    refused = await st.call(st.set_armed, body.armed, caller.who)
+    refused = await st.call(st.safety.set_armed, body.armed, caller.who)
     if refused is not None:
         log.warning("arming refused (%s): %s", caller.who, refused)
         return JSONResponse(status_code=409, content={"detail": refused})
@@ -48,11 +48,11 @@ async def confirmed_view(st: StationDep, within_s: float = CONFIRM_S) -> contrac
     fresh statistics (down, never started) is not waited for: the reply says so at once."""
     deadline = time.monotonic() + within_s
     while True:
-        doubt, alive = await st.read(views.relay_arming_check, st)
+        doubt, alive = await st.read(st.safety.relay_arming_check)
         if doubt is None or not alive:
-            return await st.read(st.arming_view)
+            return await st.read(st.safety.arming_view)
         if time.monotonic() >= deadline:
-            view = await st.read(st.arming_view)
+            view = await st.read(st.safety.arming_view)
             if view["relay_unconfirmed"] is not None:
                 view["relay_unconfirmed"] = (
                     f"the relay has not confirmed within {within_s:g} s: "

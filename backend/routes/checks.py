@@ -17,7 +17,7 @@ IdParam = Annotated[int, PathParam(ge=0, le=15, description="robot id, 0..15")]
 
 async def check_on_field(st: Station, x: float, y: float, what: str = "point") -> None:
     """A point within the field and its boundary (a 12 m x 9 m field before any geometry)."""
-    geo = await st.read(st.geometry)
+    geo = await st.read(st.browser.geometry)
     half_l = (geo["field_length"] / 2 + geo["boundary_width"]) if geo else 7000.0
     half_w = (geo["field_width"] / 2 + geo["boundary_width"]) if geo else 5000.0
     if abs(x) > half_l or abs(y) > half_w:
@@ -29,7 +29,7 @@ async def check_on_field(st: Station, x: float, y: float, what: str = "point") -
 
 
 def check_team(st: Station, team: Team, rid: int) -> None:
-    why = st.other_team_refusal(team, rid)
+    why = st.safety.other_team_refusal(team, rid)
     if why is not None:
         raise HTTPException(422, [{"loc": ["path", "team"], "msg": why,
                                    "type": "other_team"}])

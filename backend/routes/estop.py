@@ -11,6 +11,8 @@ from fastapi.responses import JSONResponse
 from .. import contract
 from ..access import estop_refusal
 from ..contract import EstopIn
+from ..estop import EstopState
+from ..station import Station
 from .deps import VIEWER, EstopDep, RuleDep, StationDep
 
 log = logging.getLogger("touchline.api")
@@ -20,7 +22,7 @@ router = APIRouter(prefix="/api/estop", tags=["estop"])
 
 @router.get("", dependencies=[VIEWER])
 async def estop_get(st: StationDep) -> contract.EstopInfo:
-    return await st.call(st.estop_view)
+    return await st.call(st.safety.estop_view)
 
 
 @router.post("", response_model=None)
@@ -36,14 +38,20 @@ async def estop(body: EstopIn, st: StationDep, rule: RuleDep,
         return JSONResponse(status_code=409, content={"detail": (
             "releasing the emergency stop must be confirmed: send "
             '{"active": false, "confirm": true}')})
+    was, view = await st.call(_set, st, body.active, who, body.reason)
     if body.active:
-        await st.call(st.set_estop, True, who)
         log.warning("emergency stop ACTIVE: pressed by %s", who)
     else:
-        was = st.estop_latch.state
-        await st.call(st.set_estop, False, who)
         log.warning("emergency stop RELEASED by %s (pressed by %s)%s", who, was.by,
                     f": {body.reason}" if body.reason else "")
-    await st.call(st.operator_action, "estop" if body.active else "estop-release",
-                  who, {"reason": body.reason})
-    return {"estop": body.active, **await st.call(st.estop_view)}
+    return {"estop": body.active, **view}
+
+
+def _set(st: Station, active: bool, who: str,
+         reason: str) -> tuple[EstopState, contract.EstopInfo]:
+    """One press (or release) is one call on the station's queue: the stop set (latched,
+    persisted, on the bus), the action recorded, the state answered."""
+    was = st.safety.latch.state
+    st.safety.set_estop(active, who)
+    st.operator_action("estop" if active else "estop-release", who, {"reason": reason})
+    return was, st.safety.estop_view()

@@ -75,7 +75,9 @@ async def evaluate_replay(body: EvaluateReplayIn,
                           st: StationDep) -> contract.Player | JSONResponse:
     """A run's SSL log in the player (the replay timeline), by report and run name."""
     try:
-        return await st.open_evaluation_log(body.report, body.run)
+        # by names: the evaluation finds the log, inside the reports folder only
+        real = await asyncio.to_thread(st.evaluation.run_log, body.report, body.run)
+        return await st.read(st.replay.open_checked, real)
     except (EvaluationError, PlayerError) as exc:
         return _refused(exc)
 

@@ -3,12 +3,13 @@ driving (ask, give, take over, release), and the hooks the other routes call: ``
 (may this caller drive that team: 409 naming the holder if not), ``check_params`` (a play
 change drives our team; a change made on an older parameter version is refused with the newer
 value), ``set_name_cookie`` (``/login?name=``) and ``ws_session`` (each websocket client is a
-session)."""
+session). ``Operators`` is station state: every change and read of it here is one call on the
+station's queue (the station thread is its one writer)."""
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+from collections.abc import AsyncIterator
 from typing import Any
 from urllib.parse import quote
 
@@ -17,7 +18,7 @@ from fastapi.responses import JSONResponse, Response
 from starlette.requests import HTTPConnection
 
 from ..contract import DrivingIn
-from ..operators import DrivingRefused, clean_name
+from ..operators import DrivingRefused, Who, clean_name
 from ..station import Station
 from .checks import TeamParam
 from .deps import NAME_COOKIE, OperatorDep, StationDep, ViewerDep, who_of
@@ -28,30 +29,41 @@ VERSION_HEADER = "x-touchline-params-version"
 router = APIRouter(prefix="/api")
 
 
-async def check_driving(request: HTTPConnection, st: Station, team: str) -> None:
-    """Raises 409 (naming the holder) unless this caller drives ``team``; the first to drive a
-    free team takes it (recorded)."""
-    who = who_of(request)
+def drive_or_refuse(st: Station, who: Who, team: str) -> None:
+    """On the station thread (Operators' one writer): raises 409 (naming the holder) unless
+    ``who`` drives ``team``; the first to drive a free team takes it (recorded)."""
     try:
         taken = st.operators.drive(who, team)
     except DrivingRefused as exc:
         raise HTTPException(409, str(exc)) from None
     if taken:
-        await st.call(st.operator_action, "driving-taken", str(who), {"team": team})
+        st.operator_action("driving-taken", str(who), {"team": team})
 
 
-async def check_params(request: Request, st: Station, body: Any) -> None:
-    """Before a PATCH of the parameters: a play change drives our team (the lock); a change
-    made on version N (``X-Touchline-Params-Version`` or ``?version=``) of leaves changed
-    since is refused (409) with the value now."""
+async def check_driving(request: HTTPConnection, st: Station, team: str) -> None:
+    """``drive_or_refuse`` for this caller, as one call on the station's queue."""
+    await st.call(drive_or_refuse, st, who_of(request), team)
+
+
+def version_seen(request: Request) -> int | None:
+    """The parameter version the caller's change was made on (``X-Touchline-Params-Version``
+    or ``?version=``), None if not said; 422 if it is not a number."""
     raw = request.headers.get(VERSION_HEADER) or request.query_params.get("version")
-    if raw is not None:
-        try:
-            seen = int(raw)
-        except ValueError:
-            raise HTTPException(422, [{"loc": ["header", VERSION_HEADER],
-                                       "msg": f"not a version number: {raw[:20]!r}",
-                                       "type": "int_parsing"}]) from None
+    if raw is None:
+        return None
+    try:
+        return int(raw)
+    except ValueError:
+        raise HTTPException(422, [{"loc": ["header", VERSION_HEADER],
+                                   "msg": f"not a version number: {raw[:20]!r}",
+                                   "type": "int_parsing"}]) from None
+
+
+def check_params(st: Station, body: Any, seen: int | None, who: Who) -> None:
+    """On the station thread, before a PATCH of the parameters: a change made on version
+    ``seen`` of leaves changed since is refused (409) with the value now; a play change
+    drives our team (the lock)."""
+    if seen is not None:
         stale = st.params.changed_since(body, seen)
         if stale:
             raise HTTPException(409, [{
@@ -61,7 +73,7 @@ async def check_params(request: Request, st: Station, body: Any) -> None:
                 "type": "stale_version", "value_now": c["to"]} for c in stale])
     strategy = body.get("strategy") if isinstance(body, dict) else None
     if isinstance(strategy, dict) and "play" in strategy:
-        await check_driving(request, st, st.params.current.team.our_team)
+        drive_or_refuse(st, who, st.params.current.team.our_team)
 
 
 def set_name_cookie(answer: Response, raw: str) -> None:
@@ -73,21 +85,22 @@ def set_name_cookie(answer: Response, raw: str) -> None:
                           samesite="strict")
 
 
-@contextlib.contextmanager
-def ws_session(conn: HTTPConnection, st: Station) -> Iterator[None]:
-    """A websocket client is a session (the Health tab lists them) while it is open."""
-    sid = st.operators.connect(who_of(conn))
+@contextlib.asynccontextmanager
+async def ws_session(conn: HTTPConnection, st: Station) -> AsyncIterator[None]:
+    """A websocket client is a session (the Health tab lists them) while it is open; both
+    ends are calls on the station's queue (Operators' one writer)."""
+    sid = await st.call(st.operators.connect, who_of(conn))
     try:
         yield
     finally:
-        st.operators.disconnect(sid)
+        await st.call(st.operators.disconnect, sid)
 
 
-def _state(st: Station, request: Request) -> dict[str, Any]:
+def _state(st: Station, me: Who) -> dict[str, Any]:
+    """Who am I and the operators' state, read on the station thread."""
     ops = st.operators
-    who = who_of(request)
-    return {"me": {"key": who.key, "name": who.name, "role": who.role,
-                   "address": who.address},
+    return {"me": {"key": me.key, "name": me.name, "role": me.role,
+                   "address": me.address},
             "operators": ops.sessions(), "driving": ops.driving(),
             "actions": ops.actions()}
 
@@ -95,7 +108,16 @@ def _state(st: Station, request: Request) -> dict[str, Any]:
 @router.get("/operators")
 async def operators_get(request: Request, st: StationDep, _: ViewerDep) -> dict[str, Any]:
     """Who am I, who is connected, who drives which team, the latest actions."""
-    return _state(st, request)
+    return await st.read(_state, st, who_of(request))
+
+
+def _request(st: Station, who: Who, me: Who, team: str) -> dict[str, Any]:
+    holder = st.operators.request(who, team)
+    if holder is None:
+        st.operator_action("driving-taken", str(who), {"team": team})
+    elif holder.key != who.key:
+        st.operator_action("driving-requested", str(who), {"team": team, "holder": holder.name})
+    return _state(st, me)
 
 
 @router.post("/driving/{team}/request")
@@ -103,28 +125,37 @@ async def driving_request(team: TeamParam, request: Request, st: StationDep,
                           caller: OperatorDep) -> dict[str, Any]:
     """Ask the holder for driving (their page shows it with an accept); a free team is
     taken at once."""
-    who = caller.operator
-    holder = st.operators.request(who, team)
-    if holder is None:
-        await st.call(st.operator_action, "driving-taken", str(who), {"team": team})
-    elif holder.key != who.key:
-        await st.call(st.operator_action, "driving-requested", str(who),
-                      {"team": team, "holder": holder.name})
-    return _state(st, request)
+    return await st.call(_request, st, caller.operator, who_of(request), team)
+
+
+def _give(st: Station, who: Who, me: Who, team: str) -> dict[str, Any]:
+    try:
+        to = st.operators.give(who, team)
+    except ValueError as exc:
+        raise HTTPException(409, str(exc)) from None
+    st.operator_action("driving-given", str(who), {"team": team, "to": to.name})
+    return _state(st, me)
 
 
 @router.post("/driving/{team}/give")
 async def driving_give(team: TeamParam, request: Request, st: StationDep,
                        caller: OperatorDep) -> dict[str, Any]:
     """The holder accepts the request: the one who asked drives now."""
-    who = caller.operator
-    try:
-        to = st.operators.give(who, team)
-    except ValueError as exc:
-        raise HTTPException(409, str(exc)) from None
-    await st.call(st.operator_action, "driving-given", str(who),
-                  {"team": team, "to": to.name})
-    return _state(st, request)
+    return await st.call(_give, st, caller.operator, who_of(request), team)
+
+
+def _take(st: Station, who: Who, me: Who, team: str,
+          confirmed: bool) -> dict[str, Any] | JSONResponse:
+    ops = st.operators
+    holder = ops.holder(team)
+    if holder is not None and holder.key != who.key and not confirmed:
+        return JSONResponse(status_code=409, content={"detail": (
+            f"{team} is driven by {holder.name} ({holder.address}): taking over must be "
+            'confirmed: send {"confirm": true}')})
+    previous = ops.take_over(who, team)
+    st.operator_action("driving-taken-over" if previous else "driving-taken", str(who),
+                       {"team": team, "from": None if previous is None else previous.name})
+    return _state(st, me)
 
 
 @router.post("/driving/{team}/take", response_model=None)
@@ -132,25 +163,17 @@ async def driving_take(team: TeamParam, body: DrivingIn, request: Request, st: S
                        caller: OperatorDep) -> dict[str, Any] | JSONResponse:
     """Take over driving from whoever holds it: must say ``confirm: true`` (the page asks
     first); recorded with both names."""
-    who = caller.operator
-    ops = st.operators
-    holder = ops.holder(team)
-    if holder is not None and holder.key != who.key and not body.confirm:
-        return JSONResponse(status_code=409, content={"detail": (
-            f"{team} is driven by {holder.name} ({holder.address}): taking over must be "
-            'confirmed: send {"confirm": true}')})
-    previous = ops.take_over(who, team)
-    await st.call(st.operator_action, "driving-taken-over" if previous else "driving-taken",
-                  str(who), {"team": team, "from": None if previous is None
-                             else previous.name})
-    return _state(st, request)
+    return await st.call(_take, st, caller.operator, who_of(request), team, body.confirm)
+
+
+def _release(st: Station, who: Who, me: Who, team: str) -> dict[str, Any]:
+    if not st.operators.release(who, team):
+        raise HTTPException(409, f"{who.name} does not drive {team}: nothing to release")
+    st.operator_action("driving-released", str(who), {"team": team})
+    return _state(st, me)
 
 
 @router.post("/driving/{team}/release")
 async def driving_release(team: TeamParam, request: Request, st: StationDep,
                           caller: OperatorDep) -> dict[str, Any]:
-    who = caller.operator
-    if not st.operators.release(who, team):
-        raise HTTPException(409, f"{who.name} does not drive {team}: nothing to release")
-    await st.call(st.operator_action, "driving-released", str(who), {"team": team})
-    return _state(st, request)
+    return await st.call(_release, st, caller.operator, who_of(request), team)

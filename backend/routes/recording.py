@@ -18,6 +18,6 @@ async def recording_post(body: RecordingIn,
                          st: StationDep) -> contract.Recording | JSONResponse:
     """A new file now, or recording on/off (the recording.enabled parameter)."""
     try:
-        return await st.call(st.recorder_command, body.action)
+        return await st.call(st.recording.command, body.action)
     except ValueError as exc:
         return JSONResponse(status_code=409, content={"detail": str(exc)})

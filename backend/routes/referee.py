@@ -12,6 +12,7 @@ from ..contract import CardIn, EnableIn, RefereeCommandIn
 from ..jsonsafe import SafeJSONResponse
 from ..referee.internal import RefereeCommandError
 from ..station import Station
+from ..world.state import Team
 from .checks import check_on_field
 from .deps import VIEWER, OperatorDep, StationDep
 
@@ -30,8 +31,8 @@ def _foreign(st: Station) -> JSONResponse | None:
 
 @router.get("", dependencies=[VIEWER])
 async def referee_get(st: StationDep) -> JSONResponse:
-    world = await st.read(st.world_dict)
-    return SafeJSONResponse({**await st.call(st.referee_view), "active": world["referee"]},
+    world = await st.read(st.browser.world)
+    return SafeJSONResponse({**await st.call(st.browser.referee), "active": world["referee"]},
                             what="referee")
 
 
@@ -44,7 +45,7 @@ async def referee_enable(body: EnableIn, st: StationDep,
         return JSONResponse(status_code=409, content={"detail": str(exc)})
     await st.call(st.operator_action, "internal-referee", caller.who,
                   {"enabled": body.enabled})
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)
 
 
 @router.post("/internal/command", response_model=None)
@@ -67,7 +68,16 @@ async def referee_command(body: RefereeCommandIn, st: StationDep,
                   {"command": body.command,
                    "designated_position": None if dp is None else {"x": dp.x, "y": dp.y}})
     log.info("internal referee: %s", body.command)
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)
+
+
+def _card(st: Station, team: Team, card: str) -> None:
+    """On the station thread: a card from the internal referee; the division's robots per
+    team come from the field size (A: 12 m x 9 m, 11 robots)."""
+    geo = st.browser.geometry()
+    st.referee_state.robots_per_team = \
+        11 if geo is not None and geo["field_length"] >= 11000 else 6
+    st.referee_state.card(team, card)
 
 
 @router.post("/internal/card", response_model=None)
@@ -76,9 +86,9 @@ async def referee_card(body: CardIn, st: StationDep,
     refused = _foreign(st)
     if refused is not None:
         return refused
-    await st.call(st.give_card, body.team, body.card)
+    await st.call(_card, st, body.team, body.card)
     await st.call(st.internal_referee.enable, True)
     await st.call(st.operator_action, "card", caller.who,
                   {"team": body.team, "card": body.card})
     log.info("internal referee: %s card for %s", body.card, body.team)
-    return await st.call(st.referee_view)
+    return await st.call(st.browser.referee)

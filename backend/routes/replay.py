@@ -29,7 +29,7 @@ def _answer(text: str) -> Response:
 
 @router.get("/player", response_model=contract.Player, dependencies=[VIEWER])
 async def player_get(st: StationDep) -> Response:
-    return _answer(await st.read(st.player.json))
+    return _answer(await st.read(st.replay.player.json))
 
 
 @router.post("/player", response_model=None, dependencies=[OPERATOR])
@@ -37,30 +37,30 @@ async def player_post(body: PlayerIn, st: StationDep) -> Response:
     """One action on the player; a refused one is answered with the reason: 422 for a
     value that can never work (a path outside the log folders, a speed out of range),
     409 for one that cannot now (no log open, nothing to jump to)."""
-    p = st.player
+    p = st.replay.player
     try:
         if body.action == "open":
-            await st.open_log(body.path)
-            return _answer(await st.read(st.player.json))
+            await st.read(st.replay.open_log, body.path)
+            return _answer(await st.read(st.replay.player.json))
         if body.action == "live":
-            await st.call(st.player_command, p.live)
+            await st.call(st.replay.command, p.live)
         elif body.action == "play":
-            await st.call(st.player_command, p.play, body.speed)
+            await st.call(st.replay.command, p.play, body.speed)
         elif body.action == "pause":
-            await st.call(st.player_command, p.pause)
+            await st.call(st.replay.command, p.pause)
         elif body.action == "seek":
-            await st.call(st.player_command, p.seek, body.position_s)
+            await st.call(st.replay.command, p.seek, body.position_s)
         elif body.action == "step":
-            await st.call(st.player_command, p.step, body.frames)
+            await st.call(st.replay.command, p.step, body.frames)
         elif body.action == "jump":
-            await st.call(st.player_command, p.jump, body.kind, body.direction)
+            await st.call(st.replay.command, p.jump, body.kind, body.direction)
     except PlayerError as exc:
-        status = 409 if st.player.log is None or body.action == "jump" else 422
+        status = 409 if p.log is None or body.action == "jump" else 422
         if body.action == "open":
             status = 422
         return JSONResponse(status_code=status, content={"detail": [
             {"loc": ["body", body.action], "msg": str(exc), "type": "player"}]})
-    return _answer(await st.read(st.player.json))
+    return _answer(await st.read(st.replay.player.json))
 
 
 @router.get("/player/history", response_model=None, dependencies=[VIEWER])
@@ -71,7 +71,8 @@ async def player_history(
 ) -> contract.PlayerHistory | JSONResponse:
     """The plots' past after a seek, computed in a worker thread (not the station's)."""
     def where() -> tuple[LogSource | None, int, int, FilterSettings]:
-        return (st.player.log, st.player.position_ns(), st.player.epoch,
+        player = st.replay.player
+        return (player.log, player.position_ns(), player.epoch,
                 st.params.current.filters)
     log, end_ns, epoch, filters = await st.read(where)
     if log is None:
@@ -83,5 +84,5 @@ async def player_history(
 @router.get("/logs", dependencies=[VIEWER])
 async def logs(st: StationDep) -> contract.LogList:
     # the folders from the station, the scan in a worker thread (not the station's)
-    folders = await st.read(st.log_folders.folders)
+    folders = await st.read(st.replay.folders.folders)
     return await asyncio.to_thread(list_logs, folders)

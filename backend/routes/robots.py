@@ -2,15 +2,28 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from fastapi import APIRouter, Request
 
 from .. import contract
 from ..contract import TargetIn
+from ..control.goto import Target
+from ..messages import OperatorTarget
+from ..station import Station
 from .checks import IdParam, TeamParam, check_on_field, check_team
 from .deps import OperatorDep, StationDep
 from .operators import check_driving
 
 router = APIRouter(prefix="/api/robots", tags=["robots"])
+
+
+def _target(st: Station, target: OperatorTarget, action: str, who: str,
+            details: dict[str, Any]) -> None:
+    """On the station thread: onto the operator targets (the strategy takes them), and
+    recorded."""
+    st.operator_targets.write(target)
+    st.operator_action(action, who, details)
 
 
 @router.post("/{team}/{rid}/target")
@@ -19,10 +32,10 @@ async def set_target(team: TeamParam, rid: IdParam, body: TargetIn, st: StationD
     check_team(st, team, rid)
     await check_driving(request, st, team)
     await check_on_field(st, body.x, body.y, "target")
-    await st.call(st.set_target, team, rid, body.x, body.y, body.orientation)
-    await st.call(st.operator_action, "target", caller.who,
-                  {"team": team, "id": rid, "x": body.x, "y": body.y,
-                   "orientation": body.orientation})
+    await st.call(_target, st, OperatorTarget(team, rid, Target(body.x, body.y,
+                                                                  body.orientation)),
+                  "target", caller.who, {"team": team, "id": rid, "x": body.x, "y": body.y,
+                                         "orientation": body.orientation})
     return {"team": team, "id": rid,
             "target": {"x": body.x, "y": body.y, "orientation": body.orientation}}
 
@@ -31,6 +44,6 @@ async def set_target(team: TeamParam, rid: IdParam, body: TargetIn, st: StationD
 async def clear_target(team: TeamParam, rid: IdParam, st: StationDep,
                        caller: OperatorDep, request: Request) -> contract.TargetAnswer:
     await check_driving(request, st, team)
-    await st.call(st.clear_target, team, rid)
-    await st.call(st.operator_action, "clear-target", caller.who, {"team": team, "id": rid})
+    await st.call(_target, st, OperatorTarget(team, rid, None), "clear-target", caller.who,
+                  {"team": team, "id": rid})
     return {"team": team, "id": rid, "target": None}

@@ -15,4 +15,4 @@ router = APIRouter(prefix="/api", tags=["strategy"])
 async def strategy_get(st: StationDep) -> JSONResponse:
     """The play, the plays to choose from (choose with PATCH /api/params
     {"strategy": {"play": name}}), the referee situation as our team sees it, roles."""
-    return SafeJSONResponse(await st.call(st.strategy_view), what="strategy")
+    return SafeJSONResponse(await st.call(st.browser.strategy), what="strategy")

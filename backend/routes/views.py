@@ -16,18 +16,18 @@ router = APIRouter(prefix="/api", tags=["views"], dependencies=[VIEWER])
 @router.get("/health")
 async def health(st: StationDep) -> JSONResponse:
     # current, computed on the station thread (the websocket gets the published one)
-    return SafeJSONResponse(await st.read(st.health), what="health")
+    return SafeJSONResponse(await st.read(st.browser.health), what="health")
 
 
 @router.get("/world")
 async def world(st: StationDep) -> JSONResponse:
     # current, built on the station thread (the websocket gets the published one)
-    return SafeJSONResponse(await st.read(st.world_dict), what="world")
+    return SafeJSONResponse(await st.read(st.browser.world), what="world")
 
 
 @router.get("/geometry")
 async def geometry(st: StationDep) -> JSONResponse:
-    geo = await st.read(st.geometry)
+    geo = await st.read(st.browser.geometry)
     if geo is None:
         raise HTTPException(404, "no geometry packet received yet")
     return SafeJSONResponse(geo, what="geometry")

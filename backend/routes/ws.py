@@ -41,14 +41,14 @@ async def ws_endpoint(ws: WebSocket, st: StationDep) -> None:
     # Host and Origin were checked by the EdgeGuard, the token by the AccessGuard (which
     # refuses a websocket before it is accepted) and again by the VIEWER dependency
     await ws.accept()
-    st.ws_clients += 1
+    st.web.clients += 1
     try:
-        with ws_session(ws, st):
+        async with ws_session(ws, st):
             await _serve_client(ws, st)
     except (WebSocketDisconnect, RuntimeError, ConnectionError):
         pass
     finally:
-        st.ws_clients -= 1
+        st.web.clients -= 1
 
 
 class _Stalled(Exception):
@@ -66,7 +66,7 @@ async def _serve_client(ws: WebSocket, st: Station) -> None:
     except _Stalled:  # counted where it was found stalled (the fan-out, or a send here)
         peer = f"{ws.client.host}:{ws.client.port}" if ws.client else "?"
         _ws_log.warning("stalled", "websocket client %s took nothing for %.1f s: dropped "
-                        "(%d so far)", peer, STALLED_CLIENT_S, st.ws_dropped)
+                        "(%d so far)", peer, STALLED_CLIENT_S, st.web.dropped)
 
 
 async def _serve_views(ws: WebSocket, st: Station) -> None:
@@ -75,7 +75,7 @@ async def _serve_views(ws: WebSocket, st: Station) -> None:
             async with asyncio.timeout(STALLED_CLIENT_S):  # no task per send (wait_for makes one)
                 await ws.send_text(text)
         except TimeoutError:
-            st.ws_dropped += 1
+            st.web.dropped += 1
             raise _Stalled from None
 
     closed = asyncio.Event()

@@ -26,7 +26,8 @@ from ..params.model import StrategyParams
 from ..world.referee import RefereeState
 from ..world.state import Team, WorldState
 from .model import ROBOT_RADIUS_MM, Ball, Bot, Frame, Intent, Move
-from .navigate import PathMemory, navigate
+from .navigate import navigate
+from .paths import PathMemory
 from .plays import Strategy, StrategyInput, Tuning
 from .situation import Situation, SituationTracker
 

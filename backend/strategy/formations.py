@@ -7,12 +7,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from domain.field import DIVISION_B
+
 
 @dataclass
 class FormationConfig:
     period_s: float = 5.0  # time on each formation
-    field_length_mm: float = 9000.0
-    field_width_mm: float = 6000.0
+    field_length_mm: float = DIVISION_B.field_length
+    field_width_mm: float = DIVISION_B.field_width
     own_half_sign: int = -1  # -1: our goal is at negative x
 
 

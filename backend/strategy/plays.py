@@ -346,9 +346,9 @@ class Strategy:
                     aim, _ = best_shot(ball.xy, others, fs)
                     return kick_ball(ball, aim, tu.kick_speed_mps, "kicker", bot)
             else:
-                p = (bxy[0] - CONTACT_MM - 90.0, bxy[1])
+                p = (bxy[0] - CONTACT_MM - R, bxy[1])
                 make = _hold("kicker", p, 0.0)
-            slots.append(Slot("kicker", "kicker", (bxy[0] - CONTACT_MM - 90.0, bxy[1]), make))
+            slots.append(Slot("kicker", "kicker", (bxy[0] - CONTACT_MM - R, bxy[1]), make))
         spots = [(-cr, 0.0)] if not sit.ours else []
         spots += [(-fs.half_length + fs.penalty_area_depth + 350.0, -500.0),
                   (-fs.half_length + fs.penalty_area_depth + 350.0, 500.0),

@@ -125,7 +125,7 @@ def kick_ball(ball: Ball, aim: tuple[float, float], speed_mps: float, role: str,
     armed. Behind-and-aligned is judged from ``robot`` (None: not yet known: approach)."""
     d = unit(aim[0] - ball.x, aim[1] - ball.y)
     face = math.atan2(d[1], d[0])
-    behind = (ball.x - d[0] * (CONTACT_MM + 90.0), ball.y - d[1] * (CONTACT_MM + 90.0))
+    behind = (ball.x - d[0] * (CONTACT_MM + R), ball.y - d[1] * (CONTACT_MM + R))
     if robot is not None:
         rx, ry = ball.x - robot.x, ball.y - robot.y
         along = rx * d[0] + ry * d[1]  # how far behind the ball, along the kick

@@ -17,7 +17,6 @@ fails until its next save, as a Python play over its CPU budget.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import math
 import re
 import time
@@ -185,19 +184,9 @@ class OctaveRunner(Runner):
         self._restart_soon()
 
     def _restart_soon(self) -> None:
-        self._want += 1
         if self.run.state != "running":
             self.run.state = "starting"
-        if self._task is None:
-            self._task = asyncio.get_running_loop().create_task(self._restarts())
-
-    async def _restarts(self) -> None:
-        try:
-            while self._done < self._want and not self.closed:
-                self._done = self._want
-                await self._restart()
-        finally:
-            self._task = None
+        self._start_soon(self._restart)
 
     async def _restart(self) -> None:
         old, self.engine = self.engine, None
@@ -238,6 +227,7 @@ class OctaveRunner(Runner):
         self.run.loaded_version = self.found.version
         self.run.reloaded_at_unix = time.time()
         self.run.reloads += 1
+        self.fresh = True
         if not self.failed:  # (a save that does not parse may have come meanwhile)
             self.run.state = "running"
 
@@ -278,7 +268,7 @@ class OctaveRunner(Runner):
             return ("out", 0, plain, wall, version)
 
         task = asyncio.get_running_loop().create_task(call())
-        p = Pending(task, now, timeout)
+        p = self._warmup(Pending(task, now, timeout))
         self.inflight = p
         self._calls.add(task)
         task.add_done_callback(lambda t: self._replied(p, t))
@@ -311,11 +301,7 @@ class OctaveRunner(Runner):
         self.accept(p, reply)
 
     async def close(self) -> None:
-        self.closed = True
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self._task
+        await self._close_start()
         for t in list(self._calls):
             t.cancel()
         eng, self.engine = self.engine, None

@@ -223,6 +223,7 @@ class TeamPlays:
                 continue
             p = r.send(replace(game, mine=mine), None, budget_s, now)
             asks.append(_Ask(play, mine, r, p, "" if p is not None else
+                             f"{f.name} is reloading" if r.reloading else
                              "busy: its previous tick has not answered"))
         self.release({a.runner.name for a in asks if a.runner is not None}, now)
         longest = max((a.pending.budget_s for a in asks if a.pending is not None),

@@ -80,7 +80,7 @@ class TeamRegistry:
             "state": state, "error": None if err is None else err.view(),
             "version": f.version, "mtime_unix": f.mtime_unix, "size_bytes": f.stat.size,
             "reloaded_at_unix": r.reloaded_at_unix, "reloads": r.reloads, "ticks": r.ticks,
-            "errors": r.errors, "overruns": r.overruns, "moved_out": r.moved_out,
+            "errors": r.errors, "overruns": r.overruns, "late": r.late, "moved_out": r.moved_out,
             "tick_ms_p50": p50, "tick_ms_p99": p99, "robots": list(r.robots),
             "outputs": dict(r.outputs),
         }

@@ -6,7 +6,9 @@ stuck, crashed) stays failed until it (or a library) is saved again; then it is 
 and resumes. Its robots are stopped meanwhile by whoever asked (the strategy).
 
 Budget: the worker's CPU time for a call (``time.thread_time``), so a busy machine does not
-make a play late; over budget, that tick's output is discarded. A call that does not return
+make a play late; over budget, that tick's output is discarded. A reload is not billed: no
+call is sent while the worker imports (it would wait behind the import), and the first call
+after a load (its warm-up) is not held to the budget. A call that does not return
 within the hard limit (``hard_limit_s``: at least 0.25 s, ten budgets) is stuck: the worker's
 faulthandler writes the stack and ends it (the station kills it half a second later if not),
 and the error says on which line it was.
@@ -18,7 +20,7 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
@@ -58,6 +60,9 @@ class Pending:
     done: bool = False
     cpu_ms: float | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    #: the first call after a load: its warm-up (lazy imports, caches) is not held to the
+    #: budget
+    warmup: bool = False
 
 
 class Runner:
@@ -65,6 +70,11 @@ class Runner:
     Subclasses: ``PythonRunner`` (a worker process), ``teamcode.octave.OctaveRunner``."""
 
     language = "python"
+    #: the (re)start under way (``_start_soon``), the starts asked for and the ones begun
+    #: (set by each subclass)
+    _task: asyncio.Task[None] | None
+    _want: int
+    _done: int
 
     def __init__(self, found: Found, run: FileRun) -> None:
         self.found = found
@@ -72,6 +82,8 @@ class Runner:
         self.over_in_a_row = 0
         self.inflight: Pending | None = None
         self.closed = False
+        #: the next call is the first since a load (its warm-up is not billed)
+        self.fresh = False
 
     @property
     def name(self) -> str:
@@ -80,6 +92,15 @@ class Runner:
     @property
     def failed(self) -> bool:
         return self.run.state == "error"
+
+    @property
+    def reloading(self) -> bool:
+        """A new version is being loaded where the calls run: no call can be answered."""
+        return False
+
+    def _warmup(self, p: Pending) -> Pending:
+        p.warmup, self.fresh = self.fresh, False
+        return p
 
     def fail(self, err: ErrorInfo) -> None:
         if self.run.fail(err):
@@ -100,9 +121,9 @@ class Runner:
             cpu_s = float(cpu) if isinstance(cpu, int | float) else 0.0
             p.cpu_ms = cpu_s * 1000.0
             p.version = str(version)
-            self.run.tick_ms.append(p.cpu_ms)
             self.run.ticks += 1
-            if cpu_s > p.budget_s:
+            self.run.tick_ms.append(p.cpu_ms)
+            if cpu_s > p.budget_s and not p.warmup:
                 self.run.overruns += 1
                 self.over_in_a_row += 1
                 p.reason = f"over its budget ({p.cpu_ms:.1f} ms of {p.budget_s * 1000:.0f} ms)"
@@ -129,6 +150,29 @@ class Runner:
         p.reason = "failed"
         self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}", self.name))
 
+    # ---- (re)starting: a save during a start is one more start, not one each ----
+
+    def _start_soon(self, start: Callable[[], Awaitable[None]]) -> None:
+        self._want += 1
+        if self._task is None:
+            self._task = asyncio.get_running_loop().create_task(self._starts(start))
+
+    async def _starts(self, start: Callable[[], Awaitable[None]]) -> None:
+        try:
+            while self._done < self._want and not self.closed:
+                self._done = self._want
+                await start()
+        finally:
+            self._task = None
+
+    async def _close_start(self) -> None:
+        """Closed: the start under way is cancelled (and awaited)."""
+        self.closed = True
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
+
     # ---- what each kind of runner does its own way ----
 
     def ensure(self) -> None:
@@ -149,9 +193,13 @@ class Runner:
 
     def late(self, p: Pending) -> None:
         """The tick stopped waiting for ``p``: its output, whenever it comes, is discarded."""
-        if not p.done:
+        if not p.done and p.warmup:
+            p.reason = "warming up (the first call after a load)"
+        elif not p.done:
+            # not over its budget (CPU time, judged when the answer comes): late (wall time:
+            # the machine is busy, or the worker was not scheduled)
             p.reason = "late (no answer within the budget and the grace)"
-            self.run.overruns += 1
+            self.run.late += 1
 
 
 def error_from(err: dict[str, Any], name: str) -> ErrorInfo:
@@ -199,6 +247,10 @@ class PythonRunner(Runner):
         return why
 
     @property
+    def reloading(self) -> bool:
+        return self._loading
+
+    @property
     def pid(self) -> int:
         return self.worker.pid if self.worker is not None and self.worker.alive else 0
 
@@ -228,19 +280,9 @@ class PythonRunner(Runner):
         self._load_soon()
 
     def _load_soon(self) -> None:
-        self._want += 1
-        if self._task is None:
-            if self.run.state != "running":
-                self.run.state = "starting"
-            self._task = asyncio.get_running_loop().create_task(self._loads())
-
-    async def _loads(self) -> None:
-        try:
-            while self._done < self._want and not self.closed:
-                self._done = self._want
-                await self._load()
-        finally:
-            self._task = None
+        if self._task is None and self.run.state != "running":
+            self.run.state = "starting"
+        self._start_soon(self._load)
 
     async def _load(self) -> None:
         found = self.found
@@ -262,16 +304,26 @@ class PythonRunner(Runner):
         w = self.worker
         fut = w.request("load", found.name, self.kind, found.entry, LOAD_LIMIT_S)
         self._loading = True
+        # The answer is accounted in the future's callback, as the ticks' answers are: in the
+        # order the worker gave them. (Awaited here, it was accounted a few loop steps later,
+        # after the answer of a tick sent during the reload: that tick's failure was cleared
+        # by "loaded" and counted again on the next tick.)
+        fut.add_done_callback(lambda f: self._loaded(found, f))
         try:
             async with asyncio.timeout(LOAD_LIMIT_S + KILL_GRACE_S):
-                reply = await asyncio.shield(fut)
+                await asyncio.wait([fut])
         except TimeoutError:
             w.kill(f"stuck: loading took longer than {LOAD_LIMIT_S:g} s")
             return  # _gone says it
-        except WorkerGone:
-            return  # _gone says it
         finally:
             self._loading = False
+
+    def _loaded(self, found: Found, fut: asyncio.Future[Any]) -> None:
+        """The worker's answer to a load (not called if it ended first: _gone says it)."""
+        if fut.cancelled() or fut.exception() is not None:
+            return
+        self._loading = False
+        reply = fut.result()
         if self.closed or self._done < self._want:
             return  # saved again meanwhile: the next load counts
         if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:
@@ -284,6 +336,7 @@ class PythonRunner(Runner):
             self.run.reloads += 1
             self.run.error = None
             self.run.state = "running"
+            self.fresh = True
             log.info("team code %s loaded (version %s)", found.name, reply[2])
         elif isinstance(reply, tuple) and reply[:1] == ("error",) and len(reply) == 4 \
                 and isinstance(reply[2], dict):
@@ -328,9 +381,13 @@ class PythonRunner(Runner):
             return None
         if self.inflight is not None:
             return None  # still running (stopped at its hard limit: see _stuck)
+        if self._loading:
+            # the worker imports the new version: a call would wait behind the import and be
+            # billed for it (late); its robots are held until the new version answers
+            return None
         hard = hard_limit_s(budget_s)
         fut = w.request("tick", game, inputs, hard)
-        p = Pending(fut, now, budget_s)
+        p = self._warmup(Pending(fut, now, budget_s))
         self.inflight = p
         fut.add_done_callback(lambda f: self._replied(p, f))
         # the worker's faulthandler ends a stuck call at ``hard``; should it not (team code
@@ -361,11 +418,7 @@ class PythonRunner(Runner):
         self.accept(p, f.result())
 
     async def close(self) -> None:
-        self.closed = True
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self._task
+        await self._close_start()
         w, self.worker = self.worker, None
         if w is not None:
             w.on_gone = None

@@ -51,6 +51,8 @@ class FileRun:
     ticks: int = 0
     errors: int = 0
     overruns: int = 0
+    #: answers that came after the tick stopped waiting (a busy machine), discarded
+    late: int = 0
     moved_out: int = 0
     #: the CPU time of the latest calls, ms
     tick_ms: deque[float] = field(default_factory=lambda: deque(maxlen=512))

@@ -36,35 +36,20 @@ import operator
 import os
 import pickle
 import resource
-import struct
 import sys
 import time
 import traceback
 import types
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any
 
 from touchline import Target, Velocity
 
+from ..workerpipe import read_frame, send, take_stdio
+
 #: a reply that is not an order: ("?", what it is), for the station's message
 Plain = tuple[Any, ...]
-
-
-def _read_exact(f: BinaryIO, n: int) -> bytes | None:
-    buf = b""
-    while len(buf) < n:
-        chunk = f.read(n - len(buf))
-        if not chunk:
-            return None
-        buf += chunk
-    return buf
-
-
-def _send(out: BinaryIO, obj: Any) -> None:
-    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
-    out.write(struct.pack(">I", len(data)) + data)
-    out.flush()
 
 
 class OutputError(Exception):
@@ -284,10 +269,7 @@ class Host:
 
 def main() -> None:
     config = json.loads(sys.argv[1])
-    proto_out = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)  # print() and C-level writes to fd 1 now go to stderr
-    sys.stdout = sys.stderr
-    proto_in = sys.stdin.buffer
+    proto_in, proto_out = take_stdio()
     mb = int(config.get("memory_mb", 0))
     if mb > 0:
         limit = mb * (1 << 20)
@@ -299,13 +281,9 @@ def main() -> None:
     faulthandler.enable(file=dump)  # a crash in C (a segfault) says where it was too
     host = Host(Path(config["team_dir"]))
     name = ""
-    _send(proto_out, ("ready", os.getpid()))
+    send(proto_out, ("ready", os.getpid()))
     while True:
-        head = _read_exact(proto_in, 4)
-        if head is None:
-            return
-        (n,) = struct.unpack(">I", head)
-        body = _read_exact(proto_in, n)
+        body = read_frame(proto_in)
         if body is None:
             return
         msg = pickle.loads(body)
@@ -319,7 +297,7 @@ def main() -> None:
             except BaseException as exc:  # SystemExit from team code's import too
                 reply = ("error", seq, host.error("import", exc, name), 0.0)
             faulthandler.cancel_dump_traceback_later()
-            _send(proto_out, reply)
+            send(proto_out, reply)
         elif op == "tick":
             _, _, game, inputs, hard_s = msg
             gc.disable()
@@ -341,15 +319,15 @@ def main() -> None:
                 faulthandler.cancel_dump_traceback_later()
                 reply = ("error", seq, host.error("exception", exc, name), cpu)
             try:
-                _send(proto_out, reply)
+                send(proto_out, reply)
             except (pickle.PicklingError, TypeError, AttributeError) as exc:
-                _send(proto_out, ("error", seq, {
+                send(proto_out, ("error", seq, {
                     "kind": "output", "message": f"the answer cannot be sent: {exc}",
                     "file": name, "line": None, "traceback": ""}, cpu))
             gc.collect(0)
             gc.enable()
         else:
-            _send(proto_out, ("error", seq, {"kind": "crash", "message": f"unknown request "
+            send(proto_out, ("error", seq, {"kind": "crash", "message": f"unknown request "
                                              f"{op!r}", "file": name, "line": None,
                                              "traceback": ""}, 0.0))
 

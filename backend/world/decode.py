@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from domain.rules import BALL_RADIUS_MM, ROBOT_RADIUS_MM
 from sslpb.ssl_vision_detection_pb2 import SSL_DetectionFrame
 from sslpb.ssl_vision_geometry_pb2 import SSL_GeometryData
 
@@ -94,8 +95,9 @@ def geometry_to_dict(geo: SSL_GeometryData, bad: list[str] | None = None) -> dic
         "center_circle_radius": (
             f.center_circle_radius if f.HasField("center_circle_radius") else 500
         ),
-        "ball_radius": positive(f.HasField("ball_radius"), f.ball_radius, 21.5),
-        "max_robot_radius": positive(f.HasField("max_robot_radius"), f.max_robot_radius, 90.0),
+        "ball_radius": positive(f.HasField("ball_radius"), f.ball_radius, BALL_RADIUS_MM),
+        "max_robot_radius": positive(f.HasField("max_robot_radius"), f.max_robot_radius,
+                                     ROBOT_RADIUS_MM),
         "lines": lines,
         "arcs": arcs,
         "cameras": camera_poses(geo),

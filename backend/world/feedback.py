@@ -22,8 +22,6 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Literal
 
-from google.protobuf.message import DecodeError, Message
-
 from sslnet import streams
 from sslpb import grsim_robot_status_pb2 as grsim_status_pb
 from sslpb import ssl_simulation_robot_feedback_pb2 as fb_pb
@@ -64,17 +62,6 @@ def _team(value: int) -> Team | None:
     return "blue" if value == tl.TEAM_BLUE else "yellow" if value == tl.TEAM_YELLOW else None
 
 
-def _parse(msg: Message, data: bytes) -> tuple[str, str] | None:
-    try:
-        msg.ParseFromString(data)
-    except (DecodeError, RuntimeError, ValueError) as exc:
-        return streams.wire_problem(data), str(exc)
-    if not msg.IsInitialized():
-        errors: list[str] = msg.FindInitializationErrors()  # type: ignore[attr-defined]
-        return streams.MISSING_FIELD, ", ".join(errors[:5])
-    return None
-
-
 def decode(env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
     """The robots in ``env``'s payload, or (reason, detail) when it is refused."""
     team = _team(env.team)
@@ -82,7 +69,7 @@ def decode(env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
         return streams.OTHER, f"feedback for team {env.team}"
     if env.kind == tl.FEEDBACK_SIM_RESPONSE:
         resp = fb_pb.RobotControlResponse()
-        why = _parse(resp, env.payload)
+        why = streams.parse_message(resp, env.payload)
         if why is not None:
             return why
         return Decoded(team, "sim", tuple(
@@ -91,7 +78,7 @@ def decode(env: tl.RobotFeedbackEnvelope) -> Decoded | tuple[str, str]:
             for f in resp.feedback))
     if env.kind == tl.FEEDBACK_GRSIM_STATUS:
         status = grsim_status_pb.Robots_Status()
-        why = _parse(status, env.payload)
+        why = streams.parse_message(status, env.payload)
         if why is not None:
             return why
         answers: list[Answer] = []

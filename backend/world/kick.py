@@ -34,6 +34,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from domain.angles import wrap_angle
+from domain.rules import ROBOT_RADIUS_MM
 
 from ..filters.core import line_sums
 from .state import BallState, KickedBall, RobotState, Team
@@ -49,7 +50,7 @@ class KickConfig:
     speed_window_s: float = 0.04  # speed: slope over this long of measurements
     min_samples: int = 2  # measurements off the previous line before a kick starts
     off_line_mm: float = 15.0  # noise allowance of "off the previous line"
-    robot_radius_mm: float = 90.0
+    robot_radius_mm: float = ROBOT_RADIUS_MM
     reach_mm: float = 100.0  # kick start this far beyond the robot's radius at most
     front_half_angle_deg: float = 60.0  # the front: this far either side of the heading
     stop_mps: float = 0.1  # slower than this: the kick is over
@@ -97,10 +98,10 @@ def _line(pts: Sequence[Sample]) -> tuple[Sample, tuple[float, float], float] | 
     return (t, xm + vx * (t - tm), ym + vy * (t - tm)), (vx, vy), rms
 
 
-def fit_rolling(pts: Sequence[Sample], decel: float,
-                u: tuple[float, float] | None = None) -> tuple[Sample, tuple[float, float]] | None:
-    """Fit p(tau) = p0 + w tau - u decel tau^2 / 2 (tau from the first point's time; u the unit
-    direction, the plain slope's if not given): ((t0, x0, y0), w), or None."""
+def _rolling_points(pts: Sequence[Sample], decel: float, u: tuple[float, float] | None
+                    ) -> tuple[float, list[Sample]] | None:
+    """The points with the deceleration along ``u`` taken out, on a time axis from the first
+    point's (t0, the points): a straight line for a ball rolling as the model says."""
     if len(pts) < 2:
         return None
     if u is None:
@@ -112,8 +113,18 @@ def fit_rolling(pts: Sequence[Sample], decel: float,
             return None
         u = (s[0] / n, s[1] / n)
     t0 = pts[0][0]
-    corr = [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
-             p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+    return t0, [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
+                 p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+
+
+def fit_rolling(pts: Sequence[Sample], decel: float,
+                u: tuple[float, float] | None = None) -> tuple[Sample, tuple[float, float]] | None:
+    """Fit p(tau) = p0 + w tau - u decel tau^2 / 2 (tau from the first point's time; u the unit
+    direction, the plain slope's if not given): ((t0, x0, y0), w), or None."""
+    c = _rolling_points(pts, decel, u)
+    if c is None:
+        return None
+    t0, corr = c
     f = _fit(corr)
     if f is None:
         return None

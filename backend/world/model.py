@@ -51,6 +51,8 @@ from typing import cast
 
 from backend.filters.core import AngleFilter, PositionFilter, VelocityFit, make_filter
 from backend.filters.params import FilterKind, FilterSettings
+from domain.field import DIVISION_A
+from domain.rules import ROBOT_RADIUS_MM
 
 from .camera_pairs import CameraPairs
 from .clock import CameraClocks, ClockConfig
@@ -78,7 +80,7 @@ class WorldModelConfig:
     drop_timeout_s: float = 3.0  # not seen for longer: removed
     camera_timeout_s: float = 1.0
     history: int = 12  # merged measurements kept per object (re-initialising a new filter)
-    robot_radius_mm: float = 90.0  # a ball detection this close to a robot centre is false
+    robot_radius_mm: float = ROBOT_RADIUS_MM  # a ball detection this near a robot centre is false
     ball_max_speed_mm_s: float = 10000.0  # faster than this is not the ball
     ball_gate_slack_mm: float = 60.0  # noise allowance added to the travel distance
     ball_assoc_window_s: float = 0.1  # unseen longer: only a confirmed hypothesis is taken
@@ -95,8 +97,10 @@ class WorldModelConfig:
     max_objects: int = 64  # balls, and robots per team, in one frame
     # objects beyond the field plus its boundary plus this are not on the field (mm)
     field_margin_mm: float = 1000.0
-    field_half_length_mm: float = 6000.0  # division A until a geometry packet says otherwise
-    field_half_width_mm: float = 4500.0
+    # the larger field (division A) until a geometry packet says otherwise: before it comes, no
+    # real detection is dropped as off the field, whichever division plays
+    field_half_length_mm: float = DIVISION_A.half_length
+    field_half_width_mm: float = DIVISION_A.half_width
     field_boundary_mm: float = 300.0
     clock: ClockConfig = field(default_factory=ClockConfig)
     kicks: KickConfig = field(default_factory=KickConfig)

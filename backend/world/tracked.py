@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import struct
 
+from sslnet.wire import varint
 from sslpb.ssl_gc_common_pb2 import BLUE, YELLOW
 from sslpb.ssl_gc_common_pb2 import Team as PbTeam
 from sslpb.ssl_vision_detection_tracked_pb2 import (
@@ -124,20 +125,8 @@ _ONE = _F32.pack(1.0)
 _ROBOT = struct.Struct("<BB" "BBBBBB" "BBBfBf" "Bf" "BBBfBf" "Bf" "Bf")
 
 
-def _varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        b = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
 def _len(tag: int, body: bytes) -> bytes:
-    return bytes((tag,)) + _varint(len(body)) + body
+    return bytes((tag,)) + varint(len(body)) + body
 
 
 def _vec2(tag: int, x: float, y: float) -> bytes:
@@ -153,7 +142,7 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
     """One TrackerWrapperPacket, serialized. ``uuid`` identifies this station (kept constant
     while it runs); ``frame_number`` increases with each packet. The ball (its height when
     flying), the other balls, the kick in progress, the capabilities (module docstring)."""
-    parts = [b"\x08" + _varint(frame_number & 0xFFFFFFFF), b"\x11" + _F64.pack(world.t_capture)]
+    parts = [b"\x08" + varint(frame_number & 0xFFFFFFFF), b"\x11" + _F64.pack(world.t_capture)]
     b = world.ball
     if b is not None:
         vis = _visibility(b.visible, b.predicted, b.lost)
@@ -181,9 +170,9 @@ def tracked_packet(world: WorldState, uuid: str, frame_number: int,
                 + b"\x19" + _F64.pack(k.start_t) + b"\x21" + _F64.pack(k.stop_t)
                 + _vec2(0x2A, k.stop_x * MM, k.stop_y * MM))
         if k.robot is not None:
-            kick += _len(0x32, b"\x08" + _varint(k.robot[1] & 0xFFFFFFFF)
-                         + b"\x10" + _varint(int(team_enum(k.robot[0]))))
+            kick += _len(0x32, b"\x08" + varint(k.robot[1] & 0xFFFFFFFF)
+                         + b"\x10" + varint(int(team_enum(k.robot[0]))))
         parts.append(_len(0x2A, kick))
-    parts.extend(b"\x30" + _varint(int(c)) for c in _capabilities(world))
+    parts.extend(b"\x30" + varint(int(c)) for c in _capabilities(world))
     u, n = uuid.encode(), source_name.encode()
     return _len(0x0A, u) + _len(0x12, n) + _len(0x1A, b"".join(parts))

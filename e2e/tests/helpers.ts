@@ -38,6 +38,8 @@ export interface Hooks {
     stoppedDrawn: string[];
     /** Command arrows the last field frame drew (replay's what-if). */
     commandsDrawn: number;
+    /** Arrows of the replayed log's own commands the last field frame drew (beside those). */
+    recordedCommandsDrawn: number;
   };
   /** The world the page holds (as received over the websocket). */
   getWorld(): World | null;

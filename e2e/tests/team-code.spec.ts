@@ -1,7 +1,7 @@
 import { readFileSync, rmSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { expect, test, type Page } from "@playwright/test";
-import { open, stats, world, type Hooks, type Robot } from "./helpers";
+import { open, stats, world, type Hooks, type Robot, type World } from "./helpers";
 
 // The team's own code against the real station (issue 27): the config starts the station on a
 // copy of the shipped team folder (E2E_TEAM_DIR); this spec writes a play into it, picks it in
@@ -34,6 +34,12 @@ interface StrategyNow {
   our_side: "negative-x" | "positive-x";
   robot_plays: Record<string, string>;
   stopped: { id: number; play: string; reason: string }[];
+}
+
+/** The world in replay: the playhead and what the log recorded (its commands among it). */
+interface ReplayNow extends World {
+  replay: { position_s: number } | null;
+  recorded: { commands: { team: string; id: number; forward_mps: number; left_mps: number }[] } | null;
 }
 
 async function strategy(page: Page): Promise<StrategyNow> {
@@ -267,7 +273,7 @@ test.describe("team code", () => {
       await page.getByRole("button", { name: "Remove plot" }).last().click();
   });
 
-  test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording", async ({ page }) => {
+  test("what-if on a recorded log: the team play runs on the replay, its targets and commands drawn beside the recording and the commands it sent", async ({ page }) => {
     test.setTimeout(90_000);
     writeFileSync(join(teamDir, FILE), SOURCE);
     await open(page);
@@ -286,47 +292,119 @@ test.describe("team code", () => {
       expect((await stats(page)).recordedDrawn).toBeGreaterThan(0);
       const w = await world(page);
       expect((w as unknown as { replay: unknown }).replay).not.toBeNull();
+
+      // paused where the log's robot 1 was driving (2.2 s): what the play commands each robot
+      // now beside the command the log sent it then, for the same robots, both drawn
+      const post = (data: object) => page.request.post("/api/player", { data, headers: { "Content-Type": "application/json" } });
+      await post({ action: "pause" });
+      await post({ action: "seek", position_s: 2.2 });
+      const compared = async () => {
+        const now = (await world(page)) as ReplayNow;
+        if (Math.abs((now.replay?.position_s ?? 0) - 2.2) > 1e-6 || !now.recorded) return "not at 2.2 s";
+        const sentThen = now.recorded.commands.filter((c) => Math.hypot(c.forward_mps, c.left_mps) > 0.05);
+        const both = sentThen.filter((c) => {
+          const r = now.robots.find((x) => x.team === c.team && x.id === c.id);
+          return r?.target?.source === "team" && r.command && Math.hypot(r.command.forward_mps, r.command.left_mps) > 0.05;
+        });
+        return both.length > 0 ? "both" : `sent then ${sentThen.length}, with the play's own command 0`;
+      };
+      await expect.poll(compared, { timeout: 15_000 }).toBe("both");
+      await expect.poll(async () => (await stats(page)).recordedCommandsDrawn, { timeout: 10_000 }).toBeGreaterThan(0);
+      expect((await stats(page)).commandsDrawn).toBeGreaterThan(0);
+      // the layers panel says which arrow is which
+      await page.getByTestId("layers-toggle").click();
+      await expect(page.getByTestId("commands-legend")).toContainText("commanded now");
+      await expect(page.getByTestId("commands-legend")).toContainText("sent then (log)");
+      await page.getByTestId("layers-toggle").click();
     } finally {
       await page.request.post("/api/player", { data: { action: "live" }, headers: { "Content-Type": "application/json" } });
     }
   });
 
-  // The pictures of docs/team-code.md (only with TOUCHLINE_DOCS_SHOTS=1; 1400x900): the shipped
-  // pass drill running with its file open in the Code tab; then a typo made in the page and
-  // saved: the error with its line marked, the traceback, the robots stopped and ringed.
-  test("docs: screenshots of the Code tab", async ({ page }) => {
-    test.setTimeout(90_000);
+  // The pictures of docs/team-code.md's walkthrough (docs/img/team-code-*.png; only with
+  // TOUCHLINE_DOCS_SHOTS=1: `npm run docs:shots`; 1400x900). The config's station runs on a
+  // copy of the shipped team folder (step 1) given with --team-dir (step 2, `make run
+  // TEAM=...`): the folder in the Code tab; the pass drill passing; an edit of its SPOTS in
+  // the page; saved: reloaded, the robots at the new spots; a typo: the error, its line, the
+  // traceback, the robots stopped and ringed. The file is put back at the end.
+  test("docs: the team-code walkthrough", async ({ page }) => {
+    test.setTimeout(180_000);
     const file = join(teamDir, "pass_drill.py");
     const original = readFileSync(file, "utf8");
+    const shot = async (name: string) => {
+      await dismissToasts(page);
+      await page.mouse.move(0, 0);
+      await page.screenshot({ path: new URL(`../../docs/img/${name}.png`, import.meta.url).pathname });
+    };
+    const ticks = page.getByTestId("code-detail-ticks");
     await page.setViewportSize({ width: 1400, height: 900 });
     await open(page);
     // the first visit's name question answered (it sits at the top of every tab)
     if (await page.getByTestId("name-prompt").isVisible()) await page.getByTestId("name-save").click();
     try {
-      await page.getByTestId("play-select-bar").selectOption("pass_drill");
-      await expect.poll(async () => (await teamTargetsX(page)).length, { timeout: 20_000 }).toBeGreaterThanOrEqual(6);
+      // 1. the copied folder as the station sees it: plays, a processor, what each says
       await page.getByTestId("tab-code").click();
       await page.getByTestId("code-file-pass_drill.py").click();
-      await expect(page.getByTestId("code-state-pass_drill.py")).toHaveAttribute("data-state", "running");
-      // to the end of the file, where play() is (the editor draws only the lines in view)
-      await page.locator(".cm-content").click();
-      await page.keyboard.press("ControlOrMeta+End");
-      await expect(page.locator(".cm-content")).toContainText("def play(game: Game)");
-      await expect(page.getByTestId("code-detail-tick")).toContainText("p50");
-      await dismissToasts(page);
-      await page.mouse.move(0, 0);
-      await page.screenshot({ path: new URL("../../docs/screenshot-code.png", import.meta.url).pathname });
+      await expect(page.locator(".cm-content")).toContainText("Try changing");
+      await expect(page.getByTestId("code-group-play").getByTestId("code-file-keeper_wall.m")).toHaveCount(1);
+      await expect(page.getByTestId("code-group-processor").getByTestId("code-file-possession.py")).toHaveCount(1);
+      await shot("team-code-1-folder");
 
+      // 2. its play chosen in the top bar: the two passers pass, the others wait in a row
+      await page.getByTestId("tab-robots").click();
+      await page.getByTestId("play-select-bar").selectOption("pass_drill");
+      await expect.poll(async () => (await strategy(page)).play, { timeout: 15_000 }).toBe("pass_drill");
+      // a pass from one spot to the other under way (the field draws the kick's line)
+      const passFrom = (spots: [number, number][]) => async () => {
+        const w = await world(page);
+        const s = w.strategy as unknown as StrategyNow;
+        const sign = s.our_side === "positive-x" ? -1 : 1;
+        const kick = (w.ball as unknown as { kick?: { robot: { team: string } | null; start_x: number; start_y: number } | null } | null)?.kick;
+        return kick?.robot?.team === s.our_team && spots.some(([x, y]) => Math.hypot(sign * kick.start_x - x, sign * kick.start_y - y) < 300);
+      };
+      await expect.poll(passFrom([[-2000, -1500], [-2000, 1500]]), { timeout: 60_000, intervals: [50] }).toBe(true);
+      await shot("team-code-2-running");
+
+      // 3. an edit in the page (an editor of your own does the same): new spots for the two
+      await page.getByTestId("tab-code").click();
+      await page.getByTestId("code-file-pass_drill.py").click();
+      await expect(ticks).toContainText("0 errors");
+      await caretAtEndOf(page, "SPOTS = (");
+      await page.keyboard.press("Shift+Home");
+      await page.keyboard.type("SPOTS = ((-2500.0, -1000.0), (-1000.0, 1500.0))");
+      await expect(page.getByTestId("code-save-status")).toHaveAttribute("data-dirty", "true");
+      await shot("team-code-3-edit");
+
+      // 4. saved (Ctrl+S): reloaded in place, the robots go to the new spots
+      await save(page);
+      await expect(page.getByTestId("code-save-status")).toHaveText("saved");
+      expect(readFileSync(file, "utf8")).toContain("SPOTS = ((-2500.0, -1000.0), (-1000.0, 1500.0))");
+      await expect(page.getByTestId("code-detail-reloaded")).toContainText("2×");
+      const atSpots = async () => {
+        const { robots, sign } = await ourRobots(page);
+        const near = (x: number, y: number) => robots.some((r) => Math.hypot(sign * r.x - x, sign * r.y - y) < 300);
+        return near(-2500, -1000) && near(-1000, 1500);
+      };
+      await expect.poll(atSpots, { timeout: 60_000 }).toBe(true);
+      await expect.poll(passFrom([[-2500, -1000], [-1000, 1500]]), { timeout: 60_000, intervals: [50] }).toBe(true);
+      await expect(ticks).toContainText("0 errors");
+      await shot("team-code-4-reloaded");
+
+      // 5. a typo, saved: the error with its line and traceback, the play's robots stopped
+      // (to the end of the file, where play() is: the editor draws only the lines in view)
+      await page.keyboard.press("ControlOrMeta+End");
       await caretAtEndOf(page, "mine = sorted(game.mine)");
       await page.keyboard.press("Shift+Home");
       await page.keyboard.type("mine = sorted(game.mien)");
       await save(page);
       await expect(page.getByTestId("code-error")).toContainText("mien");
       await expect(page.locator('.cm-line[data-error-line="true"]')).toHaveCount(1);
+      await expect(page.getByTestId("code-traceback")).toContainText("pass_drill.py");
       await expect.poll(async () => (await stats(page)).stoppedDrawn.length, { timeout: 10_000 }).toBeGreaterThanOrEqual(6);
-      await dismissToasts(page);
-      await page.mouse.move(0, 0);
-      await page.screenshot({ path: new URL("../../docs/screenshot-code-error.png", import.meta.url).pathname });
+      await expect(ticks).toContainText(" 1 error");
+      await shot("team-code-5-error");
+      // one typo, one error (counted once, however long it stays)
+      await expect(ticks).toContainText(" 1 error");
     } finally {
       writeFileSync(file, original);
     }

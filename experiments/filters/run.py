@@ -519,7 +519,7 @@ def adaptive_section(acc: dict[str, Any]) -> list[str]:
          "was not seen again.", "",
          "The filters above are tuned for one noise level: the Kalman filter assumes 3 mm, so "
          "at 20 mm it follows the noise, and the paper's filter is precise on a still object "
-         "but lags a moving one. `adaptive` (`backend/filters/adaptive.py`) needs no tuning:",
+         "but lags a moving one. `adaptive` (`backend/filters/adaptive/`) needs no tuning:",
          "",
          "- **Two motion models, mixed (IMM)**: *still* (constant position: its estimate is "
          "the running mean, the most precise thing a still object allows, and its velocity is "

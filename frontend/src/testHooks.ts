@@ -30,6 +30,7 @@ export interface TouchlineTestApi {
     stoppedDrawn: string[];
     /** Command arrows the last field frame drew (in replay: what control would command now). */
     commandsDrawn: number;
+    recordedCommandsDrawn: number;
   };
   /** The strategy's state in the latest world (null before the station reports one). */
   strategy(): StrategyState | null;
@@ -86,6 +87,7 @@ export function installTestHooks(): void {
       recordedDrawn: fieldStats.recordedDrawn,
       stoppedDrawn: [...fieldStats.stoppedDrawn],
       commandsDrawn: fieldStats.commandsDrawn,
+      recordedCommandsDrawn: fieldStats.recordedCommandsDrawn,
     }),
     strategy: () => appStore.getState().world?.strategy ?? null,
     roles: (ours = false) => {

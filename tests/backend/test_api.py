@@ -15,6 +15,7 @@ from backend.messages import OperatorTarget
 from backend.station import Station
 from backend.world.state import BallState, RobotState, WorldState
 from launcher.supervisor import free_tcp_port
+from tests.waiting import wait_until
 
 
 @pytest.fixture
@@ -307,17 +308,6 @@ def relay(client) -> Iterator[_Relay]:  # type: ignore[no-untyped-def]
     r.close()
 
 
-def _until(cond, what: str, timeout_s: float = 10.0) -> Any:  # type: ignore[no-untyped-def]
-    """Polls ``cond`` (bounded) until it returns something truthy."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        got = cond()
-        if got:
-            return got
-        time.sleep(0.02)
-    raise AssertionError(f"timed out waiting for {what}")
-
-
 def _fresh(c: TestClient, st: Station, path: str) -> Any:
     """``path`` after a no-op command: the station publishes fresh views after each command,
     so this sees every change made before (here: the test's clock moved)."""
@@ -337,7 +327,7 @@ def _health_when(c: TestClient, relay: _Relay, command: str, source: str, cond) 
         relay.referee(command, source)
         h = c.get("/api/health").json()
         return h if cond(h) else None
-    return _until(step, f"health after {command} from {source}")
+    return wait_until(step, 10.0, 0.02, f"health after {command} from {source}")
 
 
 def test_health_flags_a_silent_game_controller_and_clears_when_it_speaks(  # type: ignore[no-untyped-def]
@@ -405,7 +395,7 @@ def test_a_referee_name_that_is_not_utf8_breaks_no_endpoint_and_no_stream(  # ty
         relay.sock.send_multipart([b"referee", bad])
         ref = st.referee_topic.latest_value()
         return ref if ref is not None else None
-    ref = _until(step, "the referee message with a bad name")
+    ref = wait_until(step, 10.0, 0.02, "the referee message with a bad name")
     assert "\ufffd" in ref.yellow["name"] + ref.blue["name"]
     for path in ("/api/world", "/api/referee", "/api/health"):
         r = c.get(path)
@@ -424,8 +414,8 @@ def test_geometry_with_nan_reaches_neither_http_nor_the_websocket_as_nan(  # typ
 
     def step() -> Any:
         relay.sock.send_multipart([b"vision", env])
-        return st.geometry()
-    _until(step, "the geometry")
+        return st.browser.geometry()
+    wait_until(step, 10.0, 0.02, "the geometry")
     st.call_sync(lambda: None)  # fresh views: the geometry as published
     r = c.get("/api/geometry")
     assert r.status_code == 200
@@ -489,8 +479,8 @@ def test_geometry_arriving_while_a_page_is_connected_reaches_it_clean(  # type: 
             seq += 1
             relay.sock.send_multipart([b"vision", _geometry_envelope(seq, a="Good",
                                                                      b="BADNAME")])
-            return st.geometry()
-        _until(step, "the geometry")
+            return st.browser.geometry()
+        wait_until(step, 10.0, 0.02, "the geometry")
         msg = _ws_until(ws, lambda m: m["type"] == "geometry", "the geometry message")
     g = msg["geometry"]
     assert [ln["name"] for ln in g["lines"]] == ["Good", "Bad\ufffdame"]
@@ -584,7 +574,7 @@ def test_the_other_team_is_commanded_only_where_it_can_be_addressed(  # type: ig
         assert c.post("/api/robots/blue/3/target", json={"x": 0, "y": 0}).status_code == 200
         teleport = c.post("/api/sim/robots/yellow/3", json={"x": 0, "y": 0})
         assert teleport.status_code == (409 if output == "robot-box" else 200), teleport.text
-        assert st.drives_other_team() == (status == 200)
+        assert st.safety.drives_other_team() == (status == 200)
 
 
 def test_a_player_change_while_the_next_world_waits_reaches_the_page(client) -> None:  # type: ignore[no-untyped-def]
@@ -601,8 +591,8 @@ def test_a_player_change_while_the_next_world_waits_reaches_the_page(client) -> 
         time.sleep(0.2)  # the client's loop is in the world's wait now
 
         def player_changed() -> None:
-            st.player.error = "marker"
-            st.player.serial += 1
+            st.replay.player.error = "marker"
+            st.replay.player.serial += 1
         st.call_sync(player_changed)
         msg = _ws_until(ws, lambda m: m["type"] == "player", "the player message", 5.0)
     assert msg["player"]["error"] == "marker"

@@ -67,7 +67,7 @@ def test_arming_is_refused_without_vision(armable: tuple[TestClient, Station]) -
     r = c.post("/api/arm", json={"armed": True})
     assert r.status_code == 409
     assert "vision is missing" in r.json()["detail"]
-    assert not st.armed
+    assert not st.safety.armed
 
 
 def test_arming_with_vision_then_disarming(armable: tuple[TestClient, Station]) -> None:
@@ -79,7 +79,7 @@ def test_arming_with_vision_then_disarming(armable: tuple[TestClient, Station]) 
     assert c.get("/api/world").json()["armed"] is True
     r = c.post("/api/arm", json={"armed": False})
     assert r.status_code == 200 and r.json()["armed"] is False
-    assert not st.armed
+    assert not st.safety.armed
 
 
 def test_arming_is_refused_while_the_estop_is_active_and_a_press_disarms(
@@ -88,7 +88,7 @@ def test_arming_is_refused_while_the_estop_is_active_and_a_press_disarms(
     _vision(st)
     assert c.post("/api/arm", json={"armed": True}).status_code == 200
     assert c.post("/api/estop", json={"active": True}).status_code == 200
-    assert not st.armed
+    assert not st.safety.armed
     w = c.get("/api/world").json()
     assert w["armed"] is False and w["arming"]["by"].startswith("e-stop")
     _vision(st)
@@ -97,7 +97,7 @@ def test_arming_is_refused_while_the_estop_is_active_and_a_press_disarms(
     # disarming always works
     assert c.post("/api/arm", json={"armed": False}).status_code == 200
     assert c.post("/api/estop", json={"active": False, "confirm": True}).status_code == 200
-    assert not st.armed  # a release does not re-arm
+    assert not st.safety.armed  # a release does not re-arm
     _vision(st)
     assert c.post("/api/arm", json={"armed": True}).status_code == 200
 
@@ -105,13 +105,13 @@ def test_arming_is_refused_while_the_estop_is_active_and_a_press_disarms(
 def test_arming_is_refused_in_replay(tmp_path: Path) -> None:
     st = Station(_settings(tmp_path, require_arming=True))
     st.world_topic.write(_fresh_world())
-    assert st.arm_refusal() is None
-    st.player.log = object()  # type: ignore[assignment]
-    why = st.set_armed(True, "t")
+    assert st.safety.arm_refusal() is None
+    st.replay.player.log = object()  # type: ignore[assignment]
+    why = st.safety.set_armed(True, "t")
     assert why is not None and "replaying a log" in why
-    assert not st.armed
-    st.player.log = None
-    assert st.set_armed(True, "t") is None and st.armed
+    assert not st.safety.armed
+    st.replay.player.log = None
+    assert st.safety.set_armed(True, "t") is None and st.safety.armed
 
 
 def test_bad_bodies_are_refused(armable: tuple[TestClient, Station]) -> None:
@@ -130,10 +130,10 @@ def test_without_arming_required_the_station_is_armed(tmp_path: Path) -> None:
 
 def test_the_relay_saying_it_requires_arming_is_enough(tmp_path: Path) -> None:
     st = Station(_settings(tmp_path))
-    assert st.armed
+    assert st.safety.armed
     st.relay_stats.write({"received_mono": time.monotonic(), "arming_required": True,
                           "armed": False})
-    assert st.arming_required and not st.armed
+    assert st.safety.arming_required and not st.safety.armed
 
 
 def test_operator_actions_are_recorded(armable: tuple[TestClient, Station]) -> None:
@@ -204,7 +204,7 @@ def test_teleports_go_to_a_simulator_only_so_arming_does_not_gate_them(
             if armed:
                 _vision(st)
                 assert c.post("/api/arm", json={"armed": True}).status_code == 200
-            assert st.armed is armed
+            assert st.safety.armed is armed
             ball = c.post("/api/sim/ball", json={"x": 0, "y": 0})
             robot = c.post("/api/sim/robots/blue/3", json={"x": 0, "y": 0})
             assert (ball.status_code, robot.status_code) == (status, status), ball.text
@@ -219,16 +219,16 @@ def test_teleports_go_to_a_simulator_only_so_arming_does_not_gate_them(
 def _armed_station(tmp_path: Path, **kw: Any) -> Station:
     st = Station(_settings(tmp_path, require_arming=True, **kw))
     st.world_topic.write(_fresh_world())
-    assert st.set_armed(True, "operator at 127.0.0.1") is None
+    assert st.safety.set_armed(True, "operator at 127.0.0.1") is None
     return st
 
 
 def test_arming_survives_a_restart_by_the_supervisor(tmp_path: Path) -> None:
     first = _armed_station(tmp_path)
     again = Station(_settings(tmp_path, require_arming=True, restarted=True))
-    assert again.armed and again.arming_store.restored
-    assert again.armed_by == "operator at 127.0.0.1"
-    assert again.armed_since == pytest.approx(first.armed_since)
+    assert again.safety.armed and again.safety.arming_store.restored
+    assert again.safety.armed_by == "operator at 127.0.0.1"
+    assert again.safety.armed_since == pytest.approx(first.safety.armed_since)
     # and the publisher tells the relay so from its first step
     assert again.publisher.armed() is True
 
@@ -236,29 +236,29 @@ def test_arming_survives_a_restart_by_the_supervisor(tmp_path: Path) -> None:
 def test_a_start_anew_is_disarmed_and_forgets_the_last_arming(tmp_path: Path) -> None:
     _armed_station(tmp_path)
     fresh = Station(_settings(tmp_path, require_arming=True))
-    assert not fresh.armed and not fresh.arming_store.restored
+    assert not fresh.safety.armed and not fresh.safety.arming_store.restored
     assert not (tmp_path / "state" / "arming.json").exists()
     # a crash after that start does not bring the earlier arming back either
-    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).armed
+    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).safety.armed
 
 
 def test_a_disarm_survives_a_restart_too(tmp_path: Path) -> None:
     st = _armed_station(tmp_path)
-    st.set_armed(False, "operator at 127.0.0.1")
-    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).armed
+    st.safety.set_armed(False, "operator at 127.0.0.1")
+    assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).safety.armed
 
 
 def test_the_estop_disarms_for_the_restart_and_wins_over_an_armed_file(tmp_path: Path) -> None:
     st = _armed_station(tmp_path)
-    st.set_estop(True, "operator at 127.0.0.1")
+    st.safety.set_estop(True, "operator at 127.0.0.1")
     again = Station(_settings(tmp_path, require_arming=True, restarted=True))
-    assert again.estop and not again.armed
+    assert again.safety.estop and not again.safety.armed
     # an armed file beside a pressed stop (written by hand, or a crash between the two): the
     # stop wins, and the file is made to say so
     (tmp_path / "state" / "arming.json").write_text(
         json.dumps({"armed": True, "since": 1.0, "by": "x"}))
     again = Station(_settings(tmp_path, require_arming=True, restarted=True))
-    assert again.estop and not again.armed
+    assert again.safety.estop and not again.safety.armed
     assert json.loads((tmp_path / "state" / "arming.json").read_text())["armed"] is False
 
 
@@ -268,8 +268,8 @@ def test_a_file_that_does_not_say_armed_is_disarmed(tmp_path: Path, content: str
     (tmp_path / "state").mkdir()
     (tmp_path / "state" / "arming.json").write_text(content)
     st = Station(_settings(tmp_path, require_arming=True, restarted=True))
-    assert not st.armed
-    assert "not readable" in st.arming_store.warning
+    assert not st.safety.armed
+    assert "not readable" in st.safety.arming_store.warning
 
 
 def test_a_disarm_that_cannot_be_written_removes_the_armed_file(

@@ -85,7 +85,7 @@ def test_a_fresh_backend_with_a_persisted_stop_says_so_in_health_and_to_every_pa
         def relay_without_latch() -> None:  # through the station: its one writer
             st.relay_stats.write({"estop_latched": False, "estop_by": "",
                                   "received_mono": time.monotonic(), "streams": {}})
-            st._estop_mono = time.monotonic() - 10
+            st.safety.estop_mono = time.monotonic() - 10
         st.call_sync(relay_without_latch)
         h = c.get("/api/health").json()
         assert h["estop"]["relay_latched"] is False

@@ -3,7 +3,6 @@ health, the report, its page, a run's log into the player; names only from the w
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -15,6 +14,7 @@ from backend.api import create_app
 from backend.config import Settings
 from backend.station import Station
 from launcher.supervisor import free_tcp_port
+from tests.waiting import wait_until
 
 QUICK = Path(__file__).resolve().parents[1] / "evaluate" / "quick"
 pytestmark = pytest.mark.timeout(240)
@@ -33,14 +33,24 @@ def client(tmp_path: Path) -> Iterator[tuple[TestClient, Station]]:
 
 
 def _wait_job(c: TestClient, state: str = "done", timeout_s: float = 180.0) -> dict[str, Any]:
-    deadline = time.monotonic() + timeout_s
-    while True:
+    def ended() -> dict[str, Any] | None:
         job: dict[str, Any] = c.get("/api/evaluate").json()["job"]
-        if job["state"] == state:
-            return job
-        assert job["state"] == "running", job
-        assert time.monotonic() < deadline, f"job still {job['state']}: {job}"
-        time.sleep(0.2)  # polling the job's state (the condition), bounded above
+        assert job["state"] in ("running", state), job
+        return job if job["state"] == state else None
+
+    found: dict[str, Any] = wait_until(ended, timeout_s, 0.2, f"the job {state}")
+    return found
+
+
+def _wait_log(c: TestClient) -> dict[str, Any]:
+    """The player on the log (it indexes it in a worker first)."""
+    def opened() -> dict[str, Any] | None:
+        p: dict[str, Any] = c.get("/api/player").json()
+        assert not p["error"], p["error"]
+        return p if p["source"] == "log" else None
+
+    found: dict[str, Any] = wait_until(opened, 60, 0.1, "the log in the player")
+    return found
 
 
 def test_a_suite_runs_and_a_failed_run_opens_in_the_player(
@@ -74,11 +84,7 @@ def test_a_suite_runs_and_a_failed_run_opens_in_the_player(
         page.headers["content-security-policy"] and "quick_goal" in page.text
     r = c.post("/api/evaluate/replay", json={"report": job["report"], "run": "quick_goal"})
     assert r.status_code == 200, r.text
-    deadline = time.monotonic() + 60
-    while (p := c.get("/api/player").json())["source"] != "log":
-        assert not p["error"], p["error"]
-        assert time.monotonic() < deadline, p
-        time.sleep(0.1)  # the player indexes the log in a worker (the condition), bounded
+    p = _wait_log(c)
     assert p["file"].endswith("quick_goal.log")
     assert Path(p["file"]).is_relative_to(tmp_path / "reports")
 
@@ -123,9 +129,5 @@ def test_an_ab_report_from_the_cli_names_each_side_s_runs(
                                  for n in ("quick_goal", "quick_keeper#1", "quick_keeper#2"))
     r = c.post("/api/evaluate/replay", json={"report": "ab-quick", "run": "B-quick_goal"})
     assert r.status_code == 200, r.text
-    deadline = time.monotonic() + 60
-    while (p := c.get("/api/player").json())["source"] != "log":
-        assert not p["error"], p["error"]
-        assert time.monotonic() < deadline, p
-        time.sleep(0.1)  # the player indexes the log in a worker (the condition), bounded
+    p = _wait_log(c)
     assert p["file"].endswith("B-quick_goal.log")

@@ -1,7 +1,6 @@
 """Several operators (issue 12): the driving lock and the action list (backend/operators.py),
 and their routes with two operators on one station (backend/routes/operators.py)."""
 
-import time
 from collections.abc import Iterator
 
 import pytest
@@ -12,6 +11,7 @@ from backend.config import Settings
 from backend.operators import DrivingRefused, Operators, Who, clean_name
 from backend.station import Station
 from launcher.supervisor import free_tcp_port
+from tests.waiting import wait_until
 
 
 class Clock:
@@ -136,7 +136,8 @@ def station(tmp_path) -> Iterator[tuple[TestClient, Station, Clock]]:  # type: i
                         state_dir=tmp_path / "state", allowed_hosts=["testserver"])
     st = Station(settings)
     clock = Clock()
-    st.operators = Operators(release_after_s=5.0, clock=clock)
+    # the station's own Operators (its views were built with it), on the test's clock
+    st.operators.clock, st.operators.release_after_s = clock, 5.0
     with TestClient(create_app(settings, st), headers={"X-Touchline": "1"}) as c:
         yield c, st, clock
 
@@ -174,7 +175,7 @@ def test_a_second_operator_gets_409_naming_the_holder_until_taking_over(station)
     acts = [(a["action"], a["by"].split(" ")[0]) for a in c.get("/api/operators").json()["actions"]]
     assert acts[:3] == [("target", "bob"), ("driving-taken-over", "bob"), ("estop", "bob")]
     assert ("driving-taken", "alice") in acts and ("target", "alice") in acts
-    assert st.health()["operator_actions"][0]["action"] == "target"
+    assert st.browser.health()["operator_actions"][0]["action"] == "target"
 
 
 def test_asking_for_driving_and_the_holder_giving_it(station) -> None:  # type: ignore[no-untyped-def]
@@ -193,13 +194,6 @@ def test_asking_for_driving_and_the_holder_giving_it(station) -> None:  # type: 
     assert _target(c, A).status_code == 200  # free again
 
 
-def _wait(cond, what: str, timeout_s: float = 5.0) -> None:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while not cond():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        time.sleep(0.01)
-
-
 def test_the_holders_page_closing_releases_driving_after_a_few_seconds(station) -> None:  # type: ignore[no-untyped-def]
     c, st, clock = station
     with c.websocket_connect("/api/ws", headers=A) as ws:
@@ -210,7 +204,7 @@ def test_the_holders_page_closing_releases_driving_after_a_few_seconds(station) 
         assert _target(c, A).status_code == 200
         clock.t += 60  # her page is open: she keeps it however long she idles
         assert _target(c, B).status_code == 409
-    _wait(lambda: not st.operators.sessions(), "the session to close")
+    wait_until(lambda: not st.operators.sessions(), 5.0, 0.01, "the session to close")
     assert _target(c, B).status_code == 409  # just closed: a reload would keep it
     clock.t += 5.0
     assert _target(c, B).status_code == 200
@@ -262,6 +256,6 @@ def test_every_operator_action_is_listed_with_who(station) -> None:  # type: ign
                   headers=A).status_code == 200
     assert c.post("/api/arm", json={"armed": False}, headers=A).status_code == 200
     assert c.post("/api/estop", json={"active": True}, headers=B).status_code == 200
-    acts = [(a["action"], a["by"].split(" ")[0]) for a in st.health()["operator_actions"]]
+    acts = [(a["action"], a["by"].split(" ")[0]) for a in st.browser.health()["operator_actions"]]
     assert acts == [("estop", "bob"), ("disarm", "alice"), ("referee", "alice"),
                     ("params-import", "alice"), ("preset-load", "alice")]

@@ -11,6 +11,7 @@ import pytest
 from backend import processor
 from backend.bus import Reader, Topic
 from backend.processor import Every, OnTopic, Processor, Runner
+from tests.waiting import until
 
 
 class Counter(Processor):
@@ -24,21 +25,13 @@ class Counter(Processor):
         self.ticks += 1
 
 
-async def _until(cond, timeout_s: float = 5.0) -> None:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError("condition not met in time")
-        await asyncio.sleep(0.005)
-
-
 async def test_fixed_rate_processor_runs_at_its_rate_without_a_default_pause() -> None:
     p = Counter(200.0)
     r = Runner()
     r.add(p)
     await r.start()
     t0 = time.monotonic()
-    await _until(lambda: p.ticks >= 100)
+    await until(lambda: p.ticks >= 100)
     elapsed = time.monotonic() - t0
     await r.stop()
     # 100 ticks at 200 Hz take ~0.5 s; the seed's 1 s default pause would take 100 s
@@ -69,9 +62,9 @@ async def test_topic_triggered_processor_coalesces_and_loses_nothing() -> None:
     await r.start()
     for i in range(50):
         src.write(i)  # written without yielding: one run sees them all
-    await _until(lambda: dst.seq >= 1)
+    await until(lambda: dst.seq >= 1)
     src.write(50)
-    await _until(lambda: sum(len(v.value) for v in dst.records_after(0)) == 51)
+    await until(lambda: sum(len(v.value) for v in dst.records_after(0)) == 51)
     await r.stop()
     got = [x for rec in dst.records_after(0) for x in rec.value]
     assert got == list(range(51))
@@ -96,7 +89,7 @@ async def test_exception_in_tick_is_counted_and_the_processor_keeps_running() ->
     r = Runner()
     r.add(p)
     await r.start()
-    await _until(lambda: p.calls >= 10)
+    await until(lambda: p.calls >= 10)
     await r.stop()
     assert p.stats.errors >= 5
     assert "ValueError: bad tick" in p.stats.last_error
@@ -119,7 +112,7 @@ async def test_overruns_are_counted() -> None:
     r = Runner()
     r.add(p)
     await r.start()
-    await _until(lambda: p.stats.rate.total >= 5)
+    await until(lambda: p.stats.rate.total >= 5)
     await r.stop()
     assert p.stats.overruns >= 5
 
@@ -141,7 +134,7 @@ async def test_max_wait_runs_a_quiet_processor() -> None:
     r = Runner()
     r.add(p)
     await r.start()
-    await _until(lambda: p.runs >= 5)  # nothing is ever written: only the max wait runs it
+    await until(lambda: p.runs >= 5)  # nothing is ever written: only the max wait runs it
     await r.stop()
 
 
@@ -197,7 +190,7 @@ async def test_fixed_rate_ticks_run_on_loop_timers_and_their_pass_follows() -> N
         r.add(p)
     await r.start()
     assert not any(t.get_name() == "stepper" for t in asyncio.all_tasks())
-    await _until(lambda: stepper.stats.rate.total >= 40 and slow.stats.rate.total >= 5)
+    await until(lambda: stepper.stats.rate.total >= 40 and slow.stats.rate.total >= 5)
     await r.stop()
     assert stepper.tasks == {None}
     assert slow.stats.overruns >= 4
@@ -297,12 +290,12 @@ async def test_a_processor_runs_at_its_own_deadline_before_its_max_wait() -> Non
     r.add(p)
     await r.start()
     try:
-        await _until(lambda: len(p.runs) >= 1)  # the first pass
+        await until(lambda: len(p.runs) >= 1)  # the first pass
         for _ in range(3):
             n = len(p.runs)
             p.deadline = deadline = time.perf_counter() + 0.03
             # (bounded well inside the max wait: without the deadline it runs in 10 s)
-            await _until(lambda n=n: len(p.runs) > n, timeout_s=5.0)  # type: ignore[misc]
+            await until(lambda n=n: len(p.runs) > n, timeout_s=5.0)  # type: ignore[misc]
             assert p.runs[n] >= deadline and p.deadline is None  # at, not before, it
     finally:
         await r.stop()
@@ -317,11 +310,11 @@ async def test_a_deadline_that_stays_due_does_not_spin_the_loop() -> None:
     r.add(p)
     await r.start()
     try:
-        await _until(lambda: len(p.runs) >= 1)
+        await until(lambda: len(p.runs) >= 1)
         p.fail = True
         p.deadline = time.perf_counter() + 0.01
         n = len(p.runs)
-        await _until(lambda: len(p.runs) >= n + 6)
+        await until(lambda: len(p.runs) >= n + 6)
         assert p.asked < 2000  # asked at each wake-up, not in a loop
         # after the first run for it, one run a max wait (a slow machine only widens the
         # gaps; spinning makes them microseconds)

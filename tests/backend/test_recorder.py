@@ -6,7 +6,6 @@ import io
 import json
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
 
@@ -16,6 +15,7 @@ from backend.recorder import SessionRecorder
 from ssllog.format import TYPE_TL_ACTION, TYPE_TL_SESSION
 from ssllog.reader import LogReader, Record
 from ssllog.seek import read_index
+from tests.waiting import wait_until
 
 DEADLINE_S = 5.0
 
@@ -27,15 +27,6 @@ def read(path: Path) -> tuple[list[Record], LogReader]:
 
 def logs(folder: Path) -> list[Path]:
     return sorted(folder.glob("*.log"), key=lambda p: p.stat().st_mtime_ns)
-
-
-def wait_for(cond: Callable[[], bool], what: str) -> None:
-    """Polls a condition until a deadline (no sleep stands in for the condition)."""
-    end = time.monotonic() + DEADLINE_S
-    while not cond():
-        if time.monotonic() > end:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.01)
 
 
 def payloads(records: list[Record]) -> list[tuple[int, int, bytes]]:
@@ -138,8 +129,8 @@ def test_disable_finishes_enable_starts_a_new_file_folder_moves(tmp_path: Path) 
     rec.record(1, 4, b"a")
     rec.set_enabled(False)
     rec.record(2, 4, b"lost")
-    wait_for(lambda: rec.status()["files"] == 1 and not rec.status()["recording"],
-             "the file to be finished")
+    wait_until(lambda: rec.status()["files"] == 1 and not rec.status()["recording"],
+               DEADLINE_S, 0.01, "the file to be finished")
     [first] = logs(tmp_path / "a")
     assert read(first)[1].index_offsets is not None  # finished while the recorder runs on
     rec.set_enabled(True)
@@ -164,13 +155,14 @@ def test_disabled_from_the_start_writes_nothing(tmp_path: Path) -> None:
 
 def test_flushed_within_a_second_and_readable_while_open(tmp_path: Path) -> None:
     rec = SessionRecorder(tmp_path)
-    wait_for(lambda: rec.status()["recording"], "the first file")
+    wait_until(lambda: rec.status()["recording"], DEADLINE_S, 0.01, "the first file")
     [path] = logs(tmp_path)
     empty = path.stat().st_size
     t0 = time.monotonic()
     for i in range(10):
         rec.record(i, 4, b"y" * 50)
-    wait_for(lambda: path.stat().st_size >= empty + 10 * 66, "the records on disk")
+    wait_until(lambda: path.stat().st_size >= empty + 10 * 66, DEADLINE_S, 0.01,
+               "the records on disk")
     assert time.monotonic() - t0 < 1.0 + 0.5  # flush interval 0.5 s, with slack for a busy CI
     records, r = read(path)  # a second reader, while the recorder is still open
     assert [x.time_ns for x in records if x.type == 4] == list(range(10))
@@ -187,7 +179,7 @@ def test_disk_full_stops_recording_and_the_station_goes_on(
         return open("/dev/full", "wb", buffering=0)  # the kernel answers ENOSPC
 
     rec = SessionRecorder(tmp_path, opener=full)
-    wait_for(lambda: rec.status()["error"] is not None, "the error")
+    wait_until(lambda: rec.status()["error"] is not None, DEADLINE_S, 0.01, "the error")
     st = rec.status()
     assert st["error"].startswith("disk full:") and st["error"].endswith("recording stopped")
     assert st["recording"] is False
@@ -215,7 +207,7 @@ def test_disk_full_while_writing(tmp_path: Path) -> None:
     rec = SessionRecorder(tmp_path, opener=lambda p: Filling(p))  # type: ignore[arg-type,return-value]
     for i in range(50):
         rec.record(i, 4, b"w" * 20)
-    wait_for(lambda: rec.status()["error"] is not None, "the error")
+    wait_until(lambda: rec.status()["error"] is not None, DEADLINE_S, 0.01, "the error")
     rec.close()
     [path] = logs(tmp_path)
     records, _ = read(path)  # what did get written is readable, without an index
@@ -283,7 +275,7 @@ def test_an_unexpected_error_stops_recording_not_the_thread(tmp_path: Path) -> N
         raise RuntimeError("a bug")
 
     rec = SessionRecorder(tmp_path, opener=broken)
-    wait_for(lambda: rec.status()["error"] is not None, "the error")
+    wait_until(lambda: rec.status()["error"] is not None, DEADLINE_S, 0.01, "the error")
     assert "RuntimeError: a bug" in rec.status()["error"]
     rec.new_file("again")  # tries again, fails again, still answers
     rec.close()

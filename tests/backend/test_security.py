@@ -159,7 +159,7 @@ def test_deep_bodies_are_refused_whatever_the_content_type(app) -> None:  # type
                           headers={"content-type": ctype, "x-touchline": "1"})
             assert r.status_code == 400 and "nested deeper" in r.json()["detail"], \
                 (ctype, path, r.text)
-    assert not station.estop
+    assert not station.safety.estop
 
 
 _json = st.recursive(

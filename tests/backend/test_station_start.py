@@ -14,6 +14,7 @@ from backend.config import Settings
 from backend.station import Station
 from backend.world.state import BallState, RobotState, WorldState
 from launcher.supervisor import free_tcp_port
+from tests.waiting import wait_until
 
 
 def _settings(tmp_path: Path, **kw: Any) -> Settings:
@@ -27,16 +28,6 @@ def _world() -> WorldState:
     return WorldState(10.0, time.time_ns(), BallState(1.0, 2.0, t_seen=10.0), robots)
 
 
-def _wait(cond: Any, timeout_s: float = 20.0) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        got = cond()
-        if got:
-            return got
-        time.sleep(0.01)
-    raise AssertionError(f"timed out waiting for {cond}")
-
-
 def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Path) -> None:
     st = Station(_settings(tmp_path, late_start_max_s=600.0,
                            set_params=["strategy.engine=numpy"]))
@@ -46,7 +37,7 @@ def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Pat
         assert isinstance(steps, dict) and "station running" in steps
         # running, and nothing of the rest yet: no vision, so no command
         assert not st.late_started.is_set()
-        assert st.recorder is None and st.strategy.engine is None
+        assert st.recording.recorder is None and st.strategy.engine is None
         assert "recorder open" not in steps and "engine started" not in steps
         # vision (the world a camera frame makes), until the first command set has left
         # for the relay: the strategy's targets, then control's commands
@@ -56,8 +47,8 @@ def test_the_recorder_and_the_engine_start_after_the_first_command(tmp_path: Pat
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert steps["first targets"] <= steps["first command"] <= steps["recorder open"]
-        assert st.recorder is not None and st.recorder.status()["enabled"]
-        _wait(lambda: st.strategy.engine is not None)  # the numpy engine's worker
+        assert st.recording.recorder is not None and st.recording.recorder.status()["enabled"]
+        wait_until(lambda: st.strategy.engine is not None, 20.0, 0.01)  # the numpy engine's worker
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert steps["first command"] < steps["engine started"]
@@ -73,7 +64,7 @@ def test_without_vision_the_rest_starts_after_its_bound(tmp_path: Path) -> None:
         steps = st.startup.view()["steps_s"]
         assert isinstance(steps, dict)
         assert "recorder open" in steps and "first command" not in steps
-        assert st.recorder is not None
+        assert st.recording.recorder is not None
     finally:
         st.stop_thread()
 
@@ -83,6 +74,6 @@ def test_with_no_bound_everything_starts_at_once(tmp_path: Path) -> None:
     st = Station(_settings(tmp_path))
     st.start_thread()
     try:
-        assert st.late_started.is_set() and st.recorder is not None
+        assert st.late_started.is_set() and st.recording.recorder is not None
     finally:
         st.stop_thread()

@@ -30,7 +30,7 @@ from websockets.sync.client import connect
 from backend.api import create_app
 from backend.config import Settings
 from backend.station import Station
-from backend.viewhub import Views
+from backend.viewhub import Views, WebStats
 from backend.world.state import RobotState, WorldState
 from backend.wsfanout import STALLED_CLIENT_S, DirectSocket, LoopFanout
 from launcher.supervisor import free_tcp_port
@@ -115,24 +115,24 @@ def test_a_stalled_client_is_dropped_and_the_others_keep_receiving(tmp_path) -> 
             deadline = time.monotonic() + 60
             while len(after) < 20:
                 assert time.monotonic() < deadline, (
-                    f"dropped {st.ws_dropped} of 3 stalled clients, {len(after)} worlds after")
+                    f"dropped {st.web.dropped} of 3 stalled clients, {len(after)} worlds after")
                 msg = json.loads(ws.recv(timeout=10))  # the others keep receiving
                 if msg["type"] != "world":
                     continue
                 seqs.append(msg["world"]["seq"])
-                (after if st.ws_dropped >= 3 else while_stalled).add(msg["world"]["seq"])
+                (after if st.web.dropped >= 3 else while_stalled).add(msg["world"]["seq"])
         # worlds kept coming while the stalled clients were there (they are there >= 1.5 s)
         assert len(while_stalled) >= 10, while_stalled
         assert seqs == sorted(seqs)  # the latest only, in order
-        assert st.ws_dropped == 3
+        assert st.web.dropped == 3
         # uvicorn's connections are written by the fan-out directly (not through ASGI)
         from backend.wsfanout import _fanouts
         assert sum(f.writes for f in _fanouts[st].values()) >= len(seqs)
         for s in stalled:  # the dropped clients' connections are ended by the server
             assert _closed_by_server(s)
         deadline = time.monotonic() + 10
-        while st.ws_clients:  # the reader's endpoint ends once its close is handled
-            assert time.monotonic() < deadline, f"{st.ws_clients} clients left"
+        while st.web.clients:  # the reader's endpoint ends once its close is handled
+            assert time.monotonic() < deadline, f"{st.web.clients} clients left"
             stop.wait(0.01)
     finally:
         stop.set()
@@ -239,7 +239,7 @@ class FakeStation:
     def __init__(self, hz: float = 60.0) -> None:
         self.views = Views()
         self.listeners: set[Callable[[], None]] = set()
-        self.ws_dropped = 0
+        self.web = WebStats()
         values = {"x": 1}
         self.params = SimpleNamespace(version=0, values=lambda: values,
                                       current=SimpleNamespace(stream=SimpleNamespace(
@@ -339,7 +339,7 @@ def test_every_reader_gets_the_stream_beside_stalled_clients_on_a_loaded_loop(
         assert all(s.aborted for s in stalled) and not any(s.aborted for s in reading)
         assert all(c.stalled for c in clients[:3])
         assert not any(c.ended.is_set() for c in clients[3:])
-        assert st.ws_dropped == 3
+        assert st.web.dropped == 3
         assert max(dropped_at.values()) - (t0 + stop_at) <= 2.0, dropped_at
 
     asyncio.run(run())
@@ -368,7 +368,7 @@ def test_a_client_whose_peer_takes_nothing_is_dropped_within_two_seconds() -> No
             await _handed_over(f)
         assert clock.now() - t0 <= 2.0
         assert clock.now() - stuck.acked_at >= STALLED_CLIENT_S  # not before its time
-        assert clients[0].stalled and stuck.aborted and st.ws_dropped == 1
+        assert clients[0].stalled and stuck.aborted and st.web.dropped == 1
         assert not clients[1].ended.is_set() and not clients[2].ended.is_set()
         assert f.direct == clients[1:]
         n = len(stuck.writes)

@@ -43,3 +43,19 @@ def test_the_page_gets_the_commands_from_the_generated_contract() -> None:
     line = next(ln for ln in ts.splitlines() if ln.startswith("export type RefereeCommand ="))
     names = json.loads("[" + line.split("=", 1)[1].rstrip(";").replace(" | ", ", ") + "]")
     assert names == list(rules.COMMANDS)
+
+
+def test_the_team_apis_field_defaults_are_the_domains() -> None:
+    # touchline/ imports nothing of the station (a team's tests run without it), so its
+    # FieldSize keeps its own defaults: held here to division B and the rules' radii
+    from domain.field import DIVISION_B
+    from touchline.game import FieldSize
+
+    f = FieldSize()
+    assert (f.length, f.width, f.goal_width) == (
+        DIVISION_B.field_length, DIVISION_B.field_width, DIVISION_B.goal_width)
+    assert (f.goal_depth, f.boundary_width) == (DIVISION_B.goal_depth, DIVISION_B.boundary_width)
+    assert (f.penalty_area_depth, f.penalty_area_width) == (
+        DIVISION_B.penalty_area_depth, DIVISION_B.penalty_area_width)
+    assert f.center_circle_radius == DIVISION_B.center_circle_radius
+    assert (f.robot_radius, f.ball_radius) == (rules.ROBOT_RADIUS_MM, rules.BALL_RADIUS_MM)

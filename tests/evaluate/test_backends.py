@@ -8,7 +8,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -20,6 +19,7 @@ from evaluate.pool import DaskCluster, LocalPool
 from evaluate.runner import Entrant
 from evaluate.scenario import load_suite
 from evaluate.series import strip_volatile
+from tests.waiting import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).parent / "quick"
@@ -127,15 +127,9 @@ def test_a_lost_worker_s_runs_are_run_again(tmp_path: Path, cluster: str) -> Non
 
         thread = threading.Thread(target=series)
         thread.start()
-        deadline = time.monotonic() + 60
-        victim = None
-        while victim is None:  # a worker with a run in hand (the condition), bounded
-            assert time.monotonic() < deadline, "no worker ever took a run"
-            busy = [w for w, keys in client.processing().items() if keys]
-            if busy:
-                victim = pids[busy[0]]
-            else:
-                time.sleep(0.05)
+        busy = wait_until(lambda: [w for w, keys in client.processing().items() if keys],
+                          60, 0.05, "a worker with a run in hand")
+        victim = pids[busy[0]]
         os.kill(victim, signal.SIGKILL)
         thread.join(180)
         assert not thread.is_alive()
@@ -180,10 +174,8 @@ def test_the_station_grades_a_class_on_the_cluster(tmp_path: Path, cluster: str)
         r = c.post("/api/evaluate", json={"action": "start", "kind": "class",
                                           "suite": "class_suite"})
         assert r.status_code == 200, r.text
-        deadline = time.monotonic() + 180
-        while (job := c.get("/api/health").json()["evaluation"])["state"] == "running":
-            assert time.monotonic() < deadline, job
-            time.sleep(0.1)  # the job's progress in health (the condition), bounded
+        job = wait_until(lambda: (j := c.get("/api/health").json()["evaluation"])["state"]
+                         != "running" and j, 180, 0.1, "the job's end in health")
         assert job["state"] == "done", job
         assert (job["done"], job["total"], job["passed"], job["failed"]) == (3, 3, 1, 2)
         rep = c.get(f"/api/evaluate/reports/{job['report']}").json()
@@ -200,11 +192,8 @@ def test_the_station_grades_a_class_on_the_cluster(tmp_path: Path, cluster: str)
         assert run == "spin.drive"
         r = c.post("/api/evaluate/replay", json={"report": job["report"], "run": run})
         assert r.status_code == 200, r.text
-        deadline = time.monotonic() + 60
-        while (p := c.get("/api/player").json())["source"] != "log":
-            assert not p["error"], p["error"]
-            assert time.monotonic() < deadline, p
-            time.sleep(0.1)  # the player indexes the log in a worker (the condition)
+        p = wait_until(lambda: (q := c.get("/api/player").json())["source"] == "log" and q,
+                       60, 0.1, "the log in the player")
         assert p["file"].endswith("spin/drive.log")
     saved = json.loads((tmp_path / "reports" / job["report"] / "report.json").read_text())
     assert saved["backend"]["kind"] == "dask" and saved["backend"]["address"] == cluster

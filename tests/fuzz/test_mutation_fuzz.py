@@ -33,6 +33,7 @@ from hypothesis import strategies as st
 
 from backend import topics
 from backend.config import Settings
+from backend.jsonsafe import dumps
 from backend.processors import RefereeIngest, VisionIngest, WorldProcessor
 from backend.referee.internal import InternalReferee
 from backend.station import Station
@@ -204,7 +205,8 @@ class Pipeline:
 
     def check(self, recv_s: float) -> None:
         st_ = self.station
-        out = json.loads(st_.world_json())  # the world message as every websocket gets it
+        # the world message as every websocket gets it
+        out = json.loads(dumps({"type": "world", "world": st_.browser.world()}, "world"))
         _strict_json(out)
         model = self.world.model
         c = model.config
@@ -223,7 +225,7 @@ class Pipeline:
             cc = c.clock
             assert recv_s - 1.0 <= w.t_capture <= recv_s + cc.max_ahead_s + 1e-6, \
                 (w.t_capture - recv_s)
-        geo = st_.geometry()
+        geo = st_.browser.geometry()
         if geo is not None:
             _strict_json(geo)
         ref = st_.referee_topic.latest_value()

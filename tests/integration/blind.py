@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from sslnet.kerneltime import enable_kernel_timestamps, kernel_time_ns
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
-from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+
+from .standins import frame
 
 
 @dataclass
@@ -39,16 +40,8 @@ class Camera:
         self.thread.start()
 
     def _packet(self, now: float) -> bytes:
-        pkt = SSL_WrapperPacket()
-        d = pkt.detection
-        d.frame_number, d.t_capture, d.t_sent, d.camera_id = self.frames, now, now, 0
-        for rid, x in ((0, -2000.0), (1, 1000.0)):
-            r = d.robots_blue.add()
-            r.confidence, r.robot_id, r.x, r.y, r.orientation = 0.9, rid, x, 0.0, 0.0
-            r.pixel_x = r.pixel_y = 0.0
-        b = d.balls.add()
-        b.confidence, b.x, b.y, b.pixel_x, b.pixel_y = 0.9, 0.0, 1500.0, 0.0, 0.0
-        return pkt.SerializeToString()
+        return frame(self.frames, now, blue=[(0, -2000.0, 0.0), (1, 1000.0, 0.0)],
+                     ball=(0.0, 1500.0))
 
     def _run(self) -> None:
         sock = open_multicast_sender("127.0.0.1")

@@ -3,12 +3,8 @@ free, non-standard ports, once for the integration tests."""
 
 from __future__ import annotations
 
-import json
-import os
-import signal
+import socket
 import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -18,6 +14,12 @@ from typing import Any
 
 import httpx
 import pytest
+
+from launcher.started import start_isolated
+from tests.waiting import wait_until
+
+__all__ = ["StationHandle", "arm", "launched", "next_relay_stats", "stop_process",
+           "wait_until"]
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -43,48 +45,16 @@ def launched(*extra_args: str, state_dir: Path | None = None) -> Iterator[Statio
     (it stays after the stop: a later start on it is the same station started anew); by
     default a temporary folder of the launcher's, removed at its stop."""
     keep = ["--state-dir", str(state_dir)] if state_dir is not None else []
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", *keep, *extra_args],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-    lines: list[str] = []
-    ready = threading.Event()
-    info: dict[str, Any] = {}
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            if line.startswith("TOUCHLINE_PORTS "):
-                info["ports"] = json.loads(line.split(" ", 1)[1])
-            if line.startswith("TOUCHLINE_PIDS "):
-                info["pids"] = json.loads(line.split(" ", 1)[1])
-            if line.startswith("TOUCHLINE_STATE_DIR "):
-                info["state_dir"] = line.split(" ", 1)[1].strip()
-            if line.startswith("TOUCHLINE_READY "):
-                info["url"] = line.split(" ", 1)[1].strip()
-                ready.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not ready.wait(90):
-        proc.kill()
-        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
+    started = start_isolated([*keep, *extra_args])
     try:
-        own = info.get("state_dir")
-        yield StationHandle(info["url"], info["ports"], lines, info.get("pids", {}),
-                            Path(own) if own else state_dir)
+        yield StationHandle(started.url, started.ports, started.lines, started.pids,
+                            started.state_dir or state_dir)
     finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        else:
-            if state_dir is None:
-                # an orderly stop leaves no temporary state folder behind
-                assert "state_dir" in info, "the launcher did not say where its state went"
-                assert not Path(info["state_dir"]).exists(), info["state_dir"]
+        if started.stop() is not None and state_dir is None:
+            # an orderly stop leaves no temporary state folder behind
+            assert started.state_dir is not None, \
+                "the launcher did not say where its state went"
+            assert not started.state_dir.exists(), started.state_dir
 
 
 @pytest.fixture(scope="session")
@@ -100,6 +70,21 @@ def bare() -> Iterator[StationHandle]:
         yield st
 
 
+@pytest.fixture(scope="module")
+def box_station() -> Iterator[tuple[StationHandle, socket.socket]]:
+    """Relay + backend in robot-box mode (real robots: the seed's 13-byte datagram per robot,
+    no team field) and no simulator, the test's socket as the robot box (non-blocking)."""
+    box = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    box.bind(("127.0.0.1", 0))
+    box.setblocking(False)
+    try:
+        with launched("--sim", "none", "--output", "robot-box",
+                      f"--relay-arg=--robot-box=127.0.0.1:{box.getsockname()[1]}") as st:
+            yield st, box
+    finally:
+        box.close()
+
+
 def stop_process(proc: subprocess.Popen[str], timeout_s: float = 10.0) -> None:
     """SIGTERM, then SIGKILL if it does not end within ``timeout_s``."""
     proc.terminate()
@@ -108,18 +93,6 @@ def stop_process(proc: subprocess.Popen[str], timeout_s: float = 10.0) -> None:
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait(timeout=timeout_s)
-
-
-def wait_until(cond, timeout_s: float, interval_s: float = 0.1, what: str = "") -> Any:  # type: ignore[no-untyped-def]
-    """Polls ``cond`` until it returns a truthy value; bounded."""
-    deadline = time.monotonic() + timeout_s
-    last = None
-    while time.monotonic() < deadline:
-        last = cond()
-        if last:
-            return last
-        time.sleep(interval_s)
-    raise AssertionError(f"timed out after {timeout_s} s waiting for {what or cond}: {last!r}")
 
 
 def next_relay_stats(st: StationHandle, span_s: float = 0.5,

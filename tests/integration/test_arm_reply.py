@@ -15,14 +15,14 @@ import httpx
 import pytest
 
 from .conftest import StationHandle, launched, wait_until
-from .test_robot_box_team import _camera
+from .standins import robot_box_camera
 
 
 @pytest.fixture(scope="module")
 def station() -> Iterator[StationHandle]:
     stop = threading.Event()
     with launched("--sim", "none") as st:
-        cam = threading.Thread(target=_camera, args=(st, stop), daemon=True)
+        cam = threading.Thread(target=robot_box_camera, args=(st.ports, stop), daemon=True)
         cam.start()
         try:
             wait_until(lambda: st.get("/api/arm")["refusal"] is None, 20, what="vision seen")

@@ -7,30 +7,11 @@ from __future__ import annotations
 
 import socket
 import threading
-from collections.abc import Iterator
 
 import httpx
-import pytest
 
-from .conftest import StationHandle, arm, launched, next_relay_stats, wait_until
-from .test_robot_box_team import _box_ids, _camera
-
-
-@pytest.fixture(scope="module")
-def box() -> Iterator[socket.socket]:
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    s.setblocking(False)
-    yield s
-    s.close()
-
-
-@pytest.fixture(scope="module")
-def station(box: socket.socket) -> Iterator[StationHandle]:
-    port = box.getsockname()[1]
-    with launched("--sim", "none", "--output", "robot-box",
-                  f"--relay-arg=--robot-box=127.0.0.1:{port}") as st:
-        yield st
+from .conftest import StationHandle, arm, next_relay_stats, wait_until
+from .standins import box_ids, robot_box_camera
 
 
 def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: ignore[type-arg]
@@ -52,9 +33,10 @@ def _robots_held(st: StationHandle) -> int:
 
 
 def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
-        station: StationHandle, box: socket.socket) -> None:
+        box_station: tuple[StationHandle, socket.socket]) -> None:
+    station, box = box_station
     stop = threading.Event()
-    cam = threading.Thread(target=_camera, args=(station, stop), daemon=True)
+    cam = threading.Thread(target=robot_box_camera, args=(station.ports, stop), daemon=True)
     cam.start()
     try:
         wait_until(lambda: len(station.get("/api/world")["robots"]) == 2, 20,
@@ -76,12 +58,12 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
         dropped = _disarmed_drops(next_relay_stats(station, 0.0))
         wait_until(lambda: _disarmed_drops(station.get("/api/health")) > dropped, 10,
                    what="the dropped command sets counted")
-        assert _box_ids(box) == []
+        assert box_ids(box) == []
 
         # armed: robot 3 is driven
         state = arm(station)
         assert state["armed"] is True and state["required"] is True
-        wait_until(lambda: any(rid == 3 and sx != 0 for rid, sx in _box_ids(box)), 10,
+        wait_until(lambda: any(rid == 3 and sx != 0 for rid, sx in box_ids(box)), 10,
                    what="our robot 3 driven once armed")
         wait_until(lambda: station.get("/api/health")["relay"]["armed"], 5,
                    what="the relay armed")
@@ -90,9 +72,9 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
         assert _post(station, "/api/estop", {"active": True}).status_code == 200
         wait_until(lambda: station.get("/api/estop")["relay_latched"], 5,
                    what="the relay latched")
-        _box_ids(box)  # sent before the relay latched
+        box_ids(box)  # sent before the relay latched
         next_relay_stats(station, 1.0)  # a second of the relay's own time, latched
-        got = _box_ids(box)
+        got = box_ids(box)
         assert all(sx == 0 for _, sx in got), got
         w = station.get("/api/world")
         assert w["armed"] is False and w["estop"] is True
@@ -106,9 +88,9 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
             == 200
         # the zeros' hold time is 1 s: then the relay holds no robot and sends nothing
         wait_until(lambda: _robots_held(station) == 0, 10, what="the zeros' hold over")
-        _box_ids(box)
+        box_ids(box)
         next_relay_stats(station, 0.5)
-        assert _robots_held(station) == 0 and _box_ids(box) == []
+        assert _robots_held(station) == 0 and box_ids(box) == []
         assert station.get("/api/world")["armed"] is False
     finally:
         httpx.delete(station.url + "/api/robots/blue/3/target", headers={"X-Touchline": "1"})

@@ -20,10 +20,9 @@ import httpx
 import pytest
 
 from sslnet.multicast import open_multicast_sender
-from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
 from .conftest import StationHandle, arm, launched, next_relay_stats, wait_until
-from .test_estop_latch import Simulator
+from .standins import CommandLog, frame
 
 
 class StillCamera:
@@ -41,21 +40,12 @@ class StillCamera:
     def _run(self) -> None:
         sock = open_multicast_sender("127.0.0.1")
         end = time.monotonic() + 300  # bounded
-        frame = 0
+        k = 0
         try:
             while not self.stop.is_set() and time.monotonic() < end:
-                pkt = SSL_WrapperPacket()
-                d = pkt.detection
-                now = time.time()
-                d.frame_number, d.t_capture, d.t_sent, d.camera_id = frame, now, now, 0
-                for rid, x, y in self.ROBOTS:
-                    r = d.robots_blue.add()
-                    r.confidence, r.robot_id, r.x, r.y, r.orientation = 0.9, rid, x, y, 0.0
-                    r.pixel_x = r.pixel_y = 0.0
-                b = d.balls.add()
-                b.confidence, b.x, b.y, b.pixel_x, b.pixel_y = 0.9, 0.0, 1500.0, 0.0, 0.0
-                sock.sendto(pkt.SerializeToString(), (self.group, self.port))
-                frame += 1
+                sock.sendto(frame(k, time.time(), blue=self.ROBOTS, ball=(0.0, 1500.0)),
+                            (self.group, self.port))
+                k += 1
                 self.stop.wait(1 / 60)
         finally:
             sock.close()
@@ -130,7 +120,7 @@ def test_arming_survives_the_supervisors_restart_not_a_new_start_and_the_estop_b
 
     # 1. armed by the operator, then a crash: the restart is armed, the robots driven again
     with launched("--sim", "none", state_dir=state) as st:
-        cam, sim = camera(st), Simulator(st.ports["sim_blue"])
+        cam, sim = camera(st), CommandLog(st.ports["sim_blue"])
         try:
             wait_until(lambda: any(r["id"] == 0 for r in st.get("/api/world")["robots"]), 30,
                        what="blue 0 seen")
@@ -159,7 +149,7 @@ def test_arming_survives_the_supervisors_restart_not_a_new_start_and_the_estop_b
     # 2. the station started anew on that state: disarmed, nothing driven; then the e-stop,
     # pressed, survives a crash
     with launched("--sim", "none", state_dir=state) as st:
-        cam, sim = camera(st), Simulator(st.ports["sim_blue"])
+        cam, sim = camera(st), CommandLog(st.ports["sim_blue"])
         try:
             wait_until(lambda: any(r["id"] == 0 for r in st.get("/api/world")["robots"]), 30,
                        what="blue 0 seen")

@@ -6,52 +6,16 @@ refused, and only a confirmed release drives again."""
 
 from __future__ import annotations
 
-import math
 import os
 import signal
-import socket
 import threading
 import time
 
 import httpx
 
-from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
-
 from .conftest import StationHandle, arm, wait_until
+from .standins import CommandLog
 from .test_hostile_vision import Camera
-
-
-class Simulator:
-    """Records every command datagram for blue robots: (arrival, id, speed)."""
-
-    def __init__(self, port: int) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", port))
-        self.sock.settimeout(0.05)
-        self.log: list[tuple[float, int, float]] = []
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def _run(self) -> None:
-        end = time.monotonic() + 180  # bounded
-        while not self.stop.is_set() and time.monotonic() < end:
-            try:
-                data = self.sock.recv(65536)
-            except TimeoutError:
-                continue
-            now = time.monotonic()
-            for c in RobotControl.FromString(data).robot_commands:
-                lv = c.move_command.local_velocity
-                self.log.append((now, c.id, math.hypot(lv.forward, lv.left) + abs(lv.angular)))
-
-    def moving_since(self, t: float, rid: int = 0) -> bool:
-        return any(ts >= t and i == rid and s > 0.05 for ts, i, s in list(self.log))
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
-        self.sock.close()
 
 
 def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: ignore[type-arg]
@@ -63,7 +27,7 @@ def test_the_estop_survives_a_backend_crash_and_only_a_confirmed_release_drives(
     p = bare.ports
     cam = Camera(p["vision_group"], p["vision"])
     threading.Thread(target=cam.run, daemon=True).start()
-    sim = Simulator(p["sim_blue"])
+    sim = CommandLog(p["sim_blue"])
     try:
         wait_until(lambda: any(r["id"] == 0 for r in bare.get("/api/world")["robots"]), 20,
                    what="blue 0 seen")

@@ -19,6 +19,7 @@ from sslpb.ssl_simulation_robot_control_pb2 import RobotControl
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
 
 from .conftest import StationHandle, arm, wait_until
+from .standins import frame
 
 
 @dataclass
@@ -47,16 +48,8 @@ class Camera:
                     t_cap, x, self.mode = now + 3600.0, -2465.0, "normal"
                 elif self.mode == "scattered":
                     t_cap = now + 3600.0 * (1 + self.frames % 5) * (-1) ** self.frames
-                pkt = SSL_WrapperPacket()
-                d = pkt.detection
-                d.frame_number, d.t_capture, d.t_sent, d.camera_id = self.frames, t_cap, t_cap, 0
-                for rid, rx in ((0, x), (1, 1000.0)):
-                    r = d.robots_blue.add()
-                    r.confidence, r.robot_id, r.x, r.y, r.orientation = 0.9, rid, rx, 0.0, 0.0
-                    r.pixel_x = r.pixel_y = 0.0
-                b = d.balls.add()
-                b.confidence, b.x, b.y, b.pixel_x, b.pixel_y = 0.9, 0.0, 1500.0, 0.0, 0.0
-                sock.sendto(pkt.SerializeToString(), (self.group, self.port))
+                sock.sendto(frame(self.frames, t_cap, blue=[(0, x, 0.0), (1, 1000.0, 0.0)],
+                                  ball=(0.0, 1500.0)), (self.group, self.port))
                 self.frames += 1
                 self.stop.wait(1 / 60)
         finally:

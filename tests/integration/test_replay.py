@@ -196,3 +196,70 @@ def test_make_run_log_opens_the_station_on_a_log() -> None:
         player(st, {"action": "play", "speed": 0})
         wait_until(lambda: not st.get("/api/player")["playing"], 20, what="played to the end")
         assert (st.get("/api/health")["relay"] or {}).get("active_robots", 0) == 0
+
+
+def _commands_at(fixture: Path, t_ns: int, ttl_ns: int) -> list[dict[str, Any]]:
+    """The commands the log sent each robot at ``t_ns``, read straight from the file: the
+    newest of each robot not older than the relay's command timeout (zero after a stop_all)."""
+    from sslpb import touchline_pb2 as tl
+
+    latest: dict[tuple[int, int], tuple[int, Any]] = {}
+    for rec in LogReader(str(fixture)):
+        if rec.time_ns > t_ns:
+            break
+        if rec.type != 1001:
+            continue
+        cs = tl.RobotCommandSet.FromString(rec.payload)
+        if cs.stop_all:
+            latest = {k: (rec.time_ns, tl.RobotCommand(team=k[0], id=k[1])) for k in latest}
+        for c in cs.commands:
+            latest[(c.team, c.id)] = (rec.time_ns, c)
+    out = [{"team": "blue" if team == tl.TEAM_BLUE else "yellow", "id": rid,
+            "forward_mps": c.forward_mps, "left_mps": c.left_mps,
+            "angular_radps": c.angular_radps, "kick_speed_mps": c.kick_speed_mps,
+            "chip": c.chip, "dribbler_rpm": c.dribbler_rpm}
+           for (team, rid), (t, c) in latest.items() if t_ns - t <= ttl_ns]
+    return sorted(out, key=lambda c: (c["team"], c["id"]))
+
+
+def test_a_replay_shows_the_commands_the_log_sent() -> None:
+    """What-if: beside the commands the station computes on a replay, the page gets the ones
+    the live station sent at that moment (type 1001 records): at a seek, exactly the newest
+    the log holds for each robot up to the playhead."""
+    from backend.replay.control import RECORDED_COMMAND_TTL_S
+    from larcmacs_relay.config import RelayConfig
+
+    # the relay's own default: a robot sent nothing newer was being sent zero
+    assert RelayConfig().command_timeout_s == RECORDED_COMMAND_TTL_S
+    fixture = Path(__file__).resolve().parents[1] / "data" / "fieldsim-2s.log.gz"
+    t_first = next(iter(LogReader(str(fixture)))).time_ns
+    times = [r.time_ns for r in LogReader(str(fixture)) if r.type == 1001]
+    ttl = round(RECORDED_COMMAND_TTL_S * 1e9)
+    # a playhead no record is within 1 ms of (either side of it, or of its timeout), so a
+    # float's rounding of the position cannot change which commands count
+    pos_s = next(p / 100 for p in range(200, 240)
+                 if all(abs(t - (t_first + p * 10_000_000)) > 1_000_000
+                        and abs(t - (t_first + p * 10_000_000 - ttl)) > 1_000_000
+                        for t in times))
+    expected = _commands_at(fixture, t_first + round(pos_s * 1e9), ttl)
+    assert len(expected) >= 6 and any(c["forward_mps"] != 0 for c in expected)
+    with launched("--log", str(fixture)) as st:
+        wait_until(lambda: st.get("/api/player")["source"] == "log", 20, what="the log open")
+        player(st, {"action": "seek", "position_s": pos_s})
+
+        ages: list[float] = []
+
+        def at_seek() -> list[dict[str, Any]] | None:
+            w = st.get("/api/world")
+            if not (w["replay"] and abs(w["replay"]["position_s"] - pos_s) < 1e-6
+                    and w["recorded"]):
+                return None
+            got: list[dict[str, Any]] = w["recorded"]["commands"]
+            ages[:] = [c.pop("age_s") for c in got]
+            return got if got == expected else None
+        # (the pre-roll comes a batch at a time: equal once the feed caught up)
+        wait_until(at_seek, 10, what=f"the recorded commands at the seek: {expected}")
+        assert all(0 <= a <= RECORDED_COMMAND_TTL_S for a in ages)
+        # back to live: no recorded anything
+        player(st, {"action": "live"})
+        wait_until(lambda: st.get("/api/world")["recorded"] is None, 10, what="live again")

@@ -44,7 +44,12 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
         station.get("/api/health")), 30, what="healthy station")
     # 4 cameras x 60 Hz; generous bounds for a loaded 2-core machine
     assert 150 < h["streams"]["vision"]["rate_hz"] < 330, h["streams"]["vision"]
-    assert h["streams"]["vision"]["errors"] == 0, h["streams"]["vision"]
+    # nothing malformed; a frame the loaded machine delivered half a second late is dropped as
+    # "time out of range" (backend/world/clock.py: right to drop it; 3 of 27806 were, in one
+    # fresh-clone run at load 6-8), never more than one in a thousand
+    v = h["streams"]["vision"]
+    late = v["errors_by_reason"].get("time out of range", 0)
+    assert v["errors"] == late and late <= v["packets"] / 1000, v
     assert h["relay"]["output_rate_hz"] >= 90
     procs = {p["name"]: p for p in h["processors"]}
     # topic-triggered processors coalesce bursts of frames into one run, so they run at

@@ -18,6 +18,7 @@ from launcher.supervisor import (
     Supervisor,
     command_lines,
 )
+from tests.waiting import wait_until
 
 # a child that notes when it is asked to stop, then exits
 _POLITE = """
@@ -37,20 +38,14 @@ def _polite(name: str, note: Path) -> Child:
     return Child(name, [sys.executable, "-c", _POLITE, str(note), name])
 
 
-def _wait(cond, timeout_s: float = 10.0) -> None:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while not cond():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.05)
-
-
 def test_children_stop_in_mirror_order_and_log_to_their_files(tmp_path: Path) -> None:
     note = tmp_path / "stopped.txt"
     sup = Supervisor([_polite(n, note) for n in ("fieldsim", "relay", "backend")],
                      log_dir=tmp_path / "logs", detach=True)
     sup.start()
     try:
-        _wait(lambda: all("hello" in sup.log_tail(n) for n in ("fieldsim", "relay", "backend")))
+        wait_until(lambda: all("hello" in sup.log_tail(n)
+                               for n in ("fieldsim", "relay", "backend")), 10.0, 0.05)
     finally:
         sup.stop(timeout_s=5.0)
     assert note.read_text().split() == ["backend", "relay", "fieldsim"]
@@ -92,7 +87,8 @@ def test_a_restart_tells_the_child_and_a_start_does_not(tmp_path: Path) -> None:
         while child.restarts == 0 and time.monotonic() < deadline:
             sup.wait_exit(1.0)
             assert sup.watch() is None
-        _wait(lambda: argv_note.exists() and len(argv_note.read_text().splitlines()) >= 2)
+        wait_until(lambda: argv_note.exists() and len(argv_note.read_text().splitlines()) >= 2,
+                   10.0, 0.05)
     finally:
         sup.stop(timeout_s=5.0)
     assert argv_note.read_text().splitlines()[:2] == ["--port=1", "--port=1 --restarted"]
@@ -162,16 +158,17 @@ def test_a_warm_spare_takes_over_with_the_restart_flags(tmp_path: Path) -> None:
     sup = Supervisor([child], restart=True, standby=True, spare_after_s=0.0)
     sup.start()
     try:
-        _wait(lambda: note.exists() and "running" in note.read_text())
-        _wait(lambda: sup.watch() is None and child.spare is not None)
+        wait_until(lambda: note.exists() and "running" in note.read_text(), 10.0, 0.05)
+        wait_until(lambda: sup.watch() is None and child.spare is not None, 10.0, 0.05)
         assert child.spare is not None and child.proc is not None
         spare, first = child.spare.pid, child.proc.pid
         os.kill(first, signal.SIGKILL)
         sup.wait_exit(3600.0)
         assert sup.watch() is None
         assert child.proc.pid == spare and child.restarts == 1  # no new process: the spare
-        _wait(lambda: "running --port=1 --standby --restarted" in note.read_text())
-        _wait(lambda: sup.watch() is None and child.spare is not None)  # and the next spare
+        wait_until(lambda: "running --port=1 --standby --restarted" in note.read_text(), 10.0, 0.05)
+        # and the next spare
+        wait_until(lambda: sup.watch() is None and child.spare is not None, 10.0, 0.05)
     finally:
         sup.stop(timeout_s=5.0)
     lines = note.read_text().splitlines()
@@ -255,7 +252,7 @@ def test_a_killed_launcher_leaves_no_process_behind() -> None:
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(timeout=10)
     try:
-        _wait(lambda: all(_gone(p) for p in pids.values()), timeout_s=20.0)
+        wait_until(lambda: all(_gone(p) for p in pids.values()), 20.0, 0.05)
     finally:  # a failure must not leave them running either
         for p in pids.values():
             if not _gone(p):

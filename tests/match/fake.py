@@ -8,7 +8,8 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from match.director import Director, MatchConfig, TeleportBall
+from match.config import MatchConfig
+from match.director import Director, TeleportBall
 
 HZ = 60.0
 

@@ -7,7 +7,8 @@ import math
 import pytest
 
 from domain.field import division
-from match.director import Director, MatchConfig
+from match.config import MatchConfig
+from match.director import Director
 from match.rules import (
     PLACEMENT_DEFENSE_AREA_OFFSET_MM,
     PLACEMENT_LINE_OFFSET_MM,

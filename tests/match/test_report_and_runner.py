@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 
 from launcher.supervisor import Ports
-from match.director import MatchConfig
+from match.config import MatchConfig
 from match.report import format_result, table, write_outputs
 from match.runner import Options, build
 from match.stats import VIOLATION_KINDS

@@ -15,7 +15,8 @@ import pytest
 import zmq
 
 from launcher.supervisor import free_tcp_port
-from match.director import Director, MatchConfig, TeleportBall
+from match.config import MatchConfig
+from match.director import Director, TeleportBall
 from match.shell import DirectorShell
 from sslnet.multicast import loopback_multicast_ok, open_multicast_receiver, open_udp_server
 from sslpb.ssl_gc_referee_message_pb2 import Referee

@@ -6,7 +6,6 @@ import asyncio
 import contextlib
 import dataclasses
 import math
-import random
 import socket
 import time
 from collections.abc import AsyncIterator, Callable
@@ -19,31 +18,9 @@ from larcmacs_relay import Relay, RelayConfig
 from larcmacs_relay.codecs import Command
 from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
 from sslnet.multicast import open_multicast_sender
+from tests.ports import free_udp_port, random_multicast_port
 
 STARTUP_TIMEOUT_S = 5.0
-
-
-def free_udp_port() -> int:
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    port: int = s.getsockname()[1]
-    s.close()
-    return port
-
-
-def random_multicast_port() -> int:
-    """A random port in 20000-40000 that is free for UDP on this host right now."""
-    for _ in range(50):
-        port = random.randint(20000, 40000)
-        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            s.bind(("0.0.0.0", port))
-        except OSError:
-            continue
-        finally:
-            s.close()
-        return port
-    raise RuntimeError("no free port found")
 
 
 def udp_server() -> socket.socket:
@@ -53,15 +30,6 @@ def udp_server() -> socket.socket:
     enable_kernel_timestamps(s)
     s.setblocking(False)
     return s
-
-
-async def wait_for(cond: Callable[[], bool], timeout: float = 3.0, what: str = "") -> None:
-    """Poll ``cond`` until true; fail after ``timeout`` seconds."""
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what or cond}")
-        await asyncio.sleep(0.005)
 
 
 async def recv_udp(sock: socket.socket, timeout: float = 2.0) -> tuple[bytes, float]:

@@ -19,10 +19,10 @@ from tests.relay.conftest import (
     recv_udp,
     running_relay,
     subscribed,
-    wait_for,
 )
 from tests.relay.test_relay_codecs import make_detection_wrapper
 from tests.relay.test_relay_io import command_set
+from tests.waiting import until
 
 BLUE = touchline_pb2.TEAM_BLUE
 GO = command_set(touchline_pb2.RobotCommand(team=BLUE, id=3, forward_mps=1.0))
@@ -51,7 +51,7 @@ async def handled(h: Harness, pub: zmq.asyncio.Socket, frames: list[bytes]) -> N
     counter = h.relay.streams["commands"]
     seen = counter.packets + counter.errors
     await pub.send_multipart(frames)
-    await wait_for(lambda: counter.packets + counter.errors > seen, what="the set taken")
+    await until(lambda: counter.packets + counter.errors > seen, what="the set taken")
 
 
 def asleep(h: Harness) -> bool:
@@ -101,18 +101,18 @@ async def test_armed_commands_are_sent_and_a_disarm_leaves_only_zeros() -> None:
     async with running_relay(output="robot-box", require_arming=True) as h:
         pub = await connect(h)
         await pub.send_multipart(arming(True, "op"))
-        await wait_for(lambda: h.relay.armed, what="armed")
+        await until(lambda: h.relay.armed, what="armed")
         assert h.relay.stats().armed
         await pub.send_multipart(GO)
         data, _ = await recv_udp(h.out_box)
         assert data[1] == 3 and data[3] != 0
         await pub.send_multipart(arming(False))
-        await wait_for(lambda: not h.relay.armed, what="disarmed")
+        await until(lambda: not h.relay.armed, what="disarmed")
         log = CycleLog(h.relay)  # every cycle from here on, by the relay's clock
         drain_udp(h.out_box)
         for _ in range(5):
             await handled(h, pub, GO)
-        await wait_for(lambda: len(log.cycles) >= 3, what="cycles after the disarm")
+        await until(lambda: len(log.cycles) >= 3, what="cycles after the disarm")
         got = in_box(h)
         assert got and all(d[3] == 0 and d[2] == 0 for d in got)  # stops only
         assert all(c.is_zero for _, sent in log.cycles for c in sent), log.cycles
@@ -134,18 +134,18 @@ async def test_the_estop_disarms_and_arming_is_refused_while_latched() -> None:
     async with running_relay(output="robot-box", require_arming=True) as h:
         pub = await connect(h)
         await pub.send_multipart(arming(True))
-        await wait_for(lambda: h.relay.armed, what="armed")
+        await until(lambda: h.relay.armed, what="armed")
         press = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.PRESS, by="t")
         await pub.send_multipart([b"estop", press.SerializeToString()])
-        await wait_for(lambda: h.relay.estop_latched, what="latched")
+        await until(lambda: h.relay.estop_latched, what="latched")
         assert not h.relay.armed
         await pub.send_multipart(arming(True))
-        await wait_for(lambda: h.relay.streams["commands"].by_reason.get("arming refused", 0)
+        await until(lambda: h.relay.streams["commands"].by_reason.get("arming refused", 0)
                        == 1, what="refused")
         assert not h.relay.armed
         release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
         await pub.send_multipart([b"estop", release.SerializeToString()])
-        await wait_for(lambda: not h.relay.estop_latched, what="released")
+        await until(lambda: not h.relay.estop_latched, what="released")
         assert not h.relay.armed  # a release does not re-arm
         assert await sends_nothing(h, pub) == []
 
@@ -154,7 +154,7 @@ async def test_a_restarted_relay_starts_disarmed() -> None:
     async with running_relay(output="robot-box", require_arming=True) as h:
         pub = await connect(h)
         await pub.send_multipart(arming(True))
-        await wait_for(lambda: h.relay.armed, what="armed")
+        await until(lambda: h.relay.armed, what="armed")
     async with running_relay(output="robot-box", require_arming=True) as h:
         assert not h.relay.armed and not h.relay.stats().armed
         pub = await connect(h)
@@ -183,10 +183,10 @@ async def test_a_teleport_never_reaches_real_robots_armed_or_not() -> None:
         counter = h.relay.streams["sim_commands"]
         for armed in (False, True):
             await pub.send_multipart(arming(armed))
-            await wait_for(lambda a=armed: h.relay.armed == a, what=f"armed={armed}")
+            await until(lambda a=armed: h.relay.armed == a, what=f"armed={armed}")
             before = counter.errors
             await pub.send_multipart([b"sim", cmd.SerializeToString()])
-            await wait_for(lambda b=before: counter.errors > b,
+            await until(lambda b=before: counter.errors > b,
                            what="the teleport dropped and counted")
             # dropped when taken: nothing went out then, and nothing is scheduled
             assert asleep(h) and h.relay.cycles.total == 0 and in_box(h) == []

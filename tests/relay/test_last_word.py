@@ -19,7 +19,7 @@ import zmq.asyncio
 from larcmacs_relay import Relay, RelayConfig
 from sslpb import grsim_packet_pb2, touchline_pb2
 from sslpb import ssl_simulation_robot_control_pb2 as rc_pb
-from tests.relay.conftest import free_udp_port, random_multicast_port
+from tests.ports import free_udp_port, random_multicast_port
 
 ROOT = Path(__file__).resolve().parents[2]
 

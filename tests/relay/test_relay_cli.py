@@ -13,7 +13,7 @@ import pytest
 import zmq
 
 from larcmacs_relay.__main__ import build_parser, config_from_args
-from tests.relay.conftest import free_udp_port, random_multicast_port
+from tests.ports import free_udp_port, random_multicast_port
 
 
 def test_flags_build_config() -> None:

@@ -11,16 +11,16 @@ import zmq
 import zmq.asyncio
 
 from sslpb import ssl_gc_referee_message_pb2, ssl_simulation_robot_control_pb2
+from tests.ports import free_udp_port
 from tests.relay.conftest import (
     Harness,
     drain_udp,
-    free_udp_port,
     recv_udp,
     running_relay,
     subscribed,
-    wait_for,
 )
 from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
+from tests.waiting import until
 
 Ref = ssl_gc_referee_message_pb2.Referee
 
@@ -102,10 +102,10 @@ async def test_compat_mode_like_the_seed_strategy_bridge() -> None:
             counter = h.relay.streams["compat_commands"]
             before = counter.errors
             await bridge.send(b"\x00" * 100)
-            await wait_for(lambda: counter.errors == before + 1, what="size error")
+            await until(lambda: counter.errors == before + 1, what="size error")
             await bridge.send(m.tobytes())
             packets = counter.packets
-            await wait_for(lambda: counter.packets > packets, what="relay still alive")
+            await until(lambda: counter.packets > packets, what="relay still alive")
     finally:
         ctx.destroy(linger=0)
 
@@ -170,7 +170,7 @@ async def test_the_estop_latch_holds_for_the_seed_commands_and_any_path() -> Non
             assert seen9, "robot 9 never got its zero"
             release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
             await pub.send_multipart([b"estop", release.SerializeToString()])
-            await wait_for(lambda: not h.relay.estop_latched, what="released")
+            await until(lambda: not h.relay.estop_latched, what="released")
             deadline = time.monotonic() + 3.0
             while True:  # released: the seed's commands drive again
                 assert time.monotonic() < deadline, "no motion after the release"

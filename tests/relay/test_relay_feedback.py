@@ -10,8 +10,9 @@ import time
 import zmq.asyncio
 
 from sslpb import grsim_robot_status_pb2, ssl_simulation_robot_feedback_pb2, touchline_pb2
-from tests.relay.conftest import recv_udp_from, running_relay, wait_for
+from tests.relay.conftest import recv_udp_from, running_relay
 from tests.relay.test_relay_io import command_set, connect_commands
+from tests.waiting import until
 
 BLUE, YELLOW = touchline_pb2.TEAM_BLUE, touchline_pb2.TEAM_YELLOW
 
@@ -65,7 +66,7 @@ async def test_bad_sim_response_counted_by_reason_not_forwarded() -> None:
         counter = h.relay.streams["sim_responses"]
         h.sim_blue.sendto(b"\x12\x05\x08", addr)  # feedback (2, LEN) of 5 bytes, 1 there
         h.sim_blue.sendto(b"\x12\x02\x10\x01", addr)  # RobotFeedback without its id
-        await wait_for(lambda: counter.errors == 2, what="two bad answers counted")
+        await until(lambda: counter.errors == 2, what="two bad answers counted")
         assert counter.by_reason == {"truncated": 1, "missing required field": 1}
         assert not await sub.poll(200)
 
@@ -96,7 +97,7 @@ async def test_grsim_status_forwarded_bad_counted() -> None:
             bad = b"\x0a\x02\x08\x02"  # Robot_Status with only its robot_id
             grsim.sendto(bad, ("127.0.0.1", ports["blue"]))
             grsim.sendto(b"\x0a\x09", ("127.0.0.1", ports["blue"]))  # cut short
-            await wait_for(lambda: counter.errors == 2, what="bad status counted")
+            await until(lambda: counter.errors == 2, what="bad status counted")
             assert counter.by_reason == {"missing required field": 1, "truncated": 1}
         finally:
             grsim.close()
@@ -161,7 +162,7 @@ async def test_answers_read_by_the_output_cycles_with_the_kernels_arrival_time()
         pub = await connect_commands(h)
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
         _, _, addr = await recv_udp_from(h.sim_blue)
-        await wait_for(lambda: not h.relay._responses_watched, what="the cycles reading")
+        await until(lambda: not h.relay._responses_watched, what="the cycles reading")
         resp = ssl_simulation_robot_feedback_pb2.RobotControlResponse()
         resp.feedback.add(id=4, dribbler_ball_contact=True)
         data = resp.SerializeToString()
@@ -178,7 +179,7 @@ async def test_answers_read_by_the_output_cycles_with_the_kernels_arrival_time()
         assert any(b <= env.receive_time_ns <= a for b, a in spans), (env.receive_time_ns, spans)
         assert env.sent[0].last_sent_time_ns <= env.receive_time_ns
         # the robot's command goes stale, then its zeros end: the output idles, the loop watches
-        await wait_for(lambda: h.relay._responses_watched, timeout=5.0,
+        await until(lambda: h.relay._responses_watched, timeout_s=5.0,
                        what="the loop watching again")
         h.sim_blue.sendto(data, addr)
         env = await next_feedback(sub)

@@ -32,9 +32,9 @@ from tests.relay.conftest import (
     recv_udp_from,
     running_relay,
     subscribed,
-    wait_for,
 )
 from tests.relay.test_relay_codecs import make_detection_wrapper, make_referee
+from tests.waiting import until
 
 BLUE, YELLOW = touchline_pb2.TEAM_BLUE, touchline_pb2.TEAM_YELLOW
 Ref = ssl_gc_referee_message_pb2.Referee
@@ -68,7 +68,7 @@ async def probe(h: Harness, pub: zmq.asyncio.Socket) -> None:
     counter = h.relay.streams["commands"]
     seen = counter.packets
     await pub.send_multipart([b"commands", touchline_pb2.RobotCommandSet().SerializeToString()])
-    await wait_for(lambda: counter.packets > seen, what="the probe handled")
+    await until(lambda: counter.packets > seen, what="the probe handled")
 
 
 def decode_rc(data: bytes) -> ssl_simulation_robot_control_pb2.RobotControl:
@@ -142,7 +142,7 @@ async def test_undecodable_datagrams_forwarded_for_the_backend_to_count() -> Non
             _, body = await asyncio.wait_for(sub.recv_multipart(), 2.0)
             seen.append(touchline_pb2.Envelope.FromString(body).payload)
         assert garbage in seen and all(len(p) <= 1000 for p in seen)
-        await wait_for(lambda: vision.by_reason.get("oversized") == 1, what="oversized counted")
+        await until(lambda: vision.by_reason.get("oversized") == 1, what="oversized counted")
         assert vision.errors == 1
 
 
@@ -189,8 +189,8 @@ async def test_idle_relay_sends_nothing_and_wakes_on_a_command() -> None:
         data, _ = await recv_udp(h.sim_blue)
         assert [r.id for r in decode_rc(data).robot_commands] == [4]
         # command timeout (0.1 s) then zeros for the hold time (0.05 s), then idle: silent
-        await wait_for(lambda: relay.table.count(RobotState.IDLE) == 1, what="robot idle")
-        await wait_for(asleep, what="no output timer once every robot is idle")
+        await until(lambda: relay.table.count(RobotState.IDLE) == 1, what="robot idle")
+        await until(asleep, what="no output timer once every robot is idle")
         drain_udp(h.sim_blue)
         total = cycles.total
         await probe(h, pub)
@@ -207,7 +207,7 @@ async def test_a_command_set_moves_the_output_timer_with_the_schedule() -> None:
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4)))
         await recv_udp(h.sim_blue)
         first = relay._last_cycle
-        await wait_for(lambda: time.monotonic() > first + 0.002, what="2 ms after the cycle")
+        await until(lambda: time.monotonic() > first + 0.002, what="2 ms after the cycle")
         await pub.send_multipart(command_set(touchline_pb2.RobotCommand(team=BLUE, id=4,
                                                                         forward_mps=0.5)))
         while True:  # the new command's datagram (a repeat of the old one may come first)
@@ -286,8 +286,8 @@ async def test_commands_repeated_then_stale_then_silent() -> None:
             mark = len(events)
             await pub.send_multipart(command_set(cmd))
             # its arrival, the cycle it kicks at once and two repeats of it
-            await wait_for(partial(three_cycles_since, mark), what="three cycles after a command")
-        await wait_for(lambda: relay.table.count(RobotState.IDLE) == 1, timeout=5.0,
+            await until(partial(three_cycles_since, mark), what="three cycles after a command")
+        await until(lambda: relay.table.count(RobotState.IDLE) == 1, timeout_s=5.0,
                        what="the robot idle after its stop was held")
         # idle: no cycle is armed, so nothing can be sent any more (without a new command)
         assert relay._timer is None and relay._next_cycle == math.inf
@@ -364,7 +364,7 @@ async def test_stop_all_zeroes_every_robot_and_latency() -> None:
 
         cycles = CycleLog(h.relay)
         await pub.send_multipart(command_set(stop_all=True))
-        await wait_for(lambda: h.relay.stats().stale_robots == 2, what="both zeroed")
+        await until(lambda: h.relay.stats().stale_robots == 2, what="both zeroed")
         t_stop = time.monotonic()
         drain_udp(h.sim_blue)
         drain_udp(h.sim_yellow)
@@ -374,7 +374,7 @@ async def test_stop_all_zeroes_every_robot_and_latency() -> None:
         # still zero 0.2 s later although the old commands would not be stale yet: every
         # cycle the relay ran after the stop, by its own clock, until they would be
         fresh_until = sent_at + 1.0
-        await wait_for(lambda: any(t >= t_stop + 0.2 for t, _ in cycles.cycles),
+        await until(lambda: any(t >= t_stop + 0.2 for t, _ in cycles.cycles),
                        what="the relay's cycles 0.2 s past the stop")
         window = [(t, sent) for t, sent in cycles.after(t_stop) if t < fresh_until]
         assert any(t >= t_stop + 0.2 for t, _ in window), \
@@ -405,7 +405,7 @@ async def test_bad_commands_rejected_and_counted() -> None:
             )
         )
         await pub.send_multipart([b"commands", b"\xff\xff\xff"])
-        await wait_for(lambda: counter.errors >= before + 4, what="four command errors")
+        await until(lambda: counter.errors >= before + 4, what="four command errors")
         assert h.relay.table.known == 0
         # nothing is sent for rejected commands
         with pytest.raises(TimeoutError):
@@ -429,8 +429,8 @@ async def test_messages_of_one_or_three_parts_are_counted_and_those_around_them_
         await pub.send_multipart(cmd(0.25))
         await pub.send_multipart([b"commands", cmd(9.0)[1], cmd(8.0)[1]])
         await pub.send_multipart(cmd(0.375))
-        await wait_for(lambda: counter.packets >= packets + 3, what="three command sets")
-        await wait_for(lambda: counter.by_reason.get("bad frames", 0) >= 2, what="two errors")
+        await until(lambda: counter.packets >= packets + 3, what="three command sets")
+        await until(lambda: counter.by_reason.get("bad frames", 0) >= 2, what="two errors")
         speeds = []
         while not speeds or speeds[-1] != 0.375:
             data, _ = await recv_udp(h.sim_blue)
@@ -459,7 +459,7 @@ async def test_sim_topic_forwarded_and_responses_counted() -> None:
         e.code, e.message = "E1", "robot 0 unknown"
         h.sim_blue.sendto(resp.SerializeToString(), addr)
         counter = h.relay.streams["sim_responses"]
-        await wait_for(lambda: counter.errors == 1, what="sim response error")
+        await until(lambda: counter.errors == 1, what="sim response error")
         assert "E1" in counter.last_error and counter.packets == 1
 
 
@@ -536,7 +536,7 @@ async def test_robot_box_mode_never_drives_a_robot_for_the_other_team() -> None:
         commands = h.relay.streams["commands"]
         await pub.send_multipart(command_set(
             touchline_pb2.RobotCommand(team=YELLOW, id=3, forward_mps=1.0)))
-        await wait_for(lambda: commands.by_reason.get("other team") == 1, what="dropped")
+        await until(lambda: commands.by_reason.get("other team") == 1, what="dropped")
         assert "yellow 3 dropped" in commands.last_error
         # only our robot's datagram ever arrives, and it is robot 4's
         await pub.send_multipart(command_set(
@@ -548,7 +548,7 @@ async def test_robot_box_mode_never_drives_a_robot_for_the_other_team() -> None:
 
 
 async def test_tracker_input_when_enabled() -> None:
-    from tests.relay.conftest import random_multicast_port
+    from tests.ports import random_multicast_port
 
     async with running_relay(tracker_enabled=True, tracker_port=random_multicast_port()) as h:
         sub = h.subscriber(b"tracker")
@@ -560,7 +560,7 @@ async def test_tracker_input_when_enabled() -> None:
         assert env.payload == payload
         h.sender.sendto(b"\x0a\xff", dest)  # truncated length-delimited field
         counter = h.relay.streams["tracker"]
-        await wait_for(lambda: counter.errors == 1, what="tracker error")
+        await until(lambda: counter.errors == 1, what="tracker error")
 
 
 async def test_burst_is_forwarded_completely_in_order() -> None:
@@ -599,7 +599,7 @@ async def test_referee_out_is_multicast_and_comes_back_as_referee_input() -> Non
             # an incomplete Referee is refused, counted, and not sent
             sent = h.relay.streams["referee_out"].packets
             await pub.send_multipart([b"referee-out", b"\x08\x01"])
-            await wait_for(lambda: h.relay.streams["referee_out"].errors == 1,
+            await until(lambda: h.relay.streams["referee_out"].errors == 1,
                            what="referee-out error")
             assert h.relay.streams["referee_out"].packets == sent
         finally:
@@ -625,11 +625,11 @@ async def test_datagram_errors_are_counted_by_reason_and_published() -> None:
         h.send_vision(good[: len(good) // 2])  # cut short: forwarded, the backend counts it
         h.send_vision(b"")  # nothing in it
         h.send_vision(good + b"\x00" * 40000)  # larger than the stream's limit
-        await wait_for(lambda: vision.errors >= 2, what="two errors")
-        await wait_for(lambda: vision.packets >= 1, what="the cut one forwarded")
+        await until(lambda: vision.errors >= 2, what="two errors")
+        await until(lambda: vision.packets >= 1, what="the cut one forwarded")
         assert vision.by_reason == {"no content": 1, "oversized": 1}
         h.send_referee(b"")
-        await wait_for(lambda: h.relay.streams["referee"].errors == 1, what="referee error")
+        await until(lambda: h.relay.streams["referee"].errors == 1, what="referee error")
         assert h.relay.streams["referee"].by_reason == {"no content": 1}
         deadline = time.monotonic() + 5
         while True:
@@ -655,7 +655,7 @@ async def test_the_estop_is_latched_in_the_relay_until_an_explicit_release() -> 
         assert speed(data) > 0
         press = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.PRESS, by="t")
         await pub.send_multipart([b"estop", press.SerializeToString()])
-        await wait_for(lambda: h.relay.estop_latched, what="latched")
+        await until(lambda: h.relay.estop_latched, what="latched")
         assert h.relay.stats().estop_latched and h.relay.stats().estop_by == "t"
         # whatever arrives now, robot 1 gets zeros
         for _ in range(5):
@@ -667,7 +667,7 @@ async def test_the_estop_is_latched_in_the_relay_until_an_explicit_release() -> 
             assert speed(data) == 0
         release = touchline_pb2.EmergencyStop(action=touchline_pb2.EmergencyStop.RELEASE)
         await pub.send_multipart([b"estop", release.SerializeToString()])
-        await wait_for(lambda: not h.relay.estop_latched, what="released")
+        await until(lambda: not h.relay.estop_latched, what="released")
         await pub.send_multipart(go)
 
         async def moving() -> bool:

@@ -15,7 +15,8 @@ from sslnet.multicast import open_multicast_receiver
 from sslpb import touchline_pb2
 from sslpb.ssl_gc_common_pb2 import BLUE
 from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
-from tests.relay.conftest import running_relay, subscribed, wait_for
+from tests.relay.conftest import running_relay, subscribed
+from tests.waiting import until
 
 
 def tracked(frame: int, uuid: str = "0123abcd", robots: int = 2) -> bytes:
@@ -72,7 +73,7 @@ async def test_tracked_vision_is_sent_and_bad_bytes_are_counted_by_reason() -> N
                 await pub.send_multipart([b"tracker-out", body])
             await pub.send_multipart([b"tracker-out", full])
             assert await recv(listener) == full  # the bad ones never went out
-            await wait_for(lambda: counter.errors == len(bad), what="tracker-out errors")
+            await until(lambda: counter.errors == len(bad), what="tracker-out errors")
             assert counter.packets == sent + 1
             expected: dict[str, int] = {}
             for kind in bad.values():
@@ -100,7 +101,7 @@ async def test_loopback_output_has_ttl_zero() -> None:
 async def test_own_frames_heard_back_on_the_tracker_input_are_not_forwarded() -> None:
     """With the tracker input on the same group and port (loopback), the relay hears its own
     tracked vision: it is not taken for another tracker's."""
-    from tests.relay.conftest import random_multicast_port
+    from tests.ports import random_multicast_port
 
     port = random_multicast_port()
     async with running_relay(tracker_enabled=True, tracker_port=port,
@@ -115,7 +116,7 @@ async def test_own_frames_heard_back_on_the_tracker_input_are_not_forwarded() ->
         while counter.packets == 0:
             await pub.send_multipart([b"tracker-out", tracked(1)])
             await asyncio.sleep(0.02)
-        await wait_for(lambda: h.relay.own_tracker_echoes >= counter.packets >= 1,
+        await until(lambda: h.relay.own_tracker_echoes >= counter.packets >= 1,
                        what="every own frame heard back")
         # another tracker's frame after them: the relay forwards in order on its one PUB, so
         # an echo forwarded by mistake comes before this marker (no waiting for quiet)

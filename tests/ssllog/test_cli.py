@@ -96,36 +96,16 @@ def test_errors_are_one_line(tmp_path: Path) -> None:
     assert r.returncode == 0 and r.stdout.count("\n") == 3  # header, ball, robot
 
 
-def test_export_filtered_reruns_the_world_model(tmp_path: Path) -> None:
-    """--filtered: Touchline's world model over a recorded session (tests/data), with the
-    paper's filter: every object after every merged frame, close to the raw detections of a
-    simulated camera, with velocities."""
-    import csv
-    import math
-
-    fixture = Path(__file__).resolve().parents[1] / "data" / "fieldsim-2s.log.gz"
+def test_filtered_says_where_it_moved(tmp_path: Path) -> None:
+    """The world model's re-run is the backend's command now (the log package does not import
+    the backend): the old flag says so in one line instead of an argparse error."""
+    p = tmp_path / "m.log"
+    small_log(p)
     out = tmp_path / "f.csv"
-    r = run("--cache-dir", str(tmp_path / "c"), "export", str(fixture), "--from", "1",
-            "--to", "1.5", "--filtered", "paper", "--csv", str(out))
-    assert r.returncode == 0, r.stderr
-    raw_out = tmp_path / "r.csv"
-    assert run("--cache-dir", str(tmp_path / "c"), "export", str(fixture), "--from", "1",
-               "--to", "1.5", "--csv", str(raw_out)).returncode == 0
-    rows = list(csv.DictReader(out.open()))
-    assert rows and set(rows[0]) == {"t_log_s", "t_capture", "kind", "id", "x_mm", "y_mm",
-                                     "orientation_rad", "vx_mm_s", "vy_mm_s", "omega_rad_s",
-                                     "visible"}
-    assert {r["kind"] for r in rows} == {"ball", "blue", "yellow"}
-    times = [float(r["t_log_s"]) for r in rows]
-    assert times[0] >= 1.0 and times[-1] <= 1.5 and times == sorted(times)
-    raw = {}
-    for x in csv.DictReader(raw_out.open()):
-        if x["kind"] != "ball":
-            raw[(x["kind"], x["id"])] = (float(x["x_mm"]), float(x["y_mm"]))
-    last = {(x["kind"], x["id"]): x for x in rows if x["kind"] != "ball"}
-    assert len(last) == 12
-    for key, x in last.items():
-        assert math.dist((float(x["x_mm"]), float(x["y_mm"])), raw[key]) < 60, key
+    r = run("--cache-dir", str(tmp_path / "c"), "export", str(p), "--filtered", "paper",
+            "--csv", str(out))
+    assert r.returncode == 2 and not out.exists()
+    assert r.stderr.count("\n") == 1 and "python -m backend.relog" in r.stderr
 
 
 def test_index_builds_the_cache_with_progress_lines(tmp_path: Path) -> None:

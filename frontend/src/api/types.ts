@@ -65,6 +65,7 @@ export type {
   ProcessorHealth,
   RawCamera,
   RawRobot,
+  RecordedCommand,
   RecordedWorld,
   Recording,
   RecordingIn,

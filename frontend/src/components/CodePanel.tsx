@@ -129,7 +129,7 @@ function FileDetails({ f, stopped, now }: { f: TeamFile; stopped: readonly Stopp
       {held.length > 0 && <Row label="stopped" value={`robots ${held.join(", ")} (the play failed)`} testId="code-detail-stopped" />}
       {f.kind === "play" && <Row label="moved out" value={`${f.moved_out} targets (safety envelope)`} testId="code-detail-moved-out" />}
       {f.kind !== "library" && (
-        <Row label="ticks" value={`${f.ticks} · ${f.overruns} over budget · ${f.errors} error${f.errors === 1 ? "" : "s"}`} testId="code-detail-ticks" />
+        <Row label="ticks" value={`${f.ticks} · ${f.overruns} over budget${f.late ? ` · ${f.late} late` : ""} · ${f.errors} error${f.errors === 1 ? "" : "s"}`} testId="code-detail-ticks" />
       )}
       {outputs.length > 0 && (
         <>

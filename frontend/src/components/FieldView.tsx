@@ -17,6 +17,8 @@ function LayersPanel() {
   const [open, setOpen] = useState(false);
   const cams = useAppState((s) => s.world?.cameras.map((c) => c.camera_id).join(",") ?? "");
   const recordedSource = useAppState((s) => s.world?.recorded?.source ?? null);
+  const replaying = useAppState((s) => s.world?.replay != null);
+  const logCommands = useAppState((s) => (s.world?.recorded?.commands.length ?? 0) > 0);
   return (
     <div className="layers" data-testid="layers">
       <div className="layers-buttons">
@@ -44,6 +46,18 @@ function LayersPanel() {
           {layers.recorded && recordedSource !== null && (
             <div className="recorded-legend" data-testid="recorded-legend">
               <i aria-hidden="true" /> recorded by {recordedSource || "the log"}
+            </div>
+          )}
+          {layers.commands && replaying && (
+            <div className="commands-legend" data-testid="commands-legend">
+              <span>
+                <i className="now" aria-hidden="true" /> commanded now
+              </span>
+              {logCommands && (
+                <span>
+                  <i className="sent" aria-hidden="true" /> sent then (log)
+                </span>
+              )}
             </div>
           )}
           {layers.raw && cams && (

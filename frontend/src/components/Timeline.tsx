@@ -1,7 +1,7 @@
 // The replay timeline under the field (only while a log is open): play/pause, speed, a seek
 // bar with the log's events, frame steps and event jumps.
 
-import { useRef, useState, useSyncExternalStore, type PointerEvent as ReactPointerEvent } from "react";
+import { useRef, useState, useSyncExternalStore, type PointerEvent as ReactPointerEvent, type ReactNode } from "react";
 import type { Player } from "../api/types";
 import {
   backToLive,
@@ -26,6 +26,21 @@ import {
 } from "../player/timeline";
 import { useAppState, useThrottledWorld } from "../store/hooks";
 import { fmtClock } from "./RefereePanel";
+
+/** A step or jump button of the controls (an icon, its name for screen readers). */
+function StepButton({ label, title, testId, onClick, children }: {
+  label: string;
+  title: string;
+  testId: string;
+  onClick: () => void;
+  children: ReactNode;
+}) {
+  return (
+    <button type="button" className="btn btn-small btn-icon" aria-label={label} title={title} data-testid={testId} onClick={onClick}>
+      {children}
+    </button>
+  );
+}
 
 /** While dragging, a seek goes out at most this often (the last one on release). */
 const DRAG_SEEK_MS = 300;
@@ -115,26 +130,12 @@ function TimelineBody({ player }: { player: Player }) {
   return (
     <div className="timeline" data-testid="timeline" data-playing={player.playing ? "true" : "false"}>
       <div className="tl-controls">
-        <button
-          type="button"
-          className="btn btn-small btn-icon"
-          aria-label="Previous event"
-          title={eventTitle("Previous event", prevEvent)}
-          data-testid="timeline-prev-event"
-          onClick={() => void jump("prev")}
-        >
+        <StepButton label="Previous event" title={eventTitle("Previous event", prevEvent)} testId="timeline-prev-event" onClick={() => void jump("prev")}>
           <EventIcon direction="prev" />
-        </button>
-        <button
-          type="button"
-          className="btn btn-small btn-icon"
-          aria-label="One frame back"
-          title="One camera frame back (←)"
-          data-testid="timeline-step-back"
-          onClick={() => void step(-1)}
-        >
+        </StepButton>
+        <StepButton label="One frame back" title="One camera frame back (←)" testId="timeline-step-back" onClick={() => void step(-1)}>
           ◀︎|
-        </button>
+        </StepButton>
         <button
           type="button"
           className={`btn btn-small tl-play ${player.playing ? "" : "btn-on"}`}
@@ -146,26 +147,12 @@ function TimelineBody({ player }: { player: Player }) {
         >
           {player.playing ? "❚❚" : "▶"}
         </button>
-        <button
-          type="button"
-          className="btn btn-small btn-icon"
-          aria-label="One frame forward"
-          title="One camera frame forward (→)"
-          data-testid="timeline-step-forward"
-          onClick={() => void step(1)}
-        >
+        <StepButton label="One frame forward" title="One camera frame forward (→)" testId="timeline-step-forward" onClick={() => void step(1)}>
           |▶︎
-        </button>
-        <button
-          type="button"
-          className="btn btn-small btn-icon"
-          aria-label="Next event"
-          title={eventTitle("Next event", nextEvent)}
-          data-testid="timeline-next-event"
-          onClick={() => void jump("next")}
-        >
+        </StepButton>
+        <StepButton label="Next event" title={eventTitle("Next event", nextEvent)} testId="timeline-next-event" onClick={() => void jump("next")}>
           <EventIcon direction="next" />
-        </button>
+        </StepButton>
         <select
           className="tl-speed"
           aria-label="Replay speed"

@@ -1,4 +1,4 @@
-import { useState } from "react";
+import { useState, type ReactNode } from "react";
 import { setArmed, setEstop } from "../actions";
 import type { RefereeCommand } from "../api/types";
 import { useAppState, useThrottledWorld, useTicker } from "../store/hooks";
@@ -115,6 +115,40 @@ function ViewOptions() {
   );
 }
 
+interface ConfirmProps {
+  /** the dialog's accessible name */
+  label: string;
+  /** data-testid prefix: ``${testId}-dialog``, ``-cancel``, ``-confirm`` */
+  testId: string;
+  title: string;
+  cancel: string;
+  confirm: string;
+  onCancel: () => void;
+  onConfirm: () => void;
+  children: ReactNode;
+}
+
+/** A question before a step that makes robots move: the safe answer first and focused, the
+ * step itself in red. */
+function ConfirmDialog({ label, testId, title, cancel, confirm, onCancel, onConfirm, children }: ConfirmProps) {
+  return (
+    <div className="overlay" role="dialog" aria-modal="true" aria-label={label} data-testid={`${testId}-dialog`}>
+      <div className="overlay-box">
+        <h2>{title}</h2>
+        <p>{children}</p>
+        <div className="row">
+          <button type="button" className="btn" data-testid={`${testId}-cancel`} autoFocus onClick={onCancel}>
+            {cancel}
+          </button>
+          <button type="button" className="btn btn-danger" data-testid={`${testId}-confirm`} onClick={onConfirm}>
+            {confirm}
+          </button>
+        </div>
+      </div>
+    </div>
+  );
+}
+
 function EstopButton() {
   const estop = useAppState((s) => s.world?.estop ?? false);
   const info = useAppState((s) => s.world?.estop_info ?? null);
@@ -135,32 +169,22 @@ function EstopButton() {
         {estop ? "Release" : "EMERGENCY STOP"}
       </button>
       {confirming && estop && (
-        <div className="overlay" role="dialog" aria-modal="true" aria-label="Release the emergency stop" data-testid="estop-release-dialog">
-          <div className="overlay-box">
-            <h2>Release the emergency stop?</h2>
-            <p>
-              The robots may start moving at once, under the strategy and any operator targets.
-              {since ? ` Pressed at ${since}` : ""}
-              {info?.by ? ` by ${info.by}.` : since ? "." : ""}
-            </p>
-            <div className="row">
-              <button type="button" className="btn" data-testid="estop-release-cancel" autoFocus onClick={() => setConfirming(false)}>
-                Keep stopped
-              </button>
-              <button
-                type="button"
-                className="btn btn-danger"
-                data-testid="estop-release-confirm"
-                onClick={() => {
-                  setConfirming(false);
-                  void setEstop(false);
-                }}
-              >
-                Release
-              </button>
-            </div>
-          </div>
-        </div>
+        <ConfirmDialog
+          label="Release the emergency stop"
+          testId="estop-release"
+          title="Release the emergency stop?"
+          cancel="Keep stopped"
+          confirm="Release"
+          onCancel={() => setConfirming(false)}
+          onConfirm={() => {
+            setConfirming(false);
+            void setEstop(false);
+          }}
+        >
+          The robots may start moving at once, under the strategy and any operator targets.
+          {since ? ` Pressed at ${since}` : ""}
+          {info?.by ? ` by ${info.by}.` : since ? "." : ""}
+        </ConfirmDialog>
       )}
     </>
   );
@@ -197,28 +221,20 @@ function ArmControl() {
         </button>
       </div>
       {confirming && !armed && (
-        <div className="overlay" role="dialog" aria-modal="true" aria-label="Arm the robots" data-testid="arm-dialog">
-          <div className="overlay-box">
-            <h2>Robots will move: arm {who}?</h2>
-            <p>Commands from the strategy and any operator targets reach the real robots at once. The emergency stop disarms.</p>
-            <div className="row">
-              <button type="button" className="btn" data-testid="arm-cancel" autoFocus onClick={() => setConfirming(false)}>
-                Stay disarmed
-              </button>
-              <button
-                type="button"
-                className="btn btn-danger"
-                data-testid="arm-confirm"
-                onClick={() => {
-                  setConfirming(false);
-                  void setArmed(true);
-                }}
-              >
-                Arm {who}
-              </button>
-            </div>
-          </div>
-        </div>
+        <ConfirmDialog
+          label="Arm the robots"
+          testId="arm"
+          title={`Robots will move: arm ${who}?`}
+          cancel="Stay disarmed"
+          confirm={`Arm ${who}`}
+          onCancel={() => setConfirming(false)}
+          onConfirm={() => {
+            setConfirming(false);
+            void setArmed(true);
+          }}
+        >
+          Commands from the strategy and any operator targets reach the real robots at once. The emergency stop disarms.
+        </ConfirmDialog>
       )}
     </>
   );

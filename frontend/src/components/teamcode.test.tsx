@@ -189,7 +189,7 @@ describe("the Code tab", () => {
   };
   const files: TeamFile[] = [
     teamFile("pass_drill.py", { kind: "play", play: "pass_drill", title: "Pass drill", state: "error", error: err, robots: [], reloads: 2 }),
-    teamFile("keeper_wall.m", { kind: "play", play: "keeper_wall", title: "Keeper and wall", state: "running", robots: [0, 1], tick_ms_p50: 4.2, tick_ms_p99: 9.87 }),
+    teamFile("keeper_wall.m", { kind: "play", play: "keeper_wall", title: "Keeper and wall", state: "running", robots: [0, 1], tick_ms_p50: 4.2, tick_ms_p99: 9.87, ticks: 500, overruns: 1, late: 3 }),
     teamFile("possession.py", { kind: "processor", title: "Ball possession", state: "running", outputs: { ours: 0.7 } }),
     teamFile("lib/geometry.py"),
   ];
@@ -249,6 +249,11 @@ describe("the Code tab", () => {
     await settle();
     expect(q("code-detail-tick")?.textContent).toBe("p50 4.20 ms · p99 9.87 ms");
     expect(q("code-detail-robots")?.textContent).toBe("0, 1");
+    // answers over the CPU budget apart from late ones (a busy machine)
+    expect(q("code-detail-ticks")?.textContent).toBe("500 · 1 over budget · 3 late · 0 errors");
+    act(() => (q("code-file-possession.py") as HTMLButtonElement).click());
+    await settle();
+    expect(q("code-detail-ticks")?.textContent).toBe("0 · 0 over budget · 0 errors");
   });
 
   it("saves the open file on Ctrl+S anywhere on the tab (PUT with the version it was opened at)", async () => {

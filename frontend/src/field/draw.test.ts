@@ -10,6 +10,7 @@ import {
   chipLanding,
   commandVelocity,
   drawRecorded,
+  drawRecordedCommands,
   stoppedBanners,
   flyingLabel,
   KICK_CROSS_PX,
@@ -119,7 +120,7 @@ describe("drawField: strategy layers", () => {
   it("renders a world without any strategy field (older backend)", () => {
     const { ctx } = fakeCtx();
     const counts = drawField(ctx, { ...input([]), world: world(1) });
-    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0 });
+    expect(counts).toEqual({ robots: 2, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0, recordedCommands: 0 });
   });
 
   it("marks an armed kicker (rose bar, violet for a chip) and the dribbler (cyan dot)", () => {
@@ -219,6 +220,7 @@ describe("drawRecorded: the estimate recorded in a replayed log", () => {
       { team: "blue", id: 0, x: -1000, y: 30, orientation: 0 },
       { team: "yellow", id: 0, x: 1040, y: 0, orientation: Math.PI },
     ],
+    commands: [],
   };
   const ringsAt = (calls: ReturnType<typeof fakeCtx>["calls"], p: { x: number; y: number }) =>
     calls.filter((c) => c.name === "arc" && c.dash === RECORDED_DASH.length && c.args[0] === p.x && c.args[1] === p.y);
@@ -244,7 +246,7 @@ describe("drawRecorded: the estimate recorded in a replayed log", () => {
 
   it("skips objects without a finite position and draws nothing for an empty estimate", () => {
     const { ctx, calls } = fakeCtx();
-    const n = drawRecorded(ctx, t, { source: "x", ball: null, robots: [{ team: "blue", id: 1, x: NaN, y: 0, orientation: 0 }] });
+    const n = drawRecorded(ctx, t, { source: "x", ball: null, robots: [{ team: "blue", id: 1, x: NaN, y: 0, orientation: 0 }], commands: [] });
     expect(n).toBe(0);
     expect(calls.filter((c) => c.name === "arc")).toHaveLength(0);
   });
@@ -413,5 +415,38 @@ describe("drawField: the commands in replay (what-if)", () => {
     expect(drawField(live.ctx, { ...input(robots), world: world(1, { robots, strategy }) }).commands).toBe(0);
     const off = fakeCtx();
     expect(drawField(off.ctx, { ...input(robots, { ...ALL_LAYERS, commands: false }), world: replay }).commands).toBe(0);
+  });
+
+  const sent = (id: number, forward_mps: number, left_mps: number) => ({
+    team: "blue" as const, id, forward_mps, left_mps, angular_radps: 0, kick_speed_mps: 0, chip: false, dribbler_rpm: 0, age_s: 0.01,
+  });
+
+  it("draws the log's own commands as dashed neutral arrows from the robots, turned by their heading", () => {
+    // robot 0 heads +y: the log told it 1 m/s forward (an arrow up), control now says +x
+    const robots = [robot("blue", 0, 0, 0, { orientation: Math.PI / 2, command: cmd(1, 0) }), robot("blue", 1, 500, 0)];
+    const { ctx, calls } = fakeCtx();
+    expect(drawRecordedCommands(ctx, t, robots, [sent(0, 1, 0), sent(1, 0, 0), sent(7, 1, 0)])).toBe(1);
+    const from = worldToCanvas(t, 0, 0);
+    const to = worldToCanvas(t, 0, 500); // 0.5 s of travel along the robot's heading
+    const lines = calls.filter((c) => c.name === "lineTo");
+    expect(lines.some((c) => Math.abs(Number(c.args[0]) - to.x) < 1e-6 && Math.abs(Number(c.args[1]) - to.y) < 1e-6)).toBe(true);
+    expect(calls.some((c) => c.name === "moveTo" && c.args[0] === from.x && c.args[1] === from.y)).toBe(true);
+    const stroke = calls.find((c) => c.name === "stroke")!;
+    expect(stroke.style).toBe(COLORS.recorded);
+    expect(stroke.dash).toBe(RECORDED_DASH.length);
+  });
+
+  it("is drawn beside control's arrows in replay with the commands layer, not without it", () => {
+    const robots = [robot("blue", 0, 0, 0, { command: cmd(1.5, 0) }), robot("blue", 1, 500, 0, { command: cmd(0, 0) })];
+    const recorded = { source: "", ball: null, robots: [], commands: [sent(0, -1, 0), sent(1, 0, 0.8)] };
+    const replay = world(1, { robots, strategy, replay: replayClock(), recorded });
+    const on = fakeCtx();
+    const counts = drawField(on.ctx, { ...input(robots), world: replay });
+    expect(counts.commands).toBe(1);
+    expect(counts.recordedCommands).toBe(2);
+    expect(on.calls.some((c) => c.name === "stroke" && c.style === COLORS.command)).toBe(true);
+    expect(on.calls.some((c) => c.name === "stroke" && c.style === COLORS.recorded && c.dash === RECORDED_DASH.length)).toBe(true);
+    const off = fakeCtx();
+    expect(drawField(off.ctx, { ...input(robots, { ...ALL_LAYERS, commands: false }), world: replay }).recordedCommands).toBe(0);
   });
 });

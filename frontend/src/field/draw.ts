@@ -1,10 +1,11 @@
 // Canvas rendering of the field, robots, targets and ball. Called from the animation
 // frame loop with the latest store state; no React involved.
 
-import type { Geometry, RecordedWorld, Robot, RobotKey, Team, World } from "../api/types";
+import type { Geometry, RecordedCommand, RecordedWorld, Robot, RobotKey, Team, World } from "../api/types";
 import { sameRobot } from "../api/types";
 import { placementTarget } from "../referee";
 import { roleColor, roleTag } from "../strategy/roles";
+import { BALL_RADIUS_MM } from "../api/contract.gen";
 import { ROBOT_RADIUS_MM } from "./hitTest";
 import { pathPoints, tracePath } from "./paths";
 import { angleToCanvas, worldToCanvas, type FieldTransform } from "./transform";
@@ -136,10 +137,12 @@ export interface DrawCounts {
   stopped: string[];
   /** Command arrows drawn (replay only). */
   commands: number;
+  /** Arrows of the commands the replayed log sent (world.recorded.commands), beside those. */
+  recordedCommands: number;
 }
 
 export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): DrawCounts {
-  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0 };
+  const counts: DrawCounts = { robots: 0, raw: 0, paths: 0, roles: 0, designated: null, recorded: 0, kickStop: null, otherBalls: 0, stopped: [], commands: 0, recordedCommands: 0 };
   const { t, geometry: g, world } = input;
   ctx.save();
   ctx.fillStyle = COLORS.background;
@@ -183,7 +186,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       counts.robots++;
     }
     // The recorded estimate over today's: a ring just outside each robot, so both stay visible.
-    if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : 21.5);
+    if (L.recorded && world.recorded) counts.recorded = drawRecorded(ctx, t, world.recorded, g.ball_radius > 0 ? g.ball_radius : BALL_RADIUS_MM);
     if (L.roles && L.filtered) counts.roles = drawRoleTags(ctx, t, robots, world.strategy?.our_team ?? null, input.largeText === true);
     // Always (not a layer): robots standing still because their play failed must not look idle.
     if (L.filtered && world.strategy?.stopped?.length) counts.stopped = drawStopped(ctx, t, robots, world.strategy);
@@ -194,7 +197,7 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       counts.kickStop = { x: kick.stop_x, y: kick.stop_y };
     }
     if (L.filtered) {
-      const br = g.ball_radius > 0 ? g.ball_radius : 21.5;
+      const br = g.ball_radius > 0 ? g.ball_radius : BALL_RADIUS_MM;
       for (const o of world.other_balls ?? []) {
         drawOtherBall(ctx, t, o, br);
         counts.otherBalls++;
@@ -202,7 +205,11 @@ export function drawField(ctx: CanvasRenderingContext2D, input: DrawInput): Draw
       if (world.ball) drawBall(ctx, t, world.ball, br);
     }
     // What-if: what control would command now, beside what the robots did (the log).
-    if (L.commands && world.replay) counts.commands = drawCommands(ctx, t, robots);
+    if (L.commands && world.replay) {
+      // what the log's station sent then (dashed, neutral) under what control commands now
+      if (world.recorded?.commands.length) counts.recordedCommands = drawRecordedCommands(ctx, t, robots, world.recorded.commands);
+      counts.commands = drawCommands(ctx, t, robots);
+    }
     if (L.velocity) {
       for (const r of robots) if (r.visible) drawVelocity(ctx, t, r.x, r.y, r.vx, r.vy, teamColor(r.team));
       if (world.ball?.visible) drawVelocity(ctx, t, world.ball.x, world.ball.y, world.ball.vx, world.ball.vy, COLORS.ball);
@@ -619,7 +626,7 @@ function drawRaw(ctx: CanvasRenderingContext2D, t: FieldTransform, world: World)
  * over today's filter output so a difference between the two shows as an offset ring.
  * Returns the number of objects drawn.
  */
-export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, rec: RecordedWorld, ballRadiusMm = 21.5): number {
+export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, rec: RecordedWorld, ballRadiusMm = BALL_RADIUS_MM): number {
   let n = 0;
   ctx.save();
   ctx.strokeStyle = COLORS.recorded;
@@ -662,15 +669,15 @@ export function drawRecorded(ctx: CanvasRenderingContext2D, t: FieldTransform, r
 }
 
 /** Arrow of 0.5 s of travel at the current velocity (mm/s). */
-function drawVelocity(ctx: CanvasRenderingContext2D, t: FieldTransform, x: number, y: number, vx: number, vy: number, color: string) {
+function drawVelocity(ctx: CanvasRenderingContext2D, t: FieldTransform, x: number, y: number, vx: number, vy: number, color: string, dash: number[] = []) {
   if (!Number.isFinite(vx) || !Number.isFinite(vy) || Math.hypot(vx, vy) < 20) return;
   const a = worldToCanvas(t, x, y);
   const b = worldToCanvas(t, x + vx * 0.5, y + vy * 0.5);
-  arrow(ctx, a, b, color, 2);
+  arrow(ctx, a, b, color, 2, dash);
 }
 
 /** The commanded velocity in the field's frame (mm/s): the robot-frame command turned by the heading. */
-export function commandVelocity(r: Pick<Robot, "orientation" | "command">): { vx: number; vy: number } | null {
+export function commandVelocity(r: { orientation: number; command: Pick<NonNullable<Robot["command"]>, "forward_mps" | "left_mps"> | null }): { vx: number; vy: number } | null {
   const c = r.command;
   if (!c || !Number.isFinite(c.forward_mps) || !Number.isFinite(c.left_mps) || !Number.isFinite(r.orientation)) return null;
   const cos = Math.cos(r.orientation);
@@ -690,17 +697,37 @@ function drawCommands(ctx: CanvasRenderingContext2D, t: FieldTransform, robots: 
   return n;
 }
 
-function arrow(ctx: CanvasRenderingContext2D, a: { x: number; y: number }, b: { x: number; y: number }, color: string, width: number) {
+/**
+ * The commands the replayed log sent (what the robots were told then), each as a dashed neutral
+ * arrow of 0.5 s of travel from the robot as estimated now, turned by its heading like
+ * drawCommands' arrows, so the two arrows of a robot compare directly. Returns the number drawn.
+ */
+export function drawRecordedCommands(ctx: CanvasRenderingContext2D, t: FieldTransform, robots: readonly Robot[], commands: readonly RecordedCommand[]): number {
+  let n = 0;
+  for (const c of commands) {
+    const r = robots.find((x) => x.team === c.team && x.id === c.id);
+    if (!r || !Number.isFinite(r.x) || !Number.isFinite(r.y)) continue;
+    const v = commandVelocity({ orientation: r.orientation, command: c });
+    if (!v || Math.hypot(v.vx, v.vy) < 20) continue;
+    drawVelocity(ctx, t, r.x, r.y, v.vx, v.vy, COLORS.recorded, RECORDED_DASH);
+    n++;
+  }
+  return n;
+}
+
+function arrow(ctx: CanvasRenderingContext2D, a: { x: number; y: number }, b: { x: number; y: number }, color: string, width: number, dash: number[] = []) {
   const ang = Math.atan2(b.y - a.y, b.x - a.x);
   const head = 8;
   ctx.save();
   ctx.strokeStyle = color;
   ctx.fillStyle = color;
   ctx.lineWidth = width;
+  ctx.setLineDash(dash);
   ctx.beginPath();
   ctx.moveTo(a.x, a.y);
   ctx.lineTo(b.x, b.y);
   ctx.stroke();
+  ctx.setLineDash([]);
   ctx.beginPath();
   ctx.moveTo(b.x, b.y);
   ctx.lineTo(b.x - head * Math.cos(ang - 0.4), b.y - head * Math.sin(ang - 0.4));

@@ -1,9 +1,10 @@
 // Which robot is under a point given in world mm. Pure.
 
+import { ROBOT_RADIUS_MM } from "../api/contract.gen";
 import type { Robot } from "../api/types";
 import type { Point } from "./transform";
 
-export const ROBOT_RADIUS_MM = 90;
+export { ROBOT_RADIUS_MM };
 
 /**
  * The robot whose centre is nearest to `p` among those within `radiusMm` (the robot

@@ -26,6 +26,8 @@ export const fieldStats = {
   stoppedDrawn: [] as string[],
   /** Command arrows the last frame drew (replay's what-if). */
   commandsDrawn: 0,
+  /** Arrows of the replayed log's own commands the last frame drew (what the robots were told then). */
+  recordedCommandsDrawn: 0,
 };
 
 /** Pixels a press may move and still count as a click. */
@@ -135,6 +137,7 @@ export function useFieldDrawing(wrapRef: RefObject<HTMLDivElement | null>, canva
       fieldStats.kickStopDrawn = counts.kickStop;
       fieldStats.stoppedDrawn = counts.stopped;
       fieldStats.commandsDrawn = counts.commands;
+      fieldStats.recordedCommandsDrawn = counts.recordedCommands;
     };
     raf = requestAnimationFrame(frame);
     return () => {

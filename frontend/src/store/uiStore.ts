@@ -37,7 +37,7 @@ export const LAYER_LABELS: { key: keyof Layers; label: string; help: string }[] 
   {
     key: "commands",
     label: "Commands (replay)",
-    help: "in replay: the velocity control would command now for each robot (an arrow of 0.5 s of travel; nothing is sent), beside what the robots did",
+    help: "in replay: the velocity control would command now for each robot (an arrow of 0.5 s of travel; nothing is sent), beside the command the log sent it then (dashed)",
   },
   {
     key: "recorded",

@@ -302,6 +302,7 @@ export function teamFile(name: string, extra: Partial<TeamFile> = {}): TeamFile 
     ticks: 0,
     errors: 0,
     overruns: 0,
+    late: 0,
     moved_out: 0,
     tick_ms_p50: null,
     tick_ms_p99: null,

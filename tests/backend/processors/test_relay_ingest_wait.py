@@ -4,7 +4,9 @@ wake-up): every message published wakes it, also one that came while it was drai
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import time
+from collections.abc import Iterator
 
 import zmq
 import zmq.asyncio
@@ -176,29 +178,40 @@ async def test_a_message_that_arrives_during_the_pass_is_taken_right_after_it() 
     assert chain.seqs == list(range(1000, 1031))
 
 
-def test_each_message_is_read_whole_and_a_message_not_of_two_parts_is_counted() -> None:
-    """The parts of a message are read one by one (each part says whether more follow): a
-    message of one or three parts is counted and dropped, the messages around it are put on
-    the bus whole and in order."""
+@contextlib.contextmanager
+def inproc_ingest() -> Iterator[tuple[zmq.Socket[bytes], zmq.Socket[bytes], RelayIngest, DataBus]]:
+    """A RelayIngest on its own bus reading a SUB socket that a PUB reaches over inproc, the
+    subscription joined and the probes it took drained: (pub, sub, ingest, bus)."""
     ctx = zmq.Context()
     pub, sub = ctx.socket(zmq.PUB), ctx.socket(zmq.SUB)
     try:
         for s in (pub, sub):
             s.setsockopt(zmq.LINGER, 0)
-        pub.bind("inproc://relay-ingest-parts")
-        sub.connect("inproc://relay-ingest-parts")
+        pub.bind("inproc://relay-ingest")
+        sub.connect("inproc://relay-ingest")
         sub.setsockopt(zmq.SUBSCRIBE, b"")
         bus = DataBus({})
         ingest = RelayIngest(bus)
         ingest.attach(sub)  # type: ignore[arg-type]
-        packets = bus.of(topics.VISION_PACKETS)
         for _ in range(200):  # the subscription joins (inproc: at once, bounded all the same)
             pub.send_multipart([b"vision", envelope(0)])
             if sub.poll(10):
                 break
-        sub.recv_multipart()
         while sub.poll(0):  # what the join left
             sub.recv_multipart()
+        yield pub, sub, ingest, bus
+    finally:
+        pub.close()
+        sub.close()
+        ctx.term()
+
+
+def test_each_message_is_read_whole_and_a_message_not_of_two_parts_is_counted() -> None:
+    """The parts of a message are read one by one (each part says whether more follow): a
+    message of one or three parts is counted and dropped, the messages around it are put on
+    the bus whole and in order."""
+    with inproc_ingest() as (pub, sub, ingest, bus):
+        packets = bus.of(topics.VISION_PACKETS)
         pub.send_multipart([b"vision", envelope(1)])
         pub.send_multipart([b"vision"])
         pub.send_multipart([b"vision", envelope(2), b"extra"])
@@ -209,7 +222,40 @@ def test_each_message_is_read_whole_and_a_message_not_of_two_parts_is_counted() 
         assert got == [1, 3]
         assert ingest._zmq.by_reason == {"bad frames": 2}
         assert ingest._zmq.packets == 4
-    finally:
-        pub.close()
-        sub.close()
-        ctx.term()
+
+
+def test_an_undecodable_message_is_counted_by_its_reason_and_the_next_goes_through() -> None:
+    """Stats, feedback and an envelope cut short: each counted as truncated with what it was,
+    nothing of them on the bus; the good messages after them are."""
+    with inproc_ingest() as (pub, sub, ingest, bus):
+        stats = tl.RelayStats(time_ns=7, output_mode="sim").SerializeToString()
+        feedback = tl.RobotFeedbackEnvelope(receive_time_ns=5).SerializeToString()
+        for topic, body in ((b"stats", stats), (b"feedback", feedback),
+                            (b"vision", envelope(1))):
+            pub.send_multipart([topic, body[:-1]])  # the last byte missing
+            assert sub.poll(1000)
+            ingest.step()
+            assert ingest._zmq.last_error is not None
+            assert ingest._zmq.last_error.startswith(
+                {b"stats": "truncated: stats: ", b"feedback": "truncated: feedback: ",
+                 b"vision": "truncated: envelope: "}[topic]), ingest._zmq.last_error
+        assert ingest._zmq.by_reason == {"truncated": 3}
+        assert not Reader(bus.of(topics.RELAY_STATS), from_start=True).read_new()
+        assert not Reader(bus.of(topics.FEEDBACK_PACKETS), from_start=True).read_new()
+        assert not Reader(bus.of(topics.VISION_PACKETS), from_start=True).read_new()
+        for topic, body in ((b"stats", stats), (b"feedback", feedback),
+                            (b"vision", envelope(2))):
+            pub.send_multipart([topic, body])
+        assert sub.poll(1000)
+        for _ in range(100):  # bounded: the three are in the socket within moments (inproc)
+            ingest.step()
+            if ingest._zmq.packets == 6:
+                break
+            sub.poll(10)
+        assert ingest._zmq.by_reason == {"truncated": 3}
+        assert [s["time_ns"] for s in
+                Reader(bus.of(topics.RELAY_STATS), from_start=True).read_new()] == [7]
+        assert [f.receive_time_ns for f in
+                Reader(bus.of(topics.FEEDBACK_PACKETS), from_start=True).read_new()] == [5]
+        assert [e.sequence for e in
+                Reader(bus.of(topics.VISION_PACKETS), from_start=True).read_new()] == [2]

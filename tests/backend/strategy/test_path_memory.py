@@ -1,16 +1,16 @@
-"""Navigation reuses a robot's path search while it still holds (navigate.PathMemory): the
+"""Navigation reuses a robot's path search while it still holds (paths/memory.py's PathMemory): the
 same path while nothing moved, a clear detour re-checked instead of searched, a new search
 once something changed or the plan got old."""
 
 from __future__ import annotations
 
 from backend.strategy.model import Bot, Frame, Intent
-from backend.strategy.navigate import (
+from backend.strategy.navigate import navigate
+from backend.strategy.paths.memory import (
     DETOUR_MAX_AGE_S,
     REUSE_MAX_AGE_S,
     REUSE_MM,
     PathMemory,
-    navigate,
 )
 from domain.field import DIVISION_B
 

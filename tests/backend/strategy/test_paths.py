@@ -13,19 +13,22 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from backend.geometry import in_defense_area
-from backend.strategy import paths
 from backend.strategy.paths import (
     MOVE_PAD_MM,
     NODE_PAD_MM,
     Obstacles,
     PlannedPath,
+    collision,
     defense_area_rects,
+    enclosure,
+    escape,
     field_bounds,
     first_blocking,
     nearest_free_point,
     plan_path,
     point_is_free,
     recheck_path,
+    search,
     segment_is_free,
     straight_clear_of_circles,
     straight_clear_of_rest,
@@ -523,18 +526,18 @@ def test_goal_in_a_pocket_is_blocked_without_searching_the_field(
     bounds = (-6150.0, -4650.0, 6150.0, 4650.0)
     start, goal = (-3959.6, 12.1), (-3980.0, -13.7)
     calls: list[float] = []
-    real = paths._astar
+    real = search._astar
 
     def spy(inf, s, g, graph, limit, prune, budget=None):  # type: ignore[no-untyped-def]
         if budget is None:
             calls.append(limit)
         return real(inf, s, g, graph, limit, prune, budget)
 
-    monkeypatch.setattr(paths, "_astar", spy)
+    monkeypatch.setattr(search, "_astar", spy)
     res = plan_path(start, goal, obs, 90.0, bounds=bounds)
     assert res.blocked and res.goal_moved and res.start_escape
     assert calls and all(math.isfinite(limit) for limit in calls)
-    monkeypatch.setattr(paths, "POCKET_BUDGET", -1)  # the back search off: same answer
+    monkeypatch.setattr(enclosure, "POCKET_BUDGET", -1)  # the back search off: same answer
     calls.clear()
     assert plan_path(start, goal, obs, 90.0, bounds=bounds) == res
     assert any(math.isinf(limit) for limit in calls)
@@ -547,7 +550,7 @@ def test_the_pocket_shortcut_changes_no_answer(scene: tuple[Obstacles, float],
                                                goal: tuple[float, float]) -> None:
     obs, clearance = scene
     fast = plan_path(start, goal, obs, clearance)
-    with patch.object(paths, "POCKET_BUDGET", -1):
+    with patch.object(enclosure, "POCKET_BUDGET", -1):
         slow = plan_path(start, goal, obs, clearance)
     assert fast == slow
 
@@ -629,7 +632,7 @@ def test_leaving_out_far_boundaries_changes_no_nearest_free_point(
     obs, clearance = scene
     p = data.draw(inside_points(obs, clearance))
     fast = nearest_free_point(p, obs, clearance)
-    with patch.object(paths, "_near_p", _keep_all):
+    with patch.object(escape, "_near_p", _keep_all):
         slow = nearest_free_point(p, obs, clearance)
     assert fast == slow
 
@@ -639,36 +642,36 @@ def test_near_p_keeps_what_comes_within_the_distance_in_order() -> None:
     rp = np.array([100.0, 100.0, 100.0, 100.0])
     xs = np.array([-50.0, 400.0, 30.0])
     ys = np.array([900.0, -20.0])
-    c, r, x, y = paths._near_p(np.array([0.0, 0.0]), 150.0, cxy, rp, xs, ys)
+    c, r, x, y = escape._near_p(np.array([0.0, 0.0]), 150.0, cxy, rp, xs, ys)
     # circle 0: p at its centre, boundary 100 away; circle 2: boundary 200 away; the others
     # farther; lines 50 and 30 away in x, 20 in y
     assert c.tolist() == [[0.0, 0.0]] and r.tolist() == [100.0]
     assert x.tolist() == [-50.0, 30.0] and y.tolist() == [-20.0]
-    c, r, x, y = paths._near_p(np.array([0.0, 0.0]), 250.0, cxy, rp, xs, ys)
+    c, r, x, y = escape._near_p(np.array([0.0, 0.0]), 250.0, cxy, rp, xs, ys)
     assert c.tolist() == [[0.0, 0.0], [0.0, 300.0]]
-    every = paths._near_p(np.array([0.0, 0.0]), math.inf, cxy, rp, xs, ys)
+    every = escape._near_p(np.array([0.0, 0.0]), math.inf, cxy, rp, xs, ys)
     assert all(a is b for a, b in zip(every, (cxy, rp, xs, ys), strict=True))
 
 
 def test_pairs_are_triu_indices_and_read_only() -> None:
     for k in (2, 5, 23):
-        i, j = paths._pairs(k)
+        i, j = escape._pairs(k)
         ri, rj = np.triu_indices(k, 1)
         assert i.tolist() == ri.tolist() and j.tolist() == rj.tolist()
         with pytest.raises(ValueError):
             i[0] = 1
 
 
-@given(scenes(), st.lists(pt, min_size=1, max_size=paths.SMALL_T), st.floats(0.0, 150.0))
+@given(scenes(), st.lists(pt, min_size=1, max_size=collision.SMALL_T), st.floats(0.0, 150.0))
 @settings(max_examples=300, deadline=None)
 def test_points_free_in_plain_floats_is_the_numpy_test(scene: tuple[Obstacles, float],
                                                        pts: list[tuple[float, float]],
                                                        clearance: float) -> None:
     obs, _ = scene
-    inf = paths._Inflated(obs, clearance, None)
+    inf = collision._Inflated(obs, clearance, None)
     few = np.array(pts, dtype=np.float64)
     # past SMALL_T points the numpy test runs: the same points, padded with copies
-    many = np.vstack([few] * (paths.SMALL_T + 1))
+    many = np.vstack([few] * (collision.SMALL_T + 1))
     assert inf.points_free(few).tolist() == inf.points_free(many)[:len(pts)].tolist()
     assert inf.points_free(few).dtype == np.bool_
 

@@ -171,6 +171,44 @@ async def test_an_exception_has_its_traceback(tmp_path: Path) -> None:
         await r.close()
 
 
+async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) -> None:
+    """A save with a typo that only a call finds (game.mien): the reload imports fine, the
+    first call fails. The failure must stand: counted once, not cleared by the load's answer
+    and counted again on the next tick (errors: 2 for one typo before, when a tick sent
+    during the reload was answered in the same read as the load). No call goes to a worker
+    that is importing (it could not answer: the call would be billed for the import); the
+    first one after the load is the one that fails."""
+    good = ("import os, time\nfrom touchline import Target\n"
+            "GATE = {gate!r}\n"
+            "deadline = time.monotonic() + 20.0\n"
+            "while not os.path.exists(GATE) and time.monotonic() < deadline:\n"
+            "    time.sleep(0.001)  # a slow import (numpy, a model...), until the test opens\n"
+            "def play(game):\n    return {{r: Target(0.0, 0.0) for r in game.mine}}\n")
+    gate = tmp_path / "gate"
+    gate.touch()
+    write(tmp_path, "typo.py", good.format(gate=str(gate)))
+    r = await started(tmp_path, "typo.py")
+    try:
+        assert (await answer(r.send(game(), None, 1.0))).output is not None
+        gate.unlink()
+        write(tmp_path, "typo.py", good.format(gate=str(gate)).replace("game.mine", "game.mien"))
+        r.update(found(tmp_path, "typo.py"))
+        await until(lambda: r._loading, what="the load request with the worker")
+        assert r.run.state == "running" and r.reloading
+        assert r.send(game(), None, 1.0) is None  # not asked while it imports
+        gate.touch()  # the import ends; the worker answers the load
+        await until(lambda: r._task is None and not r.reloading, what="the load accounted")
+        p = await answer(r.send(game(), None, 1.0))
+        assert p.reason == "failed"
+        assert r.run.state == "error" and r.run.error is not None
+        assert "mien" in r.run.error.message
+        assert r.run.errors == 1
+        assert r.send(game(), None, 1.0) is None  # failed: not asked again until a save
+        assert r.run.errors == 1
+    finally:
+        await r.close()
+
+
 @pytest.mark.parametrize(("body", "message"), [
     ("return [1, 2]", "the play returned list"),
     ("return {1: 'fast'}", "robot 1's order is str"),
@@ -263,6 +301,10 @@ async def test_over_budget_three_ticks_in_a_row_fails(tmp_path: Path) -> None:
     write(tmp_path, "slow.py", BURN.format(ms=30))
     r = await started(tmp_path, "slow.py")
     try:
+        # the first call after a load is its warm-up: not held to the budget
+        p = await answer(r.send(game(), None, BUDGET))
+        assert p.output is not None and p.cpu_ms is not None and p.cpu_ms >= 30.0
+        assert r.run.overruns == 0
         for k in range(OVER_BUDGET_IN_A_ROW):
             assert r.run.state == "running"
             p = await answer(r.send(game(), None, BUDGET))
@@ -293,6 +335,35 @@ async def test_one_tick_over_budget_is_discarded_but_not_fatal(tmp_path: Path) -
         got = [(await answer(r.send(game(), None, 0.015))).output for _ in range(4)]
         assert got[1] is None and [g[0][2] for g in (got[0], got[2], got[3])] == [1, 3, 4]
         assert r.run.state == "running" and r.run.overruns == 1
+    finally:
+        await r.close()
+
+
+async def test_a_late_answer_is_counted_late_not_over_budget(tmp_path: Path) -> None:
+    """An answer that comes after the tick stopped waiting, with little CPU time spent (the
+    worker not scheduled on a busy machine; here: it waits on a gate, asleep): discarded for
+    that tick and counted as late, not over the play's CPU budget."""
+    gate = tmp_path / "gate"
+    gate.touch()
+    write(tmp_path, "sleepy.py", "import os, time\nfrom touchline import Target\n"
+                                 f"GATE = {str(gate)!r}\n"
+                                 "def play(game):\n"
+                                 "    end = time.monotonic() + 20.0\n"
+                                 "    while not os.path.exists(GATE) and time.monotonic() < end:\n"
+                                 "        time.sleep(0.001)\n"
+                                 "    return {1: Target(0.0, 0.0)}\n")
+    r = await started(tmp_path, "sleepy.py")
+    try:
+        assert (await answer(r.send(game(), None, BUDGET))).output is not None  # warm-up
+        gate.unlink()
+        p = r.send(game(), None, BUDGET)
+        assert p is not None
+        r.late(p)  # the tick's deadline (TeamTick.wait): no answer yet
+        assert p.reason.startswith("late") and (r.run.late, r.run.overruns) == (1, 0)
+        gate.touch()
+        await answer(p)
+        assert p.cpu_ms is not None and p.cpu_ms < BUDGET * 1000.0
+        assert (r.run.late, r.run.overruns, r.run.state) == (1, 0, "running")
     finally:
         await r.close()
 

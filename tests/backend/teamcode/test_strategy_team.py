@@ -4,6 +4,7 @@ plays' robots stopped with the reason, operator targets first."""
 
 from __future__ import annotations
 
+import asyncio
 import math
 import os
 from pathlib import Path
@@ -154,5 +155,82 @@ async def test_a_play_no_robot_runs_gives_its_worker_back(
         await until(lambda: runner.closed and not rig.plays._closing)  # its close done
         with pytest.raises(ProcessLookupError):
             os.kill(pid, 0)
+    finally:
+        await rig.close()
+
+
+
+WARM = ("import os, time\n"
+        "from touchline import Target\n"
+        "GATE = {gate!r}\n"
+        "deadline = time.monotonic() + 20.0\n"
+        "while not os.path.exists(GATE) and time.monotonic() < deadline:\n"
+        "    time.sleep(0.001)  # a slow import (a model, a big table), until the test opens\n"
+        "CALLS = [0]\n"
+        "def play(game):\n"
+        "    CALLS[0] += 1\n"
+        "    if CALLS[0] <= {slow}:  # warm-up: the first call builds what later ones use\n"
+        "        t = time.thread_time()\n"
+        "        while time.thread_time() - t < 0.03:\n"
+        "            pass\n"
+        "    return {{r: Target(-1000.0, 600.0 * k - 600.0, 0.0, role='v{v}')\n"
+        "            for k, r in enumerate(sorted(game.mine))}}\n")
+
+
+async def test_a_reload_and_its_warm_up_are_not_billed_as_over_budget(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """After a save the new version imports (slowly here: until a gate opens) and its first
+    call warms up (30 ms of CPU against a 10 ms budget); neither is an overrun: the ticks
+    during the import are not sent to a worker that cannot answer (the play's robots are
+    held meanwhile, 'reloading'), and the first call after a load is not held to the budget.
+    The next calls are."""
+    from backend.teamcode import plays as plays_mod
+    from backend.teamcode import runner as runner_mod
+
+    # only the CPU-time budget is judged here (a loaded machine stretches wall time)
+    monkeypatch.setattr(runner_mod, "hard_limit_s", lambda _budget_s: 30.0)
+    monkeypatch.setattr(plays_mod, "IPC_GRACE_S", 2.0)
+    gate = tmp_path / "gate"
+    gate.touch()
+    write(tmp_path, "warm.py", WARM.format(gate=str(gate), slow=1, v=1))
+    rig = Rig(tmp_path, "warm", team_budget_ms=10.0)
+    try:
+        run = rig.registry.runs["warm.py"]
+
+        async def ticks_until(cond: object, what: str) -> None:
+            for _ in range(2000):
+                await rig.tick()
+                if cond():  # type: ignore[operator]
+                    return
+                await asyncio.sleep(0.005)
+            raise AssertionError(f"never: {what} ({run})")
+
+        def runs(v: int) -> bool:  # every robot driven by version v
+            t = rig.targets()
+            return len(t) == 3 and all(not e.stop and e.role == f"v{v}" for e in t.values())
+        await ticks_until(lambda: runs(1), "loaded and running")
+        assert (run.overruns, run.errors, run.state) == (0, 0, "running")
+
+        gate.unlink()
+        write(tmp_path, "warm.py", WARM.format(gate=str(gate), slow=1, v=2))
+        rig.registry.rescan()  # the watcher's part
+        runner = rig.plays.runners["warm.py"]
+        await until(lambda: runner.reloading, what="the new version's import under way")
+        for _ in range(3):  # ticks while it imports: nobody to answer them
+            await rig.tick()
+        assert run.overruns == 0
+        assert {rid for rid, _play, _why in rig.strategy.stopped} == {1, 2, 3}
+        assert all("reloading" in why for _rid, _play, why in rig.strategy.stopped)
+        gate.touch()
+        # the new version's first call (its warm-up), then the next ones within budget
+        await ticks_until(lambda: runs(2) and run.ticks >= 8, "the new version")
+        assert (run.overruns, run.errors, run.state, run.reloads) == (0, 0, "running", 2)
+
+        # only the first call is excused: a second one over the budget is counted
+        write(tmp_path, "warm.py", WARM.format(gate=str(gate), slow=2, v=3))
+        rig.registry.rescan()
+        await ticks_until(lambda: run.overruns == 1, "the second call over the budget")
+        await ticks_until(lambda: runs(3), "the version after it")
+        assert run.state == "running" and run.overruns == 1
     finally:
         await rig.close()

@@ -223,19 +223,14 @@ def _ref_line(pts: list[tuple[float, float, float]]) -> object:
 
 def _ref_rolling(pts: list[tuple[float, float, float]], decel: float,
                  u: tuple[float, float] | None) -> object:
-    if len(pts) < 2:
+    """fit_rolling's line fit as the generators summed it, on the points fit_rolling corrects
+    (the correction is the detector's own: only the sums are the reference here)."""
+    from backend.world import kick
+
+    c = kick._rolling_points(pts, decel, u)
+    if c is None:
         return None
-    if u is None:
-        s = _ref_slope(pts)
-        if s is None:
-            return None
-        n = math.hypot(*s)
-        if n < 1e-9:
-            return None
-        u = (s[0] / n, s[1] / n)
-    t0 = pts[0][0]
-    corr = [(p[0] - t0, p[1] + u[0] * decel * (p[0] - t0) ** 2 / 2,
-             p[2] + u[1] * decel * (p[0] - t0) ** 2 / 2) for p in pts]
+    t0, corr = c
     w = _ref_slope(corr)
     if w is None:
         return None
