@@ -22,11 +22,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-# (evaluate.jobs, .pool and .runner, which import the headless runner, are imported when a
-# job starts: not in the station's start, which is ordered for the first command)
-from evaluate.report import REPORT_HTML, REPORT_JSON, read_report
-from evaluate.scenario import SUITES_DIR, ScenarioError, Suite, load_suite
-
+# evaluate/ is imported inside the functions that use it: it is built on the backend (its
+# headless runs are the station's own processors), so the backend may not import it at module
+# level (tests/test_import_graph.py: no packages in a circle); and evaluate.jobs, .pool and
+# .runner (the headless runner) stay out of the station's start, ordered for the first command
 from . import contract
 from .config import Settings
 from .params.model import StationParams
@@ -89,6 +88,8 @@ class Evaluation:
         sub-folders with scenarios (a folder of scenarios itself counts too); the first of
         a name wins."""
         found: dict[str, Path] = {}
+        from evaluate.scenario import SUITES_DIR
+
         roots = [SUITES_DIR, *self.settings.suite_dirs]
         for root in roots:
             if not root.is_dir():
@@ -100,7 +101,9 @@ class Evaluation:
                     found.setdefault(sub.name, sub)
         return found
 
-    def _suite(self, name: str) -> Suite:
+    def _suite(self, name: str) -> Any:  # an evaluate.scenario.Suite
+        from evaluate.scenario import ScenarioError, load_suite
+
         folder = self.suites().get(check_name("suite", name))
         if folder is None:
             raise EvaluationError(404, f"no suite {name!r} (suites: "
@@ -121,6 +124,8 @@ class Evaluation:
     # -- the view -------------------------------------------------------------------------
 
     def view(self) -> contract.EvaluationView:
+        from evaluate.scenario import ScenarioError, load_suite
+
         suites: list[contract.EvaluationSuite] = []
         for name, folder in sorted(self.suites().items()):
             try:
@@ -151,6 +156,8 @@ class Evaluation:
             return dict(self._job)  # type: ignore[return-value]
 
     def reports(self) -> list[contract.EvaluationReportInfo]:
+        from evaluate.report import REPORT_JSON, read_report
+
         folder = self.reports_folder
         if folder is None or not folder.is_dir():
             return []
@@ -168,6 +175,8 @@ class Evaluation:
         return out[:MAX_REPORTS]
 
     def _report_dir(self, name: str) -> Path:
+        from evaluate.report import REPORT_JSON
+
         folder = self.reports_folder
         if folder is None:
             raise EvaluationError(409, "no reports folder")
@@ -177,6 +186,8 @@ class Evaluation:
         return d
 
     def report(self, name: str) -> contract.EvaluationReport:
+        from evaluate.report import read_report
+
         d = self._report_dir(name)
         try:
             rep = read_report(d)
@@ -185,6 +196,8 @@ class Evaluation:
         return _detail(name, rep)
 
     def report_html(self, name: str) -> bytes:
+        from evaluate.report import REPORT_HTML
+
         d = self._report_dir(name)
         try:
             return (d / REPORT_HTML).read_bytes()
@@ -193,6 +206,8 @@ class Evaluation:
 
     def run_log(self, report: str, run: str) -> str:
         """The real path of a run's log, inside the reports folder."""
+        from evaluate.report import read_report
+
         d = self._report_dir(report)
         check_name("run", run)
         rep = read_report(d)
@@ -270,7 +285,7 @@ class Evaluation:
             j["last"] = f"{res.get('student', '') + ' ' if res.get('student') else ''}" \
                         f"{res['name']}: {'passed' if res.get('passed') else 'failed'}"
 
-    def _run(self, kind: str, suite: Suite, play: str | None, params: dict[str, Any],
+    def _run(self, kind: str, suite: Any, play: str | None, params: dict[str, Any],
              out: Path) -> None:
         from evaluate.jobs import run_class, run_suite
         from evaluate.pool import DaskCluster, LocalPool
