@@ -13,7 +13,7 @@ TEAM ?=
 MINUTES ?= 3
 
 .PHONY: run test setup proto contract build multicast chromium octave lint typecheck test-py test-ts \
-        test-e2e bench soak experiments clean match fuzz
+        test-e2e bench soak experiments clean match fuzz evaluate
 
 run: build multicast
 	$(PY) -m launcher --sim $(SIM) --port $(PORT) $(if $(LOG),--log "$(LOG)") \
@@ -103,6 +103,18 @@ experiments: setup multicast
 # A whole 6 v 6 match on the built-in simulator, directed and judged; prints the result table.
 match: build multicast
 	$(PY) -m match --minutes $(MINUTES)
+
+# Scenario suites, headless and in parallel (docs/evaluate.md): make evaluate SUITE=exercises
+# PLAY=match OUT=folder (default var/reports/<date>-<time>-<suite>); TEAM=folder: team plays
+# from there (e.g. TEAM=evaluate/solutions); more flags in EVAL_ARGS (python -m evaluate suite
+# --help), e.g. EVAL_ARGS="--cluster tcp://host:8786"
+SUITE ?= regression
+PLAY ?=
+OUT ?=
+EVAL_ARGS ?=
+evaluate: setup
+	$(PY) -m evaluate suite $(SUITE) $(if $(PLAY),--play $(PLAY)) $(if $(OUT),--out "$(OUT)") \
+	  $(if $(TEAM),--team-dir "$(TEAM)") $(EVAL_ARGS)
 
 clean:
 	rm -rf .venv node_modules sslpb frontend/src/gen frontend/dist test-results playwright-report

@@ -64,6 +64,10 @@ def main() -> None:
                                   else a.log_dirs),
                         record=not a.no_record, scripts_dir=a.scripts_dir,
                         record_dir=a.record_dir, require_token=a.require_token,
+                        reports_dir=a.reports_dir, class_dir=a.class_dir,
+                        suite_dirs=(Settings.from_env().suite_dirs if a.suite_dirs is None
+                                    else a.suite_dirs),
+                        eval_workers=a.eval_workers, eval_cluster=a.eval_cluster,
                         view_token=a.view_token, estop_for_all=a.estop_for_all,
                         team_dir=a.team_dir,
                         allow_code_edit=a.allow_code_edit, team_memory_mb=a.team_memory_mb,
@@ -154,6 +158,20 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--record-dir", type=Path, default=d.record_dir, metavar="DIR",
                    help="record into DIR (default: logs/ in the state folder; "
                         "TOUCHLINE_RECORD_DIR)")
+    p.add_argument("--reports-dir", type=Path, default=d.reports_dir, metavar="DIR",
+                   help="the Evaluate tab's reports and their runs' logs (default: reports/ "
+                        "in the state folder; TOUCHLINE_REPORTS_DIR)")
+    p.add_argument("--suite-dir", dest="suite_dirs", type=Path, action="append", default=None,
+                   metavar="DIR", help="a folder of scenario suites the Evaluate tab offers "
+                   "(repeatable; TOUCHLINE_SUITE_DIRS)")
+    p.add_argument("--class-dir", type=Path, default=d.class_dir, metavar="DIR",
+                   help="a class: one sub-folder per student, each a team folder "
+                        "(TOUCHLINE_CLASS_DIR)")
+    p.add_argument("--eval-workers", type=int, default=None, metavar="N",
+                   help="the Evaluate tab's pool workers (default: cores - 1, at least 1)")
+    p.add_argument("--eval-cluster", default=None, metavar="ADDRESS",
+                   help="run the Evaluate tab's jobs on a Dask cluster: a scheduler's "
+                        "tcp://host:8786, or local:N (docs/evaluate.md)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session (the recording.enabled parameter stays as "
                         "it is, for the next start)")

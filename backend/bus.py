@@ -29,18 +29,22 @@ class Record(NamedTuple, Generic[T]):
     ``object.__setattr__``; hundreds are written a second)."""
 
     seq: int
-    time_mono: float  # time.monotonic() when written
+    time_mono: float  # time.monotonic() when written (the bus's clock)
     value: T
 
 
 class Topic(Generic[T]):
     """A bounded queue of records plus the latest value and a change notification."""
 
-    def __init__(self, name: str, capacity: int, check: type[Any] | None = None) -> None:
+    def __init__(self, name: str, capacity: int, check: type[Any] | None = None,
+                 clock: Callable[[], float] = _monotonic) -> None:
         if capacity < 1:
             raise ValueError(f"topic {name!r}: capacity must be >= 1, got {capacity}")
         self.name = name
         self._check = check  # with DataBus(check_types=True): every record's type
+        #: the time records are stamped with (``time.monotonic``; a virtual clock headless:
+        #: evaluate/ runs the station's processors faster than real time)
+        self._clock = clock
         self._ring: deque[Record[T]] = deque(maxlen=capacity)
         #: the ring's size (a plain attribute, not a property: the relay ingest reads three
         #: in every tick)
@@ -69,7 +73,7 @@ class Topic(Generic[T]):
             raise TypeError(f"topic {self.name!r} carries {self._check.__name__}, "
                             f"not {type(value).__name__}")
         self._seq = seq = self._seq + 1
-        rec: Record[T] = _tuple_new(Record, (seq, _monotonic(), value))
+        rec: Record[T] = _tuple_new(Record, (seq, self._clock(), value))
         self._ring.append(rec)
         if self._waiters:
             for ev in self._waiters:
@@ -102,7 +106,7 @@ class Topic(Generic[T]):
         rec = self.latest()
         if rec is None:
             return -1.0
-        return (time.monotonic() if now is None else now) - rec.time_mono
+        return (self._clock() if now is None else now) - rec.time_mono
 
     def subscribe_event(self) -> asyncio.Event:
         """An event set on every write; the owner clears it. Used to wake waiting readers."""
@@ -168,11 +172,16 @@ class DataBus:
     the declaration unless ``sizes`` (the ``bus`` parameter group) sets one.
 
     ``check_types``: every write is checked against the topic's declared type (default: the
-    environment's ``TOUCHLINE_CHECK_TOPICS=1``, which the test suite sets)."""
+    environment's ``TOUCHLINE_CHECK_TOPICS=1``, which the test suite sets).
+
+    ``clock``: what records are stamped with (monotonic seconds; a virtual clock when the
+    processors run headless, evaluate/)."""
 
     def __init__(self, sizes: dict[str, int] | None = None,
-                 check_types: bool | None = None) -> None:
+                 check_types: bool | None = None,
+                 clock: Callable[[], float] = _monotonic) -> None:
         self._topics: dict[str, Topic[Any]] = {}
+        self.clock = clock
         self._sizes = dict(sizes or {})
         self.check_types = (os.environ.get("TOUCHLINE_CHECK_TOPICS") == "1"
                             if check_types is None else check_types)
@@ -182,7 +191,7 @@ class DataBus:
         t = self._topics.get(spec.name)
         if t is None:
             t = Topic[T](spec.name, self._sizes.get(spec.name, spec.capacity),
-                         spec.type if self.check_types else None)
+                         spec.type if self.check_types else None, self.clock)
             self._topics[spec.name] = t
         return t
 

@@ -66,6 +66,18 @@ class Settings(BaseModel):
         ROOT / "team", "--team-dir", "Team code",
         "the team's own plays, processors and libraries, run in worker processes and "
         "reloaded on every save (make run TEAM=...; docs/team-code.md)")
+    #: None: reports/ in the state folder
+    reports_dir: Path | None = station_folder(
+        None, "--reports-dir", "Evaluation reports",
+        "where the Evaluate tab writes its reports and their runs' logs, and lists them "
+        "(default: reports/ in the state folder)")
+    suite_dirs: list[Path] = station_folder(
+        list, "--suite-dir", "Scenario suites", "more folders of scenario suites the Evaluate "
+        "tab offers (the folder, or each sub-folder, with *.toml files; the shipped exercises "
+        "and regression always are)")
+    class_dir: Path | None = station_folder(
+        None, "--class-dir", "Class", "one sub-folder per student (each a team folder): the "
+        "Evaluate tab runs the exercises for each of them")
     #: the relay's output as the launcher started it ("sim", "grsim", "robot-box"); the relay's
     #: own stats confirm it. None: unknown until the relay says (the other team is refused)
     relay_output: str | None = None
@@ -78,6 +90,11 @@ class Settings(BaseModel):
     log: Path | None = None
     #: False: this run records nothing, whatever the recording.enabled parameter says
     record: bool = True
+    #: the Evaluate tab's pool workers (None: cores - 1, at least 1)
+    eval_workers: int | None = Field(default=None, ge=1, le=256)
+    #: the Evaluate tab's jobs on a Dask cluster instead of the local pool: a scheduler's
+    #: address (tcp://host:8786) or local:N (a LocalCluster of N workers started per job)
+    eval_cluster: str | None = Field(default=None, pattern=r"^((tcp|tls)://\S+|local:\d{1,3})$")
     #: the operator token for every change even on loopback (always off loopback)
     require_token: bool = False
     #: viewing (GET /api/*, the websocket) needs a token too (implies require_token)
@@ -104,7 +121,8 @@ class Settings(BaseModel):
         default_factory=lambda: ["http://localhost:5173", "http://127.0.0.1:5173"]
     )
 
-    @field_validator("scripts_dir", "record_dir", "state_dir", "log_dirs", "team_dir")
+    @field_validator("scripts_dir", "record_dir", "state_dir", "log_dirs", "team_dir",
+                     "reports_dir", "suite_dirs", "class_dir")
     @classmethod
     def _absolute(cls, v: Path | list[Path] | None) -> Path | list[Path] | None:
         # shown to the operator and compared with the page's paths: absolute, ~ expanded
@@ -149,11 +167,20 @@ class Settings(BaseModel):
             return self.record_dir
         return None if self.state_dir is None else self.state_dir / "logs"
 
+    def reports_folder(self) -> Path | None:
+        """Where the Evaluate tab's reports go: --reports-dir, else reports/ in the state
+        folder (var/reports by default); None: nowhere (no state kept: tests)."""
+        if self.reports_dir is not None:
+            return self.reports_dir
+        return None if self.state_dir is None else self.state_dir / "reports"
+
     def station_folders(self) -> contract.StationFolders:
         """GET /api/folders: every station folder as this run uses it, read-only."""
         out: list[contract.StationFolder] = []
         for name, meta in self.folder_fields().items():
-            value: Any = self.recording_folder() if name == "record_dir" else getattr(self, name)
+            value: Any = (self.recording_folder() if name == "record_dir" else
+                          self.reports_folder() if name == "reports_dir" else
+                          getattr(self, name))
             paths = value if isinstance(value, list) else [] if value is None else [value]
             out.append({"name": name, "label": meta["label"], "what": meta["what"],
                         "paths": [str(p) for p in paths], "flag": meta["flag"],

@@ -715,6 +715,147 @@ class StationFolders(TypedDict):
     folders: list[StationFolder]
 
 
+# ------------------------------------------------------------------------------ evaluation
+
+
+EvaluationState = Literal["idle", "running", "done", "failed", "cancelled"]
+
+
+@with_config(_STRICT)
+class EvaluationJob(TypedDict):
+    """The Evaluate tab's job (one at a time; evaluate/, docs/evaluate.md), in every health
+    message: its progress as the runs come back from the pool."""
+
+    id: Annotated[int, Field(description="counts the jobs since the start (0: none yet)")]
+    state: EvaluationState
+    kind: Literal["suite", "class"] | None
+    suite: str
+    play: Annotated[str | None, Field(description="null: each scenario's own play")]
+    done: int
+    total: int
+    passed: int
+    failed: int
+    started_unix: float | None
+    finished_unix: float | None
+    report: Annotated[str | None, Field(description="the report's name (its folder)")]
+    by: Annotated[str, Field(description="who started it")]
+    error: Annotated[str, Field(description='why the job failed, or ""')]
+    last: Annotated[str, Field(description="the last run that came back, and how")]
+
+
+@with_config(_STRICT)
+class EvaluationScenario(TypedDict):
+    name: str
+    title: str
+    statement: Annotated[str, Field(description="what a student reads")]
+    runs: int
+    play: Annotated[str | None, Field(description="the play the scenario names")]
+    duration_s: float
+
+
+@with_config(_STRICT)
+class EvaluationSuite(TypedDict):
+    name: str
+    error: Annotated[str, Field(description='a scenario file that cannot be used, or ""')]
+    scenarios: list[EvaluationScenario]
+
+
+@with_config(_STRICT)
+class EvaluationReportInfo(TypedDict):
+    name: Annotated[str, Field(description="the report's folder in the reports folder")]
+    title: str
+    kind: Annotated[str, Field(description="suite, ab-suite, matches, ab-matches, class")]
+    created_unix: float
+    runs: int
+    passed: int
+    score: float | None
+
+
+@with_config(_STRICT)
+class EvaluationView(TypedDict):
+    """GET /api/evaluate: what can be run, the job, the reports."""
+
+    available: bool
+    reason: Annotated[str, Field(description='why the tab cannot run jobs, or ""')]
+    suites: list[EvaluationSuite]
+    class_dir: str | None
+    students: Annotated[list[str], Field(description="the class folder's sub-folders")]
+    workers: Annotated[int, Field(description="the local pool's workers")]
+    cluster: Annotated[str | None, Field(
+        description="the Dask cluster the jobs run on (--eval-cluster), or null: the local "
+                    "pool")]
+    job: EvaluationJob
+    reports: list[EvaluationReportInfo]
+
+
+@with_config(_STRICT)
+class EvaluationCheck(TypedDict):
+    name: str
+    label: str
+    passed: bool
+    score: float
+    detail: str
+
+
+@with_config(_STRICT)
+class EvaluationRun(TypedDict):
+    id: Annotated[str, Field(description="the run's name in its report (POST "
+                                         "/api/evaluate/replay takes it)")]
+    name: str
+    scenario: str
+    title: str
+    student: str | None
+    seed: int
+    passed: bool
+    score: float
+    detail: Annotated[str, Field(description="a match's score line")]
+    error: str
+    team_error: Annotated[str, Field(
+        description='why the team play failed (its file\'s error with its line first, or why '
+                    'its robots were stopped), or ""')]
+    sim_s: float
+    replay: Annotated[bool, Field(description="its SSL log was kept")]
+    checks: list[EvaluationCheck]
+
+
+@with_config(_STRICT)
+class EvaluationCell(TypedDict):
+    passed: bool
+    score: float
+    runs: int
+    runs_passed: int
+    sim_s: float
+    note: str
+    run: Annotated[str | None, Field(description="the run to replay (the first failed one)")]
+
+
+@with_config(_STRICT)
+class EvaluationGrade(TypedDict):
+    student: str
+    score: float
+    passed: int
+    scenarios: int
+    cells: Annotated[dict[str, EvaluationCell], Field(description="by exercise")]
+
+
+@with_config(_STRICT)
+class EvaluationReport(TypedDict):
+    """GET /api/evaluate/reports/{name}: the runs with their checks, and a class's grades."""
+
+    name: str
+    title: str
+    kind: str
+    created_unix: float
+    passed: int
+    score: float | None
+    verdict: Annotated[str, Field(description="an A/B or a match series: is the difference "
+                                              'real ("not significant: ...")')]
+    exercises: list[str]
+    grades: list[EvaluationGrade]
+    runs: Annotated[list[EvaluationRun], Field(description="every run, in the report's order")]
+    timing: dict[str, float]
+
+
 @with_config(_STRICT)
 class AccessHealth(TypedDict):
     """Who may do what (docs/security.md) and what was refused since the start."""
@@ -921,6 +1062,7 @@ class Health(TypedDict):
     startup: StartupInfo
     team_code: Annotated[list[TeamFile], Field(
         description="the team folder's files and their states (as GET /api/team)")]
+    evaluation: EvaluationJob
 
 
 # ------------------------------------------------------------------------------ parameters
@@ -1240,6 +1382,37 @@ class RecordingIn(BaseModel):
     action: Literal["new-file", "start", "stop"]
 
 
+_EVAL_NAME = r"^[A-Za-z0-9][A-Za-z0-9_.#-]{0,119}$"
+
+
+class EvaluateStartIn(BaseModel):
+    """Start a job: a suite (shipped, or of a --suite-dir folder) for one play (null: each
+    scenario's own), or the class folder's students through a suite."""
+
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["start"]
+    kind: Literal["suite", "class"] = "suite"
+    suite: str = Field(pattern=_EVAL_NAME)
+    play: str | None = Field(default=None, pattern=r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
+
+
+class EvaluateCancelIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    action: Literal["cancel"]
+
+
+EvaluateIn = Annotated[EvaluateStartIn | EvaluateCancelIn, Field(discriminator="action")]
+
+
+class EvaluateReplayIn(BaseModel):
+    """Open a run's SSL log in the player (names only: the station finds the file in its
+    reports folder)."""
+
+    model_config = ConfigDict(extra="forbid")
+    report: str = Field(pattern=_EVAL_NAME)
+    run: str = Field(pattern=_EVAL_NAME)
+
+
 # ------------------------------------------------------------------------------ websocket
 
 
@@ -1321,6 +1494,8 @@ EXPORTS: dict[str, object] = {
     "PlayerHistory": PlayerHistory, "TeamCode": TeamCode, "TeamFile": TeamFile,
     "TeamError": TeamError, "TeamFileText": TeamFileText, "TeamFileSaved": TeamFileSaved,
     "StoppedRobot": StoppedRobot,
+    "EvaluationJob": EvaluationJob, "EvaluationView": EvaluationView,
+    "EvaluationReport": EvaluationReport,
     # request bodies (their optional fields are optional in TypeScript too)
     "TargetIn": TargetIn, "RefereeCommandIn": RefereeCommandIn, "CardIn": CardIn,
     "EnableIn": EnableIn, "ArmIn": ArmIn, "TeleportBallIn": TeleportBallIn,
@@ -1330,4 +1505,6 @@ EXPORTS: dict[str, object] = {
     "PlayerPauseIn": PlayerPauseIn, "PlayerSeekIn": PlayerSeekIn, "PlayerStepIn": PlayerStepIn,
     "PlayerJumpIn": PlayerJumpIn, "PlayerLiveIn": PlayerLiveIn, "RecordingIn": RecordingIn,
     "TeamFileIn": TeamFileIn,
+    "EvaluateStartIn": EvaluateStartIn, "EvaluateCancelIn": EvaluateCancelIn,
+    "EvaluateReplayIn": EvaluateReplayIn,
 }

@@ -23,6 +23,7 @@ from . import stalldump, topics
 from .bus import DataBus
 from .config import Settings
 from .engine.switch import EngineSwitch
+from .evaluation import Evaluation
 from .operators import Operators
 from .params.model import PLAYS, StationParams
 from .params.store import ParamStore, deep_merge, parse_setting
@@ -175,6 +176,9 @@ class Station:
         stalls = stalldump.from_env()
         if stalls is not None:
             self.tracker.after_send = stalls.beat
+        # the Evaluate tab's jobs: a pool of processes driven from a thread of its own
+        self.evaluation = Evaluation(settings, self.params.diff_from_defaults,
+                                     lambda: self.params.current, settings.eval_workers)
         # the browser's data (backend/views.py), built from the parts named here
         self.browser = BrowserData(ViewParts(
             params=self.params, bus=self.bus, runner=self.runner, safety=self.safety,
@@ -185,7 +189,7 @@ class Station:
             team=self.team, team_processors=self.team_processors, engine=self.engine,
             replay=self.replay, recording=self.recording, operators=self.operators,
             startup=self.startup, web=self.web, cpu=self.cpu, state_dir=settings.state_dir,
-            started_mono=self.started_mono))
+            started_mono=self.started_mono, evaluation=self.evaluation))
         # what the web side reads, published at most at the rate a page can show
         self.hub = ViewHub(self.browser, self.replay.player)
         # in pipeline order: a topic-triggered processor runs in the pass of what wrote it
@@ -332,6 +336,7 @@ class Station:
             self._late_timer = None
         self.team_watcher.stop()
         self.replay.close()
+        await asyncio.to_thread(self.evaluation.close)
         # a last stop to every robot we drive, then shut down
         if self.ctx is not None and self.publisher.attached:
             with contextlib.suppress(zmq.ZMQError):

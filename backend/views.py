@@ -21,6 +21,7 @@ from sslpb.ssl_vision_wrapper_tracked_pb2 import TrackerWrapperPacket
 from . import contract, topics
 from .bus import DataBus, Topic
 from .engine.switch import EngineSwitch
+from .evaluation import Evaluation
 from .messages import TargetEntry
 from .operators import Operators
 from .params.model import PLAYS
@@ -84,6 +85,8 @@ class ViewParts:
     #: the state folder (the launcher's supervisor.json), None for a station without one
     state_dir: Path | None
     started_mono: float
+    #: the Evaluate tab's job (its progress in every health message)
+    evaluation: Evaluation
 
     @property
     def world_topic(self) -> Topic[WorldState]:
@@ -511,6 +514,7 @@ def health(p: ViewParts) -> contract.Health:
         "supervisor": sup,
         "startup": cast(contract.StartupInfo, p.startup.view()),
         "team_code": team_files,
+        "evaluation": p.evaluation.job(),
     }
     return out
 

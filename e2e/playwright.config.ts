@@ -50,7 +50,9 @@ export default defineConfig({
   },
   webServer: {
     // --log-dir: the replay spec opens the recorded fixture (tests/data) from the Logs dialog.
-    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data --team-dir ${JSON.stringify(teamDir)}`,
+    // --suite-dir, --class-dir: the Evaluate spec runs the quick suite (tests/evaluate/quick) and
+    // grades the test class (tests/evaluate/class: a good, a crashing and a spinning student).
+    command: `.venv/bin/python -m launcher --isolated --port ${port} --log-dir tests/data --team-dir ${JSON.stringify(teamDir)} --suite-dir tests/evaluate --class-dir tests/evaluate/class`,
     cwd: "..",
     url: `${baseURL}/api/health`,
     timeout: 60_000,

@@ -114,6 +114,16 @@ def main() -> int:
     p.add_argument("--scripts-dir", default=None, metavar="DIR",
                    help="the .m files the Octave engine runs (default engine_scripts/; or "
                         "TOUCHLINE_SCRIPTS_DIR). Folders are set here, never as parameters")
+    p.add_argument("--reports-dir", default=None, metavar="DIR",
+                   help="the Evaluate tab's reports (default: reports/ in the state folder; "
+                        "or TOUCHLINE_REPORTS_DIR)")
+    p.add_argument("--suite-dir", dest="suite_dirs", action="append", default=[], metavar="DIR",
+                   help="a folder of scenario suites the Evaluate tab offers (repeatable)")
+    p.add_argument("--class-dir", default=None, metavar="DIR",
+                   help="a class: one sub-folder per student (the Evaluate tab grades them)")
+    p.add_argument("--eval-cluster", default=None, metavar="ADDRESS",
+                   help="the Evaluate tab's jobs on a Dask cluster (tcp://host:8786, or "
+                        "local:N) instead of a local pool (docs/evaluate.md)")
     p.add_argument("--allow-host", dest="allow_hosts", action="append", default=[],
                    metavar="NAME", help="a name the station may be reached by besides the "
                    "bound address and localhost (repeatable; see python -m backend --help)")
@@ -157,6 +167,9 @@ def main() -> int:
         a.sim = "none"  # a replay has no simulator, and nothing is sent to robots
         replay_args.append(f"--log={os.path.abspath(a.log)}")
     replay_args += [f"--log-dir={os.path.abspath(d)}" for d in a.log_dirs]
+    replay_args += [f"--suite-dir={os.path.abspath(d)}" for d in a.suite_dirs]
+    if a.eval_cluster:
+        replay_args.append(f"--eval-cluster={a.eval_cluster}")
     if a.team_dir is not None:
         if not os.path.isdir(a.team_dir):
             log.error("no such team folder: %s", a.team_dir)
@@ -173,7 +186,8 @@ def main() -> int:
     # the station's folders (backend/config.py): given here, or the TOUCHLINE_* variables
     # the backend inherits
     replay_args += [f"--{flag.replace('_', '-')}={os.path.abspath(getattr(a, flag))}"
-                    for flag in ("record_dir", "scripts_dir") if getattr(a, flag)]
+                    for flag in ("record_dir", "scripts_dir", "reports_dir", "class_dir")
+                    if getattr(a, flag)]
     ports = Ports.isolated(a.port) if a.isolated else Ports(http=a.port or defaults.BACKEND_PORT)
     own_state_dir: str | None = None  # a temporary state folder of ours: removed at exit
     if a.isolated and a.state_dir is None:

@@ -84,13 +84,17 @@ class _Interlude:
 
 
 class Director:
-    def __init__(self, config: MatchConfig | None = None, *, wall_offset_s: float = 0.0) -> None:
+    def __init__(self, config: MatchConfig | None = None, *, wall_offset_s: float = 0.0,
+                 source_identifier: str | None = None) -> None:
         self.cfg = config if config is not None else MatchConfig()
         self.field = division(self.cfg.division)
         self.timing = self.cfg.timing
         self.grace = self.cfg.grace
         self.wall_offset_s = wall_offset_s
-        self.referee = MatchReferee(source_identifier=f"touchline-match-{uuid.uuid4()}")
+        # a live match is one of a kind; a headless one names itself (the same seed gives the
+        # same log, byte for byte)
+        self.referee = MatchReferee(
+            source_identifier=source_identifier or f"touchline-match-{uuid.uuid4()}")
         self.referee.blue_team_on_positive_half = self.cfg.blue_on_positive
         self.referee.blue.goalkeeper = self.cfg.goalkeepers.get("blue", 0)
         self.referee.yellow.goalkeeper = self.cfg.goalkeepers.get("yellow", 0)
@@ -195,7 +199,9 @@ class Director:
     def _log(self, kind: str, team: str | None = None, robot: int | None = None,
              detail: str = "") -> None:
         self.timeline.append({
-            "t": round(self.now - (self.t0 or self.now), 3), "kind": kind, "team": team,
+            # (t0 is None before the start; 0.0 is a start, on the headless virtual clock)
+            "t": round(self.now - self.t0, 3) if self.t0 is not None else 0.0,
+            "kind": kind, "team": team,
             "robot": robot, "command": self.referee.command, "stage": self.referee.stage,
             "detail": detail})
 

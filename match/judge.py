@@ -92,7 +92,10 @@ class Judge:
     def _episodes(self, kind: str, offenders: set[RobotKey], dt: float,
                   latched: set[RobotKey] | None = None) -> None:
         prev = self._active[kind]
-        for key in offenders:
+        # in robot order: a set of (team, id) iterates in an order of its string hashes,
+        # which differ from process to process (two offenders in one frame were logged in
+        # either order)
+        for key in sorted(offenders):
             v = self.game.stats[key[0]].violations[kind]
             v.seconds += dt
             if key not in prev and (latched is None or key not in latched):

@@ -269,7 +269,8 @@ class MatchRunner:
     def _status(d: Director) -> str:
         r = d.referee
         left = (r.stage_time_left_us or 0) / 1e6
-        return (f"  {d.now - (d.t0 or d.now):6.1f} s  {r.stage:<22} {r.command:<22} "
+        t = d.now - d.t0 if d.t0 is not None else 0.0
+        return (f"  {t:6.1f} s  {r.stage:<22} {r.command:<22} "
                 f"blue {r.blue.score} : {r.yellow.score} yellow   stage time left {left:5.1f} s")
 
     def _result(self, director: Director, shell: DirectorShell, procs: Supervisor, ports: Ports,

@@ -9,7 +9,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from dataclasses import field as _field
-from typing import Literal
+from typing import Any, Literal
 
 #: The version of this interface. A play written for version 1 keeps working while the
 #: station speaks version 1; fields may be added, none renamed or removed.
@@ -179,6 +179,10 @@ class Game:
     topics: Mapping[str, Mapping[str, float]] = _field(default_factory=dict)
     #: True in a replay (what-if on a recorded log): nothing the play orders is sent
     replay: bool = False
+    #: an exercise's parameters when the play runs in one (``python -m evaluate``, the
+    #: Evaluate tab: the scenario's ``[task]`` table as its file gives it, e.g.
+    #: ``{"robot": 0, "target_mm": [1000.0, 500.0]}``); empty in a game
+    task: Mapping[str, Any] = _field(default_factory=dict)
 
     def robot(self, rid: int) -> Robot | None:
         """Our robot ``rid``, None when it is not on the field."""

@@ -41,7 +41,8 @@ class ControlProcessor(Processor):
     name = "control"
 
     def __init__(self, bus: DataBus, max_wait_s: float, vision_stale_s: float,
-                 settings: ControlSettings | None = None) -> None:
+                 settings: ControlSettings | None = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         world = bus.of(topics.WORLD)
         super().__init__(OnTopic(world, max_wait_s=max_wait_s))
         self.world = world
@@ -77,7 +78,10 @@ class ControlProcessor(Processor):
         #: whether commands for the other team may go out (the station says: a simulator
         #: output and the operator's safety.other_team_in_simulator); else they never do
         self.may_drive_other_team: Callable[[], bool] = lambda: False
-        self._last_tick = time.monotonic()
+        #: monotonic seconds (a virtual clock headless: evaluate/); the bus's records carry the
+        #: same clock's times
+        self.clock = clock
+        self._last_tick = clock()
         self.halt_reason = ""
         #: in replay, the log's time at the playhead (Unix ns): vision is as old as the log
         #: says, whatever the speed and also while paused
@@ -159,14 +163,14 @@ class ControlProcessor(Processor):
         self.trigger = OnTopic(self.world, max_wait_s=params.processors.control_max_wait_s)
 
     def step(self) -> None:
-        now = time.monotonic()
+        now = self.clock()
         tick_dt = min(0.1, now - self._last_tick)
         self._last_tick = now
         rec = self.world.latest()
         targets: dict[tuple[Team, int], TargetEntry] = self.targets.latest_value() or {}
         ref = self.active_referee()
         estop = bool(self.estop.latest_value())
-        created = time.time_ns()
+        created = self.clock_ns()
         vision_age = self.vision_age_s(now)
         self.vision_lost = lost = self._lost(vision_age)
         if estop:

@@ -14,11 +14,36 @@ from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus, Reader
+from ..messages import CommandSet
 from ..processor import OnTopic
 from .common import LatencyStage, SocketProcessor
 
 _CommandSet = tl.RobotCommandSet
 _BLUE, _YELLOW = tl.TEAM_BLUE, tl.TEAM_YELLOW
+
+
+def encode_command_set(cs: CommandSet, seq: int) -> tl.RobotCommandSet:
+    """A command set as the relay gets it (and the recorder keeps it: TYPE_TL_COMMANDS)."""
+    msg = _CommandSet(
+        created_time_ns=cs.created_time_ns,
+        source_receive_time_ns=cs.source_receive_time_ns,
+        sequence=seq,
+        stop_all=cs.stop_all,
+    )
+    add = msg.commands.add
+    # each Command (and its LocalVelocity) unpacked as the tuple it is, in its fields'
+    # order: one step instead of a read by name per field
+    for team, rid, (fwd, left, ang), kick, chip, drib in cs.commands:
+        m = add()  # fields set one by one: cheaper than add(**fields)
+        m.team = _BLUE if team == "blue" else _YELLOW
+        m.id = rid
+        m.forward_mps = fwd
+        m.left_mps = left
+        m.angular_radps = ang
+        m.kick_speed_mps = kick
+        m.chip = chip
+        m.dribbler_rpm = drib
+    return msg
 
 
 class CommandPublisher(SocketProcessor):
@@ -74,26 +99,7 @@ class CommandPublisher(SocketProcessor):
         self._was_muted = False
         for cs in self.reader.read_new():
             self.seq += 1
-            msg = _CommandSet(
-                created_time_ns=cs.created_time_ns,
-                source_receive_time_ns=cs.source_receive_time_ns,
-                sequence=self.seq,
-                stop_all=cs.stop_all,
-            )
-            add = msg.commands.add
-            # each Command (and its LocalVelocity) unpacked as the tuple it is, in its fields'
-            # order: one step instead of a read by name per field
-            for team, rid, (fwd, left, ang), kick, chip, drib in cs.commands:
-                m = add()  # fields set one by one: cheaper than add(**fields)
-                m.team = _BLUE if team == "blue" else _YELLOW
-                m.id = rid
-                m.forward_mps = fwd
-                m.left_mps = left
-                m.angular_radps = ang
-                m.kick_speed_mps = kick
-                m.chip = chip
-                m.dribbler_rpm = drib
-            raw = msg.SerializeToString()
+            raw = encode_command_set(cs, self.seq).SerializeToString()
             self.send([b"commands", raw])
             now_ns = time.time_ns()
             self.record(now_ns, TYPE_TL_COMMANDS, raw)

@@ -7,7 +7,8 @@ import os
 import pickle
 import time
 from collections.abc import Callable, Mapping
-from typing import BinaryIO
+from dataclasses import replace
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -53,7 +54,7 @@ class StrategyProcessor(Processor):
     name = "strategy"
 
     def __init__(self, bus: DataBus, our_team: Team, params: StrategyParams | None = None,
-                 hz: float = 20.0) -> None:
+                 hz: float = 20.0, clock: Callable[[], float] = time.monotonic) -> None:
         super().__init__(Every(hz))
         self.world = bus.of(topics.WORLD)
         self.geometry = bus.of(topics.GEOMETRY)
@@ -80,7 +81,9 @@ class StrategyProcessor(Processor):
         self.engine_last_error = ""
         self._engine_task: asyncio.Task[tuple[float, float]] | None = None
         self._engine_point: tuple[float, tuple[float, float]] | None = None
-        self._t0 = time.monotonic()
+        #: monotonic seconds (a virtual clock headless: evaluate/)
+        self.clock = clock
+        self._t0 = clock()
         self._record: BinaryIO | None = None
         #: called once, with the first targets for a robot (the station's start timeline)
         self.on_first_targets: Callable[[], None] | None = None
@@ -91,6 +94,8 @@ class StrategyProcessor(Processor):
         #: for the world message: the play each robot of ours runs, and robots held still
         #: because their team play failed (id, play, reason)
         self.robot_plays: dict[int, str] = {}
+        #: an exercise's parameters for the team's plays (Game.task; evaluate/ sets it)
+        self.task: Mapping[str, Any] = {}
         self.stopped: list[tuple[int, str, str]] = []
 
     def ball_contact(self, team: Team, rid: int) -> bool:
@@ -135,7 +140,7 @@ class StrategyProcessor(Processor):
         p = self.params
         robot_plays = p.robot_plays
         if world is not None and (p.play != "idle" or robot_plays):
-            now = time.monotonic() - self._t0
+            now = self.clock() - self._t0
             contacts = self.contacts(self.our_team)
             referee = self.referee_source()
             prep = self.core.prepare(world, self.geometry.latest_value(), referee, p,
@@ -209,6 +214,8 @@ class StrategyProcessor(Processor):
                 raise RuntimeError("team plays chosen but no team code host")
             game = build_game(prep, world, referee, team, contacts, self.team_topics(),
                               self.replaying())
+            if self.task:
+                game = replace(game, task=self.task)
             tick = self.team.ask(game, theirs, p.team_budget_ms / 1000.0, p.engine_timeout_s)
         intents = await asyncio.to_thread(self.core.builtin_intents, prep, builtin, keeper)
         stopped: list[tuple[int, str, str]] = []
@@ -255,7 +262,7 @@ class StrategyProcessor(Processor):
             self._engine_task = None
             try:
                 point = task.result()
-                self._engine_point = (time.monotonic(), point)
+                self._engine_point = (self.clock(), point)
             except Exception as exc:
                 self.engine_fallbacks += 1
                 msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -268,7 +275,7 @@ class StrategyProcessor(Processor):
             self._engine_task = asyncio.get_running_loop().create_task(
                 self._call_keeper(eng, prep))
         got = self._engine_point
-        if got is None or time.monotonic() - got[0] > ENGINE_MAX_AGE_S:
+        if got is None or self.clock() - got[0] > ENGINE_MAX_AGE_S:
             if got is not None:
                 self.engine_fallbacks += 1  # the engine is late: use the built-in code
             return None

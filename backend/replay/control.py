@@ -155,6 +155,12 @@ class ReplayControl:
         once; the player's loading progress and then the log come in the "player" messages."""
         return self._start_open(path, False)
 
+    def open_checked(self, real_path: str) -> contract.Player:
+        """Opens a log the station found in one of its own folders itself (an evaluation
+        run's, in the reports folder), on the station thread: no further check of the
+        path."""
+        return self._start_open(real_path, True)
+
     def open_at_start(self, path: str) -> None:
         """``make run LOG=...``: the log instead of live input, from the start."""
         self._opening = asyncio.get_running_loop().create_task(self._open_log(path))

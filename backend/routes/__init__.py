@@ -8,6 +8,7 @@ from fastapi import APIRouter
 from . import (
     arming,
     estop,
+    evaluate,
     login,
     operators,
     params,
@@ -27,4 +28,4 @@ from . import (
 ROUTERS: tuple[APIRouter, ...] = (
     views.router, ws.router, robots.router, sim.router, strategy.router, referee.router,
     estop.router, arming.router, params.router, replay.router, recording.router,
-    token.router, login.router, operators.router, team.router)
+    token.router, login.router, operators.router, team.router, evaluate.router)

@@ -143,6 +143,10 @@ class TeamPlays:
         self.last_used: dict[str, float] = {}
         #: an Octave play's budget: the compute engine's timeout (strategy.engine_timeout_s)
         self.octave_timeout_s = 0.2
+        #: how much longer than the budget a tick waits for the answers (wall clock). Live:
+        #: IPC_GRACE_S. Headless (evaluate/) the game's clock stands still while it waits,
+        #: so it waits up to the hard limit: a busy machine never makes an answer late there
+        self.grace_s = IPC_GRACE_S
         self._closing: set[asyncio.Task[None]] = set()
         registry.listeners.append(self._changed)
 
@@ -224,7 +228,7 @@ class TeamPlays:
         self.release({a.runner.name for a in asks if a.runner is not None}, now)
         longest = max((a.pending.budget_s for a in asks if a.pending is not None),
                       default=budget_s)
-        return TeamTick(asks, now + longest + IPC_GRACE_S)
+        return TeamTick(asks, now + longest + self.grace_s)
 
     def release(self, used: set[str] | None = None, now: float | None = None) -> None:
         """Runners not ``used`` this tick drive no robot; those unused for

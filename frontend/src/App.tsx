@@ -1,5 +1,6 @@
 import { lazy, Suspense, useEffect } from "react";
 import { sameRobot } from "./api/types";
+import { EvaluatePanel } from "./components/EvaluatePanel";
 import { FieldView } from "./components/FieldView";
 import { HealthPanel } from "./components/HealthPanel";
 import { HelpOverlay } from "./components/HelpOverlay";
@@ -102,6 +103,7 @@ export function App({ onRetryNow }: { onRetryNow: () => void }) {
                 <CodePanel />
               </Suspense>
             )}
+            {tab === "evaluate" && <EvaluatePanel />}
           </div>
         </aside>
       </main>

@@ -226,6 +226,171 @@ export interface EstopInfo {
   relay_latched: boolean | null;
 }
 
+export interface EvaluateCancelIn {
+  action: "cancel";
+}
+
+/**
+ * Open a run's SSL log in the player (names only: the station finds the file in its
+ * reports folder).
+ */
+export interface EvaluateReplayIn {
+  report: string;
+  run: string;
+}
+
+/**
+ * Start a job: a suite (shipped, or of a --suite-dir folder) for one play (null: each
+ * scenario's own), or the class folder's students through a suite.
+ */
+export interface EvaluateStartIn {
+  action: "start";
+  kind?: "suite" | "class";
+  suite: string;
+  play?: string | null;
+}
+
+export interface EvaluationCell {
+  passed: boolean;
+  score: number;
+  runs: number;
+  runs_passed: number;
+  sim_s: number;
+  note: string;
+  /** the run to replay (the first failed one) */
+  run: string | null;
+}
+
+export interface EvaluationCheck {
+  name: string;
+  label: string;
+  passed: boolean;
+  score: number;
+  detail: string;
+}
+
+export interface EvaluationGrade {
+  student: string;
+  score: number;
+  passed: number;
+  scenarios: number;
+  /** by exercise */
+  cells: Record<string, EvaluationCell>;
+}
+
+/**
+ * The Evaluate tab's job (one at a time; evaluate/, docs/evaluate.md), in every health
+ * message: its progress as the runs come back from the pool.
+ */
+export interface EvaluationJob {
+  /** counts the jobs since the start (0: none yet) */
+  id: number;
+  state: "idle" | "running" | "done" | "failed" | "cancelled";
+  kind: ("suite" | "class") | null;
+  suite: string;
+  /** null: each scenario's own play */
+  play: string | null;
+  done: number;
+  total: number;
+  passed: number;
+  failed: number;
+  started_unix: number | null;
+  finished_unix: number | null;
+  /** the report's name (its folder) */
+  report: string | null;
+  /** who started it */
+  by: string;
+  /** why the job failed, or "" */
+  error: string;
+  /** the last run that came back, and how */
+  last: string;
+}
+
+/** GET /api/evaluate/reports/{name}: the runs with their checks, and a class's grades. */
+export interface EvaluationReport {
+  name: string;
+  title: string;
+  kind: string;
+  created_unix: number;
+  passed: number;
+  score: number | null;
+  /** an A/B or a match series: is the difference real ("not significant: ...") */
+  verdict: string;
+  exercises: string[];
+  grades: EvaluationGrade[];
+  /** every run, in the report's order */
+  runs: EvaluationRun[];
+  timing: Record<string, number>;
+}
+
+export interface EvaluationReportInfo {
+  /** the report's folder in the reports folder */
+  name: string;
+  title: string;
+  /** suite, ab-suite, matches, ab-matches, class */
+  kind: string;
+  created_unix: number;
+  runs: number;
+  passed: number;
+  score: number | null;
+}
+
+export interface EvaluationRun {
+  /** the run's name in its report (POST /api/evaluate/replay takes it) */
+  id: string;
+  name: string;
+  scenario: string;
+  title: string;
+  student: string | null;
+  seed: number;
+  passed: boolean;
+  score: number;
+  /** a match's score line */
+  detail: string;
+  error: string;
+  /** why the team play failed (its file's error with its line first, or why its robots were stopped), or "" */
+  team_error: string;
+  sim_s: number;
+  /** its SSL log was kept */
+  replay: boolean;
+  checks: EvaluationCheck[];
+}
+
+export interface EvaluationScenario {
+  name: string;
+  title: string;
+  /** what a student reads */
+  statement: string;
+  runs: number;
+  /** the play the scenario names */
+  play: string | null;
+  duration_s: number;
+}
+
+export interface EvaluationSuite {
+  name: string;
+  /** a scenario file that cannot be used, or "" */
+  error: string;
+  scenarios: EvaluationScenario[];
+}
+
+/** GET /api/evaluate: what can be run, the job, the reports. */
+export interface EvaluationView {
+  available: boolean;
+  /** why the tab cannot run jobs, or "" */
+  reason: string;
+  suites: EvaluationSuite[];
+  class_dir: string | null;
+  /** the class folder's sub-folders */
+  students: string[];
+  /** the local pool's workers */
+  workers: number;
+  /** the Dask cluster the jobs run on (--eval-cluster), or null: the local pool */
+  cluster: string | null;
+  job: EvaluationJob;
+  reports: EvaluationReportInfo[];
+}
+
 export interface FieldArc {
   name: string;
   center: Vec;
@@ -301,6 +466,7 @@ export interface Health {
   startup: StartupInfo;
   /** the team folder's files and their states (as GET /api/team) */
   team_code: TeamFile[];
+  evaluation: EvaluationJob;
 }
 
 export interface HealthMessage {

@@ -9,6 +9,11 @@ import type {
   EnableIn,
   EstopAnswer,
   EstopIn,
+  EvaluateReplayIn,
+  EvaluateStartIn,
+  EvaluationJob,
+  EvaluationReport,
+  EvaluationView,
   RefereeCommand,
   RefereeCommandIn,
   LogList,
@@ -302,3 +307,19 @@ export function takeDriving(team: Team): Promise<OperatorsState> {
   return request<OperatorsState>("POST", `/api/driving/${team}/take`, body);
 }
 export const releaseDriving = (team: Team) => request<OperatorsState>("POST", `/api/driving/${team}/release`);
+
+// ---- the Evaluate tab (docs/evaluate.md): names only, the station finds the files ----
+
+export const getEvaluation = () => request<EvaluationView>("GET", "/api/evaluate");
+
+export const startEvaluation = (body: Omit<EvaluateStartIn, "action">) =>
+  request<EvaluationJob>("POST", "/api/evaluate", { action: "start", ...body });
+
+export const cancelEvaluation = () => request<EvaluationJob>("POST", "/api/evaluate", { action: "cancel" });
+
+export const getEvaluationReport = (name: string) =>
+  request<EvaluationReport>("GET", `/api/evaluate/reports/${encodeURIComponent(name)}`);
+
+export const evaluationReportPage = (name: string) => `/api/evaluate/reports/${encodeURIComponent(name)}/html`;
+
+export const replayEvaluationRun = (body: EvaluateReplayIn) => request<Player>("POST", "/api/evaluate/replay", body);

@@ -6,7 +6,7 @@ import { ALL_LAYERS as DEFAULT_LAYERS, type DrawLayers } from "../field/draw";
 import type { RefereeCommand } from "../api/types";
 import { createStore } from "./createStore";
 
-export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "code";
+export type Tab = "robots" | "params" | "plots" | "referee" | "health" | "code" | "evaluate";
 export const TABS: { key: Tab; label: string }[] = [
   { key: "robots", label: "Robots" },
   { key: "params", label: "Params" },
@@ -14,6 +14,7 @@ export const TABS: { key: Tab; label: string }[] = [
   { key: "referee", label: "Referee" },
   { key: "health", label: "Health" },
   { key: "code", label: "Code" },
+  { key: "evaluate", label: "Evaluate" },
 ];
 
 /** The field layers the user can toggle: exactly what the field drawing takes. */

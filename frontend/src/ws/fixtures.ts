@@ -1,5 +1,6 @@
 // Test fixtures (only imported by tests).
 import type {
+  EvaluationJob,
   ArmingInfo,
   EngineHealth,
   Geometry,
@@ -105,8 +106,28 @@ export function health(rate = 60): Health {
     operator_actions: [],
     startup: { restarted: false, standby: false, steps_s: { imports: 0.6, "first command": 0.7 } },
     team_code: [],
+    evaluation: evaluationJob(),
   };
 }
+
+export const evaluationJob = (extra: Partial<EvaluationJob> = {}): EvaluationJob => ({
+  id: 0,
+  state: "idle",
+  kind: null,
+  suite: "",
+  play: null,
+  done: 0,
+  total: 0,
+  passed: 0,
+  failed: 0,
+  started_unix: null,
+  finished_unix: null,
+  report: null,
+  by: "",
+  error: "",
+  last: "",
+  ...extra,
+});
 
 export const stream = (extra: Partial<StreamHealth> = {}): StreamHealth => ({
   packets: 100,

@@ -1,0 +1,117 @@
+"""The headless run: the station's pipeline on fieldsim on a virtual clock, recorded as an SSL
+log; deterministic for a seed."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from evaluate.runner import (
+    Entrant,
+    MatchTask,
+    ScenarioTask,
+    run_match_task,
+    run_scenario_task,
+)
+from evaluate.scenario import load_scenario
+from ssllog.format import TYPE_REFEREE_2013, TYPE_TL_COMMANDS, TYPE_VISION_2014
+from ssllog.reader import LogReader
+
+DATA = Path(__file__).parent / "quick"
+
+
+def _run(name: str, log: Path | None, **changes: Any) -> dict[str, Any]:
+    sc = load_scenario(DATA / f"{name}.toml")
+    if changes:
+        sc = dataclasses.replace(sc, **changes)
+    res = run_scenario_task(ScenarioTask(sc, 0, Entrant(), str(log) if log else None))
+    assert res["error"] is None, res["error"]
+    return {k: v for k, v in res.items() if k not in ("wall_s", "log")}
+
+
+def test_same_seed_same_run_and_log(tmp_path: Path) -> None:
+    a = _run("quick_keeper", tmp_path / "a.log")
+    b = _run("quick_keeper", tmp_path / "b.log")
+    assert a == b
+    assert (tmp_path / "a.log").read_bytes() == (tmp_path / "b.log").read_bytes()
+    c = _run("quick_keeper", tmp_path / "c.log", seed=6)
+    assert (tmp_path / "c.log").read_bytes() != (tmp_path / "a.log").read_bytes()
+    assert c["seed"] == 6
+
+
+def test_the_log_is_what_the_station_records(tmp_path: Path) -> None:
+    _run("quick_keeper", tmp_path / "k.log")
+    types: dict[int, int] = {}
+    times = []
+    reader = LogReader(str(tmp_path / "k.log"))
+    for rec in reader:
+        if rec.time_ns == 0:  # the index record, last
+            continue
+        types[rec.type] = types.get(rec.type, 0) + 1
+        times.append(rec.time_ns)
+    assert reader.warning is None and reader.index_offsets
+    assert times == sorted(times)
+    # 4 cameras at 60 Hz for 2 s, the referee, our commands (TYPE_TL_COMMANDS)
+    assert types[TYPE_VISION_2014] >= 4 * 60 * 2
+    assert types[TYPE_REFEREE_2013] >= 10
+    assert types[TYPE_TL_COMMANDS] > 50
+    assert (times[-1] - times[0]) / 1e9 == pytest.approx(2.0, abs=0.05)
+
+
+def test_goals_collisions_violations_and_actions_are_recorded() -> None:
+    res = _run("quick_goal", None)
+    kinds = [(e["kind"], e["team"], e["detail"].split(":")[0]) for e in res["events"]]
+    goal = next(e for e in res["events"] if e["kind"] == "goal")
+    # 1.0 m to the goal line (4.5 m) at 3 m/s slowing by 0.4 m/s^2: ~0.35 s
+    assert goal["detail"] == "theirs" and 0.3 < goal["t"] < 0.45
+    assert ("collision", "ours", "") in kinds
+    assert ("violation", "ours", "stop_distance") in kinds  # robot 1 at the ball at STOP
+    checks = {c["name"]: c["passed"] for c in res["checks"]}
+    assert checks == {"ball_in_goal": True, "no_collision": False, "no_violation": False}
+    assert not res["passed"] and res["score"] == pytest.approx(1 / 3, abs=1e-3)
+
+
+def test_a_bad_play_or_parameter_fails_the_run_with_the_reason() -> None:
+    sc = load_scenario(DATA / "quick_keeper.toml")
+    res = run_scenario_task(ScenarioTask(sc, 0, Entrant("nosuchplay"), None))
+    assert not res["passed"] and "nosuchplay" in res["error"]
+    res = run_scenario_task(ScenarioTask(
+        sc, 0, Entrant(params={"strategy.kick_speed_mps": 99.0}), None))
+    assert not res["passed"] and "strategy.kick_speed_mps" in res["error"]
+
+
+def test_a_short_match_is_played_and_judged(tmp_path: Path) -> None:
+    task = MatchTask("m", Entrant("match"), Entrant("simple"), 3, half_s=4.0,
+                     interludes=False, log_path=str(tmp_path / "m.log"))
+    a = run_match_task(task)
+    assert a["error"] is None, a["error"]
+    res = a["result"]
+    assert res["finished"] and res["stage"] == "POST_GAME"
+    assert set(res["score"]) == {"blue", "yellow"}
+    assert (tmp_path / "m.log").stat().st_size > 100_000
+    # the timeline's times count from the start on the virtual clock (which starts at 0)
+    ts = [e["t"] for e in res["timeline"]]
+    assert ts == sorted(ts) and ts[-1] == pytest.approx(a["sim_s"], abs=0.1), ts
+    halves = [e["t"] for e in res["timeline"] if e["kind"] == "half_end"]
+    assert len(halves) == 2 and halves[0] >= 4.0
+    # the same match in another process, whose string hashes differ (PYTHONHASHSEED): the
+    # same result and the same log, byte for byte (the referee's match id, the order of two
+    # violations found in one frame once differed)
+    other = tmp_path / "other.log"
+    code = ("import json, sys; from evaluate.runner import Entrant, MatchTask, run_match_task; "
+            "t = MatchTask('m', Entrant('match'), Entrant('simple'), 3, half_s=4.0, "
+            "interludes=False, log_path=sys.argv[1]); "
+            "print(json.dumps(run_match_task(t)['result']))")
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code, str(other)], cwd=root, check=True,
+                         capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": str(root), "PYTHONHASHSEED": "4242"})
+    assert json.loads(out.stdout.splitlines()[-1]) == json.loads(json.dumps(a["result"]))
+    assert other.read_bytes() == (tmp_path / "m.log").read_bytes()
