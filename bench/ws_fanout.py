@@ -362,6 +362,8 @@ def main() -> None:
                   f"{req[0]:.2f} / {statistics.median(req):.2f} / {req[-1]:.2f} s from their "
                   f"upgrade request, {served[0]:.2f} / {statistics.median(served):.2f} / "
                   f"{served[-1]:.2f} s from the server's first bytes")
+            print("  in the order they went (s from the server's first bytes): "
+                  + " ".join(f"{d[1]:.2f}" for d in r["drops"]))
         else:
             print(f"{name}: no stalled client dropped")
 
