@@ -132,9 +132,11 @@ BACKOFF_MAX_S = 2.0
 #: it takes the operator's arming back from its state folder (docs/security.md)
 RESTARTED_FLAG = "--restarted"
 #: a child with ``standby_args`` (the backend) gets a warm spare once it has run this long
-#: (the spare's imports then do not compete with its start); a spare that exited on its own
-#: is tried again ``SPARE_RETRY_S`` later
-SPARE_AFTER_S = 5.0
+#: (the spare's imports then do not compete with its own, 1-1.5 s on a quiet machine); a
+#: spare that exited on its own is tried again ``SPARE_RETRY_S`` later. 5 s left a crash in
+#: the first 5 s of play to a cold start (1.5 s to the first command on a quiet machine,
+#: the issue's goal 1 s); a spare still importing at a crash is ready sooner than a cold start
+SPARE_AFTER_S = 2.0
 SPARE_RETRY_S = 60.0
 #: after a spare took over (its start is over within a few hundred ms: nothing to import),
 #: the next spare comes sooner, ready for a second crash
