@@ -88,3 +88,27 @@ test("the top bar's buttons stay whole and apart at laptop widths", async ({ pag
     expect(nf.x + nf.width, `${width} px: "new file" ends before Logs starts`).toBeLessThanOrEqual(logs.x);
   }
 });
+
+test("the top bar's play select shows the whole name of every built-in play at laptop widths", async ({ page }) => {
+  // at 1280 px "Formation (classroom)" was cut to "Formation (cl"
+  await page.goto("/");
+  const select = page.getByTestId("play-bar").locator("select");
+  await expect(select).toBeVisible();
+  await expect.poll(async () => select.locator("option").count()).toBeGreaterThan(3);
+  for (const width of [1920, 1600, 1450, 1280]) {
+    await page.setViewportSize({ width, height: 800 });
+    const fit = await select.evaluate((el: HTMLSelectElement) => {
+      const cs = getComputedStyle(el);
+      const ctx = document.createElement("canvas").getContext("2d")!;
+      ctx.font = `${cs.fontWeight} ${cs.fontSize} ${cs.fontFamily}`;
+      // the built-in plays (a team's titles are the team's to keep short)
+      const names = Array.from(el.querySelectorAll<HTMLOptionElement>("[data-testid=play-group-builtin] option"), (o) => o.text);
+      const widest = Math.max(...names.map((t) => ctx.measureText(t).width));
+      // the text's room: the box without its padding and the drop-down arrow (about 20 px)
+      const room = el.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight) - 20;
+      return { names, widest, room };
+    });
+    expect(fit.names.length, `${width} px: the built-in plays listed`).toBeGreaterThan(3);
+    expect(fit.widest, `${width} px: ${JSON.stringify(fit)}`).toBeLessThanOrEqual(fit.room);
+  }
+});

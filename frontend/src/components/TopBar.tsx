@@ -73,7 +73,7 @@ function RefereeInfo() {
   return (
     <div className={`stat referee ${silentFor !== null ? "is-silent" : ""}`} title={ref ? `Stage ${ref.stage}` : "No referee messages"}>
       <span className="stat-label">Referee</span>
-      <span className={`ref-cmd ${command ? refereeClass(command) : ""}`} data-testid="referee-command">
+      <span className={`ref-cmd ${command ? refereeClass(command) : "ref-none"}`} data-testid="referee-command">
         {command ?? "—"}
       </span>
       {ref && ref.source !== "none" && (
