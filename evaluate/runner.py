@@ -367,16 +367,22 @@ class ScenarioTask:
         return sc.name if sc.runs == 1 else f"{sc.name}#{self.run_index + 1}"
 
 
-def run_scenario_task(task: ScenarioTask) -> dict[str, Any]:
-    """Runs one scenario run; never raises: an error is a failed run that says why."""
-    sc = task.scenario.for_run(task.run_index)
-    wall0 = time.perf_counter()
-    log_path = task.log_path
-    if task.ship_log and log_path is not None:
+def _run_log_path(log_path: str | None, ship_log: bool) -> str | None:
+    """Where a run writes its SSL log: the report's path, or a temporary file on a worker that
+    ships the log back to the report's machine (``ship_log``)."""
+    if ship_log and log_path is not None:
         import tempfile
         fd, log_path = tempfile.mkstemp(prefix="evaluate-", suffix=".log")
         os.close(fd)
         os.unlink(log_path)
+    return log_path
+
+
+def run_scenario_task(task: ScenarioTask) -> dict[str, Any]:
+    """Runs one scenario run; never raises: an error is a failed run that says why."""
+    sc = task.scenario.for_run(task.run_index)
+    wall0 = time.perf_counter()
+    log_path = _run_log_path(task.log_path, task.ship_log)
     res: dict[str, Any] = {
         "kind": "scenario", "name": task.name, "scenario": sc.name, "title": sc.title,
         "run": task.run_index, "seed": sc.seed, "entrant": task.entrant.name(),
@@ -512,12 +518,7 @@ class MatchRun(Engine):
 def run_match_task(task: MatchTask) -> dict[str, Any]:
     """Plays one match; never raises (an error is a match without a result that says why)."""
     wall0 = time.perf_counter()
-    log_path = task.log_path
-    if task.ship_log and log_path is not None:
-        import tempfile
-        fd, log_path = tempfile.mkstemp(prefix="evaluate-", suffix=".log")
-        os.close(fd)
-        os.unlink(log_path)
+    log_path = _run_log_path(task.log_path, task.ship_log)
     out: dict[str, Any] = {"kind": "match", "name": task.name, "seed": task.seed,
                            "blue": task.blue.name(), "yellow": task.yellow.name(),
                            "blue_on_positive": task.blue_on_positive, "log": task.log_path,
