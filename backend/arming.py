@@ -12,11 +12,12 @@ import contextlib
 import json
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from .params.store import atomic_write_json
+from .params.store import atomic_write_json, run_now
 
 log = logging.getLogger("touchline.arming")
 
@@ -35,6 +36,8 @@ class ArmingStore:
         self.file = None if state_dir is None else state_dir / "arming.json"
         self.state = ArmingState()
         self.warning = ""
+        #: runs a file write (the station: its ordered writer thread); inline by default
+        self.writer: Callable[[Callable[[], None]], None] = run_now
         #: taken back from the file after a crash (the supervisor's restart)
         self.restored = False
         if self.file is None:
@@ -62,23 +65,29 @@ class ArmingStore:
         self.restored = self.state.armed
 
     def set(self, armed: bool, by: str) -> ArmingState:
-        self.state = ArmingState(armed, time.time(), by)
-        if self.file is None:
+        """The state at once; its file written by ``writer`` (in order, off the caller's
+        thread when the station gives one, as the e-stop's)."""
+        self.state = state = ArmingState(armed, time.time(), by)
+        file = self.file
+        if file is None:
             return self.state
-        try:
-            atomic_write_json(self.file, asdict(self.state))
-            self.warning = ""
-        except OSError as exc:
-            if armed:  # the arming holds in memory; a restart comes up disarmed
-                self.warning = (f"arming not persisted ({exc}): a backend restart would come "
-                                f"up disarmed")
-            else:  # an armed file must not outlive a disarm: no file is disarmed too
-                try:
-                    self.file.unlink(missing_ok=True)
-                    self.warning = ""
-                except OSError as exc2:
-                    self.warning = (f"disarming not persisted ({exc}; {exc2}): a backend "
-                                    f"restart could come up armed")
-            if self.warning:
-                log.error("%s", self.warning)
+
+        def write() -> None:
+            try:
+                atomic_write_json(file, asdict(state))
+                self.warning = ""
+            except OSError as exc:
+                if armed:  # the arming holds in memory; a restart comes up disarmed
+                    self.warning = (f"arming not persisted ({exc}): a backend restart would "
+                                    f"come up disarmed")
+                else:  # an armed file must not outlive a disarm: no file is disarmed too
+                    try:
+                        file.unlink(missing_ok=True)
+                        self.warning = ""
+                    except OSError as exc2:
+                        self.warning = (f"disarming not persisted ({exc}; {exc2}): a backend "
+                                        f"restart could come up armed")
+                if self.warning:
+                    log.error("%s", self.warning)
+        self.writer(write)
         return self.state

@@ -8,13 +8,14 @@ from __future__ import annotations
 import json
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from domain.wallclock import date_clock
 
-from .params.store import atomic_write_json
+from .params.store import atomic_write_json, run_now
 
 log = logging.getLogger("touchline.estop")
 
@@ -33,6 +34,8 @@ class EstopLatch:
         self.file = None if state_dir is None else state_dir / "estop.json"
         self.state = EstopState()
         self.warning = ""
+        #: runs a file write (the station: its ordered writer thread); inline by default
+        self.writer: Callable[[Callable[[], None]], None] = run_now
         if self.file is not None and self.file.exists():
             try:
                 data: Any = json.loads(self.file.read_text())
@@ -58,13 +61,19 @@ class EstopLatch:
         return self.state.active
 
     def set(self, active: bool, by: str) -> EstopState:
-        self.state = EstopState(active, time.time(), by)
+        """The state at once; its file written by ``writer`` (in order, off the caller's
+        thread when the station gives one: an fsync behind a recorder's writes can take tens
+        of milliseconds, and the stop must not wait for the disk)."""
+        self.state = state = EstopState(active, time.time(), by)
         self.warning = ""
-        if self.file is not None:
-            try:
-                atomic_write_json(self.file, asdict(self.state))
-            except OSError as exc:  # the stop itself holds in memory and in the relay
-                self.warning = (f"emergency stop state not persisted ({exc}): a backend "
-                                f"restart would rely on the relay's latch alone")
-                log.error("%s", self.warning)
+        file = self.file
+        if file is not None:
+            def write() -> None:
+                try:
+                    atomic_write_json(file, asdict(state))
+                except OSError as exc:  # the stop itself holds in memory and in the relay
+                    self.warning = (f"emergency stop state not persisted ({exc}): a backend "
+                                    f"restart would rely on the relay's latch alone")
+                    log.error("%s", self.warning)
+            self.writer(write)
         return self.state

@@ -137,6 +137,10 @@ class Station:
             self.bus, self.params, settings.state_dir, restarted=settings.restarted,
             require_arming=settings.require_arming, relay_output=settings.relay_output,
             replaying=lambda: self.replay.replaying, vision_age_s=self.control.vision_age_s)
+        # their files are written on the parameters' writer thread, in order with them: the
+        # press is on the bus at once and the control pass that stops every robot does not
+        # wait for an fsync (behind the recorder's writes it can take tens of ms)
+        self.safety.latch.writer = self.safety.arming_store.writer = self._persist
         self.publisher.adopt_estop = self.safety.adopt_relay_estop
         self.publisher.estop_by = self.safety.estop_by
         self.publisher.armed = self.safety.operator_armed
@@ -208,6 +212,20 @@ class Station:
 
     def stop_thread(self) -> None:
         self.loop.stop_thread()
+
+    def _persist(self, write: Callable[[], None]) -> None:
+        """Runs a state file's ``write`` on the writer thread (in order); what it did not
+        catch itself is logged, not lost."""
+        writer = self.params.writer
+        if writer is None:
+            write()
+            return
+
+        def said(fut: concurrent.futures.Future[None]) -> None:
+            exc = fut.exception()
+            if exc is not None:
+                log.error("a state file was not written: %s: %s", type(exc).__name__, exc)
+        writer.submit(write).add_done_callback(said)
 
     async def call(self, fn: Callable[..., T], *args: Any) -> T:
         """Runs ``fn(*args)`` on the station loop; fresh views are published after it."""
@@ -350,7 +368,7 @@ class Station:
         rec = self.recording.recorder
         if rec is not None:  # what is queued is written, the file gets its index
             await asyncio.to_thread(rec.close)
-        if self.params.writer is not None:  # the last parameter change is on disk (in order)
+        if self.params.writer is not None:  # the last parameter change, e-stop and arming on disk
             await asyncio.wrap_future(self.params.writer.submit(lambda: None))
 
     # ---- the views the web side reads (backend/viewhub.py) ----

@@ -169,6 +169,11 @@ def parse_setting(item: str) -> dict[str, Any]:
     return out
 
 
+def run_now(write: Callable[[], None]) -> None:
+    """A file write run where it is asked for (no writer thread)."""
+    write()
+
+
 def atomic_write_json(path: Path, data: Any) -> None:
     """Write-then-rename: a crash leaves either the old file or the new one, never half."""
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import errno
 import json
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -216,11 +217,19 @@ def test_teleports_go_to_a_simulator_only_so_arming_does_not_gate_them(
 # restart after a crash (--restarted), not a start anew; the e-stop wins over it ----
 
 
+def _on_disk(st: Station) -> Station:
+    """``st`` once the state files asked for so far are written: the station writes them on
+    its writer thread, in order (a crash within that millisecond forgets the last change)."""
+    assert st.params.writer is not None
+    st.params.writer.submit(lambda: None).result(timeout=10)
+    return st
+
+
 def _armed_station(tmp_path: Path, **kw: Any) -> Station:
     st = Station(_settings(tmp_path, require_arming=True, **kw))
     st.world_topic.write(_fresh_world())
     assert st.safety.set_armed(True, "operator at 127.0.0.1") is None
-    return st
+    return _on_disk(st)
 
 
 def test_arming_survives_a_restart_by_the_supervisor(tmp_path: Path) -> None:
@@ -245,12 +254,14 @@ def test_a_start_anew_is_disarmed_and_forgets_the_last_arming(tmp_path: Path) ->
 def test_a_disarm_survives_a_restart_too(tmp_path: Path) -> None:
     st = _armed_station(tmp_path)
     st.safety.set_armed(False, "operator at 127.0.0.1")
+    _on_disk(st)
     assert not Station(_settings(tmp_path, require_arming=True, restarted=True)).safety.armed
 
 
 def test_the_estop_disarms_for_the_restart_and_wins_over_an_armed_file(tmp_path: Path) -> None:
     st = _armed_station(tmp_path)
     st.safety.set_estop(True, "operator at 127.0.0.1")
+    _on_disk(st)
     again = Station(_settings(tmp_path, require_arming=True, restarted=True))
     assert again.safety.estop and not again.safety.armed
     # an armed file beside a pressed stop (written by hand, or a crash between the two): the
@@ -296,3 +307,21 @@ def test_an_unreadable_file_is_a_health_warning(tmp_path: Path) -> None:
     with TestClient(create_app(st.settings, st), headers={"X-Touchline": "1"}) as c:
         warnings = c.get("/api/health").json()["warnings"]
     assert any(w.startswith("arming.json is not readable") for w in warnings), warnings
+
+
+def test_a_press_does_not_wait_for_the_disk(tmp_path: Path) -> None:
+    """The stop is on the bus (and the arming gone) while the disk still holds the writer
+    thread; the file follows once the disk is free, in order."""
+    st = _armed_station(tmp_path)
+    assert st.params.writer is not None
+    disk_free = threading.Event()
+    st.params.writer.submit(disk_free.wait, 10)  # a slow fsync: the writer thread busy
+    try:
+        st.safety.set_estop(True, "operator at 127.0.0.1")
+        assert st.safety.estop and not st.safety.armed
+        assert not (tmp_path / "state" / "estop.json").exists()  # not written yet
+    finally:
+        disk_free.set()
+    _on_disk(st)
+    assert json.loads((tmp_path / "state" / "estop.json").read_text())["active"] is True
+    assert json.loads((tmp_path / "state" / "arming.json").read_text())["armed"] is False
