@@ -13,6 +13,7 @@ import logging
 import os
 import shutil
 import signal
+import socket
 import sys
 import tempfile
 import time
@@ -77,6 +78,18 @@ def announce(line: str, out: TextIO | None = None) -> None:
     stream = sys.stdout if out is None else out
     stream.write(line + "\n")
     stream.flush()
+
+def http_port_taken(host: str, port: int) -> str | None:
+    """Why the backend could not listen on ``host:port`` (bound as uvicorn binds it), or None."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            return exc.strerror or str(exc)
+    return None
+
 
 def main() -> int:
     p = argparse.ArgumentParser(prog="python -m launcher", description=__doc__)
@@ -212,6 +225,14 @@ def main() -> int:
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
 
+    taken = http_port_taken(a.host, ports.http)
+    if taken is not None:  # the backend would fail to bind it and be restarted for ever
+        log.error("the web port %s:%d is taken (%s): is a station already running? Stop it, "
+                  "or start this one on another port (make run PORT=8001, --port 8001)",
+                  a.host, ports.http, taken)
+        if own_state_dir is not None:
+            shutil.rmtree(own_state_dir, ignore_errors=True)
+        return 2
     sup.start()
     url = f"http://{a.host}:{ports.http}"
     if wait_http(url + "/api/health", 30.0):
