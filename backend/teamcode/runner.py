@@ -376,18 +376,18 @@ class PythonRunner(Runner):
         # order the worker gave them. (Awaited here, it was accounted a few loop steps later,
         # after the answer of a tick sent during the reload: that tick's failure was cleared
         # by "loaded" and counted again on the next tick.)
-        fut.add_done_callback(lambda f: self._loaded(found, f))
+        fut.add_done_callback(lambda f: self._loaded(found, w, f))
         self._watch(w, Watch(fut.done, time.monotonic(), cpu0, LOAD_LIMIT_S,
                              LOAD_WALL_LIMIT_S, loading=True))
         await asyncio.wait([fut])  # bounded: the watch ends a worker past its limits
 
-    def _loaded(self, found: Found, fut: asyncio.Future[Any]) -> None:
+    def _loaded(self, found: Found, w: PyWorker, fut: asyncio.Future[Any]) -> None:
         """The worker's answer to a load (not called if it ended first: _gone says it)."""
         if fut.cancelled() or fut.exception() is not None:
             return
         self._loading = False
         reply = fut.result()
-        self._spun(reply)
+        self._spun(w, reply)
         if self.closed or self._done < self._want:
             return  # saved again meanwhile: the next load counts
         if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:
@@ -409,16 +409,15 @@ class PythonRunner(Runner):
             self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}",
                                 found.name))
 
-    def _spun(self, reply: Any) -> None:
+    def _spun(self, w: PyWorker, reply: Any) -> None:
         """A call stopped at its CPU limit (the worker's SIGPROF raised in it): that worker
         is ended (what the interrupted code left behind, a thread it started, goes with it);
         the next save starts a new one."""
         if not (isinstance(reply, tuple) and reply[:1] == ("error",) and len(reply) == 4
                 and isinstance(reply[2], dict) and reply[2].get("spinning") is True):
             return
-        w, self.worker = self.worker, None
-        if w is None:
-            return
+        if self.worker is w:
+            self.worker = None
         w.on_gone = None
         task = asyncio.get_running_loop().create_task(w.close())
         self._retiring.add(task)
@@ -510,12 +509,12 @@ class PythonRunner(Runner):
         fut = w.request("tick", game, inputs, limit)
         p = self._warmup(Pending(fut, now, budget_s, cpu0=cpu0))
         self.inflight = p
-        fut.add_done_callback(lambda f: self._replied(p, f))
+        fut.add_done_callback(lambda f: self._replied(w, p, f))
         self._watch(w, Watch(lambda: p.done, time.monotonic(), cpu0, limit,
                              wall_limit_s(budget_s)))
         return p
 
-    def _replied(self, p: Pending, f: asyncio.Future[Any]) -> None:
+    def _replied(self, w: PyWorker, p: Pending, f: asyncio.Future[Any]) -> None:
         if f.cancelled():
             return
         exc = f.exception()
@@ -527,7 +526,7 @@ class PythonRunner(Runner):
             return
         reply = f.result()
         self.accept(p, reply)
-        self._spun(reply)
+        self._spun(w, reply)
 
     async def close(self) -> None:
         await self._close_start()
