@@ -243,13 +243,16 @@ class Runner:
             self.run.late += 1
 
     def waiting(self) -> str:
-        """Why no call was sent this tick: the previous one has not answered."""
+        """Why no call was sent this tick: the previous one has not answered (the machine
+        is busy, or the play computes: its CPU time says which)."""
         p = self.inflight
-        if p is None:
+        used = self.call_cpu_s(p) if p is not None else None
+        if p is None or used is None:
             return "busy: its previous tick has not answered"
-        used = self.call_cpu_s(p)
-        if used is not None and used >= p.budget_s and not p.warmup:
-            return (f"busy: its previous tick is still computing{self._so_far(p, used)}")
+        if p.warmup:
+            return f"warming up (the first call after a load; {used * 1000:.0f} ms of CPU time)"
+        if used >= p.budget_s:
+            return f"busy: its previous tick is still computing{self._so_far(p, used)}"
         return f"late: its previous tick has not answered yet{self._so_far(p, used)}"
 
     def _so_far(self, p: Pending, used: float | None = None) -> str:
@@ -258,8 +261,8 @@ class Runner:
             return ""
         if used < p.budget_s:
             return f" (the machine is busy: {used * 1000:.0f} ms of CPU time so far)"
-        return (f" ({used * 1000:.0f} ms of CPU time so far, over its {p.budget_s * 1000:.0f} ms "
-                "budget)")
+        return (f" ({used * 1000:.0f} ms of CPU time so far, over its "
+                f"{p.budget_s * 1000:.0f} ms budget)")
 
 
 def error_from(err: dict[str, Any], name: str) -> ErrorInfo:

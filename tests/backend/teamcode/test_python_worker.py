@@ -357,6 +357,38 @@ async def test_a_late_answer_is_counted_late_not_over_budget(tmp_path: Path) -> 
         await r.close()
 
 
+async def test_the_reason_says_whether_the_machine_or_the_play_is_busy(tmp_path: Path) -> None:
+    """While a call has not answered, the robots' reason tells a busy machine (the call has
+    used less CPU time than its budget) from a play that computes (more): from the worker's
+    CPU time."""
+    gate = tmp_path / "gate"
+    write(tmp_path, "churn.py", "import os\nfrom touchline import Target\n"
+                                f"GATE = {str(gate)!r}\n"
+                                "def play(game):\n"
+                                "    while os.path.exists(GATE):\n"
+                                "        pass\n"
+                                "    return {1: Target(0.0, 0.0)}\n")
+    r = await started(tmp_path, "churn.py")
+    try:
+        assert (await answer(r.send(game(), None, 0.05))).output is not None  # warm-up
+        gate.touch()
+        p = r.send(game(), None, 0.05)
+        assert p is not None
+        assert r.waiting().startswith("late: its previous tick has not answered yet (the "
+                                      "machine is busy: "), r.waiting()
+        await until(lambda: (r.call_cpu_s(p) or 0.0) >= 0.05, what="50 ms of CPU time used")
+        assert r.waiting().startswith("busy: its previous tick is still computing ("), \
+            r.waiting()
+        assert "ms of CPU time so far, over its 50 ms budget)" in r.waiting()
+        gate.unlink()
+        await answer(p)
+        assert p.output is None and p.reason.startswith("over its budget")
+        assert r.run.state == "running"
+    finally:
+        gate.unlink(missing_ok=True)
+        await r.close()
+
+
 def alive(pid: int) -> bool:
     """Process ``pid`` exists and has not ended (a zombie has)."""
     try:
