@@ -76,20 +76,22 @@ class CpuLimit:
     def __init__(self) -> None:
         self.armed = False
         self.limit_s = 0.0
+        #: the limit was reached in the latest call (its stacks are in the dump file)
+        self.fired = False
         signal.signal(signal.SIGPROF, self._expired)
 
     def _expired(self, _signum: int, _frame: Any) -> None:
         # a signal that came as the call ended runs its Python handler a few bytecodes
         # later: not armed any more, nothing to stop
         if self.armed:
-            self.armed = False
+            self.armed, self.fired = False, True
             raise CpuLimitExceeded(f"over its CPU limit ({self.limit_s:g} s of CPU time)")
 
     def call(self, limit_s: float, fn: Any, *args: Any) -> Any:
         """``fn(*args)`` under the limit (raises CpuLimitExceeded past it; the raise may come
         from this function's own last lines, still for this call)."""
         self.limit_s = limit_s
-        self.armed = True
+        self.armed, self.fired = True, False
         signal.setitimer(signal.ITIMER_PROF, max(limit_s, 1e-3))
         try:
             return fn(*args)
@@ -351,6 +353,7 @@ def main() -> None:
             except BaseException as exc:  # SystemExit from team code's import too
                 reply = ("error", seq, host.error("import", exc, name), 0.0)
             send(proto_out, reply)
+            forget_stacks(cpu_limit, dump)
         elif op == "tick":
             _, _, game, inputs, cpu_s = msg
             gc.disable()
@@ -377,12 +380,23 @@ def main() -> None:
                 send(proto_out, ("error", seq, {
                     "kind": "output", "message": f"the answer cannot be sent: {exc}",
                     "file": name, "line": None, "traceback": ""}, cpu))
+            forget_stacks(cpu_limit, dump)
             gc.collect(0)
             gc.enable()
         else:
             send(proto_out, ("error", seq, {"kind": "crash", "message": f"unknown request "
                                              f"{op!r}", "file": name, "line": None,
                                              "traceback": ""}, 0.0))
+
+
+def forget_stacks(cpu_limit: CpuLimit, dump: Any) -> None:
+    """After a call that reached its CPU limit (answered all the same when the team's code
+    caught CpuLimitExceeded: this worker goes on), the stacks written then must not pass
+    for a later crash's."""
+    if cpu_limit.fired:
+        cpu_limit.fired = False
+        dump.seek(0)
+        dump.truncate()
 
 
 def spinning(host: Host, kind: str, exc: CpuLimitExceeded, name: str, cpu_s: float,
@@ -395,6 +409,7 @@ def spinning(host: Host, kind: str, exc: CpuLimitExceeded, name: str, cpu_s: flo
                       "a loop that does not end?)")
     err["spinning"] = True
     return err
+
 
 if __name__ == "__main__":
     main()

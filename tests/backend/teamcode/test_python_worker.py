@@ -439,6 +439,40 @@ async def test_a_spin_is_stopped_at_its_cpu_limit_with_its_line(tmp_path: Path) 
         await r.close()
 
 
+async def test_a_play_that_catches_its_cpu_limit_goes_on_and_a_later_crash_says_its_line(
+        tmp_path: Path) -> None:
+    """A play that catches CpuLimitExceeded (``except BaseException``) and answers: over its
+    budget, not failed, same worker. The stacks written at the limit are forgotten: a crash
+    later names its own line, not the old spin's."""
+    write(tmp_path, "catches.py", "import os, signal\n"
+                                  "N = [0]\n"
+                                  "def play(game):\n"
+                                  "    N[0] += 1\n"
+                                  "    if N[0] == 2:\n"
+                                  "        try:\n"
+                                  "            while True:\n"
+                                  "                pass\n"
+                                  "        except BaseException:\n"
+                                  "            return {}\n"
+                                  "    if N[0] == 3:\n"
+                                  "        os.kill(os.getpid(), signal.SIGSEGV)\n"
+                                  "    return {}\n")
+    r = await started(tmp_path, "catches.py")
+    try:
+        pid = r.pid
+        assert (await answer(r.send(game(), None, BUDGET))).output == []  # warm-up
+        p = await answer(r.send(game(), None, BUDGET))
+        assert p.reason.startswith("over its budget") and p.cpu_ms is not None and \
+            p.cpu_ms >= 240.0
+        assert (r.run.state, r.run.overruns, r.pid) == ("running", 1, pid)
+        r.send(game(), None, BUDGET)
+        await until(lambda: r.run.state == "error", what="the crash")
+        e = r.run.error
+        assert e is not None and e.kind == "crash" and (e.file, e.line) == ("catches.py", 12), e
+    finally:
+        await r.close()
+
+
 async def test_a_spin_in_one_long_c_call_is_stopped_by_the_station(tmp_path: Path) -> None:
     """A call into C that never looks at signals (here ``sum`` over a huge range) cannot be
     interrupted by the worker's SIGPROF: the station sees the worker's CPU time (/proc) go
