@@ -928,8 +928,9 @@ class TeamError(TypedDict):
     kind: Annotated[TeamErrorKind, Field(
         description='"import": does not load (syntax, import, a name taken); "exception": '
         'raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); '
-        '"budget": over its time budget 3 ticks in a row, or stuck (killed); "crash": its '
-        'worker process died; "missing": the file of a chosen play is gone')]
+        '"budget": over its time budget 3 ticks in a row, spinning (over its CPU limit in '
+        'one call) or stuck (no answer within the wall-clock backstop), its worker ended; '
+        '"crash": its worker process died; "missing": the file of a chosen play is gone')]
     message: str
     file: Annotated[str, Field(description='the team file it happened in ("lib/util.py")')]
     line: int | None

@@ -14,13 +14,22 @@ within the envelope: the station thread's own cost) and the round trip (request 
 answer accounted: pickling, the pipe, the worker's call, its reply), median and p99, for a
 trivial Python play and a trivial Octave play. The worker's own CPU time per call too.
 
-    PYTHONPATH=. .venv/bin/python bench/team_bench.py [reload|tick|all] [--saves 20]
+``busy``: the shipped ``team/pass_drill.py`` asked at ``--hz`` for ``--seconds`` on a busy
+machine: this process (the station's side) and the play's worker share the CPUs ``--cpus``
+(default one core, "1") with ``--burners`` busy-looping processes (a laptop at a match
+running grSim, the station and a browser), and with ``--stop-every`` > 0 the worker is also
+stopped (SIGSTOP) for ``--stop-s`` every so often (a process the OS does not run). Counts:
+ticks answered in time, late, the play's failures (each restarts it, as a save would) and
+their messages, and why its robots were held. Not part of ``all``.
+
+    PYTHONPATH=. .venv/bin/python bench/team_bench.py [reload|tick|all|busy] [--saves 20]
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import os
 import statistics
@@ -212,14 +221,128 @@ async def tick_bench(ticks: int, hz: float) -> dict[str, Any]:
     return out
 
 
+# ---------------------------------------------------------------------------- busy
+
+
+async def busy_bench(seconds: float, hz: float, stop_every_s: float, stop_s: float
+                     ) -> dict[str, Any]:
+    import collections
+    import shutil
+    import signal
+
+    from backend.params.model import PLAYS, StationParams
+    from backend.strategy.core import StrategyCore
+    from backend.teamcode.plays import TeamPlays
+    from backend.teamcode.registry import TeamRegistry
+
+    team = Path(tempfile.mkdtemp(prefix="touchline-team-busy-"))
+    shutil.copy(ROOT / "team" / "pass_drill.py", team / "pass_drill.py")
+    reg = TeamRegistry(team, PLAYS)
+    reg.rescan()
+    plays = TeamPlays(reg, 1024)
+    params = StationParams.model_validate({"strategy": {"play": "pass_drill"}})
+    core = StrategyCore()
+    groups = {"pass_drill": (0, 1, 2, 3, 4, 5)}
+    held: collections.Counter[str] = collections.Counter()
+    failures: list[str] = []
+    answered = asked = 0
+    pids: set[int] = set()
+    stopped_pid = 0
+    next_stop = time.monotonic() + stop_every_s if stop_every_s > 0 else float("inf")
+    resume_at = float("inf")
+    period = 1.0 / hz
+    try:
+        # started and loaded first (not counted)
+        deadline = time.monotonic() + 120.0
+        while reg.runs.get("pass_drill.py") is None or reg.runs["pass_drill.py"].ticks < 5:
+            if time.monotonic() > deadline:
+                raise RuntimeError("pass_drill never answered")
+            await _busy_tick(core, params, plays, groups)
+            await asyncio.sleep(period)
+        run = reg.runs["pass_drill.py"]
+        late0, errors0 = run.late, run.errors
+        end = time.monotonic() + seconds
+        next_t = time.monotonic()
+        while time.monotonic() < end:
+            r = plays.runners["pass_drill.py"]
+            now = time.monotonic()
+            pid = getattr(r, "pid", 0)
+            if pid:
+                pids.add(pid)
+            if now >= next_stop and pid and not stopped_pid:
+                os.kill(pid, signal.SIGSTOP)
+                stopped_pid, resume_at = pid, now + stop_s
+                next_stop = now + stop_every_s
+            if stopped_pid and now >= resume_at:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(stopped_pid, signal.SIGCONT)
+                stopped_pid, resume_at = 0, float("inf")
+            tick = await _busy_tick(core, params, plays, groups)
+            asked += 1
+            a = tick.asks[0]
+            if a.pending is not None and a.pending.output is not None:
+                answered += 1
+            else:
+                why = a.reason if a.pending is None else a.pending.reason
+                held[why.split(" (")[0].split(":")[0]] += 1
+            if run.state == "error" and run.error is not None:
+                failures.append(run.error.one_line())
+                r.update(reg.plays()["pass_drill"])  # as a save would: started again
+            next_t += period
+            await asyncio.sleep(max(0.0, next_t - time.monotonic()))
+        if stopped_pid:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(stopped_pid, signal.SIGCONT)
+        out = {"seconds": seconds, "hz": hz, "ticks": asked, "answered_in_time": answered,
+               "late": run.late - late0, "failures": len(failures),
+               "errors_counted": run.errors - errors0, "failure_messages": failures[:5],
+               "held_because": dict(held), "workers": len(pids)}
+        print(f"busy: {asked} ticks of pass_drill at {hz:g} Hz in {seconds:g} s: "
+              f"{answered} answered in time, {out['late']} late, {len(failures)} failures "
+              f"({len(pids)} worker process(es)); held because: {dict(held)}", flush=True)
+        for m in failures[:5]:
+            print(f"  failure: {m}", flush=True)
+        return out
+    finally:
+        await plays.close()
+
+
+async def _busy_tick(core: Any, params: Any, plays: Any, groups: Any) -> Any:
+    from backend.teamcode.game import build_game
+    from backend.world.state import BallState, RobotState, WorldState
+
+    now = time.time()
+    robots = tuple(RobotState(team_, i, -4000.0 + 700.0 * i, 100.0 * i, 0.0, t_seen=now)
+                   for team_ in ("blue", "yellow") for i in range(6))
+    world = WorldState(now, time.time_ns(), BallState(-1500.0, 50.0, t_seen=now), robots)
+    prep = core.prepare(world, None, None, params.strategy, "blue", True, False,
+                        time.monotonic())
+    tick = plays.ask(build_game(prep, world, None, "blue"), groups,
+                     params.strategy.team_budget_ms / 1000.0, 1.0)
+    await tick.wait()
+    return tick
+
+
+def burners(n: int) -> list[subprocess.Popen[bytes]]:
+    """``n`` busy-looping processes (inheriting this process's CPU affinity)."""
+    return [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("part", nargs="?", default="all", choices=["reload", "tick", "all"])
+    p.add_argument("part", nargs="?", default="all",
+                   choices=["reload", "tick", "all", "busy"])
     p.add_argument("--saves", type=int, default=20)
     p.add_argument("--ticks", type=int, default=600)
     p.add_argument("--hz", type=float, default=20.0)
     p.add_argument("--json", default=None, help="write the figures to this file")
+    p.add_argument("--seconds", type=float, default=60.0, help="busy: how long")
+    p.add_argument("--burners", type=int, default=4, help="busy: busy-looping processes")
+    p.add_argument("--cpus", default="1", help="busy: the CPUs shared (e.g. 1 or 0,1)")
+    p.add_argument("--stop-every", type=float, default=0.0,
+                   help="busy: SIGSTOP the worker this often (s; 0: never)")
+    p.add_argument("--stop-s", type=float, default=1.5, help="busy: for this long")
     a = p.parse_args()
     print(f"load average before: {loadavg()}", flush=True)
     res: dict[str, Any] = {}
@@ -227,6 +350,15 @@ def main() -> None:
         res["tick"] = asyncio.run(tick_bench(a.ticks, a.hz))
     if a.part in ("reload", "all"):
         res["reload"] = reload_bench(a.saves)
+    if a.part == "busy":
+        os.sched_setaffinity(0, {int(c) for c in a.cpus.split(",")})
+        procs = burners(a.burners)
+        try:
+            res["busy"] = asyncio.run(busy_bench(a.seconds, a.hz, a.stop_every, a.stop_s))
+        finally:
+            for b in procs:
+                b.kill()
+                b.wait()
     print(f"load average after: {loadavg()}", flush=True)
     if a.json:
         Path(a.json).write_text(json.dumps(res, indent=2))

@@ -21,8 +21,9 @@ station's Logs/replay open it.
 
 A team play (backend/teamcode) runs in its worker process as in the station, in real time:
 its worker is started and its file loaded before the game's clock starts, and each strategy
-tick waits for its answer (the budget + a grace, as live) while the virtual clock stands
-still; a play that crashes, spins or answers wrongly stops its robots and fails as live.
+tick waits for its answer (up to the call's wall-clock backstop: a busy machine never makes
+it late) while the virtual clock stands still; a play that crashes, spins or answers wrongly
+stops its robots and fails as live.
 
 Not simulated: robot feedback (ball contact from the robots; the strategy judges contact from
 positions, as on a legacy grSim port), the compute engine (the built-in keeper code runs) and
@@ -56,7 +57,7 @@ from backend.processors.strategy import StrategyProcessor
 from backend.processors.world import WorldProcessor
 from backend.teamcode.plays import TeamPlays
 from backend.teamcode.registry import TeamRegistry
-from backend.teamcode.runner import KILL_GRACE_S, LOAD_LIMIT_S, hard_limit_s
+from backend.teamcode.runner import LOAD_WALL_LIMIT_S, STACK_WAIT_S, wall_limit_s
 from backend.world.decode import decode_detection, geometry_to_dict
 from backend.world.referee import decode_referee
 from backend.world.state import CameraFrame
@@ -189,9 +190,10 @@ class Side:
                            f"(its plays: {', '.join(sorted(plays)) or 'none'})")
         self.team_plays = TeamPlays(reg, memory_mb)
         # the game's clock stands still while a tick waits: wait for the answer up to the
-        # call's hard limit (then its worker is stopped), never "late" on a busy machine
+        # call's wall-clock backstop (then its worker is stopped; a spin is stopped sooner,
+        # at its CPU limit), never "late" on a busy machine
         budget = self.params.strategy.team_budget_ms / 1000.0
-        self.team_plays.grace_s = hard_limit_s(budget) + KILL_GRACE_S + 0.05
+        self.team_plays.grace_s = wall_limit_s(budget) + STACK_WAIT_S + 0.1
         self.team_play = play
         self.strategy.team = self.team_plays
 
@@ -203,7 +205,7 @@ class Side:
             return
         r = tp.runner(tp.registry.plays()[self.team_play])
         r.ensure()
-        deadline = time.monotonic() + LOAD_LIMIT_S + 5.0
+        deadline = time.monotonic() + LOAD_WALL_LIMIT_S + 5.0
         while r.run.state not in ("running", "error") and time.monotonic() < deadline:
             await asyncio.sleep(0.01)  # a real process starting: its state, bounded
         if r.run.error is not None:

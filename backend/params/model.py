@@ -59,8 +59,8 @@ class StrategyParams(Group):
     team_budget_ms: float = num(10.0, 1.0, 200.0, "ms", 1.0,
                                 "CPU time a team play may use per tick: over it, that tick's "
                                 "orders are discarded (the robots stop); 3 ticks in a row, "
-                                "or stuck for 10 budgets (at least 0.25 s), and the play "
-                                "stops until its file is saved again")
+                                "or 10 budgets (at least 0.25 s) of CPU time in one call, "
+                                "and the play stops until its file is saved again")
     formation_period_s: float = num(5.0, 1.0, 60.0, "s", 0.5, "time on each formation")
     kick_speed_mps: float = num(5.5, 1.0, 6.5, "m/s", 0.1, "shot speed (the rules allow 6.5)")
     pass_speed_mps: float = num(3.0, 0.5, 6.5, "m/s", 0.1, "pass and free-kick speed")

@@ -145,7 +145,8 @@ class TeamPlays:
         self.octave_timeout_s = 0.2
         #: how much longer than the budget a tick waits for the answers (wall clock). Live:
         #: IPC_GRACE_S. Headless (evaluate/) the game's clock stands still while it waits,
-        #: so it waits up to the hard limit: a busy machine never makes an answer late there
+        #: so it waits up to the wall-clock backstop: a busy machine never makes an answer
+        #: late there
         self.grace_s = IPC_GRACE_S
         self._closing: set[asyncio.Task[None]] = set()
         registry.listeners.append(self._changed)
@@ -224,7 +225,7 @@ class TeamPlays:
             p = r.send(replace(game, mine=mine), None, budget_s, now)
             asks.append(_Ask(play, mine, r, p, "" if p is not None else
                              f"{f.name} is reloading" if r.reloading else
-                             "busy: its previous tick has not answered"))
+                             r.waiting()))
         self.release({a.runner.name for a in asks if a.runner is not None}, now)
         longest = max((a.pending.budget_s for a in asks if a.pending is not None),
                       default=budget_s)

@@ -1,6 +1,7 @@
 """The station's end of a team-code worker process (``backend.teamcode.worker``): spawn it,
 send requests, read replies in a task of its own (so an answer may come after the tick that
-asked stopped waiting), and say why it ended (a stuck call's stack from its dump file)."""
+asked stopped waiting), say how much CPU time it has used (its limits are judged on that), and
+say why it ended (a stuck call's stack from its dump file)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from sslnet.proc import process_cpu_s
 
 from ..engine._process import PROJECT_ROOT, worker_env
 
@@ -45,11 +48,6 @@ class WorkerGone(Exception):
         self.dump = dump
         self.reason = reason
         super().__init__(reason or self.describe())
-
-    @property
-    def timed_out(self) -> bool:
-        """faulthandler ended it: a call ran past its hard limit."""
-        return "Timeout (" in self.dump
 
     def describe(self) -> str:
         rc = self.returncode
@@ -194,6 +192,24 @@ class PyWorker:
             fut.set_exception(WorkerGone(self.proc.returncode, "", f"cannot write: {exc}"))
             fut.exception()
         return fut
+
+    def cpu_s(self) -> float | None:
+        """The process's CPU time so far (user + system, every thread; /proc), or None
+        when it cannot be read (ended)."""
+        if not self.alive or self.pid <= 0:
+            return None
+        try:
+            return process_cpu_s(self.pid)
+        except (OSError, ValueError, IndexError):
+            return None
+
+    def ask_stack(self) -> None:
+        """Asks the worker to write its threads' stacks to the dump file (its faulthandler
+        answers SIGUSR1 at C level, whatever the call is doing): where a call that does not
+        answer is waiting."""
+        if self.alive and self.pid > 0:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(self.pid, signal.SIGUSR1)
 
     def kill(self, reason: str = "") -> None:
         if reason and not self.kill_reason:

@@ -2,16 +2,23 @@
 (its CPU time against the budget), reload it on a save, fail it and say why.
 
 A failed file (import error, exception, malformed output, over budget 3 ticks in a row,
-stuck, crashed) stays failed until it (or a library) is saved again; then it is loaded again
-and resumes. Its robots are stopped meanwhile by whoever asked (the strategy).
+spinning, stuck, crashed) stays failed until it (or a library) is saved again; then it is
+loaded again and resumes. Its robots are stopped meanwhile by whoever asked (the strategy).
 
 Budget: the worker's CPU time for a call (``time.thread_time``), so a busy machine does not
 make a play late; over budget, that tick's output is discarded. A reload is not billed: no
 call is sent while the worker imports (it would wait behind the import), and the first call
-after a load (its warm-up) is not held to the budget. A call that does not return
-within the hard limit (``hard_limit_s``: at least 0.25 s, ten budgets) is stuck: the worker's
-faulthandler writes the stack and ends it (the station kills it half a second later if not),
-and the error says on which line it was.
+after a load (its warm-up) is not held to the budget.
+
+Limits, on CPU time too: a call that uses its CPU limit (``cpu_limit_s``: at least 0.25 s,
+ten budgets) is spinning: the worker's ``SIGPROF`` raises in it (the error names the line)
+and the station ends that worker; should the raise not come (a long C call, the limit
+switched off), the station ends it ``KILL_GRACE_S`` of CPU time later, from the CPU time
+/proc shows. A worker the machine does not schedule uses no CPU time and is not stopped: its
+robots are held ("late") until it answers. Behind that, a wall-clock backstop
+(``wall_limit_s``: ten CPU limits) for a call that waits on something (a sleep, a lock, a
+socket) or a worker never scheduled: its stack is asked for, then it is ended. Loads alike
+(``LOAD_LIMIT_S`` of CPU time, ``LOAD_WALL_LIMIT_S`` of wall time).
 """
 
 from __future__ import annotations
@@ -34,17 +41,30 @@ from .state import ErrorInfo, ErrorKind, FileRun
 log = logging.getLogger("touchline.team")
 _ratelog = RateLimitedLog(log, interval_s=10.0)
 
-#: the longest a file may take to import (numpy, scipy, a library of the team's...)
+#: the CPU time a file's import may use (numpy, scipy, a library of the team's...)
 LOAD_LIMIT_S = 10.0
-#: the station kills a worker this long after its own hard limit (faulthandler's) passed
+#: the wall time a load may take before it is stuck (a busy machine, a slow disk, a wait)
+LOAD_WALL_LIMIT_S = 60.0
+#: the station ends a worker whose call went this much CPU time past its limit: the
+#: worker's own SIGPROF did not stop it (a long call into C, or the team's code turned it off)
 KILL_GRACE_S = 0.5
+#: a call with no answer after this many CPU limits of wall time is stuck (the backstop)
+WALL_FACTOR = 10.0
+#: a worker's stack (SIGUSR1: where it spins or waits) is waited for this long before it is
+#: ended
+STACK_WAIT_S = 0.1
 #: this many ticks in a row over budget: failed until the next save
 OVER_BUDGET_IN_A_ROW = 3
 
 
-def hard_limit_s(budget_s: float) -> float:
-    """A call still running after this long is stuck (wall clock)."""
+def cpu_limit_s(budget_s: float) -> float:
+    """A call that uses this much CPU time is spinning."""
     return max(0.25, 10.0 * budget_s)
+
+
+def wall_limit_s(budget_s: float) -> float:
+    """A call not answered after this long (wall clock) is stuck, whatever its CPU time."""
+    return WALL_FACTOR * cpu_limit_s(budget_s)
 
 
 @dataclass
@@ -63,6 +83,23 @@ class Pending:
     #: the first call after a load: its warm-up (lazy imports, caches) is not held to the
     #: budget
     warmup: bool = False
+    #: the worker's CPU time when the call was sent (None: unknown)
+    cpu0: float | None = None
+
+
+@dataclass
+class Watch:
+    """One call the station watches (a tick or a load) against its CPU and wall limits."""
+
+    done: Callable[[], bool]
+    started: float  # monotonic
+    cpu0: float | None
+    cpu_limit_s: float
+    wall_limit_s: float
+    loading: bool = False
+    #: (wall s, CPU s) since the start at the latest look that let it go on
+    seen: tuple[float, float | None] = (0.0, None)
+    looks: int = 0
 
 
 class Runner:
@@ -191,15 +228,41 @@ class Runner:
     async def close(self) -> None:
         raise NotImplementedError
 
+    def call_cpu_s(self, p: Pending) -> float | None:
+        """The CPU time call ``p`` has used so far (None: unknown)."""
+        return None
+
     def late(self, p: Pending) -> None:
         """The tick stopped waiting for ``p``: its output, whenever it comes, is discarded."""
         if not p.done and p.warmup:
             p.reason = "warming up (the first call after a load)"
         elif not p.done:
-            # not over its budget (CPU time, judged when the answer comes): late (wall time:
-            # the machine is busy, or the worker was not scheduled)
-            p.reason = "late (no answer within the budget and the grace)"
+            # not judged over its budget here (CPU time, when the answer comes): late (wall
+            # time: the machine is busy, or the worker was not scheduled)
+            p.reason = f"late: no answer within the budget + grace{self._so_far(p)}"
             self.run.late += 1
+
+    def waiting(self) -> str:
+        """Why no call was sent this tick: the previous one has not answered (the machine
+        is busy, or the play computes: its CPU time says which)."""
+        p = self.inflight
+        used = self.call_cpu_s(p) if p is not None else None
+        if p is None or used is None:
+            return "busy: its previous tick has not answered"
+        if p.warmup:
+            return f"warming up (the first call after a load; {used * 1000:.0f} ms of CPU time)"
+        if used >= p.budget_s:
+            return f"busy: its previous tick is still computing{self._so_far(p, used)}"
+        return f"late: its previous tick has not answered yet{self._so_far(p, used)}"
+
+    def _so_far(self, p: Pending, used: float | None = None) -> str:
+        used = self.call_cpu_s(p) if used is None else used
+        if used is None:
+            return ""
+        if used < p.budget_s:
+            return f" (the machine is busy: {used * 1000:.0f} ms of CPU time so far)"
+        return (f" ({used * 1000:.0f} ms of CPU time so far, over its "
+                f"{p.budget_s * 1000:.0f} ms budget)")
 
 
 def error_from(err: dict[str, Any], name: str) -> ErrorInfo:
@@ -231,6 +294,10 @@ class PythonRunner(Runner):
         self._want = 0  # loads asked for (a save during a load loads again)
         self._done = 0
         self._loading = False  # a load request is with the worker
+        #: workers ended after a spin (closing)
+        self._retiring: set[asyncio.Task[None]] = set()
+        #: the latest call watched against the limits (a tick or a load)
+        self.watched: Watch | None = None
         #: what the loaded file says of itself (a processor: rate_hz, trigger, max_hz,
         #: reads), checked by ``info_check``
         self.info: dict[str, Any] = {}
@@ -302,28 +369,28 @@ class PythonRunner(Runner):
             w.on_gone = self._gone
             self.worker = w
         w = self.worker
+        cpu0 = w.cpu_s()
         fut = w.request("load", found.name, self.kind, found.entry, LOAD_LIMIT_S)
+        # set until the answer is accounted (``_loaded``) or the worker is gone (``_gone``
+        # says it was loading): never before, or a load the station ended reads as a tick's
+        # failure
         self._loading = True
         # The answer is accounted in the future's callback, as the ticks' answers are: in the
         # order the worker gave them. (Awaited here, it was accounted a few loop steps later,
         # after the answer of a tick sent during the reload: that tick's failure was cleared
         # by "loaded" and counted again on the next tick.)
-        fut.add_done_callback(lambda f: self._loaded(found, f))
-        try:
-            async with asyncio.timeout(LOAD_LIMIT_S + KILL_GRACE_S):
-                await asyncio.wait([fut])
-        except TimeoutError:
-            w.kill(f"stuck: loading took longer than {LOAD_LIMIT_S:g} s")
-            return  # _gone says it
-        finally:
-            self._loading = False
+        fut.add_done_callback(lambda f: self._loaded(found, w, f))
+        self._watch(w, Watch(fut.done, time.monotonic(), cpu0, LOAD_LIMIT_S,
+                             LOAD_WALL_LIMIT_S, loading=True))
+        await asyncio.wait([fut])  # bounded: the watch ends a worker past its limits
 
-    def _loaded(self, found: Found, fut: asyncio.Future[Any]) -> None:
+    def _loaded(self, found: Found, w: PyWorker, fut: asyncio.Future[Any]) -> None:
         """The worker's answer to a load (not called if it ended first: _gone says it)."""
         if fut.cancelled() or fut.exception() is not None:
             return
         self._loading = False
         reply = fut.result()
+        self._spun(w, reply)
         if self.closed or self._done < self._want:
             return  # saved again meanwhile: the next load counts
         if isinstance(reply, tuple) and reply[:1] == ("loaded",) and len(reply) == 4:
@@ -345,23 +412,33 @@ class PythonRunner(Runner):
             self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}",
                                 found.name))
 
+    def _spun(self, w: PyWorker, reply: Any) -> None:
+        """A call stopped at its CPU limit (the worker's SIGPROF raised in it): that worker
+        is ended (what the interrupted code left behind, a thread it started, goes with it);
+        the next save starts a new one."""
+        if not (isinstance(reply, tuple) and reply[:1] == ("error",) and len(reply) == 4
+                and isinstance(reply[2], dict) and reply[2].get("spinning") is True):
+            return
+        if self.worker is w:
+            self.worker = None
+        w.on_gone = None
+        task = asyncio.get_running_loop().create_task(w.close())
+        self._retiring.add(task)
+        task.add_done_callback(self._retiring.discard)
+
     def _gone(self, gone: WorkerGone) -> None:
-        """The worker ended without being asked: stuck (faulthandler or the station ended
-        it), or crashed. Failed until the next save, which starts a new one."""
+        """The worker ended without being asked: spinning or stuck (the station ended it),
+        or crashed. Failed until the next save, which starts a new one."""
         self.worker = None
-        inflight, self.inflight = self.inflight, None
+        self.inflight = None
         if self.closed:
             return
-        limit = f" of {hard_limit_s(inflight.budget_s):g} s" if inflight is not None else ""
         file, line, stack = gone.where(_team_namer(self.team_dir))
         at = f" at {file}:{line}" if file is not None else ""
         loading, self._loading = self._loading, False
-        if gone.timed_out or gone.reason.startswith("stuck"):
-            what = (gone.reason.removeprefix("stuck: ") if not gone.timed_out else
-                    f"did not finish loading within {LOAD_LIMIT_S:g} s" if loading else
-                    f"did not return within its hard limit{limit}")
+        if gone.reason.startswith(("spinning", "stuck")):
             self.fail(ErrorInfo("import" if loading else "budget",
-                                f"stuck: {what}{at} (its worker was stopped)",
+                                f"{gone.reason}{at} (its worker was stopped)",
                                 file or self.name, line, stack))
         elif gone.reason:
             self.fail(ErrorInfo("crash", f"{gone.reason}{at}", file or self.name, line, stack))
@@ -369,43 +446,78 @@ class PythonRunner(Runner):
             self.fail(ErrorInfo("crash", f"{gone.describe()}{at}", file or self.name, line,
                                 stack or gone.dump[-4000:]))
 
+    # ---- the limits: the worker's CPU time, and a wall-clock backstop ----
+
+    def _watch(self, w: PyWorker, c: Watch) -> None:
+        """Looks at call ``c`` when it could be past its CPU limit at the earliest (one
+        thread uses at most a second of CPU time a second), again as long as it has not
+        answered, and ends its worker once past a limit."""
+        self.watched = c
+        asyncio.get_running_loop().call_later(c.cpu_limit_s + KILL_GRACE_S, self._look, w, c)
+
+    def _look(self, w: PyWorker, c: Watch, verdict: str = "") -> None:
+        if c.done() or not w.alive:
+            return
+        if verdict:
+            w.kill(verdict)  # _gone says it
+            return
+        cpu = w.cpu_s()
+        elapsed = time.monotonic() - c.started
+        used = cpu - c.cpu0 if cpu is not None and c.cpu0 is not None else None
+        c.looks += 1
+        if used is not None and used > c.cpu_limit_s + KILL_GRACE_S:
+            what = "while loading" if c.loading else "in one call"
+            verdict = (f"spinning: over its CPU limit {what} ({used:.2f} s of CPU time, the "
+                       f"limit {c.cpu_limit_s:g} s) and not stopped by it (a long call into "
+                       "C, or the limit turned off)")
+        elif elapsed >= c.wall_limit_s:
+            spent = f"{used:.2f} s" if used is not None else "unknown"
+            verdict = (f"stuck: {'not loaded' if c.loading else 'no answer'} within "
+                       f"{c.wall_limit_s:g} s of wall time, with {spent} of CPU time (waiting "
+                       "on something, or its worker not scheduled)")
+        else:
+            c.seen = (elapsed, used)
+            left = c.cpu_limit_s + KILL_GRACE_S - (used or 0.0)
+            asyncio.get_running_loop().call_later(
+                max(0.02, min(left, c.wall_limit_s - elapsed)), self._look, w, c)
+            return
+        # where it is (its stack, for the error's line), then ended a moment later: also a
+        # reply that came while the station's loop was busy is read first, not killed
+        w.ask_stack()
+        asyncio.get_running_loop().call_later(STACK_WAIT_S, self._look, w, c, verdict)
+
+    def call_cpu_s(self, p: Pending) -> float | None:
+        w = self.worker
+        cpu = w.cpu_s() if w is not None else None
+        return cpu - p.cpu0 if cpu is not None and p.cpu0 is not None else None
+
     # ---- ticks ----
 
     def send(self, game: Any, inputs: Any, budget_s: float,
              now: float | None = None) -> Pending | None:
         """Sends this tick's request; None when there is nothing to ask (not running, or the
-        previous call still runs: then it is stopped once past its hard limit)."""
+        previous call still runs: then it is stopped once past its limits)."""
         now = time.monotonic() if now is None else now
         w = self.worker
         if self.closed or self.run.state != "running" or w is None or not w.alive:
             return None
         if self.inflight is not None:
-            return None  # still running (stopped at its hard limit: see _stuck)
+            return None  # still running (stopped past its limits: see _look)
         if self._loading:
             # the worker imports the new version: a call would wait behind the import and be
             # billed for it (late); its robots are held until the new version answers
             return None
-        hard = hard_limit_s(budget_s)
-        fut = w.request("tick", game, inputs, hard)
-        p = self._warmup(Pending(fut, now, budget_s))
+        cpu0 = w.cpu_s()
+        limit = cpu_limit_s(budget_s)
+        fut = w.request("tick", game, inputs, limit)
+        p = self._warmup(Pending(fut, now, budget_s, cpu0=cpu0))
         self.inflight = p
-        fut.add_done_callback(lambda f: self._replied(p, f))
-        # the worker's faulthandler ends a stuck call at ``hard``; should it not (team code
-        # can switch it off), the station ends the worker a little later
-        asyncio.get_running_loop().call_later(hard + KILL_GRACE_S, self._stuck, w, p)
+        fut.add_done_callback(lambda f: self._replied(w, p, f))
+        self._watch(w, Watch(lambda: p.done, time.monotonic(), cpu0, limit,
+                             wall_limit_s(budget_s)))
         return p
 
-    def _stuck(self, w: PyWorker, p: Pending, final: bool = False) -> None:
-        if p.done or not w.alive:
-            return
-        if not final:
-            # once more a moment later: a reply that came while the station's loop was busy
-            # (its timer runs before the reader's next step) is read first, not killed
-            asyncio.get_running_loop().call_later(0.02, self._stuck, w, p, True)
-            return
-        w.kill(f"stuck: no answer within {hard_limit_s(p.budget_s) + KILL_GRACE_S:.2f} s")
-
-    def _replied(self, p: Pending, f: asyncio.Future[Any]) -> None:
+    def _replied(self, w: PyWorker, p: Pending, f: asyncio.Future[Any]) -> None:
         if f.cancelled():
             return
         exc = f.exception()
@@ -415,7 +527,9 @@ class PythonRunner(Runner):
             if self.inflight is p:
                 self.inflight = None
             return
-        self.accept(p, f.result())
+        reply = f.result()
+        self.accept(p, reply)
+        self._spun(w, reply)
 
     async def close(self) -> None:
         await self._close_start()
@@ -423,6 +537,8 @@ class PythonRunner(Runner):
         if w is not None:
             w.on_gone = None
             await w.close()
+        if self._retiring:
+            await asyncio.gather(*self._retiring, return_exceptions=True)
         if self.run.state in ("running", "starting"):
             self.run.state = "idle"
 

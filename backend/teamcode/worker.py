@@ -7,23 +7,29 @@ Protocol on stdin/stdout, as the compute engine's (``backend.engine._numpy_worke
 of a 4-byte big-endian length and a pickle. The first frame out is ``("ready", pid)``; then
 each request carries a sequence number its reply repeats:
 
-* ``("load", seq, name, kind, entry, hard_s)`` -> ``("loaded", seq, version, info)`` (a
+* ``("load", seq, name, kind, entry, cpu_s)`` -> ``("loaded", seq, version, info)`` (a
   processor's ``rate_hz``, ``trigger``, ``max_hz``, ``reads``; {} for a play) or
   ``("error", seq, error, 0.0)``: imports the file (again: a reload drops every module of the
   team folder and imports it anew, keeping numpy and touchline loaded; a class play or
   processor that defines ``keep()``/``restore()`` carries its state across).
-* ``("tick", seq, game, inputs, hard_s)`` -> ``("out", seq, output, cpu_s, version)`` or
+* ``("tick", seq, game, inputs, cpu_s)`` -> ``("out", seq, output, cpu_s, version)`` or
   ``("error", seq, error, cpu_s)``: one call of ``play(game)``, ``Play().tick(game)`` or the
   processor's ``tick(game, inputs)``. ``cpu_s`` is this thread's CPU time for the call (the
   budget is judged on it: a busy machine does not make a play late), with the garbage
   collector off during the call and a young-generation collection after the reply.
   ``output``: plain data (``plain_orders``, ``plain_outputs``); the station checks it again.
 
-A call that runs longer than ``hard_s`` (wall clock) is stuck: ``faulthandler`` writes every
-thread's stack to the dump file named in the config (so the station can say on which line
-it was) and ends the process. The station kills it too if it does not answer. The
-address space is limited (RLIMIT_AS, ``memory_mb``); team code's prints go to stderr (the
-station's log): fd 1 is pointed there so nothing can corrupt the protocol.
+The request's ``cpu_s`` is the call's CPU limit: this process's CPU time (``ITIMER_PROF``),
+not the wall clock, so a loaded machine that does not schedule the worker never counts
+against the play. Past it the call is spinning: ``SIGPROF`` raises ``CpuLimitExceeded``
+where the team code is (the error names that line; a ``BaseException``, so a play's
+``except Exception`` does not swallow it), and faulthandler writes every thread's stack to
+the dump file named in the config first (the line, should the raise never come: a long C
+call). The station watches the worker's CPU time from outside too and ends it if it goes
+on (``runner.PythonRunner``), and asks for a stack (``SIGUSR1``) before ending one that gives
+no answer for far longer in wall time. The address space is limited (RLIMIT_AS,
+``memory_mb``); team code's prints go to stderr (the station's log): fd 1 is pointed there
+so nothing can corrupt the protocol.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import operator
 import os
 import pickle
 import resource
+import signal
 import sys
 import time
 import traceback
@@ -54,6 +61,43 @@ Plain = tuple[Any, ...]
 
 class OutputError(Exception):
     """The team code returned something that is not what the interface asks."""
+
+
+class CpuLimitExceeded(BaseException):
+    """One call of team code used its CPU limit (raised by ``SIGPROF``). A BaseException, as
+    KeyboardInterrupt: a play's ``except Exception`` does not swallow it."""
+
+
+class CpuLimit:
+    """The CPU-time limit of one call: ``ITIMER_PROF`` (this process's CPU time, user and
+    system, every thread) armed around it; its ``SIGPROF`` raises ``CpuLimitExceeded`` in the
+    call. One shot: at most one raise per call, and none once the call is over."""
+
+    def __init__(self) -> None:
+        self.armed = False
+        self.limit_s = 0.0
+        #: the limit was reached in the latest call (its stacks are in the dump file)
+        self.fired = False
+        signal.signal(signal.SIGPROF, self._expired)
+
+    def _expired(self, _signum: int, _frame: Any) -> None:
+        # a signal that came as the call ended runs its Python handler a few bytecodes
+        # later: not armed any more, nothing to stop
+        if self.armed:
+            self.armed, self.fired = False, True
+            raise CpuLimitExceeded(f"over its CPU limit ({self.limit_s:g} s of CPU time)")
+
+    def call(self, limit_s: float, fn: Any, *args: Any) -> Any:
+        """``fn(*args)`` under the limit (raises CpuLimitExceeded past it; the raise may come
+        from this function's own last lines, still for this call)."""
+        self.limit_s = limit_s
+        self.armed, self.fired = True, False
+        signal.setitimer(signal.ITIMER_PROF, max(limit_s, 1e-3))
+        try:
+            return fn(*args)
+        finally:
+            self.armed = False  # before the timer stops: a late handler does nothing
+            signal.setitimer(signal.ITIMER_PROF, 0.0)
 
 
 def _describe(v: Any) -> str:
@@ -159,8 +203,11 @@ class Host:
             return None
         return rel.as_posix()
 
-    def error(self, kind: str, exc: BaseException, name: str) -> dict[str, Any]:
-        """An exception as the station shows it: the deepest frame in the team folder."""
+    def error(self, kind: str, exc: BaseException, name: str,
+              to_team_end: bool = False) -> dict[str, Any]:
+        """An exception as the station shows it: the deepest frame in the team folder
+        (``to_team_end``: the traceback ends there too, the worker's frames below it are
+        how it was stopped, not what the team wrote)."""
         file, line = name, None
         frames = traceback.extract_tb(exc.__traceback__)
         team_frames = [(i, f) for i, f in enumerate(frames) if self.team_name(f.filename)]
@@ -171,8 +218,9 @@ class Host:
             file, line = self.team_name(f.filename) or name, f.lineno
         # the traceback from the first team frame on (the worker's own frames say nothing)
         first = team_frames[0][0] if team_frames else len(frames)
+        end = team_frames[-1][0] + 1 if team_frames and to_team_end else len(frames)
         lines = ["Traceback (most recent call last):\n",
-                 *traceback.format_list(frames[first:]),
+                 *traceback.format_list(frames[first:end]),
                  *traceback.format_exception_only(type(exc), exc)]
         text = "".join(lines)
         for root in (str(self.team_dir) + os.sep,):
@@ -279,6 +327,12 @@ def main() -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
     dump = open(config["dump"], "w")  # noqa: SIM115 (open for the process's life)
     faulthandler.enable(file=dump)  # a crash in C (a segfault) says where it was too
+    cpu_limit = CpuLimit()
+    # past the CPU limit the stacks are written first (C level, whatever the call is doing),
+    # then the Python handler raises; SIGUSR1: the station asks where a call that does not
+    # answer is waiting, before it ends the worker
+    faulthandler.register(signal.SIGPROF, file=dump, all_threads=True, chain=True)
+    faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
     host = Host(Path(config["team_dir"]))
     name = ""
     send(proto_out, ("ready", os.getpid()))
@@ -289,34 +343,36 @@ def main() -> None:
         msg = pickle.loads(body)
         op, seq = msg[0], msg[1]
         if op == "load":
-            _, _, name, kind, entry, hard_s = msg
-            faulthandler.dump_traceback_later(hard_s, exit=True, file=dump)
+            _, _, name, kind, entry, cpu_s = msg
             try:
-                version = host.load(name, kind, entry)
+                version = cpu_limit.call(cpu_s, host.load, name, kind, entry)
                 reply: Any = ("loaded", seq, version, host.info())
+            except CpuLimitExceeded as exc:
+                reply = ("error", seq, spinning(host, "import", exc, name, cpu_s,
+                                                "while loading"), 0.0)
             except BaseException as exc:  # SystemExit from team code's import too
                 reply = ("error", seq, host.error("import", exc, name), 0.0)
-            faulthandler.cancel_dump_traceback_later()
             send(proto_out, reply)
+            forget_stacks(cpu_limit, dump)
         elif op == "tick":
-            _, _, game, inputs, hard_s = msg
+            _, _, game, inputs, cpu_s = msg
             gc.disable()
-            faulthandler.dump_traceback_later(hard_s, exit=True, file=dump)
             t0 = time.thread_time()
             try:
-                out = host.tick(game, inputs)
+                out = cpu_limit.call(cpu_s, host.tick, game, inputs)
                 cpu = time.thread_time() - t0
-                faulthandler.cancel_dump_traceback_later()
                 version = host.loaded.version if host.loaded else ""
                 reply = ("out", seq, out, cpu, version)
+            except CpuLimitExceeded as exc:
+                cpu = time.thread_time() - t0
+                reply = ("error", seq, spinning(host, "budget", exc, name, cpu_s,
+                                                "in one call"), cpu)
             except OutputError as exc:
                 cpu = time.thread_time() - t0
-                faulthandler.cancel_dump_traceback_later()
                 reply = ("error", seq, {"kind": "output", "message": str(exc), "file": name,
                                         "line": None, "traceback": ""}, cpu)
             except BaseException as exc:  # SystemExit and KeyboardInterrupt from team code too
                 cpu = time.thread_time() - t0
-                faulthandler.cancel_dump_traceback_later()
                 reply = ("error", seq, host.error("exception", exc, name), cpu)
             try:
                 send(proto_out, reply)
@@ -324,12 +380,35 @@ def main() -> None:
                 send(proto_out, ("error", seq, {
                     "kind": "output", "message": f"the answer cannot be sent: {exc}",
                     "file": name, "line": None, "traceback": ""}, cpu))
+            forget_stacks(cpu_limit, dump)
             gc.collect(0)
             gc.enable()
         else:
             send(proto_out, ("error", seq, {"kind": "crash", "message": f"unknown request "
                                              f"{op!r}", "file": name, "line": None,
                                              "traceback": ""}, 0.0))
+
+
+def forget_stacks(cpu_limit: CpuLimit, dump: Any) -> None:
+    """After a call that reached its CPU limit (answered all the same when the team's code
+    caught CpuLimitExceeded: this worker goes on), the stacks written then must not pass
+    for a later crash's."""
+    if cpu_limit.fired:
+        cpu_limit.fired = False
+        dump.seek(0)
+        dump.truncate()
+
+
+def spinning(host: Host, kind: str, exc: CpuLimitExceeded, name: str, cpu_s: float,
+             when: str) -> dict[str, Any]:
+    """A call stopped at its CPU limit, as the station shows it: where it was (the
+    traceback's deepest team frame), and a message that says what happened (the station
+    ends this worker: the next save starts a new one)."""
+    err = host.error(kind, exc, name, to_team_end=True)
+    err["message"] = (f"spinning: over its CPU limit {when} ({cpu_s:g} s of CPU time; "
+                      "a loop that does not end?)")
+    err["spinning"] = True
+    return err
 
 
 if __name__ == "__main__":

@@ -173,7 +173,7 @@ def test_pool_and_cluster_give_the_same_report(tmp_path: Path, cluster: str) -> 
         s = strip_volatile(rep)
         for r in s["runs"]:
             r["log"] = Path(r["log"]).relative_to(Path(r["log"]).parents[2]).as_posix()
-            # where the hard limit caught the endless loop (line 8 or 9) is the machine's
+            # where the CPU limit caught the endless loop (line 8 or 9) is the machine's
             r["team_error"] = re.sub(r"py:\d+", "py:N", str(r["team_error"]))
         for g in s["grades"]:
             for cell in g["cells"].values():
@@ -184,7 +184,7 @@ def test_pool_and_cluster_give_the_same_report(tmp_path: Path, cluster: str) -> 
     a, b = same(pool_rep), same(saved)
     assert [c["name"] for c in b["runs"][1]["checks"]] == ["reach", "stopped"]
     assert a == b
-    # the logs too (not the spinning student's: its commands stop when the hard limit, in
+    # the logs too (not the spinning student's: its commands stop when the CPU limit, in
     # real time, catches it)
     for ra, rb in zip(pool_rep["runs"], saved["runs"], strict=True):
         assert Path(rb["log"]).is_relative_to(tmp_path / "reports")

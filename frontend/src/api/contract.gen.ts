@@ -1198,7 +1198,7 @@ export interface TeamEdit {
  * it uses, is saved again).
  */
 export interface TeamError {
-  /** "import": does not load (syntax, import, a name taken); "exception": raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); "budget": over its time budget 3 ticks in a row, or stuck (killed); "crash": its worker process died; "missing": the file of a chosen play is gone */
+  /** "import": does not load (syntax, import, a name taken); "exception": raised; "output": malformed answer (wrong type, NaN, a robot it does not drive); "budget": over its time budget 3 ticks in a row, spinning (over its CPU limit in one call) or stuck (no answer within the wall-clock backstop), its worker ended; "crash": its worker process died; "missing": the file of a chosen play is gone */
   kind: "import" | "exception" | "output" | "budget" | "crash" | "missing";
   message: string;
   /** the team file it happened in ("lib/util.py") */

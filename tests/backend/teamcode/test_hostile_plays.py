@@ -211,3 +211,59 @@ async def test_a_play_that_stops_answering_stops_its_robots(rig: Rig, tmp_path: 
         assert e.stop
     for _ in range(3):
         assert all(speed(c) == 0.0 for c in (await rig.tick()).values())
+
+
+async def test_a_worker_the_machine_does_not_run_is_held_not_killed(
+        rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A healthy play whose worker is not scheduled (SIGSTOP, a real process signal, past
+    the old wall-clock limit of 0.75 s at a 10 ms budget): its robots get zero commands the
+    whole time (never its last command, never driving blind), the reason says the machine
+    is busy, and its worker is not ended: after SIGCONT the same worker drives again. (The
+    wall-clock backstop is put far off so that a loaded test machine cannot reach it; it is
+    tested on its own in test_python_worker.py.)"""
+    import os
+    import signal
+
+    from backend.teamcode import runner as runner_mod
+
+    monkeypatch.setattr(runner_mod, "WALL_FACTOR", 100.0, raising=False)
+    write(tmp_path, "steady.py", SPEED.format(fwd=1.0))
+    rig.registry.rescan()
+    rig.configure(play="steady", team_budget_ms=10.0)
+    await rig.running("steady.py")
+    runner = rig.plays.runners["steady.py"]
+    run = rig.registry.runs["steady.py"]
+
+    async def ticks_until(cond: Any, what: str) -> None:
+        for _ in range(2000):
+            await rig.tick()
+            if cond():
+                return
+        raise AssertionError(f"never: {what} ({run})")
+
+    await ticks_until(lambda: all(speed(c) > 0.5 for c in rig.last.values()), "driving")
+    pid = runner.pid  # type: ignore[attr-defined]
+    os.kill(pid, signal.SIGSTOP)
+    held = 0
+    try:
+        # ticks until the station looked at the unanswered call past the old limit
+        for _ in range(20000):
+            cmds = await rig.tick()
+            watched = getattr(runner, "watched", None)
+            if run.state == "error" or (watched is not None and not watched.done()
+                                        and watched.seen[0] > 1.0):
+                break
+            if not any(speed(c) > 0 for c in cmds.values()):
+                held += 1
+        assert run.state == "running" and runner.pid == pid, run.error  # type: ignore
+        cmds = await rig.tick()
+        assert cmds and all(speed(c) == 0.0 for c in cmds.values())
+        assert {rid for rid, _play, _why in rig.strategy.stopped} == {1, 2, 3}
+        assert all(why.startswith("late: its previous tick has not answered yet (the machine "
+                                  "is busy") for _rid, _play, why in rig.strategy.stopped), \
+            rig.strategy.stopped
+        assert held > 0
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    await ticks_until(lambda: all(speed(c) > 0.5 for c in rig.last.values()), "driving again")
+    assert run.state == "running" and runner.pid == pid  # type: ignore[attr-defined]

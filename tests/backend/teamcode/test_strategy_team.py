@@ -185,10 +185,9 @@ async def test_a_reload_and_its_warm_up_are_not_billed_as_over_budget(
     held meanwhile, 'reloading'), and the first call after a load is not held to the budget.
     The next calls are."""
     from backend.teamcode import plays as plays_mod
-    from backend.teamcode import runner as runner_mod
 
-    # only the CPU-time budget is judged here (a loaded machine stretches wall time)
-    monkeypatch.setattr(runner_mod, "hard_limit_s", lambda _budget_s: 30.0)
+    # only the CPU-time budget is judged here: the ticks wait long for the answers (a
+    # loaded machine stretches wall time)
     monkeypatch.setattr(plays_mod, "IPC_GRACE_S", 2.0)
     gate = tmp_path / "gate"
     gate.touch()
