@@ -21,7 +21,7 @@ computed from one frame for the robots in it, so a robot's frame age is its set'
 Machines are noisy: the ratios of one run are the figures that count.
 
     PYTHONPATH=. .venv/bin/python bench/loop_bench.py [--seconds 20] [--cameras 8] [--hz 75]
-        [--browser]
+        [--browser] [--camera-phases spread|together]
 """
 
 from __future__ import annotations
@@ -50,8 +50,7 @@ PY = sys.executable
 
 def sim_args(a: argparse.Namespace) -> list[str]:
     return ["--division", "A", "--blue", str(a.robots), "--yellow", str(a.robots), "--cameras",
-            str(a.cameras),
-            "--camera-hz", str(a.hz)]
+            str(a.cameras), "--camera-hz", str(a.hz), "--camera-phases", a.camera_phases]
 
 
 def measure(pids: dict[str, int], seconds: float) -> dict[str, float]:
@@ -102,10 +101,18 @@ def thread_cpu_by_name(pid: int) -> dict[str, float]:
     return out
 
 
+def frames_and_passes(health: dict[str, Any]) -> tuple[int, int]:
+    """The vision frames the backend took so far and its world model's runs (one a pass
+    that brought frames)."""
+    runs = {p["name"]: p["runs"] for p in health["processors"]}
+    return health["streams"]["vision"]["packets"], runs["world-model"]
+
+
 def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
     """Touchline's row; ``browser``: with headless Chromium showing the page meanwhile (its
     own CPU apart: only the relay's and the backend's count)."""
-    station = start_station(full_scale_args(a.cameras, a.hz, a.relay_arg, a.robots))
+    station = start_station(full_scale_args(a.cameras, a.hz, a.relay_arg, a.robots,
+                                            a.camera_phases))
     proc, pids, url = station.proc, station.pids, station.url
     page: subprocess.Popen[str] | None = None
     try:
@@ -123,6 +130,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
         p99s: list[float] = []
         age50s: list[float] = []
         age99s: list[float] = []
+        passes0 = frames_and_passes(client.get(url + "/api/health").json())
         c0 = {k: cpu_s(v) for k, v in pids.items()}
         th0 = thread_cpu_by_name(pids["backend"])
         t0 = time.monotonic()
@@ -138,6 +146,7 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
                 age50s.append(age["p50_ms"])
                 age99s.append(age["p99_ms"])
         dt = time.monotonic() - t0
+        passes1 = frames_and_passes(h)
         th1 = thread_cpu_by_name(pids["backend"])
         threads = {k: (v - th0.get(k, 0.0)) / dt * 100 for k, v in th1.items()}
         cpu = {("sim" if k == "fieldsim" else k): (cpu_s(v) - c0[k]) / dt * 100
@@ -152,7 +161,8 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
             "p99_ms": statistics.median(p99s) if p99s else -1,
             "p99_worst_ms": max(p99s) if p99s else -1, "threads": threads,
             "age_p50_ms": statistics.median(age50s) if age50s else -1,
-            "age_p99_ms": statistics.median(age99s) if age99s else -1}
+            "age_p99_ms": statistics.median(age99s) if age99s else -1,
+            "frames_a_pass": (passes1[0] - passes0[0]) / max(1, passes1[1] - passes0[1])}
 
 
 def main() -> None:
@@ -161,6 +171,9 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=5.0)
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
+    ap.add_argument("--camera-phases", choices=["spread", "together"], default="spread",
+                    help="fieldsim's cameras: each its own phase (spread), or all captured at "
+                         "once and sent back to back (together, as grSim does)")
     ap.add_argument("--robots", type=int, default=11,
                     help="robots a team (11: the goal's load; 1: the same frames with almost no "
                          "robot in them, the framework's own cost)")
@@ -176,7 +189,8 @@ def main() -> None:
         print(f"Touchline: relay {t['relay']:.1f} % backend {t['backend']:.1f} % "
               f"simulator {t['sim']:.1f} %, arrival -> command p50 {t['p50_ms']:.2f} ms "
               f"p99 {t['p99_ms']:.2f} ms (worst 1 s p99 {t['p99_worst_ms']:.2f} ms), "
-              f"robot's frame age p50 {t['age_p50_ms']:.2f} ms p99 {t['age_p99_ms']:.2f} ms")
+              f"robot's frame age p50 {t['age_p50_ms']:.2f} ms p99 {t['age_p99_ms']:.2f} ms, "
+              f"{t['frames_a_pass']:.2f} frames a pass")
         print("backend threads (% of one core): " + ", ".join(
             f"{k} {v:.1f}" for k, v in sorted(t["threads"].items(), key=lambda kv: -kv[1])
             if v >= 0.05))
@@ -186,7 +200,8 @@ def main() -> None:
             ("Touchline", t)]
     if a.browser:
         rows.append(("Touchline, one browser", touchline(a, browser=True)))
-    print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz, division A, 11 v 11, "
+    print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz ({a.camera_phases}), division A, "
+          f"{a.robots} v {a.robots}, "
           f"{a.seconds:g} s (CPU in % of one core)")
     print("| | relay | backend | relay + backend | arrival -> command p50 | p99 | "
           "robot's frame age p50 | p99 | simulator |")
@@ -202,7 +217,8 @@ def main() -> None:
     ratio = (t["relay"] + t["backend"]) / max(1e-9, f["relay"] + f["backend"])
     print(f"| Touchline / floor | {x('relay')} | {x('backend')} | {ratio:.1f}x | "
           f"{x('p50_ms')} | {x('p99_ms')} | {x('age_p50_ms')} | {x('age_p99_ms')} | |")
-    print(f"(Touchline's worst one-second p99: {t['p99_worst_ms']:.2f} ms)")
+    print(f"(Touchline's worst one-second p99: {t['p99_worst_ms']:.2f} ms; "
+          f"{t['frames_a_pass']:.2f} camera frames a pass; cameras {a.camera_phases})")
 
 
 if __name__ == "__main__":
