@@ -174,7 +174,8 @@ class RelayIngest(SocketProcessor):
         """Waits for the next frame of a burst under way (its cameras' frames came in bursts
         of more than this one has so far, the last two times): True once a message waits,
         False when none came within ``BURST_GAP_NS`` of the newest frame's arrival at the
-        relay (then the pass runs with what came). The relay forwards a burst's frames one by
+        relay, or within half of it from now when this thread is that far behind the relay
+        (then the pass runs with what came). The relay forwards a burst's frames one by
         one, tens of microseconds apart, and a pass takes longer than that: without the wait
         the first frame or two got a pass of their own, the rest a second one. Blocks this
         thread (at most the gap; the station has nothing else due that soon) on the socket's
@@ -183,8 +184,10 @@ class RelayIngest(SocketProcessor):
         out, clock = self._out, self.clock_ns
         fd = self._fd if self._fd >= 0 else out.get(zmq.FD)
         now = clock()
-        # (never longer than the gap from now: a stamp from the future does not hold it)
-        until = min(self._burst_last, now) + BURST_GAP_NS
+        # from the newest frame's arrival at the relay or, if that is longer ago (this thread
+        # woke late: the relay has forwarded the burst's frames before the rest came here),
+        # from now; never longer than the gap from now
+        until = max(min(self._burst_last, now), now - BURST_GAP_NS // 2) + BURST_GAP_NS
         while now < until:
             select.select((fd,), (), (), (until - now) / 1e9)
             if out.get(_EVENTS) & _POLLIN:
