@@ -284,7 +284,10 @@ class FieldSim:
                         start_mono += skipped
                         start_unix += skipped
                         now = world.t
-                        next_capture = [max(t - skipped, now) for t in next_capture]
+                        # (the captures stay where they are in simulated time, which
+                        # goes on where it was: each camera keeps its phase, the frames
+                        # it missed are dropped below; moved to the skip's instant, all
+                        # cameras captured together from then on)
                         next_geom = min(next_geom, now)
                         next_truth = min(next_truth, now)
                         self.lag_resets += 1
