@@ -165,6 +165,11 @@ def touchline(a: argparse.Namespace, browser: bool = False) -> dict[str, Any]:
             "frames_a_pass": (passes1[0] - passes0[0]) / max(1, passes1[1] - passes0[1])}
 
 
+def loadavg() -> str:
+    with open("/proc/loadavg") as f:
+        return " ".join(f.read().split()[:3])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seconds", type=float, default=20.0)
@@ -184,13 +189,15 @@ def main() -> None:
                     help="also a row with headless Chromium rendering the page (node, "
                          "/usr/bin/chromium)")
     a = ap.parse_args()
+    load0 = loadavg()
     t = touchline(a)
     if a.no_floor:
         print(f"Touchline: relay {t['relay']:.1f} % backend {t['backend']:.1f} % "
               f"simulator {t['sim']:.1f} %, arrival -> command p50 {t['p50_ms']:.2f} ms "
               f"p99 {t['p99_ms']:.2f} ms (worst 1 s p99 {t['p99_worst_ms']:.2f} ms), "
               f"robot's frame age p50 {t['age_p50_ms']:.2f} ms p99 {t['age_p99_ms']:.2f} ms, "
-              f"{t['frames_a_pass']:.2f} frames a pass")
+              f"{t['frames_a_pass']:.2f} frames a pass, cameras {a.camera_phases}, load average "
+              f"{load0} -> {loadavg()}")
         print("backend threads (% of one core): " + ", ".join(
             f"{k} {v:.1f}" for k, v in sorted(t["threads"].items(), key=lambda kv: -kv[1])
             if v >= 0.05))
@@ -199,7 +206,7 @@ def main() -> None:
     rows = [("floor", f), ("floor + the paper's algorithms in plain Python", floor(a, True)),
             ("Touchline", t)]
     if a.browser:
-        rows.append(("Touchline, one browser", touchline(a, browser=True)))
+        rows.append(("Touchline, a Chromium page open", touchline(a, browser=True)))
     print(f"control loop, {a.cameras} cameras x {a.hz:g} Hz ({a.camera_phases}), division A, "
           f"{a.robots} v {a.robots}, "
           f"{a.seconds:g} s (CPU in % of one core)")
@@ -218,7 +225,8 @@ def main() -> None:
     print(f"| Touchline / floor | {x('relay')} | {x('backend')} | {ratio:.1f}x | "
           f"{x('p50_ms')} | {x('p99_ms')} | {x('age_p50_ms')} | {x('age_p99_ms')} | |")
     print(f"(Touchline's worst one-second p99: {t['p99_worst_ms']:.2f} ms; "
-          f"{t['frames_a_pass']:.2f} camera frames a pass; cameras {a.camera_phases})")
+          f"{t['frames_a_pass']:.2f} camera frames a pass; cameras {a.camera_phases}; "
+          f"load average {load0} at the start, {loadavg()} at the end)")
 
 
 if __name__ == "__main__":
