@@ -147,6 +147,7 @@ class Station:
         self.publisher.armed_by = lambda: self.safety.armed_by
         self.control.internal = self.internal_referee
         self.control.silence = self.world.silence
+        self.publisher.arrivals = self.world.arrivals
         self.control.may_drive_other_team = self.safety.drives_other_team
         # the internal referee switched off is not obeyed: its silence is no warning
         self.referee_watch.obeyed = lambda: self.control.active_referee() is not None

@@ -38,6 +38,7 @@ from .processors import (
     VisionIngest,
     WorldProcessor,
 )
+from .processors.publisher import FRAME_AGE_STAGE
 from .recording import RecordingControl
 from .referee.internal import OPERATOR_COMMANDS, InternalReferee
 from .referee.watch import RefereeWatch
@@ -398,7 +399,8 @@ def latency_stages(p: ViewParts) -> list[contract.LatencyStage]:
     stages = [cast(contract.LatencyStage, {"stage": name, **stage.summary()})
               for name, stage in (("decoded (vision ingest)", p.vision.latency),
                                   ("world model written", p.world.latency),
-                                  ("commands sent to relay", p.publisher.latency))]
+                                  ("commands sent to relay", p.publisher.latency),
+                                  (FRAME_AGE_STAGE, p.publisher.frame_age))]
     rs = p.relay_stats.latest_value()
     if rs is not None and rs.get("command_latency_ms", -1) >= 0:
         stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],

@@ -12,7 +12,7 @@ Prints the top by own time and by cumulative time. cProfile slows the part down:
 shares, and take CPU figures from bench/loop_bench.py.
 
     PYTHONPATH=. .venv/bin/python bench/profile_station.py [--part backend|relay]
-        [--seconds 20] [--out FILE] [--clock wall|cpu]
+        [--seconds 20] [--out FILE] [--clock wall|cpu] [--camera-phases spread|together]
 """
 
 from __future__ import annotations
@@ -45,6 +45,8 @@ def main() -> None:
     ap.add_argument("--cameras", type=int, default=8)
     ap.add_argument("--hz", type=float, default=75.0)
     ap.add_argument("--robots", type=int, default=11, help="robots a team")
+    ap.add_argument("--camera-phases", choices=["spread", "together"], default="spread",
+                    help="fieldsim's cameras: each its own phase, or all at once (a burst)")
     ap.add_argument("--out", default=None, help="default /tmp/touchline-<part>.prof")
     ap.add_argument("--top", type=int, default=30)
     ap.add_argument("--clock", choices=["wall", "cpu"], default="wall",
@@ -54,7 +56,7 @@ def main() -> None:
     out = Path(a.out or f"/tmp/touchline-{a.part}.prof")
     out.unlink(missing_ok=True)
     args = [sys.executable, "-m", "launcher", "--isolated",
-            *full_scale_args(a.cameras, a.hz, robots=a.robots)]
+            *full_scale_args(a.cameras, a.hz, robots=a.robots, camera_phases=a.camera_phases)]
     env = dict(os.environ, TOUCHLINE_PROFILE_CLOCK=a.clock)
     if a.part == "backend":
         env.update(TOUCHLINE_PROFILE=str(out), TOUCHLINE_PROFILE_AFTER="5",

@@ -16,12 +16,13 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def full_scale_args(cameras: int = 8, hz: float = 75.0,
-                    relay_args: list[str] | None = None, robots: int = 11) -> list[str]:
+                    relay_args: list[str] | None = None, robots: int = 11,
+                    camera_phases: str = "spread") -> list[str]:
     """The launcher's arguments for issue 11's load: the built-in simulator at ``cameras`` x
-    ``hz``, division A, 11 v 11 (``robots`` a team), the "match" play."""
+    ``hz``, division A, 11 v 11 (``robots`` a team), the "match" play; ``camera_phases``:
+    fieldsim's (spread: each camera its own phase; together: all at once, in one burst)."""
     sim = ["--division", "A", "--blue", str(robots), "--yellow", str(robots), "--cameras",
-           str(cameras),
-           "--camera-hz", str(hz)]
+           str(cameras), "--camera-hz", str(hz), "--camera-phases", camera_phases]
     return [*(f"--sim-arg={x}" for x in sim), "--backend-arg=--set",
             "--backend-arg=strategy.play=match", *(f"--relay-arg={x}" for x in relay_args or [])]
 

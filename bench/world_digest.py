@@ -13,9 +13,12 @@ Every world state (its repr: every float exactly) and its tracked-vision packet,
   ``d=FILE``: the same over another recording (a station's, full scale: ``--record-dir``);
 - ``e``: the pipeline (vision ingest, world, control, command publisher, tracked vision) on
   pipeline_bench's datagrams with a clock of its own: every world written, every command set,
-  every message sent to the relay, every tracked packet recorded.
+  every message sent to the relay, every tracked packet recorded;
+- ``g``/``gf``: fieldsim's cameras triggered together, a chip (``gf``: a flat kick): the
+  robots, the ball and the kick estimate at the end of each burst of eight, merged one frame a
+  pass and one burst a pass (issue 29), side by side.
 
-    PYTHONPATH=. .venv/bin/python bench/world_digest.py [a1 a2 b c1 c3 cf d e d=FILE]
+    PYTHONPATH=. .venv/bin/python bench/world_digest.py [a1 a2 b c1 c3 cf d e g gf d=FILE]
 """
 
 from __future__ import annotations
@@ -136,6 +139,61 @@ def fieldsim(every: int, chip: bool) -> str:
     return f"{d} kicks {m.kicks.kicks} chips {m.flight.chips}"
 
 
+def bursts(chip: bool = True) -> str:
+    """fieldsim's cameras triggered together (``--camera-phases together``, as grSim): the
+    world after each burst of eight frames, merged one frame a pass (a snapshot after every
+    frame, as the station did when each frame had its pass) and one burst a pass (a snapshot
+    after the eighth only). Digests of the robots, the ball and the kick estimate at the
+    bursts' ends, per way: equal digests are bit-identical worlds. (At 2902664: the robots
+    are; the ball is until a chip flies: the flight estimate, refitted at each snapshot, maps
+    a burst's later detections to under the ball one burst later; the kick estimate, fed at
+    each snapshot, is fitted over other batches.)"""
+    from fieldsim.config import SimConfig
+    from fieldsim.vision import Vision
+    from fieldsim.world import Team, World
+
+    t0 = 1_700_000_000.0
+    cfg = SimConfig(blue=11, yellow=11, seed=3, cameras=8, division="A", camera_hz=75.0,
+                    false_prob=0.05, camera_phases="together")
+    w = World(cfg)
+    v = Vision(cfg, w.geometry)
+    w.teleport_robot(Team.BLUE, 0, -2.0, 0.5, 0.0)
+    w.teleport_ball(-2.0 + cfg.robot_radius_m + cfg.ball_radius_m + 0.004, 0.5)
+    frames: list[list[CameraFrame]] = []  # per instant, its eight frames in camera order
+    period, nxt = 1.0 / cfg.camera_hz, 0.0
+    while w.t < 6.0:
+        if 0.5 <= w.t < 0.52:
+            w.set_command(Team.BLUE, 0, 0.0, 0.0, 0.0, kick_speed=4.0,
+                          kick_angle=math.radians(50.0 if chip else 0.0))
+        for rid in range(1, 6):
+            w.set_command(Team.BLUE, rid, 1.0, 0.3, 1.0 if w.t % 2 < 1 else -1.0)
+        w.step()
+        while nxt <= w.t:
+            tc, nxt = nxt, nxt + period
+            frames.append([decode_detection(v.detect(k, w, t0 + tc, t0 + tc + 0.001,
+                                                     tc - w.t).detection,
+                                            int((t0 + tc + 0.002) * 1e9) + 30_000 * k)
+                           for k in range(8)])
+    out = []
+    for per_frame in (True, False):
+        m = WorldModel()
+        m.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
+        robots, ball, kick = Digest(), Digest(), Digest()
+        for burst in frames:
+            for f in burst:
+                m.update(f)
+                if per_frame:
+                    world = m.snapshot()
+            if not per_frame:
+                world = m.snapshot()
+            robots.add(repr(world.robots).encode())
+            ball.add(repr(world.ball).encode())
+            kick.add(repr(world.kicked_ball).encode())
+        out.append(f"{'frame' if per_frame else 'burst'} a pass: robots {robots} ball {ball} "
+                   f"kick {kick} kicks {m.kicks.kicks} chips {m.flight.chips}")
+    return " | ".join(out)
+
+
 def recorded(path: str = str(ROOT / "tests" / "data" / "fieldsim-2s.log.gz")) -> str:
     from ssllog.format import TYPE_VISION_2014
     from ssllog.logfile import LogFile
@@ -204,7 +262,10 @@ def pipeline() -> str:
         wire = pb.Wire()
         wire.send_multipart = lambda fr, flags=0: sent.add(b"|".join(fr))  # type: ignore
         vision, world = VisionIngest(bus), WorldProcessor(bus)
-        control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=1e9)
+        # (its clock given: the default is bound to the real time.monotonic at import, which
+        # made the commands differ from run to run)
+        control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=1e9,
+                                   clock=clock.monotonic)
         control.strategy_stale_s = 1e9
         publisher = CommandPublisher(bus)
         publisher.attach(wire)  # type: ignore[arg-type]
@@ -241,7 +302,8 @@ def pipeline() -> str:
 SCENARIOS: dict[str, Callable[[], Any]] = {
     "a1": lambda: all_objects(1), "a2": lambda: all_objects(2), "b": parts,
     "c1": lambda: fieldsim(1, True), "c3": lambda: fieldsim(3, True),
-    "cf": lambda: fieldsim(2, False), "d": recorded, "e": pipeline,
+    "cf": lambda: fieldsim(2, False), "d": recorded, "e": pipeline, "g": bursts,
+    "gf": lambda: bursts(False),
 }
 
 

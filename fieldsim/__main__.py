@@ -10,7 +10,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from fieldsim.config import SimConfig
+from fieldsim.config import CAMERA_PHASES, SimConfig
 from fieldsim.server import FieldSim
 
 log = logging.getLogger("fieldsim")
@@ -68,6 +68,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--cameras", type=int, choices=[1, 2, 4, 8], default=d.cameras,
                    help="8: two rows of four along the field (division A)")
     v.add_argument("--camera-hz", type=float, default=d.camera_hz)
+    v.add_argument("--camera-phases", choices=CAMERA_PHASES, default=d.camera_phases,
+                   help="spread: each camera its own random phase; together: every camera "
+                        "captures at once, the frames sent back to back (like grSim)")
     v.add_argument("--geometry-hz", type=float, default=d.geometry_hz)
     v.add_argument("--overlap-mm", type=float, default=d.camera_overlap_mm)
     v.add_argument("--noise-mm", type=float, default=d.noise_mm)
@@ -113,6 +116,7 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
         other_balls=list(args.other_ball),
         cameras=args.cameras,
         camera_hz=args.camera_hz,
+        camera_phases=args.camera_phases,
         geometry_hz=args.geometry_hz,
         camera_overlap_mm=args.overlap_mm,
         noise_mm=args.noise_mm,

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from domain.rules import ROBOT_RADIUS_MM
 from sslnet import defaults
 
+#: fieldsim's camera timing (SimConfig.camera_phases)
+CAMERA_PHASES = ("spread", "together")
 
 @dataclass
 class SimConfig:
@@ -54,6 +56,11 @@ class SimConfig:
     # Vision
     cameras: int = 4  # 1, 2, 4 or 8 (division A: two rows of four)
     camera_hz: float = 60.0
+    #: "spread": every camera its own random phase (unsynchronised cameras, frames spread
+    #: over the period); "together": every camera captures at the same instant and the
+    #: frames go out back to back (cameras triggered together: grSim sends its four in one
+    #: burst per step)
+    camera_phases: str = "spread"
     camera_overlap_mm: float = 400.0  # each camera sees this far past the centre lines
     camera_height_mm: float = 4000.0
     geometry_hz: float = 3.0
@@ -91,6 +98,8 @@ class SimConfig:
             raise ValueError("generation must be 1 or 2")
         if self.cameras not in (1, 2, 4, 8):
             raise ValueError("cameras must be 1, 2, 4 or 8")
+        if self.camera_phases not in CAMERA_PHASES:
+            raise ValueError(f"camera_phases must be one of {', '.join(CAMERA_PHASES)}")
         for name in ("physics_hz", "camera_hz", "geometry_hz"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0")

@@ -284,7 +284,10 @@ class FieldSim:
                         start_mono += skipped
                         start_unix += skipped
                         now = world.t
-                        next_capture = [max(t - skipped, now) for t in next_capture]
+                        # (the captures stay where they are in simulated time, which
+                        # goes on where it was: each camera keeps its phase, the frames
+                        # it missed are dropped below; moved to the skip's instant, all
+                        # cameras captured together from then on)
                         next_geom = min(next_geom, now)
                         next_truth = min(next_truth, now)
                         self.lag_resets += 1
@@ -295,6 +298,9 @@ class FieldSim:
                     steps += 1
                 if steps and self.grsim_peers:
                     self._send_grsim_status()
+                # the frames due now are all encoded, then sent back to back: cameras
+                # triggered together arrive as one burst (as grSim's), not one per encoding
+                due: list[tuple[int, bytes]] = []
                 for k in range(len(next_capture)):
                     while next_capture[k] <= now:
                         tc = next_capture[k]
@@ -303,9 +309,11 @@ class FieldSim:
                             continue  # a late frame is dropped, like a camera would
                         t_sent = start_unix + (self._clock() - start_mono)
                         packet = vision.detect(k, world, start_unix + tc, t_sent, tc - world.t)
-                        if self._send(packet.SerializeToString()):
-                            self.frames_sent[k] += 1
-                            self.frame_rates[k].add()
+                        due.append((k, packet.SerializeToString()))
+                for k, data in due:
+                    if self._send(data):
+                        self.frames_sent[k] += 1
+                        self.frame_rates[k].add()
                 if now >= next_geom:
                     next_geom += geom_period * max(1, int((now - next_geom) / geom_period) + 1)
                     if self._send(geometry_bytes):

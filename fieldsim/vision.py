@@ -38,6 +38,8 @@ class Vision:
         # each camera's own clock (t_capture_camera) is offset from Unix time
         self.clock_offsets = [rng.uniform(-1000.0, 1000.0) for rng in self._rng]
         self.phases = [rng.uniform(0.0, 1.0 / config.camera_hz) for rng in self._rng]
+        if config.camera_phases == "together":  # (drawn all the same: the noise stays)
+            self.phases = [0.0] * len(self.phases)
         self.false_detections = 0
         self.missed_detections = 0
 

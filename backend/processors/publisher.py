@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import zmq
 import zmq.asyncio
@@ -14,11 +14,14 @@ from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus, Reader
-from ..messages import CommandSet
+from ..messages import Command, CommandSet
 from ..processor import OnTopic
+from ..world.state import Team
 from .common import LatencyStage, SocketProcessor
 
 _CommandSet = tl.RobotCommandSet
+#: the health's latency stage of ``CommandPublisher.frame_age`` (bench/loop_bench.py reads it)
+FRAME_AGE_STAGE = "each robot's newest frame -> its command sent to relay"
 _BLUE, _YELLOW = tl.TEAM_BLUE, tl.TEAM_YELLOW
 
 
@@ -61,6 +64,14 @@ class CommandPublisher(SocketProcessor):
         self.referee_out_reader = Reader(bus.of(topics.REFEREE_OUT))
         self.seq = 0
         self.latency = LatencyStage()  # relay arrival -> command set sent to the relay
+        #: what each robot experiences: for every robot command of a set computed from vision,
+        #: the age of the newest frame that saw that robot when the set is sent (``latency``
+        #: takes the world's newest frame, one per set: a robot seen in an older frame, or
+        #: commanded again for a new target, waited longer). Its frames' arrivals: the world
+        #: processor's ``arrivals`` (the station shares them; empty: nothing measured)
+        self.frame_age = LatencyStage(maxlen=2000)
+        self.arrivals: Mapping[tuple[Team, int], int] = {}
+        self.world = bus.of(topics.WORLD)
         self.sent = CountRate()  # command sets sent (a count; its rate when read)
         self.estop = bus.of(topics.ESTOP)
         self.relay_stats = bus.of(topics.RELAY_STATS)
@@ -105,6 +116,8 @@ class CommandPublisher(SocketProcessor):
             self.record(now_ns, TYPE_TL_COMMANDS, raw)
             self.sent.total += 1
             self.latency.add_at(now_ns, cs.source_receive_time_ns)
+            if cs.source_receive_time_ns > 0 and self.arrivals:  # (not a stop's set)
+                self._frame_ages(now_ns, cs.commands)
             if self.on_first_command is not None and (cs.commands or cs.stop_all):
                 hook, self.on_first_command = self.on_first_command, None
                 hook()
@@ -115,6 +128,21 @@ class CommandPublisher(SocketProcessor):
         now = time.monotonic()
         self._estop_latch(now)
         self._arming(now)
+
+    def _frame_ages(self, now_ns: int, commands: tuple[Command, ...]) -> None:
+        """Each seen robot's newest frame's age at ``now_ns`` (a robot not seen gets zero:
+        no frame is behind its command)."""
+        rec = self.world.latest()
+        if rec is None:
+            return
+        robot, arrivals = rec.value.robot, self.arrivals
+        add = self.frame_age.samples.append
+        for c in commands:
+            r = robot(c[0], c[1])
+            if r is not None and r.visible:
+                arrived = arrivals.get((c[0], c[1]))
+                if arrived is not None:
+                    add((now_ns - arrived) / 1e6)
 
     def _arming(self, now: float) -> None:
         """The arming state to the relay on every change and every 0.5 s (a restarted relay

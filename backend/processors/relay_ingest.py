@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import select
 import time
 from collections.abc import Callable
 from typing import Any
@@ -22,6 +23,9 @@ from .common import SocketProcessor, badlog
 
 _EVENTS, _POLLIN, _NOBLOCK = int(zmq.EVENTS), int(zmq.POLLIN), int(zmq.NOBLOCK)
 _ROUNDS = 8  # ticks (each with its pass) in one callback of the descriptor at most
+#: vision frames the relay received each within this of the one before (its receive stamps)
+#: are one burst: cameras triggered together (grSim, fieldsim --camera-phases together)
+BURST_GAP_NS = 300_000
 
 
 class RelayIngest(SocketProcessor):
@@ -49,6 +53,14 @@ class RelayIngest(SocketProcessor):
         self._waiter: asyncio.Future[None] | None = None
         #: the runner's callback (``watch_input``): tick and pass when a message waits
         self._ready: Callable[[], None] | None = None
+        #: one pass per burst: the clock of the relay's receive stamps (this machine's wall
+        #: clock); the newest vision frame's stamp, the frames of its burst so far, the sizes
+        #: of the last two whole bursts; the times a tick waited for the rest of a burst
+        self.clock_ns: Callable[[], int] = time.time_ns
+        self._burst_last = 0
+        self._burst_n = 0
+        self._burst_sizes = (0, 0)
+        self.held = 0
 
     async def wait_input(self) -> None:
         """Until a message waits. Through the socket's own file descriptor, watched by the
@@ -150,12 +162,39 @@ class RelayIngest(SocketProcessor):
                 part = recv(_NOBLOCK, copy=False)
                 frames.append(part.bytes)
             handle(frames)
-            if not get(_EVENTS) & _POLLIN:
+            if not get(_EVENTS) & _POLLIN and not (
+                    self._burst_n < min(self._burst_sizes) and self._rest_of_burst()):
                 return
         if self._ready is not None and self._fd_loop is not None:
             # more than a topic holds: the rest after this pass, in the loop's next turn
             # (the descriptor will not signal what is already there)
             self._fd_loop.call_soon(self._fd_ready)
+
+    def _rest_of_burst(self) -> bool:
+        """Waits for the next frame of a burst under way (its cameras' frames came in bursts
+        of more than this one has so far, the last two times): True once a message waits,
+        False when none came within ``BURST_GAP_NS`` of the newest frame's arrival at the
+        relay, or within half of it from now when this thread is that far behind the relay
+        (then the pass runs with what came). The relay forwards a burst's frames one by
+        one, tens of microseconds apart, and a pass takes longer than that: without the wait
+        the first frame or two got a pass of their own, the rest a second one. Blocks this
+        thread (at most the gap; the station has nothing else due that soon) on the socket's
+        descriptor, which signals a new message after ``zmq.EVENTS`` was asked. Cameras with
+        phases of their own (bursts of one) never wait."""
+        out, clock = self._out, self.clock_ns
+        fd = self._fd if self._fd >= 0 else out.get(zmq.FD)
+        now = clock()
+        # from the newest frame's arrival at the relay or, if that is longer ago (this thread
+        # woke late: the relay has forwarded the burst's frames before the rest came here),
+        # from now; never longer than the gap from now
+        until = max(min(self._burst_last, now), now - BURST_GAP_NS // 2) + BURST_GAP_NS
+        while now < until:
+            select.select((fd,), (), (), (until - now) / 1e9)
+            if out.get(_EVENTS) & _POLLIN:
+                self.held += 1
+                return True
+            now = clock()
+        return False
 
     def _parse(self, msg: Message, body: bytes, what: str) -> str | None:
         """Parses ``body`` into ``msg``: None, or the parser's words, counted under the reason
@@ -195,9 +234,16 @@ class RelayIngest(SocketProcessor):
             badlog.warning("zmq-envelope", "undecodable envelope on %r: %s", topic, why)
             return
         if topic == b"vision":
-            self.record(env.receive_time_ns, TYPE_VISION_2014, env.payload)
+            t = env.receive_time_ns
+            self.record(t, TYPE_VISION_2014, env.payload)
             if self.live():
                 self.vision_packets.write(env)
+                if t - self._burst_last <= BURST_GAP_NS:
+                    self._burst_n += 1
+                else:  # a new burst: the one before is whole
+                    self._burst_sizes = (self._burst_sizes[1], self._burst_n)
+                    self._burst_n = 1
+                self._burst_last = t
         elif topic == b"referee":
             self.record(env.receive_time_ns, TYPE_REFEREE_2013, env.payload)
             if self.live():

@@ -14,7 +14,7 @@ from ..params.model import StationParams
 from ..processor import OnTopic, Processor
 from ..world.model import WorldModel
 from ..world.silence import CameraSilence
-from ..world.state import WorldState
+from ..world.state import Team, WorldState
 from .common import LatencyStage, badlog
 
 
@@ -37,6 +37,9 @@ class WorldProcessor(Processor):
         #: every world written (the station records it)
         self.on_world: Callable[[WorldState], None] = lambda w: None
         self.latency = LatencyStage()  # relay arrival -> world written
+        #: per robot (team, id): the relay's receive stamp of the newest merged frame with a
+        #: detection of it (the command publisher's frame age: what the robot experiences)
+        self.arrivals: dict[tuple[Team, int], int] = {}
         #: every detection frame's arrival, merged or not (a camera whose frames are dropped
         #: is not silent: that is the stale world's stop); the control's all-vision-lost stop
         self.silence = CameraSilence(self.model.config.max_camera_id)
@@ -75,6 +78,7 @@ class WorldProcessor(Processor):
         self.reader.read_new()  # frames of before the jump are not merged
         self.model = WorldModel()
         self.silence.reset()
+        self.arrivals.clear()  # (cleared, not replaced: the publisher holds it)
         if self._params is not None:
             self.configure(self._params)
         self._geometry_seq = -1
@@ -127,8 +131,12 @@ class WorldProcessor(Processor):
         self.world.write(world)
         self.on_world(world)
         now_ns, add_at = time.time_ns(), self.latency.add_at  # (one clock read for the lot)
+        arrivals = self.arrivals
         for f in merged:
-            add_at(now_ns, f.receive_time_ns)
+            recv_ns = f.receive_time_ns
+            add_at(now_ns, recv_ns)
+            for r in f.robots:  # (in arrival order: the newest frame's stamp stays)
+                arrivals[(r.team, r.id)] = recv_ns
 
 
 def _reasons(counts: dict[str, int]) -> str:

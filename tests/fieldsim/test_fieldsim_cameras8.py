@@ -239,3 +239,32 @@ def test_frame_numbers_and_rate_per_camera_at_11v11() -> None:
         assert len(phases) > 1
     finally:
         _stop(sim)
+
+
+def test_cameras_together_capture_at_once_and_arrive_as_one_burst() -> None:
+    """``--camera-phases together`` (cameras triggered together, as grSim sends its four in
+    one burst per step): every camera's frame of an instant has the same capture time, and
+    the frames of an instant arrive one after the other, the eight of them, before any frame
+    of the next instant (sent back to back; the timing of the burst is bench/burst_bench.py's,
+    not a test's). The default (spread) was checked above: the cameras are not in phase."""
+    sim = _start("--blue", "11", "--yellow", "11", "--camera-phases", "together")
+    try:
+        arrivals: list[tuple[float, int]] = []  # (capture time, camera) in arrival order
+        deadline = time.monotonic() + 60.0  # bounds a stuck simulator, not a speed check
+        for p in sim.packets():
+            assert time.monotonic() < deadline, len(arrivals)
+            if p.HasField("detection"):
+                arrivals.append((p.detection.t_capture, p.detection.camera_id))
+            if len(arrivals) >= 100 * CAMERAS:
+                break
+        # from the first whole instant on (the first one read may have begun before)
+        start = next(i for i, (t, _) in enumerate(arrivals) if i and t != arrivals[i - 1][0])
+        bursts = [list(g) for _, g in itertools.groupby(arrivals[start:], key=lambda a: a[0])]
+        bursts = bursts[:-1]  # the last one read may be cut short
+        assert len(bursts) >= 90
+        for b in bursts:  # each instant: its eight cameras in a row, then the next instant
+            assert sorted(c for _, c in b) == list(range(CAMERAS)), b
+        times = [b[0][0] for b in bursts]
+        assert all(t1 > t0 for t0, t1 in itertools.pairwise(times))
+    finally:
+        _stop(sim)

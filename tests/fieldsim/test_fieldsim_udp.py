@@ -400,3 +400,43 @@ async def test_grsim_status_sent_to_the_command_sender() -> None:
         await sim.stop()
         tx.close()
         status_rx.close()
+
+
+async def test_cameras_keep_their_phases_when_the_simulator_catches_up() -> None:
+    """A stall longer than fieldsim's catch-up (its clock jumps 1 s: 200 physics steps, it
+    takes 50 and skips the rest) leaves each camera on its own phase: after the skip the
+    cameras still capture at instants of their own, not all at the skip's instant (which
+    made every later frame of a spread run arrive as one burst, as --camera-phases together,
+    for the rest of the run)."""
+    port = random_vision_port()
+    rx = open_multicast_receiver(GROUP, port, "127.0.0.1")
+    jump = [0.0]
+    cfg = SimConfig(vision_port=port, control_port=0, blue_port=0, yellow_port=0,
+                    grsim_port=0, seed=11)
+    sim = FieldSim(cfg, clock=lambda: time.monotonic() + jump[0])
+    st = Station(sim, rx)
+    await sim.start()
+    try:
+        instants: dict[float, set[int]] = {}
+
+        def distinct_instants(n: int) -> Callable[[Packet], bool]:
+            instants.clear()
+
+            def take(p: Packet) -> bool:
+                if p.HasField("detection"):
+                    instants.setdefault(p.detection.t_capture, set()).add(
+                        p.detection.camera_id)
+                return len(instants) >= n
+
+            return take
+
+        await st.packet(distinct_instants(12), timeout=5.0)
+        assert all(len(c) == 1 for c in instants.values())  # spread: one camera an instant
+        jump[0] = 1.0  # the machine stalled for a second
+        await st.packet(lambda p: sim.lag_resets > 0, timeout=5.0)
+        await st.packet(lambda p: True)  # what was sent in the reset's turn
+        await st.packet(distinct_instants(12), timeout=5.0)
+        assert all(len(c) == 1 for c in instants.values()), instants
+    finally:
+        await sim.stop()
+        st.close()

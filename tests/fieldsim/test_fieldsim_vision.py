@@ -198,3 +198,18 @@ def test_eight_cameras_cover_the_field_and_overlap() -> None:
 def test_eight_cameras_need_a_valid_count() -> None:
     with pytest.raises(ValueError, match="1, 2, 4 or 8"):
         SimConfig(cameras=6).validate()
+
+
+def test_cameras_together_share_one_phase_and_keep_their_noise() -> None:
+    """``camera_phases="together"``: every camera at phase 0; each camera's random stream is
+    the spread configuration's (the same detections for the same calls)."""
+    w1, spread = setup(seed=5, cameras=8, division="A", blue=11, yellow=11)
+    w2, together = setup(seed=5, cameras=8, division="A", blue=11, yellow=11,
+                         camera_phases="together")
+    assert len(set(spread.phases)) == 8
+    assert together.phases == [0.0] * 8
+    for k in range(8):
+        assert (spread.detect(k, w1, 10.0).SerializeToString()
+                == together.detect(k, w2, 10.0).SerializeToString())
+    with pytest.raises(ValueError, match="camera_phases"):
+        SimConfig(camera_phases="random").validate()

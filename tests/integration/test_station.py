@@ -9,6 +9,7 @@ from typing import Any
 
 import httpx
 
+from backend.processors.publisher import FRAME_AGE_STAGE
 from sslnet.multicast import open_multicast_sender
 from sslpb.ssl_gc_referee_message_pb2 import Referee
 
@@ -63,6 +64,9 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
         "decoded (vision ingest)", "world model written", "commands sent to relay"]
     assert all(s["n"] > 0 for s in stages[:3])
     assert 0 < stages[0]["p50_ms"] <= stages[1]["p50_ms"] <= stages[2]["p50_ms"] < 100
+    # what the robots experience: each one's newest frame's age when its command is sent
+    age = next(s for s in stages if s["stage"] == FRAME_AGE_STAGE)
+    assert age["n"] > 0 and 0 < age["p50_ms"] < 100
     assert procs["strategy"]["configured_hz"] == 20.0
     # what each process costs: both busy (a camera stream at 240 Hz), neither runaway
     cost = {p["name"]: p for p in h["processes"]}
