@@ -1477,7 +1477,13 @@ ServerMessage = (SnapshotMessage | WorldMessage | GeometryMessage | HealthMessag
 
 #: the rules' numbers the page draws with before a geometry packet names its own (exported
 #: to TypeScript as constants: the page keeps no copy)
-CONSTANTS: dict[str, float] = {"ROBOT_RADIUS_MM": ROBOT_RADIUS_MM, "BALL_RADIUS_MM": BALL_RADIUS_MM}
+#: the health's latency stage of each robot's newest frame's age when its command is sent (the
+#: latency the robot sees; the Health tab and bench/loop_bench.py look it up by this name)
+FRAME_AGE_STAGE = "each robot's newest frame -> its command sent to relay"
+
+CONSTANTS: dict[str, float | str] = {"ROBOT_RADIUS_MM": ROBOT_RADIUS_MM,
+                                     "BALL_RADIUS_MM": BALL_RADIUS_MM,
+                                     "FRAME_AGE_STAGE": FRAME_AGE_STAGE}
 
 #: what scripts/gen_contract.py exports to TypeScript, in this order
 EXPORTS: dict[str, object] = {

@@ -14,14 +14,13 @@ from sslpb import touchline_pb2 as tl
 
 from .. import topics
 from ..bus import DataBus, Reader
+from ..contract import FRAME_AGE_STAGE as FRAME_AGE_STAGE  # the stage of ``frame_age``
 from ..messages import Command, CommandSet
 from ..processor import OnTopic
 from ..world.state import Team
 from .common import LatencyStage, SocketProcessor
 
 _CommandSet = tl.RobotCommandSet
-#: the health's latency stage of ``CommandPublisher.frame_age`` (bench/loop_bench.py reads it)
-FRAME_AGE_STAGE = "each robot's newest frame -> its command sent to relay"
 _BLUE, _YELLOW = tl.TEAM_BLUE, tl.TEAM_YELLOW
 
 

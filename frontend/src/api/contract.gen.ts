@@ -3,6 +3,7 @@
 
 export const ROBOT_RADIUS_MM = 90.0;
 export const BALL_RADIUS_MM = 21.5;
+export const FRAME_AGE_STAGE = "each robot's newest frame -> its command sent to relay";
 
 export type Team = "blue" | "yellow";
 

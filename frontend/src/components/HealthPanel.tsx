@@ -1,3 +1,4 @@
+import { FRAME_AGE_STAGE } from "../api/contract.gen";
 import type { Health } from "../api/types";
 import { fmtFixed } from "../format";
 import { useAppState } from "../store/hooks";
@@ -250,21 +251,25 @@ export function ErrorsByReason({ h }: { h: Health }) {
   );
 }
 
-function Latency({ h }: { h: Health }) {
+export function Latency({ h }: { h: Health }) {
   const lat = h.latency;
   const relay = h.relay;
-  const rows: [string, number | undefined][] = [
+  // what the robot sees: its newest frame's age when its command leaves for the relay
+  const age = h.latency_stages.find((s) => s.stage === FRAME_AGE_STAGE);
+  const rows: [string, number | null | undefined][] = [
     ["vision → command p50", lat?.p50_ms],
     ["vision → command mean", lat?.mean_ms],
     ["vision → command p99", lat?.p99_ms],
     ["→ robot datagram p50", relay?.command_latency_p50_ms],
     ["→ robot datagram p99", relay?.command_latency_p99_ms],
+    ["robot's newest frame p50", age?.p50_ms],
+    ["robot's newest frame p99", age?.p99_ms],
   ];
   const max = niceMax(Math.max(...rows.map(([, v]) => v ?? 0), 1));
   return (
     <section>
       <h3>
-        Latency <span className="muted">vision arrival at the relay → commands sent to the relay (backend), → the command datagram sent (relay) · scale {max} ms</span>
+        Latency <span className="muted">vision arrival at the relay → commands sent to the relay (backend), → the command datagram sent (relay); the age of each commanded robot's newest frame when its command is sent (what the robot sees) · scale {max} ms</span>
       </h3>
       <table className="htable" data-testid="health-latency">
         <tbody>
@@ -274,7 +279,7 @@ function Latency({ h }: { h: Health }) {
               <td className="hbarcell">
                 <Bar value={v ?? 0} max={max} warn={(v ?? 0) > 20} label={name} />
               </td>
-              <td className="num hval">{v === undefined ? "—" : `${fmtFixed(v, 2)} ms`}</td>
+              <td className="num hval">{v === undefined || v === null ? "—" : `${fmtFixed(v, 2)} ms`}</td>
             </tr>
           ))}
         </tbody>

@@ -7,7 +7,8 @@ import { arming, health, world } from "../ws/fixtures";
 import { RobotDetails } from "./RobotDetails";
 import { RobotTable } from "./RobotTable";
 import { TopBar } from "./TopBar";
-import { AccessHealth, ArmingHealth, Cameras, ErrorsByReason, EstopHealth, Processes } from "./HealthPanel";
+import { AccessHealth, ArmingHealth, Cameras, ErrorsByReason, EstopHealth, Latency, Processes } from "./HealthPanel";
+import { FRAME_AGE_STAGE } from "../api/contract.gen";
 import { toastTexts } from "../store/toasts";
 
 import { domPerTest } from "../testing/dom";
@@ -136,6 +137,20 @@ describe("Processes", () => {
     expect(q("health-restarts-relay")?.textContent).toBe("2 restarts");
     act(() => t.root.render(<Processes h={{ ...health(), processes: [] }} />));
     expect(q("health-processes")).toBeNull();
+  });
+});
+
+describe("Latency", () => {
+  it("shows the age of each robot's newest frame when its command is sent, '—' before there is one", () => {
+    const row = (name: string) =>
+      [...t.host.querySelectorAll('[data-testid="health-latency"] tr')].find((r) => r.textContent?.startsWith(name))?.textContent;
+    act(() => t.root.render(<Latency h={health()} />));
+    expect(row("robot's newest frame p50")).toBe("robot's newest frame p50—");
+    const stage = { stage: FRAME_AGE_STAGE, mean_ms: 1.1, p50_ms: 0.64, p99_ms: 12.5, n: 900 };
+    const other = { stage: "vision -> world", mean_ms: 0.2, p50_ms: 0.2, p99_ms: 0.3, n: 900 };
+    act(() => t.root.render(<Latency h={{ ...health(), latency_stages: [other, stage] }} />));
+    expect(row("robot's newest frame p50")).toBe("robot's newest frame p500.64 ms");
+    expect(row("robot's newest frame p99")).toBe("robot's newest frame p9912.50 ms");
   });
 });
 
