@@ -23,60 +23,24 @@ from __future__ import annotations
 import argparse
 import itertools
 import random
-import select
 import statistics
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sslnet.kerneltime import enable_kernel_timestamps, kernel_time
-from sslnet.multicast import open_multicast_receiver
 from sslpb.ssl_vision_wrapper_pb2 import SSL_WrapperPacket
+from tests.integration.standins import Arrivals
 
 ROOT = Path(__file__).resolve().parents[1]
 GROUP = "224.5.23.2"
 
 
-class Frames:
-    """Every detection frame on the group: (kernel receive time s, camera id), on a thread."""
-
-    def __init__(self, port: int) -> None:
-        self.sock = open_multicast_receiver(GROUP, port, "127.0.0.1", rcvbuf=4 << 20)
-        enable_kernel_timestamps(self.sock)
-        self.got: list[tuple[float, int]] = []
-        self.recording = False
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            if not select.select([self.sock], [], [], 0.1)[0]:
-                continue
-            while True:
-                try:
-                    data, anc, _, _ = self.sock.recvmsg(65536, 64)
-                except BlockingIOError:
-                    break
-                if not self.recording:
-                    continue
-                pkt = SSL_WrapperPacket.FromString(data)
-                if pkt.HasField("detection"):
-                    self.got.append((kernel_time(anc) or time.time(), pkt.detection.camera_id))
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(2)
-        self.sock.close()
-
-
 def run(phases: str, seconds: float, window_s: float, cameras: int, hz: float) -> str:
     port = random.SystemRandom().randint(20000, 40000)
-    frames = Frames(port)
+    frames = Arrivals(GROUP, port, rcvbuf=4 << 20, keep_data=True)
     sim = subprocess.Popen(
         [sys.executable, "-m", "fieldsim", "--division", "A", "--blue", "11", "--yellow", "11",
          "--cameras", str(cameras), "--camera-hz", str(hz), "--camera-phases", phases,
@@ -86,17 +50,19 @@ def run(phases: str, seconds: float, window_s: float, cameras: int, hz: float) -
          "--log-level", "WARNING"], cwd=ROOT)
     try:
         time.sleep(3.0)  # fieldsim's start-up (imports, the first frames)
-        frames.recording = True
+        t0 = time.time()
         time.sleep(seconds)
-        frames.recording = False
+        t1 = time.time()
     finally:
         sim.terminate()
         sim.wait(timeout=10)
         frames.close()
-    got = frames.got
-    if len(got) < 2:
+    assert frames.datagrams is not None
+    # the detection frames of the measured window (not the geometry packets)
+    times = [t for t, data in frames.datagrams
+             if t0 <= t <= t1 and SSL_WrapperPacket.FromString(data).HasField("detection")]
+    if len(times) < 2:
         return f"{phases}: no frames heard"
-    times = [t for t, _ in got]
     gaps = [b - a for a, b in itertools.pairwise(times)]
     together = [g <= window_s for g in gaps]
     bursts: list[list[float]] = [[times[0]]]
@@ -108,7 +74,7 @@ def run(phases: str, seconds: float, window_s: float, cameras: int, hz: float) -
     sizes = sorted(len(b) for b in bursts)
     multi = [b for b in bursts if len(b) > 1]
     spans = sorted((b[-1] - b[0]) * 1e3 for b in multi)
-    rate = len(got) / (times[-1] - times[0])
+    rate = len(times) / (times[-1] - times[0])
 
     def pct(v: list[float], q: float) -> float:
         return v[min(len(v) - 1, int(q * len(v)))] if v else 0.0

@@ -81,10 +81,13 @@ class Arrivals:
     """Every datagram on a multicast group and port (tracked vision, a camera's frames): the
     kernel's receive time (wall clock, s), read on a thread of its own."""
 
-    def __init__(self, group: str, port: int, rcvbuf: int = 1 << 21) -> None:
+    def __init__(self, group: str, port: int, rcvbuf: int = 1 << 21,
+                 keep_data: bool = False) -> None:
         self.sock = open_multicast_receiver(group, port, "127.0.0.1", rcvbuf=rcvbuf)
         enable_kernel_timestamps(self.sock)
         self.times: list[float] = []
+        #: with ``keep_data``: every datagram with its receive time, to be read afterwards
+        self.datagrams: list[tuple[float, bytes]] | None = [] if keep_data else None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
@@ -95,10 +98,13 @@ class Arrivals:
                 continue
             while True:
                 try:
-                    _, anc, _, _ = self.sock.recvmsg(65536, 64)
+                    data, anc, _, _ = self.sock.recvmsg(65536, 64)
                 except BlockingIOError:
                     break
-                self.times.append(kernel_time(anc) or time.time())
+                t = kernel_time(anc) or time.time()
+                self.times.append(t)
+                if self.datagrams is not None:
+                    self.datagrams.append((t, data))
 
     def close(self) -> None:
         self._stop.set()
