@@ -1,5 +1,5 @@
 import { expect, test } from "@playwright/test";
-import { open, robot, stats, toScreen, world } from "./helpers";
+import { clickField, open, robot, stats, toasts, world } from "./helpers";
 
 // Per-robot controller and filter choices, field layers and filter parameters, against the
 // real station. The station is shared by every spec: each test puts back what it changed.
@@ -11,7 +11,7 @@ test("Algorithm 1 chosen in the robot panel drives a robot to a clicked point; t
   const select = page.getByTestId("robot-controller-select");
   await expect(select).toBeEnabled();
   await expect(select.locator("option").first()).toHaveText(/^Default \((Algorithm [12]|Proportional)\)$/);
-  const target = { x: -600, y: -2200 }; // own half, off the demo formation
+  let target = { x: -600, y: -2200 }; // own half, off the demo formation
   try {
     await select.selectOption("algorithm1");
     await expect(page.getByTestId("robot-controller-effective")).toHaveAttribute("data-override", "true");
@@ -19,9 +19,13 @@ test("Algorithm 1 chosen in the robot panel drives a robot to a clicked point; t
     expect(values.control.robots["blue/5"].algorithm).toBe("algorithm1");
     await expect.poll(async () => (await robot(page, "blue", 5)).control?.algorithm ?? null).toBe("algorithm1");
 
-    const p = await toScreen(page, target.x, target.y);
-    await page.mouse.click(p.x, p.y);
-    await expect.poll(async () => (await robot(page, "blue", 5)).target?.source ?? null).toBe("operator");
+    // a spot of our half no robot and no toast covers (otherwise the click selects or misses)
+    target = await clickField(page, [target, { x: -1500, y: -2200 }, { x: -600, y: 2200 }, { x: -2000, y: 1500 }]);
+    await expect(page.getByTestId("selected-robot")).toContainText("blue 5");
+    await expect.poll(async () => {
+      const source = (await robot(page, "blue", 5)).target?.source;
+      return source ?? `no target (toasts: ${(await toasts(page)).join(" | ") || "none"})`;
+    }).toBe("operator");
     const t = (await robot(page, "blue", 5)).target!;
     expect(Math.hypot(t.x - target.x, t.y - target.y)).toBeLessThan(40);
     await expect.poll(async () => {

@@ -73,6 +73,40 @@ export async function toScreen(page: Page, x: number, y: number): Promise<{ x: n
   return { x: box.x + p.x, y: box.y + p.y };
 }
 
+/** The toasts the page shows now ("kind: text"), for failure messages. */
+export const toasts = (page: Page): Promise<string[]> =>
+  page.getByTestId("toast").evaluateAll((els) => els.map((e) => `${e.getAttribute("data-kind")}: ${e.querySelector("span")?.textContent ?? ""}`));
+
+/** Clicks the field at the first of ``candidates`` (mm) that the pointer really reaches (no
+ * toast or panel over that spot of the canvas) and that no robot of the page's world is within
+ * ``clearMm`` of (a click there would select that robot instead): returns the point clicked.
+ * Fails naming what was in the way of each candidate. */
+export async function clickField(
+  page: Page,
+  candidates: { x: number; y: number }[],
+  clearMm = 400,
+): Promise<{ x: number; y: number }> {
+  const why: string[] = [];
+  for (const c of candidates) {
+    const s = await toScreen(page, c.x, c.y);
+    const blocked = await page.evaluate(([x, y, cx, cy, clear]) => {
+      const el = document.elementFromPoint(x, y);
+      if (el?.getAttribute("data-testid") !== "field-canvas") {
+        return `under ${el ? el.getAttribute("data-testid") ?? `${el.tagName.toLowerCase()}.${el.className}` : "nothing"}`;
+      }
+      const w = (window as unknown as { __touchline: Hooks }).__touchline.getWorld();
+      const near = (w?.robots ?? []).filter((r) => r.visible && Math.hypot(r.x - cx, r.y - cy) < clear);
+      return near.length ? `robots near: ${near.map((r) => `${r.team} ${r.id}`).join(", ")}` : null;
+    }, [s.x, s.y, c.x, c.y, clearMm] as const);
+    if (blocked === null) {
+      await page.mouse.click(s.x, s.y);
+      return c;
+    }
+    why.push(`(${c.x}, ${c.y}) ${blocked}`);
+  }
+  throw new Error(`no spot of the field to click: ${why.join("; ")}; toasts: ${(await toasts(page)).join(" | ") || "none"}`);
+}
+
 export const stats = (page: Page) =>
   page.evaluate(() => (window as unknown as { __touchline: Hooks }).__touchline.stats());
 

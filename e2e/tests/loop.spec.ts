@@ -1,5 +1,5 @@
 import { expect, test, type Page } from "@playwright/test";
-import { world, type World } from "./helpers";
+import { clickField, world, type World } from "./helpers";
 
 async function waitForRobots(page: Page, n: number): Promise<World> {
   let w: World = { robots: [], ball: null, estop: false, referee: null };
@@ -54,9 +54,9 @@ test("click a robot, click a point: the robot drives there", async ({ page }) =>
   await page.mouse.click(box.x + p.x, box.y + p.y);
   await expect(page.getByTestId("selected-robot")).toContainText("blue 2");
 
-  const target = { x: 1500, y: 1200 }; // on the opponent half, away from everyone's formation
-  const q = await toScreen(target.x, target.y);
-  await page.mouse.click(box.x + q.x, box.y + q.y);
+  // on the opponent half, away from everyone's formation; a spot no robot and no toast covers
+  const target = await clickField(page, [{ x: 1500, y: 1200 }, { x: 2000, y: -1200 }, { x: 1000, y: 2200 }]);
+  await expect(page.getByTestId("selected-robot")).toContainText("blue 2");
 
   await expect
     .poll(async () => {

@@ -1,5 +1,5 @@
 import { expect, test, type Page } from "@playwright/test";
-import { open, stats, toScreen, world, type Hooks } from "./helpers";
+import { clickField, open, stats, world, type Hooks } from "./helpers";
 
 // The ball placement mark on the field against the real station and its internal referee.
 // The official game controller sends its designated position during every command, not only
@@ -52,8 +52,7 @@ test("the ball placement mark shows during BALL_PLACEMENT, not during STOP thoug
     // ball placement for blue at a clicked point: the mark is drawn there
     await page.getByTestId("ref-BALL_PLACEMENT_BLUE").click();
     await expect(page.getByTestId("placement-hint")).toBeVisible();
-    const s = await toScreen(page, spot.x, spot.y);
-    await page.mouse.click(s.x, s.y);
+    await clickField(page, [spot], 0); // robots do not matter while placing; a toast would
     await expect(page.getByTestId("referee-command")).toHaveText("BALL_PLACEMENT_BLUE");
     const dp = (await world(page)).referee?.designated_position;
     expect(dp, "the station's referee carries the clicked position").toBeTruthy();
