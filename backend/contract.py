@@ -493,8 +493,13 @@ class Geometry(TypedDict):
     goal_width: float
     goal_depth: float
     boundary_width: float
-    penalty_area_depth: float
-    penalty_area_width: float
+    penalty_area_depth: Annotated[float, Field(
+        description="as sent, else read off the field lines (grSim sends only those), else 0")]
+    penalty_area_width: Annotated[float, Field(
+        description="as sent, else read off the field lines, else 0")]
+    goal_center_to_penalty_mark: Annotated[float, Field(
+        description="the penalty mark's distance from the goal centre; 0 when not sent "
+                    "(grSim): the division's, 8 m in A and 6 m in B")]
     center_circle_radius: float
     ball_radius: float
     max_robot_radius: float

@@ -55,18 +55,30 @@ class Field:
     @classmethod
     def from_geometry(cls, g: Mapping[str, Any] | None, fallback: Field | None = None) -> Field:
         """From the decoded geometry packet (``backend.world.decode.geometry_to_dict``); a size
-        missing, not a number, not finite or not positive keeps ``fallback``'s (division B)."""
-        base = fallback or DIVISION_B
+        missing, not a number, not finite or not positive keeps ``fallback``'s, by default
+        the division whose field length is nearer the packet's (grSim's 12 x 9 m field sends
+        no penalty mark: division A's 8 m, not B's 6 m)."""
         if not g:
-            return base
+            return fallback or DIVISION_B
         changes: dict[str, float] = {}
-        for name in ("field_length", "field_width", "goal_width", "goal_depth",
-                     "boundary_width", "penalty_area_depth", "penalty_area_width",
-                     "center_circle_radius", "ball_radius", "max_robot_radius"):
-            v = g.get(name)
+        for name, key in (("field_length", "field_length"), ("field_width", "field_width"),
+                          ("goal_width", "goal_width"), ("goal_depth", "goal_depth"),
+                          ("boundary_width", "boundary_width"),
+                          ("penalty_area_depth", "penalty_area_depth"),
+                          ("penalty_area_width", "penalty_area_width"),
+                          ("center_circle_radius", "center_circle_radius"),
+                          ("ball_radius", "ball_radius"),
+                          ("max_robot_radius", "max_robot_radius"),
+                          ("penalty_mark_distance", "goal_center_to_penalty_mark")):
+            v = g.get(key)
             if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) \
                     and v > 0:
                 changes[name] = float(v)
+        base = fallback
+        if base is None:
+            length = changes.get("field_length", DIVISION_B.field_length)
+            base = DIVISION_A if abs(length - DIVISION_A.field_length) \
+                < abs(length - DIVISION_B.field_length) else DIVISION_B
         return replace(base, **changes) if changes else base
 
     def defense_rect(self, side: int) -> tuple[float, float, float, float]:

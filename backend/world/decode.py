@@ -84,14 +84,18 @@ def geometry_to_dict(geo: SSL_GeometryData, bad: list[str] | None = None) -> dic
     def positive(has: bool, value: float, default: float) -> float:
         return value if has and math.isfinite(value) and value > 0 else default
 
+    depth, width = _penalty_area(f, lines)
     return {
         "field_length": f.field_length,
         "field_width": f.field_width,
         "goal_width": f.goal_width,
         "goal_depth": f.goal_depth,
         "boundary_width": f.boundary_width,
-        "penalty_area_depth": f.penalty_area_depth if f.HasField("penalty_area_depth") else 0,
-        "penalty_area_width": f.penalty_area_width if f.HasField("penalty_area_width") else 0,
+        "penalty_area_depth": depth,
+        "penalty_area_width": width,
+        "goal_center_to_penalty_mark": (
+            f.goal_center_to_penalty_mark if f.HasField("goal_center_to_penalty_mark")
+            and f.goal_center_to_penalty_mark > 0 else 0),
         "center_circle_radius": (
             f.center_circle_radius if f.HasField("center_circle_radius") else 500
         ),
@@ -102,6 +106,44 @@ def geometry_to_dict(geo: SSL_GeometryData, bad: list[str] | None = None) -> dic
         "arcs": arcs,
         "cameras": camera_poses(geo),
     }
+
+
+#: The defence area's sides among ssl-vision's line names: the line parallel to the goal
+#: line (its x says the depth) and the ones along the touch lines (their y says the width)
+_STRETCH = ("LeftPenaltyStretch", "RightPenaltyStretch")
+_STRETCH_SIDES = ("LeftFieldLeftPenaltyStretch", "LeftFieldRightPenaltyStretch",
+                  "RightFieldLeftPenaltyStretch", "RightFieldRightPenaltyStretch")
+
+
+def _penalty_area(f: Any, lines: list[dict[str, Any]]) -> tuple[float, float]:
+    """The defence area's depth and width (mm): as sent, else read off the field lines
+    (grSim sends the lines only: without this a 12 x 9 m field got division B's 1 x 2 m
+    area), else 0 (the consumers' division default). A line's centre lies half its
+    thickness inside or outside the area (ssl-vision and grSim differ): a size within that
+    of a multiple of 50 mm is that multiple."""
+    hl = f.field_length / 2.0
+    depth = float(f.penalty_area_depth) if f.HasField("penalty_area_depth") else 0.0
+    width = float(f.penalty_area_width) if f.HasField("penalty_area_width") else 0.0
+    stretch = [ln for ln in lines if ln["name"] in _STRETCH and ln["p1"]["x"] == ln["p2"]["x"]]
+    if depth <= 0 and stretch:
+        ln = stretch[0]
+        depth = _snap(hl - abs(ln["p1"]["x"]), ln["thickness"] / 2.0)
+    if width <= 0:
+        if stretch:  # its ends: the area's corners
+            ln = stretch[0]
+            width = _snap(abs(ln["p2"]["y"] - ln["p1"]["y"]), ln["thickness"])
+        else:  # the sides along the touch lines, each half the width from the centre line
+            sides = [ln for ln in lines
+                     if ln["name"] in _STRETCH_SIDES and ln["p1"]["y"] == ln["p2"]["y"]]
+            if sides:
+                width = _snap(2.0 * abs(sides[0]["p1"]["y"]), sides[0]["thickness"])
+    return (depth if 0 < depth < hl else 0.0,
+            width if 0 < width < f.field_width else 0.0)
+
+
+def _snap(size: float, within: float) -> float:
+    near = round(size / 50.0) * 50.0
+    return near if abs(size - near) <= within + 1.0 else size
 
 
 def camera_poses(geo: SSL_GeometryData) -> list[dict[str, Any]]:

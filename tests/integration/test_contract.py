@@ -125,7 +125,8 @@ def test_the_contract_refuses_an_undeclared_key() -> None:
     """The check above can fail: a key the contract does not declare is refused."""
     geo = {"field_length": 9000.0, "field_width": 6000.0, "goal_width": 1000.0,
            "goal_depth": 180.0, "boundary_width": 300.0, "penalty_area_depth": 1000.0,
-           "penalty_area_width": 2000.0, "center_circle_radius": 500.0, "ball_radius": 21.5,
+           "penalty_area_width": 2000.0, "goal_center_to_penalty_mark": 6000.0,
+           "center_circle_radius": 500.0, "ball_radius": 21.5,
            "max_robot_radius": 90.0, "lines": [], "arcs": [], "cameras": []}
     _valid(contract.Geometry, geo, "a geometry")
     with pytest.raises(AssertionError, match="extra"):

@@ -415,8 +415,12 @@ export interface Geometry {
   goal_width: number;
   goal_depth: number;
   boundary_width: number;
+  /** as sent, else read off the field lines (grSim sends only those), else 0 */
   penalty_area_depth: number;
+  /** as sent, else read off the field lines, else 0 */
   penalty_area_width: number;
+  /** the penalty mark's distance from the goal centre; 0 when not sent (grSim): the division's, 8 m in A and 6 m in B */
+  goal_center_to_penalty_mark: number;
   center_circle_radius: number;
   ball_radius: number;
   max_robot_radius: number;

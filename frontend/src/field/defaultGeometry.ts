@@ -54,6 +54,7 @@ const divisionBDims: Omit<Geometry, "lines" | "arcs"> = {
   boundary_width: 300,
   penalty_area_depth: 1000,
   penalty_area_width: 2000,
+  goal_center_to_penalty_mark: 6000,
   center_circle_radius: 500,
   ball_radius: 21.5,
   max_robot_radius: 90,
