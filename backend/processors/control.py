@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from domain.rules import kick_allowed
+from sslnet.ratelog import RateLimitedLog
 
 from .. import topics
 from ..bus import DataBus
@@ -23,6 +25,7 @@ from ..world.referee import RefereeState
 from ..world.silence import MIN_S as LOST_MIN_S
 from ..world.silence import CameraSilence, Lost
 from ..world.state import RobotState, Team, WorldState
+from .common import log
 from .internal_referee import InternalRefereeProcessor
 
 
@@ -83,6 +86,10 @@ class ControlProcessor(Processor):
         self.clock = clock
         self._last_tick = clock()
         self.halt_reason = ""
+        #: why the robots are held now ("" while driving), for the log line of each change
+        self._held = ""
+        self._held_since = 0.0
+        self._holdlog = RateLimitedLog(log, interval_s=10.0)
         #: in replay, the log's time at the playhead (Unix ns): vision is as old as the log
         #: says, whatever the speed and also while paused
         self.replay_clock: Callable[[], int] | None = None
@@ -146,6 +153,22 @@ class ControlProcessor(Processor):
             return None
         return max(0.0, (d - self.clock_ns()) / 1e9)
 
+    def _hold_changed(self, held: str, now: float) -> None:
+        """One log line when the robots are stopped for a new reason and when they are
+        driven again (a vision PC that died and came back is in the log, not only on the
+        page), rate-limited per reason (a flickering camera does not flood it); HALT is the
+        referee's and goes in at INFO."""
+        before, since = self._held, self._held_since
+        self._held, self._held_since = held, now
+        if held:
+            level = logging.INFO if held == "HALT" else logging.WARNING
+            self._holdlog.log(level, f"held-{held}", "robots stopped: %s", self.halt_reason)
+        elif before:
+            self._holdlog.log(logging.INFO if before == "HALT" else logging.WARNING,
+                              f"driven-{before}",
+                              "robots driven again after %.1f s stopped (%s)", now - since,
+                              before)
+
     def apply_settings(self, settings: ControlSettings, our_team: Team) -> None:
         self.motion.apply_settings(settings)
         self.our_team = our_team
@@ -197,12 +220,18 @@ class ControlProcessor(Processor):
                                 lost.reason() if lost is not None else
                                 f"no vision for {vision_age:.1f} s" if blind
                                 else f"strategy stalled ({targets_age:.1f} s)")
+            held = ("HALT" if ref and ref.halted else "no vision" if rec is None or blind
+                    else "strategy stalled")
+            if held != self._held:
+                self._hold_changed(held, now)
             self._reset()
             cmds = tuple(Command(t, i, zero) for t, i in keys)
             self.commands.write(CommandSet(created, 0, cmds))
             self.last_commands = {(c.team, c.id): c for c in cmds}
             return
         self.halt_reason = ""
+        if self._held:
+            self._hold_changed("", now)
         world = rec.value
         command = ref.command if ref is not None else None
         if command != self._command:  # speed caps and kicks change for every robot

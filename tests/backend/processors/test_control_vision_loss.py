@@ -249,3 +249,23 @@ def test_bad_camera_ids_and_a_clock_stepped_back_do_not_fool_it() -> None:
 
 def _frame_times(rig: Rig, cam: int) -> list[int]:
     return list(rig.world.silence._cams[cam].times)
+
+
+def test_losing_and_regaining_vision_is_logged_once_each(caplog: pytest.LogCaptureFixture) -> None:
+    """A vision PC that dies and comes back is in the station's log (found by hand against
+    grSim: the page said it, the log did not), once each way, not on every tick."""
+    rig = Rig()
+    rig.run({0: 60.0, 1: 60.0}, T0 + S)
+    last = rig.last_frame_ns()
+    with caplog.at_level("INFO", logger="touchline.processors"):
+        for k in range(1, 20):  # 19 ticks while silent
+            rig.tick_at(last + k * S // 10)
+        rig.run({0: 60.0}, last + 2 * S + S // 2, start_ns=last + 2 * S)
+    assert _moving(rig)
+    lines = [(r.levelname, r.getMessage()) for r in caplog.records]
+    assert len(lines) == 2, lines
+    assert lines[0][0] == "WARNING"
+    assert lines[0][1].startswith("robots stopped: no vision: every camera silent for 100 ms")
+    assert lines[1][0] == "WARNING"
+    assert lines[1][1].startswith("robots driven again after ")
+    assert lines[1][1].endswith(" s stopped (no vision)")
