@@ -44,6 +44,7 @@ class RefereeWatch:
         self.command = ""
         self.silent = False  # as of the last check()
         self._log = RateLimitedLog(log, interval_s=SILENCE_LOG_INTERVAL_S)
+        self._silent_source = ""  # the source that fell silent last
 
     def heard(self, ref: RefereeState) -> None:
         self.last_heard = self.clock()
@@ -80,10 +81,16 @@ class RefereeWatch:
         silent = bool(st and st["silent"])
         if st is not None and silent != self.silent:
             if silent:
+                self._silent_source = st["source_identifier"]
                 self._log.log(logging.WARNING, "silent",
                               "referee %s silent for %.1f s: still obeying its last command %s",
                               st["source_identifier"] or "(no source identifier)",
                               st["last_heard_s"], st["command"])
+            elif st["obeyed"] and st["source_identifier"] != self._silent_source:
+                # a game controller started anew (a new id), not the silent one back
+                self._log.log(logging.INFO, "back", "referee %s heard (%s fell silent before)",
+                              st["source_identifier"] or "(no source identifier)",
+                              self._silent_source or "(no source identifier)")
             elif st["obeyed"]:
                 self._log.log(logging.INFO, "back", "referee %s heard again",
                               st["source_identifier"] or "(no source identifier)")

@@ -81,3 +81,21 @@ def test_each_transition_is_logged_once(caplog: pytest.LogCaptureFixture) -> Non
         back = [r for r in caplog.records if "heard again" in r.getMessage()]
         assert len(back) == 1 and back[0].levelno == logging.INFO
         assert len(caplog.records) == 2
+
+
+def test_a_new_game_controller_is_not_the_silent_one_back(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """A GC restarted has a new source identifier: the log says which fell silent and which
+    is heard now (found by hand: it said the new one was "heard again")."""
+    clock = Clock()
+    w = RefereeWatch(clock=clock)
+    w.heard(_ref("STOP", "gc-1"))
+    w.check()
+    clock.t += 3.5
+    with caplog.at_level(logging.INFO, logger="touchline.referee"):
+        w.check()
+        w.heard(_ref("HALT", "gc-2"))
+        w.check()
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 2, lines
+    assert lines[1] == "referee gc-2 heard (gc-1 fell silent before)"
