@@ -188,6 +188,10 @@ async def test_the_last_word_reaches_every_robot_on_every_output(output: str) ->
                       pub_endpoint="tcp://127.0.0.1:0", sub_endpoint="tcp://127.0.0.1:0",
                       output=output, sim_blue_port=port[blue], sim_yellow_port=port[yellow],
                       sim_control_port=port[control], grsim_port=port[blue],
+                      # the robot status ports of its own (grSim's 30011/30012 may be taken
+                      # by a station running beside the tests: "Address already in use")
+                      grsim_status_host="127.0.0.1", grsim_status_blue_port=0,
+                      grsim_status_yellow_port=0,
                       robot_box_port=port[box], hold_time_s=30.0, command_timeout_s=1.0)
     robots = ([(BLUE, 2), (BLUE, 4)] if output == "robot-box"
               else [(BLUE, 2), (YELLOW, 4), (YELLOW, 7)])
@@ -204,7 +208,13 @@ async def test_the_last_word_reaches_every_robot_on_every_output(output: str) ->
     pub = ctx.socket(zmq.PUB)
     pub.setsockopt(zmq.LINGER, 0)
     try:
-        await asyncio.wait_for(relay.ready.wait(), 5)
+        # ready, or the relay's own error (not a timeout hiding it)
+        ready = asyncio.ensure_future(relay.ready.wait())
+        await asyncio.wait([ready, task], timeout=5, return_when=asyncio.FIRST_COMPLETED)
+        ready.cancel()
+        if task.done():
+            task.result()
+        assert relay.ready.is_set(), "the relay did not start within 5 s"
         pub.connect(relay.sub_address)
         body = touchline_pb2.RobotCommandSet(
             commands=[_command(t, i) for t, i in robots]).SerializeToString()
