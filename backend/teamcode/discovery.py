@@ -148,7 +148,14 @@ def _inspect_python(name: str, text: str) -> tuple[Kind, str, str, str, Problem 
     """(kind, entry, title, description, problem) of a Python file."""
     in_lib = name.startswith(LIB + "/")
     try:
-        tree = ast.parse(text, filename=name)
+        try:
+            tree = ast.parse(text, filename=name)
+        except SystemError as exc:
+            # CPython 3.11's spurious "AST constructor recursion depth mismatch" when
+            # another thread parses at the same time (python/cpython#106905): once more
+            if "recursion depth mismatch" not in str(exc):
+                raise
+            tree = ast.parse(text, filename=name)
     except SyntaxError as exc:
         kind: Kind = "library"
         if not in_lib:
