@@ -64,7 +64,10 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
     assert [s["stage"] for s in stages[:3]] == [
         "decoded (vision ingest)", "world model written", "commands sent to relay"]
     assert all(s["n"] > 0 for s in stages[:3])
-    assert 0 < stages[0]["p50_ms"] <= stages[1]["p50_ms"] <= stages[2]["p50_ms"] < 100
+    # each stage's p50 over its own samples: a frame each for the first, a pass each for the
+    # others (a pass's newest frame), so they are in order on a quiet machine only (at load 12
+    # the frames waiting in a burst made the first 6.1 ms, the second 2.0 ms)
+    assert all(0 < s["p50_ms"] < 100 for s in stages[:3]), stages[:3]
     # what the robots experience: each one's newest frame's age when its command is sent
     age = next(s for s in stages if s["stage"] == FRAME_AGE_STAGE)
     assert age["n"] > 0 and 0 < age["p50_ms"] < 100
