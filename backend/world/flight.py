@@ -184,6 +184,10 @@ class FlightTracker:
         self._tried_kick: float | None = None  # start time of the kick given up on
         self._last_t0 = -math.inf  # the start of the last flight (a launch is tried once)
         self._fitted_t = -math.inf  # the newest detection the last fit had: fit again after
+        #: the last ``_launch`` answer in time order and what it was made of (the detections
+        #: seen so far, the first recent one, the last flight's start, the parameters read):
+        #: with no fit to make, ``update`` asks at every snapshot, mostly with no detection new
+        self._launch_memo: tuple[tuple[float, ...], float | None] | None = None
         self.chips = 0  # flights recognised (tests, health)
         self.ended = ""  # why the last flight ended
 
@@ -199,6 +203,7 @@ class FlightTracker:
     def reset(self) -> None:
         self._obs.clear()
         self._back.clear()
+        self._launch_memo = None
         self._flight = None
 
     def observe(self, t: float, cam: int, x: float, y: float) -> None:
@@ -303,7 +308,26 @@ class FlightTracker:
                     hi = mid
                 else:
                     lo = mid + 1
-            recent = obs  # (from lo on)
+            # the answer depends on t_now only through lo: the same detections, the same
+            # first recent one and the same parameters give the same answer (the rest below
+            # reads a few detections at rest, then every recent one of a launch)
+            key = (self._n_obs, lo, self._last_t0, within, cfg.min_samples, cfg.launch_mm,
+                   cfg.rest_s, cfg.rest_mm)
+            memo = self._launch_memo
+            if memo is not None and memo[0] == key:
+                return memo[1]
+            t0 = self._launch_from(obs, lo)
+            self._launch_memo = (key, t0)
+            return t0
+        return self._launch_from(recent, lo)
+
+    def _launch_from(self, recent: Sequence[tuple[float, int, float, float]],
+                     lo: int) -> float | None:
+        """``_launch``'s answer from the recent detections (``recent[lo:]``; ``recent`` is
+        ``_obs`` itself when in time order, from its first recent one, ``lo``, on)."""
+        cfg = self.config
+        obs = self._obs
+        back = recent is not obs
         if len(recent) - lo < cfg.min_samples:
             return None
         x0, y0 = recent[lo][2], recent[lo][3]

@@ -298,3 +298,41 @@ def test_launch_from_rest_finds_the_recent_detections_as_a_full_pass_did() -> No
         if rng.random() < 0.3:
             ft.reset()
     assert launches > 0  # (the scenario does launch balls)
+
+
+def test_launch_asked_again_without_new_detections_answers_as_a_full_pass() -> None:
+    """``_launch`` keeps its last answer while nothing it reads changed (the snapshot asks at
+    every pass, mostly with no ball detection new): asked again at later times (the recent
+    window sliding over the same detections), earlier ones, after a flight's start and after
+    a reset, it answers what the first version, every detection looked at, answers."""
+    import random
+
+    rng = random.Random(11)
+    launches = nones = 0
+    for _ in range(40):
+        ft = FlightTracker()
+        ft.set_cameras({c: (0.0, 0.0, 4000.0) for c in range(4)})
+        t = 1.7e9 + rng.uniform(0.0, 1.0)
+        t_kick = t + rng.uniform(0.2, 1.0)
+        speed = rng.choice([0.0, 3000.0])
+        p_late = rng.choice([0.0, 0.0, 0.1])
+        for i in range(250):
+            t += rng.choice([1 / 150, 1 / 75])
+            dt = max(0.0, t - t_kick)
+            late = rng.random() < p_late
+            tc = t - (rng.uniform(0.0, 0.05) if late else 0.0)
+            ft.observe(tc, rng.randrange(4), 100.0 + speed * dt + rng.gauss(0, 2),
+                       rng.gauss(0, 2))
+            # several passes before the next detection: times on, back, and past the window
+            for k, t_now in enumerate((t, t + 0.001, t + 0.2, t + 0.001, t + 0.45, t + 0.6,
+                                       t + 0.001)):
+                if k == 1 and i % 10 == 9:
+                    # a flight started between two passes (what _recognise sets)
+                    ft._last_t0 = t - rng.uniform(0.0, 0.3)
+                want = _ref_launch(ft, t_now)
+                assert ft._launch(t_now) == want
+                launches += want is not None
+                nones += want is None
+        if rng.random() < 0.3:
+            ft.reset()
+    assert launches > 0 and nones > 0  # (both answers are asked again)
