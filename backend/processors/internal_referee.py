@@ -7,7 +7,7 @@ import time
 from .. import topics
 from ..bus import DataBus, Reader
 from ..processor import Every, Processor
-from ..referee.internal import InternalReferee, RefereeCommandError
+from ..referee.internal import InternalReferee, RefereeCommandError, robots_for_field
 from .common import log
 
 
@@ -26,6 +26,8 @@ class InternalRefereeProcessor(Processor):
         self.last_foreign: tuple[float, str] | None = None
         self.out = bus.of(topics.REFEREE_OUT)
         self.reader = Reader(bus.of(topics.REFEREE))
+        self.geometry = bus.of(topics.GEOMETRY)
+        self._geometry_seq = -1
 
     def foreign_active(self) -> str | None:
         """The source id of another referee heard recently, if any."""
@@ -43,13 +45,24 @@ class InternalRefereeProcessor(Processor):
         self.enabled = on
 
     async def tick(self) -> None:
+        if self.geometry.seq != self._geometry_seq:
+            # the robots allowed before any card: the division's, by the field (grSim's 12 m
+            # field showed B's 6 until a card was given)
+            self._geometry_seq = self.geometry.seq
+            g = self.geometry.latest_value()
+            if g is not None:
+                self.referee.robots_per_team = robots_for_field(g["field_length"])
         for r in self.reader.read_new():
             if r.source_identifier != self.referee.source_identifier:
                 self.last_foreign = (time.monotonic(), r.source_identifier)
+                reason = (f"switched off: a game controller is active "
+                          f"({r.source_identifier or 'no source identifier'})")
                 if self.enabled:
                     self.enabled = False
-                    self.disabled_reason = (f"switched off: a game controller is active "
-                                            f"({r.source_identifier or 'no source identifier'})")
+                    self.disabled_reason = reason
                     log.warning("internal referee %s", self.disabled_reason)
+                elif self.disabled_reason.startswith("switched off: a game controller") \
+                        and self.disabled_reason != reason:
+                    self.disabled_reason = reason  # a new GC (a new id): the reason names it
         if self.enabled:
             self.out.write(self.referee.encode())

@@ -33,6 +33,11 @@ YELLOW_CARD_US = 120_000_000
 CARDS = ("yellow", "red", "clear")  # clear: the operator withdraws the team's cards
 
 
+def robots_for_field(field_length_mm: float | None) -> int:
+    """The division's robots per team by the field's size (A: 12 m x 9 m, 11; B: 6)."""
+    return 11 if field_length_mm is not None and field_length_mm >= 11000 else 6
+
+
 @dataclass
 class _Team:
     name: str

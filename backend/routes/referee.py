@@ -10,7 +10,7 @@ from fastapi.responses import JSONResponse
 from .. import contract
 from ..contract import CardIn, EnableIn, RefereeCommandIn
 from ..jsonsafe import SafeJSONResponse
-from ..referee.internal import RefereeCommandError
+from ..referee.internal import RefereeCommandError, robots_for_field
 from ..station import Station
 from ..world.state import Team
 from .checks import check_on_field
@@ -75,8 +75,8 @@ def _card(st: Station, team: Team, card: str) -> None:
     """On the station thread: a card from the internal referee; the division's robots per
     team come from the field size (A: 12 m x 9 m, 11 robots)."""
     geo = st.browser.geometry()
-    st.referee_state.robots_per_team = \
-        11 if geo is not None and geo["field_length"] >= 11000 else 6
+    st.referee_state.robots_per_team = robots_for_field(
+        geo["field_length"] if geo is not None else None)
     st.referee_state.card(team, card)
 
 
