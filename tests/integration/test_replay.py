@@ -37,8 +37,10 @@ def test_a_live_session_is_recorded_and_replays(tmp_path: Path) -> None:
         wait_until(lambda: len(st.get("/api/world")["robots"]) >= 6, 20, what="robots")
         rec = st.get("/api/health")["recording"]
         assert rec["enabled"] and rec["recording"] and rec["folder"] == str(logs)
-        # a fresh file for this test, then operator actions in it
-        assert post(st, "/api/recording", {"action": "new-file"}).status_code == 200
+        # a fresh file for this test, then operator actions in it; the answer names the new
+        # file (it named the one just closed)
+        r = post(st, "/api/recording", {"action": "new-file"})
+        assert r.status_code == 200 and r.json()["file"] not in ("", rec["file"]), r.json()
         wait_until(lambda: st.get("/api/health")["recording"]["file"] != rec["file"], 10,
                    what="a new file")
         for cmd in ("STOP", "FORCE_START"):
