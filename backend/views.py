@@ -403,8 +403,12 @@ def latency_stages(p: ViewParts) -> list[contract.LatencyStage]:
                                   (FRAME_AGE_STAGE, p.publisher.frame_age))]
     rs = p.relay_stats.latest_value()
     if rs is not None and rs.get("command_latency_ms", -1) >= 0:
+        # the relay's own p50 / p99 (vision arrival -> the first datagram of the commands it
+        # caused, its last second; -1: none), beside its mean
+        p50, p99 = rs.get("command_latency_p50_ms", -1), rs.get("command_latency_p99_ms", -1)
         stages.append({"stage": "sent to robots (relay)", "mean_ms": rs["command_latency_ms"],
-                       "p50_ms": None, "p99_ms": None, "n": None})
+                       "p50_ms": p50 if p50 >= 0 else None, "p99_ms": p99 if p99 >= 0 else None,
+                       "n": None})
     return stages
 
 

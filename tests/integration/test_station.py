@@ -71,6 +71,9 @@ def test_health_reports_rates_of_every_stream_and_processor(station: StationHand
     # what the robots experience: each one's newest frame's age when its command is sent
     age = next(s for s in stages if s["stage"] == FRAME_AGE_STAGE)
     assert age["n"] > 0 and 0 < age["p50_ms"] < 100
+    # and the relay's own, to the first datagram out: its p50 and p99 too, not only a mean
+    relay = next(s for s in stages if s["stage"] == "sent to robots (relay)")
+    assert relay["p50_ms"] is not None and 0 < relay["p50_ms"] <= relay["p99_ms"] < 100, relay
     assert procs["strategy"]["configured_hz"] == 20.0
     # what each process costs: both busy (a camera stream at 240 Hz), neither runaway
     cost = {p["name"]: p for p in h["processes"]}
