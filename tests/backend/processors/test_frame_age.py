@@ -42,16 +42,24 @@ def frame(n: int, camera: int, robot_id: int, x_mm: float, t: float) -> bytes:
     return pkt.SerializeToString()
 
 
-def test_each_robot_gets_the_age_of_its_own_newest_frame() -> None:
+def _pipeline(ids: tuple[int, ...]) -> tuple[DataBus, VisionIngest, WorldProcessor,
+                                              ControlProcessor, CommandPublisher]:
+    """Vision ingest -> world -> control -> publisher on a bus, wired as the station wires
+    them, with strategy targets for blue ``ids``."""
     bus = DataBus({}, check_types=True)
     vision, world = VisionIngest(bus), WorldProcessor(bus)
     control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=10.0)
     control.strategy_stale_s = 3600.0
     publisher = CommandPublisher(bus)
     publisher.attach(Wire())  # type: ignore[arg-type]
-    publisher.arrivals = world.arrivals  # as the station wires them
+    publisher.arrivals = world.arrivals
     bus.of(topics.TARGETS).write({("blue", i): TargetEntry(Target(2000.0, 0.0, 0.0), "strategy")
-                                  for i in (3, 4)})
+                                  for i in ids})
+    return bus, vision, world, control, publisher
+
+
+def test_each_robot_gets_the_age_of_its_own_newest_frame() -> None:
+    bus, vision, world, control, publisher = _pipeline((3, 4))
     packets = bus.of(topics.VISION_PACKETS)
     now = time.time()
     t_old = time.time_ns() - 4_000_000
@@ -76,16 +84,8 @@ def test_each_robot_gets_the_age_of_its_own_newest_frame() -> None:
 
 
 def test_a_robot_not_seen_and_a_stop_give_no_age() -> None:
-    bus = DataBus({}, check_types=True)
-    vision, world = VisionIngest(bus), WorldProcessor(bus)
-    control = ControlProcessor(bus, max_wait_s=10.0, vision_stale_s=10.0)
-    control.strategy_stale_s = 3600.0
-    publisher = CommandPublisher(bus)
-    publisher.attach(Wire())  # type: ignore[arg-type]
-    publisher.arrivals = world.arrivals
     # robot 5 has a target and was never seen: commanded zero, no frame behind it
-    bus.of(topics.TARGETS).write({("blue", i): TargetEntry(Target(2000.0, 0.0, 0.0), "strategy")
-                                  for i in (3, 5)})
+    bus, vision, world, control, publisher = _pipeline((3, 5))
     bus.of(topics.VISION_PACKETS).write(tl.Envelope(
         stream=tl.STREAM_VISION, receive_time_ns=time.time_ns(), sequence=1, source="test",
         payload=frame(1, 0, 3, 0.0, time.time())))
