@@ -99,18 +99,39 @@ def parts() -> str:
     return str(d)
 
 
-def fieldsim(every: int, chip: bool) -> str:
+def _kick_scene(camera_phases: str) -> tuple[Any, Any, Any]:
+    """fieldsim 11 v 11 on division A's field, 8 cameras at 75 Hz: (config, world, vision),
+    blue 0 with the ball at its kicker."""
     from fieldsim.config import SimConfig
     from fieldsim.vision import Vision
     from fieldsim.world import Team, World
 
-    t0 = 1_700_000_000.0
     cfg = SimConfig(blue=11, yellow=11, seed=3, cameras=8, division="A", camera_hz=75.0,
-                    false_prob=0.05)
+                    false_prob=0.05, camera_phases=camera_phases)
     w = World(cfg)
     v = Vision(cfg, w.geometry)
     w.teleport_robot(Team.BLUE, 0, -2.0, 0.5, 0.0)
     w.teleport_ball(-2.0 + cfg.robot_radius_m + cfg.ball_radius_m + 0.004, 0.5)
+    return cfg, w, v
+
+
+def _kick_script(w: Any, chip: bool) -> None:
+    """The commands of one simulator step: blue 0 kicks (or chips) at 0.5 s, blue 1-5 drive
+    curves turning back and forth."""
+    from fieldsim.world import Team
+
+    if 0.5 <= w.t < 0.52:
+        w.set_command(Team.BLUE, 0, 0.0, 0.0, 0.0, kick_speed=4.0,
+                      kick_angle=math.radians(50.0 if chip else 0.0))
+    for rid in range(1, 6):
+        w.set_command(Team.BLUE, rid, 1.0, 0.3, 1.0 if w.t % 2 < 1 else -1.0)
+
+
+def fieldsim(every: int, chip: bool) -> str:
+    from fieldsim.world import Team
+
+    t0 = 1_700_000_000.0
+    cfg, w, v = _kick_scene("spread")
     m = WorldModel()
     m.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
     d = Digest()
@@ -118,11 +139,7 @@ def fieldsim(every: int, chip: bool) -> str:
     nxt = list(v.phases)
     n = 0
     while w.t < 6.0:
-        if 0.5 <= w.t < 0.52:
-            w.set_command(Team.BLUE, 0, 0.0, 0.0, 0.0, kick_speed=4.0,
-                          kick_angle=math.radians(50.0 if chip else 0.0))
-        for rid in range(1, 6):
-            w.set_command(Team.BLUE, rid, 1.0, 0.3, 1.0 if w.t % 2 < 1 else -1.0)
+        _kick_script(w, chip)
         if 4.0 <= w.t < 4.5:  # two robots lifted off the field
             for rid in (6, 7):
                 w.robots.pop((Team.YELLOW, rid), None)
@@ -148,25 +165,12 @@ def bursts(chip: bool = True) -> str:
     are; the ball is until a chip flies: the flight estimate, refitted at each snapshot, maps
     a burst's later detections to under the ball one burst later; the kick estimate, fed at
     each snapshot, is fitted over other batches.)"""
-    from fieldsim.config import SimConfig
-    from fieldsim.vision import Vision
-    from fieldsim.world import Team, World
-
     t0 = 1_700_000_000.0
-    cfg = SimConfig(blue=11, yellow=11, seed=3, cameras=8, division="A", camera_hz=75.0,
-                    false_prob=0.05, camera_phases="together")
-    w = World(cfg)
-    v = Vision(cfg, w.geometry)
-    w.teleport_robot(Team.BLUE, 0, -2.0, 0.5, 0.0)
-    w.teleport_ball(-2.0 + cfg.robot_radius_m + cfg.ball_radius_m + 0.004, 0.5)
+    cfg, w, v = _kick_scene("together")
     frames: list[list[CameraFrame]] = []  # per instant, its eight frames in camera order
     period, nxt = 1.0 / cfg.camera_hz, 0.0
     while w.t < 6.0:
-        if 0.5 <= w.t < 0.52:
-            w.set_command(Team.BLUE, 0, 0.0, 0.0, 0.0, kick_speed=4.0,
-                          kick_angle=math.radians(50.0 if chip else 0.0))
-        for rid in range(1, 6):
-            w.set_command(Team.BLUE, rid, 1.0, 0.3, 1.0 if w.t % 2 < 1 else -1.0)
+        _kick_script(w, chip)
         w.step()
         while nxt <= w.t:
             tc, nxt = nxt, nxt + period
