@@ -10,7 +10,7 @@ from fastapi.responses import JSONResponse
 from .. import contract
 from ..contract import CardIn, EnableIn, RefereeCommandIn
 from ..jsonsafe import SafeJSONResponse
-from ..referee.internal import RefereeCommandError, robots_for_field
+from ..referee.internal import RefereeCommandError
 from ..station import Station
 from ..world.state import Team
 from .checks import check_on_field
@@ -72,11 +72,8 @@ async def referee_command(body: RefereeCommandIn, st: StationDep,
 
 
 def _card(st: Station, team: Team, card: str) -> None:
-    """On the station thread: a card from the internal referee; the division's robots per
-    team come from the field size (A: 12 m x 9 m, 11 robots)."""
-    geo = st.browser.geometry()
-    st.referee_state.robots_per_team = robots_for_field(
-        geo["field_length"] if geo is not None else None)
+    """On the station thread: a card from the internal referee (the division's robots per
+    team follow the field: its processor keeps them)."""
     st.referee_state.card(team, card)
 
 
