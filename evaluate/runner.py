@@ -32,6 +32,9 @@ from .scenario import Scenario
 
 #: a run's wall-clock limit by default (a run that hangs fails on its own)
 MAX_WALL_S = 600.0
+#: a NORMAL_START ``when = "ready"`` comes once the robots have been in place this long, as
+#: the game controller continues (its ``preparation-time-before-resume``, 2 s)
+READY_HOLD_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -160,6 +163,8 @@ class ScenarioRun(Engine):
         self._kicks = {k: r.kicks for k, r in w.robots.items()}
         self._event_seq = 0
         self.ended_by = ""
+        self._given: set[int] = set()  # referee steps given (a ready one may come early)
+        self._ready_since: float | None = None
 
     # -- frames ---------------------------------------------------------------------------
 
@@ -251,6 +256,9 @@ class ScenarioRun(Engine):
     # -- referee and actions ----------------------------------------------------------------
 
     def _referee_step(self, i: int) -> None:
+        if i in self._given:  # (a NORMAL_START given when ready: its latest time passes)
+            return
+        self._given.add(i)
         step = self.sc.referee[i]
         ref = self.game.referee
         colour = None if step.team is None else self.ours if step.team == "ours" else self.theirs
@@ -287,6 +295,30 @@ class ScenarioRun(Engine):
                       designated=step.designated)
         self.send_referee(ref)
 
+    def _watch_ready(self, i: int) -> None:
+        """A NORMAL_START ``when = "ready"`` (step ``i``): given once the robots have kept the
+        positions its PREPARE_* asks for ``READY_HOLD_S`` (the judge's own rule, so given
+        early it finds nothing), or at its ``at`` whatever they do (the game controller's
+        prepare timeout). Looked at once a camera frame while the PREPARE_* holds."""
+        if i in self._given or i - 1 not in self._given:
+            self._ready_since = None
+            return
+        prev = self.sc.referee[i - 1]
+        kicker = self.ours if prev.team == "ours" else self.theirs
+        issues = (self.judge.kickoff_issues(kicker) if prev.command == "PREPARE_KICKOFF"
+                  else self.judge.penalty_issues(kicker))
+        t = self.clock.t
+        if issues or self.game.snap is None:
+            self._ready_since = None
+        elif self._ready_since is None:
+            self._ready_since = t
+        elif t - self._ready_since >= READY_HOLD_S - 1e-9:
+            self._ready_since = None
+            self._referee_step(i)
+            return
+        if t < self.sc.referee[i].at:
+            self.at(t + 1.0 / self.sim.camera_hz, self.O_REFEREE, lambda: self._watch_ready(i))
+
     def _action(self, i: int) -> None:
         a = self.sc.actions[i]
         s = self.sign
@@ -309,6 +341,9 @@ class ScenarioRun(Engine):
             self.at(a.at, self.O_ACTION, lambda i=i: self._action(i))  # type: ignore[misc]
         for i, step in enumerate(sc.referee):
             self.at(step.at, self.O_REFEREE, lambda i=i: self._referee_step(i))  # type: ignore[misc]
+            if step.when_ready:  # watched from its PREPARE_* on (given just before)
+                self.at(sc.referee[i - 1].at, self.O_REFEREE + 1,
+                        lambda i=i: self._watch_ready(i))  # type: ignore[misc]
         if self.refereed:
             first = sc.referee[0].at
             self.every(1.0 / 10.0, self.O_REFEREE,

@@ -83,6 +83,9 @@ class RefereeStep:
     command: str  # PLAIN_COMMANDS or TEAM_COMMANDS
     team: TeamSide | None = None
     designated: tuple[float, float] | None = None  # BALL_PLACEMENT: our frame, m
+    #: NORMAL_START only: given as soon as the robots are ready, as the game controller does
+    #: (``runner.READY_RULE``), ``at`` being the latest (its prepare timeout)
+    when_ready: bool = False
 
     def label(self) -> str:
         return self.command if self.team is None else f"{self.command} ({self.team})"
@@ -449,12 +452,15 @@ def parse_scenario(data: Mapping[str, Any], name: str, where: str,
         if cmd in TEAM_COMMANDS:
             team = "ours" if rf.choice("team", ("ours", "theirs")) == "ours" else "theirs"
         designated = rf.point("designated", required=False)
+        when_ready = rf.choice("when", ("at", "ready"), "at") == "ready"
+        if when_ready and cmd != "NORMAL_START":
+            raise rf.err("when", f"only a NORMAL_START waits for the robots, not {cmd}")
         if cmd == "BALL_PLACEMENT" and designated is None:
             raise rf.err("designated", "BALL_PLACEMENT needs a designated point [x, y] (m)")
         if cmd != "BALL_PLACEMENT" and designated is not None:
             raise rf.err("designated", f"only BALL_PLACEMENT has one, not {cmd}")
         rf.done()
-        referee.append(RefereeStep(at, cmd, team, designated))
+        referee.append(RefereeStep(at, cmd, team, designated, when_ready))
     for i in range(1, len(referee)):
         if referee[i].at < referee[i - 1].at:
             raise ScenarioError(where, f"referee[{i}].at", "the referee's steps go in time "

@@ -194,25 +194,41 @@ class Judge:
         self.game._log("violation", team=r.team, robot=r.id, detail=f"{kind}: {why}")
 
     def kickoff(self, kicking: str) -> None:
+        """The positions at a kick-off's NORMAL_START, judged (violations counted)."""
+        for r, why in self.kickoff_issues(kicking):
+            self._snapshot_violation("kickoff_position", r, why)
+
+    def kickoff_issues(self, kicking: str) -> list[tuple[RobotView, str]]:
+        """The robots out of place for a kick-off by ``kicking``, and why (none: ready)."""
         s = self.game.snap
         if s is None:
-            return
+            return []
         inside_ok = ROBOT_RADIUS_MM - DISTANCE_TOLERANCE_MM  # centre this far into own half
         in_circle = sorted((r for r in s.robots if r.team == kicking
                             and math.hypot(r.x, r.y) < TOO_CLOSE_MM),
                            key=lambda r: math.hypot(r.x, r.y))
         allowed = in_circle[0].key if in_circle else None
+        out: list[tuple[RobotView, str]] = []
         for r in s.robots:
             at = f" at ({r.x:.0f}, {r.y:.0f})"
             if self.game.side_of(r.team) * r.x < inside_ok:
-                self._snapshot_violation("kickoff_position", r, "not in its own half" + at)
+                out.append((r, "not in its own half" + at))
             elif math.hypot(r.x, r.y) < TOO_CLOSE_MM and r.key != allowed:
-                self._snapshot_violation("kickoff_position", r, "inside the centre circle" + at)
+                out.append((r, "inside the centre circle" + at))
+        return out
 
     def penalty(self, kicking: str) -> None:
+        """The positions at a penalty's NORMAL_START, judged (violations counted)."""
+        for r, why in self.penalty_issues(kicking):
+            self._snapshot_violation("penalty_position", r, why)
+
+    def penalty_issues(self, kicking: str) -> list[tuple[RobotView, str]]:
+        """The robots out of place for a penalty by ``kicking``, and why (none: ready): the
+        defending keeper on its goal line, every other robot but the kicker 1 m behind the
+        ball."""
         s = self.game.snap
         if s is None:
-            return
+            return []
         defending = other(kicking)
         side = self.game.side_of(defending)
         keeper = self.game.cfg.goalkeepers.get(defending, 0)
@@ -222,6 +238,7 @@ class Judge:
                          key=lambda r: dist(r.x, r.y, bx, by))
         kicker = kickers[0].key if kickers else None
         goal_x = side * self.game.field.half_length
+        out: list[tuple[RobotView, str]] = []
         for r in s.robots:
             if r.key == kicker:
                 continue
@@ -229,8 +246,8 @@ class Judge:
             if r.team == defending and r.id == keeper:
                 if abs(r.x - goal_x) > ROBOT_RADIUS_MM + DISTANCE_TOLERANCE_MM or \
                         abs(r.y) > self.game.field.goal_width / 2.0:
-                    self._snapshot_violation("penalty_position", r,
-                                             "keeper not on its goal line" + at)
+                    out.append((r, "keeper not on its goal line" + at))
                 continue
             if side * (r.x - bx) > -(PENALTY_BEHIND_BALL_MM - DISTANCE_TOLERANCE_MM):
-                self._snapshot_violation("penalty_position", r, "not 1 m behind the ball" + at)
+                out.append((r, "not 1 m behind the ball" + at))
+        return out

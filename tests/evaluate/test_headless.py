@@ -115,3 +115,90 @@ def test_a_short_match_is_played_and_judged(tmp_path: Path) -> None:
                          env={**os.environ, "PYTHONPATH": str(root), "PYTHONHASHSEED": "4242"})
     assert json.loads(out.stdout.splitlines()[-1]) == json.loads(json.dumps(a["result"]))
     assert other.read_bytes() == (tmp_path / "m.log").read_bytes()
+
+
+READY = """
+title = "Kick-off when ready"
+statement = "NORMAL_START once the robots are in place, as the game controller gives it."
+duration_s = 4.5
+seed = 3
+
+[ours]
+play = "match"
+
+[[robots]]
+team = "ours"
+id = 0
+x = -1.0
+y = 0.0
+
+[[robots]]
+team = "theirs"
+id = 0
+x = THEIR_X
+y = 1.0
+
+[ball]
+x = 0.0
+y = 0.0
+
+[[referee]]
+at = 0.0
+command = "STOP"
+
+[[referee]]
+at = 0.2
+command = "PREPARE_KICKOFF"
+team = "ours"
+
+[[referee]]
+at = 4.0
+command = "NORMAL_START"
+when = "ready"
+
+[[check]]
+name = "no_violation"
+team = "theirs"
+kinds = ["kickoff_position"]
+"""
+
+
+def _normal_start(their_x: float) -> tuple[float, dict[str, Any]]:
+    from evaluate.scenario import parse_scenario_text
+
+    sc = parse_scenario_text(READY.replace("THEIR_X", str(their_x)), "ready", "ready.toml")
+    res = run_scenario_task(ScenarioTask(sc, 0, Entrant(), None))
+    assert res["error"] is None, res["error"]
+    starts = [e["t"] for e in res["events"]
+              if e["kind"] == "referee" and e["detail"] == "NORMAL_START"]
+    assert len(starts) == 1, res["events"]  # given once, early or at its time, never twice
+    return starts[0], res
+
+
+def test_normal_start_when_ready_comes_once_the_robots_are_in_place() -> None:
+    """``when = "ready"``: the game controller's way (2 s after every robot is where the
+    PREPARE_* wants it, its prepare timeout at the latest), judged by the judge's own rule."""
+    from evaluate.runner import READY_HOLD_S
+
+    t, res = _normal_start(1.5)  # their robot in its own half: ready from the start
+    assert 0.2 + READY_HOLD_S <= t < 4.0
+    assert {c["name"]: c["passed"] for c in res["checks"]} == {"no_violation": True}
+    # their robot stands in our half (no play drives it): never ready, NORMAL_START at 4 s,
+    # and the judge finds what kept it
+    t, res = _normal_start(-1.5)
+    assert t == pytest.approx(4.0)
+    assert not res["checks"][0]["passed"] and "not in its own half" in res["checks"][0]["detail"]
+
+
+def test_only_a_normal_start_waits_for_the_robots() -> None:
+    from evaluate.scenario import ScenarioError, parse_scenario_text
+
+    text = READY.replace("THEIR_X", "1.5").replace(
+        'command = "STOP"', 'command = "STOP"\nwhen = "ready"', 1)
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario_text(text, "ready", "ready.toml")
+    assert err.value.field == "referee[0].when" and "only a NORMAL_START" in str(err.value)
+    text = READY.replace("THEIR_X", "1.5").replace('when = "ready"', 'when = "soon"')
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario_text(text, "ready", "ready.toml")
+    assert err.value.field == "referee[2].when" and "not one of at, ready" in str(err.value)
