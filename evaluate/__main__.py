@@ -119,6 +119,12 @@ def main(argv: list[str] | None = None) -> int:
                                                       else ""))
         return 0
 
+    if args.out is not None and (args.out / "runs").is_dir() and any((args.out / "runs").iterdir()):
+        # the runs' logs are never overwritten (as the recorder's): every run would fail
+        say(f"{args.out} holds the runs of an earlier report: give another --out, or remove "
+            "it first", err=True)
+        return 2
+
     def progress(done: int, total: int, res: dict[str, Any]) -> None:
         ok = "ok  " if res.get("passed") or ("score" in res and not res.get("error")
                                              and res.get("kind") == "match") else "FAIL"

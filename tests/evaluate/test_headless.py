@@ -202,3 +202,21 @@ def test_only_a_normal_start_waits_for_the_robots() -> None:
     with pytest.raises(ScenarioError) as err:
         parse_scenario_text(text, "ready", "ready.toml")
     assert err.value.field == "referee[2].when" and "not one of at, ready" in str(err.value)
+
+
+def test_a_report_folder_with_runs_is_refused_before_anything_runs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Runs' logs are never overwritten: a second report into the same --out said before that
+    every run failed (FileExistsError in each); now it is refused at once, saying why."""
+    from evaluate.__main__ import main
+
+    argv = ["suite", str(DATA), "--only", "quick_keeper", "--workers", "1", "--out",
+            str(tmp_path / "rep")]
+    assert main(argv) == 0
+    logs = sorted((tmp_path / "rep" / "runs").iterdir())
+    before = [p.stat().st_mtime_ns for p in logs]
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "holds the runs of an earlier report" in err and "--out" in err
+    assert [p.stat().st_mtime_ns for p in sorted((tmp_path / "rep" / "runs").iterdir())] == before
