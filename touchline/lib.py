@@ -123,7 +123,8 @@ def best_shot(game: Game) -> tuple[tuple[float, float], float]:
 
 def goalkeeper(game: Game, min_speed_mmps: float = 300.0, rid: int | None = None) -> Target:
     """The built-in keeper: on the line in front of our goal where the ball's path crosses
-    it (a ball coming faster than ``min_speed_mmps``), else level with the ball; a slow ball
+    it (a ball coming faster than ``min_speed_mmps``), else where the bisector of the angle
+    the goal mouth makes at the ball crosses it; a slow ball
     inside our area is kicked out. ``rid``: the keeper (default: the referee's goalkeeper)."""
     fs = _field(game)
     keeper = rid if rid is not None else game.referee.goalkeeper

@@ -96,15 +96,26 @@ def goalkeeper_target(ball: ArrayLike, velocity: ArrayLike, goal_x: float, goal_
     """Where a goalkeeper on the goal line should stand: (goal_x, y).
 
     If the ball moves towards the goal line faster than ``min_speed`` (units/s along x),
-    y is where its straight path crosses x = goal_x; otherwise y is the ball's y (stand between
-    ball and goal). y is clamped to the goal mouth shrunk by ``margin`` on each side
-    (|y| <= goal_width / 2 - margin). The same rule as ``engine_scripts/goalkeeper.m``.
+    y is where its straight path crosses x = goal_x; otherwise y is where the bisector of the
+    angle the goal mouth (posts at (goal_x, +-goal_width / 2)) makes at the ball crosses it,
+    which divides the mouth as the ball's distances to the posts (the middle of the shots the
+    ball has; level with a ball out wide left the far side open). y is clamped to the goal
+    mouth shrunk by ``margin`` on each side (|y| <= goal_width / 2 - margin). The same rule as
+    ``engine_scripts/goalkeeper.m``.
     """
     b, v = as_points(ball), as_points(velocity)
     towards = (goal_x - b[..., 0]) * v[..., 0]
     moving = (towards > 0.0) & (np.abs(v[..., 0]) > min_speed)
     y_hit = intercept_x(b, v, goal_x)
-    y = np.where(moving, y_hit, b[..., 1])
+    # (the same operations in the same order as roles.keeper_y: the same bits)
+    h = goal_width / 2.0
+    dx = b[..., 0] - goal_x
+    d1 = np.sqrt(dx * dx + (b[..., 1] - h) * (b[..., 1] - h))
+    d2 = np.sqrt(dx * dx + (b[..., 1] + h) * (b[..., 1] + h))
+    s = d1 + d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y_bis = np.where(s > 0.0, h * (d2 - d1) / np.where(s > 0.0, s, 1.0), b[..., 1])
+    y = np.where(moving, y_hit, y_bis)
     lim = max(goal_width / 2.0 - margin, 0.0)
     y = np.clip(y, -lim, lim)
     x = np.broadcast_to(np.float64(goal_x), y.shape)

@@ -1,7 +1,8 @@
 """The roles of our team, in our frame (our goal at -x, we attack +x). Pure functions of the
 situation: each returns where a robot should go and what it should do (an ``Intent``).
 
-- goalkeeper: between ball and goal on the goal line; intercepts a ball moving towards the
+- goalkeeper: on the goal line where the bisector of the angle the goal mouth makes at the
+  ball crosses it; intercepts a ball moving towards the
   goal where the line fitted to its recent positions crosses the goal line (the point comes
   from ``backend.geometry.goalkeeper_target``'s rule, in plain floats as ``keeper_y``, or from
   the compute engine); clears a slow ball
@@ -80,7 +81,8 @@ def best_shot(ball: tuple[float, float], blockers: Sequence[tuple[float, float]]
 
 def keeper_point(ball: Ball, fs: Field, min_speed: float) -> tuple[float, float]:
     """The goalkeeper's spot (our frame): on a line just in front of our goal line, where the
-    ball's path crosses it when the ball comes towards the goal, else level with the ball."""
+    ball's path crosses it when the ball comes towards the goal, else on the bisector of the
+    angle the goal mouth makes at the ball."""
     gx = -fs.half_length + R + 30.0
     return gx, keeper_y(ball.x, ball.y, ball.vx, ball.vy, gx, fs.goal_width, R / 2.0,
                         min_speed)
@@ -90,9 +92,19 @@ def keeper_y(bx: float, by: float, vx: float, vy: float, goal_x: float, goal_wid
              margin: float, min_speed: float) -> float:
     """``backend.geometry.goalkeeper_target``'s y for one ball, in plain floats (the same
     operations in the same order, so the same bits; numpy on one point costs ~20 calls)."""
-    # moving towards the goal line: where its path crosses it (vx != 0 then), else level
+    # moving towards the goal line: where its path crosses it (vx != 0 then); else on the
+    # bisector of the angle between the ball's lines to the two posts (at goal_x), which
+    # meets the mouth dividing it as the distances to the posts (the angle bisector theorem):
+    # a keeper level with a ball out wide left the far side open (regression: penalty_theirs)
     moving = (goal_x - bx) * vx > 0.0 and abs(vx) > min_speed
-    y = by + (goal_x - bx) * vy / vx if moving else by
+    if moving:
+        y = by + (goal_x - bx) * vy / vx
+    else:
+        h = goal_width / 2.0
+        dx = bx - goal_x
+        d1 = math.sqrt(dx * dx + (by - h) * (by - h))
+        d2 = math.sqrt(dx * dx + (by + h) * (by + h))
+        y = h * (d2 - d1) / (d1 + d2) if d1 + d2 > 0.0 else by
     lim = max(goal_width / 2.0 - margin, 0.0)
     # np.clip(y, -lim, lim): a NaN stays NaN
     return lim if y > lim else (-lim if y < -lim else y)

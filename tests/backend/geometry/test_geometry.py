@@ -397,8 +397,13 @@ def test_goalkeeper_target_against_scalar(ball, vel) -> None:  # type: ignore[no
     lim = goal_w / 2 - margin
     if (goal_x - ball[0]) * vel[0] > 0 and abs(vel[0]) > min_speed:
         y = ball[1] + (goal_x - ball[0]) * vel[1] / vel[0]
-    else:
-        y = ball[1]
+    else:  # on the bisector of the angle between the lines to the posts: equal angles
+        a_up = math.atan2(goal_w / 2 - ball[1], goal_x - ball[0])
+        a_down = math.atan2(-goal_w / 2 - ball[1], goal_x - ball[0])
+        mid = a_down + (a_up - a_down) / 2 if abs(a_up - a_down) <= math.pi else None
+        if mid is None:  # (behind the line: the angle wraps through pi)
+            mid = a_down + (a_up - a_down + 2 * math.pi) / 2
+        y = ball[1] + (goal_x - ball[0]) * math.tan(mid) if ball[0] != goal_x else ball[1]
     y = min(lim, max(-lim, y))
     out = g.goalkeeper_target(ball, vel, goal_x, goal_w, margin, min_speed)
     assert out[0] == goal_x
@@ -409,6 +414,16 @@ def test_goalkeeper_hand_cases() -> None:
     # ball at the centre rolling to the left goal, aimed 410 mm up at the goal line
     assert g.goalkeeper_target([0, 0], [-1000, 91.111], -4500, 1000).tolist() == pytest.approx(
         [-4500, 410.0], abs=0.01)
-    # rolling away: mirror the ball's y, clamped to the goal mouth minus the margin
-    assert g.goalkeeper_target([0, 2000], [1000, 0], -4500, 1000, 90).tolist() == [-4500, 410]
+    # rolling away, out wide: on the bisector of the angle the mouth makes at the ball, which
+    # divides the mouth as the distances to the posts (4743.4 and 5147.8 mm: 20.4 mm up), not
+    # level with the ball (which left the far side open)
+    assert g.goalkeeper_target([0, 2000], [1000, 0], -4500, 1000, 90).tolist() == pytest.approx(
+        [-4500, 500 * (math.hypot(4500, 2500) - math.hypot(4500, 1500))
+         / (math.hypot(4500, 2500) + math.hypot(4500, 1500))])
+    # level with the goal's centre: the middle; close in, out wide: towards the near post
+    # (141 and 1105 mm to the posts); clamped to the mouth less the margin
+    assert g.goalkeeper_target([-2000, 0], [0, 0], -4500, 1000).tolist() == [-4500, 0]
+    assert g.goalkeeper_target([-4400, 600], [0, 0], -4500, 1000, 90).tolist() == pytest.approx(
+        [-4500, 386.4958], abs=1e-3)
+    assert g.goalkeeper_target([-4400, 600], [0, 0], -4500, 1000, 200).tolist() == [-4500, 300]
     assert float(g.intercept_x([0, 0], [0, 1], 5)) != float(g.intercept_x([0, 0], [0, 1], 5))

@@ -72,7 +72,12 @@ def test_goalkeeper_defenders_attacker_shot() -> None:
                 Ball(-1000.0, 300.0), keeper=0)
     k = goalkeeper(slow)
     assert isinstance(k, Target) and k.x == -HL + 90.0 + 30.0
-    assert k.y == 300.0 and k.role == "goalkeeper"  # level with a slow ball
+    # a slow ball: on the bisector of the angle the mouth makes at it, which divides the
+    # mouth as the ball's distances to the posts (at the keeper's line): a little up
+    h, dx = F.goal_width / 2, -1000.0 - k.x
+    d1, d2 = math.hypot(dx, 300.0 - h), math.hypot(dx, 300.0 + h)
+    assert math.isclose(k.y, h * (d2 - d1) / (d1 + d2)) and 0.0 < k.y < 300.0
+    assert k.role == "goalkeeper"
     towards = snap(slow.ours, [], Ball(-1000.0, 0.0, -2000.0, -100.0), keeper=0)
     k2 = goalkeeper(towards)
     expect = 0.0 + (k2.x - -1000.0) * -100.0 / -2000.0  # where its path crosses
