@@ -35,6 +35,9 @@ MAX_WALL_S = 600.0
 #: a NORMAL_START ``when = "ready"`` comes once the robots have been in place this long, as
 #: the game controller continues (its ``preparation-time-before-resume``, 2 s)
 READY_HOLD_S = 2.0
+#: a penalty ends this long after its NORMAL_START (the game controller's PENALTY_KICK_FAILED,
+#: "Time run out": its prepare timeout): the run ends there, as ``end_on`` would
+PENALTY_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -283,6 +286,7 @@ class ScenarioRun(Engine):
                 self.judge.kickoff(kicker)
             else:
                 self.judge.penalty(kicker)
+                self.at(self.clock.t + PENALTY_S, self.O_REFEREE, self._penalty_over)
             g.set_piece, g.is_running = (kicker, kind, self.clock.t), False
         elif step.command == "DIRECT_FREE":
             g.set_piece, g.is_running = (colour or "", "free", self.clock.t), False
@@ -294,6 +298,10 @@ class ScenarioRun(Engine):
         self.rb.event(self.clock.t, "referee", step.team, None, step.command,
                       designated=step.designated)
         self.send_referee(ref)
+
+    def _penalty_over(self) -> None:
+        self.ended_by = "penalty_time"
+        self.stopped = True
 
     def _watch_ready(self, i: int) -> None:
         """A NORMAL_START ``when = "ready"`` (step ``i``): given once the robots have kept the

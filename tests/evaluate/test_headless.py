@@ -220,3 +220,23 @@ def test_a_report_folder_with_runs_is_refused_before_anything_runs(
     err = capsys.readouterr().err
     assert "holds the runs of an earlier report" in err and "--out" in err
     assert [p.stat().st_mtime_ns for p in sorted((tmp_path / "rep" / "runs").iterdir())] == before
+
+
+def test_a_penalty_ends_ten_seconds_after_its_normal_start() -> None:
+    """As the game controller ends it (PENALTY_KICK_FAILED, "Time run out"): a kicker that
+    never kicks (their robots have no play here) ends the run then, not at its duration."""
+    from evaluate.runner import PENALTY_S
+    from evaluate.scenario import parse_scenario_text
+
+    text = (READY.replace("THEIR_X", "2.0").replace("duration_s = 4.5", "duration_s = 13.0")
+            .replace('command = "PREPARE_KICKOFF"\nteam = "ours"',
+                     'command = "PREPARE_PENALTY"\nteam = "theirs"')
+            .replace('at = 4.0\ncommand = "NORMAL_START"\nwhen = "ready"',
+                     'at = 1.0\ncommand = "NORMAL_START"')
+            .replace('x = 0.0\ny = 0.0\n\n[[referee]]', 'x = -1.5\ny = 0.0\n\n[[referee]]'))
+    sc = parse_scenario_text(text, "pen", "pen.toml")
+    assert sc.referee[1].command == "PREPARE_PENALTY" and sc.referee[2].at == 1.0
+    res = run_scenario_task(ScenarioTask(sc, 0, Entrant(), None))
+    assert res["error"] is None, res["error"]
+    assert res["ended_by"] == "penalty_time"
+    assert res["sim_s"] == pytest.approx(1.0 + PENALTY_S, abs=0.02)
