@@ -143,9 +143,13 @@ class LineController:
 
     def reset(self) -> None:
         """Forget the move and command zero from here (HALT, lost vision, emergency stop).
-        The estimate of C is kept: it is the robot's property."""
+        The estimate of C is kept: it is the robot's property. A move under way starts again
+        from where the robot is when it is driven again, counted as a restart (as after it
+        was lost): its line A-B is then no longer the whole way."""
+        under_way = self._target is not None or self._lost
         self._vx = self._vy = 0.0
         self._clear()
+        self._lost = under_way
 
     def set_params(self, params: ControllerParams) -> None:
         self.params = params

@@ -165,6 +165,26 @@ def test_lost_robot_commands_zero_and_restarts_where_it_is_seen_again() -> None:
     assert tel["path_length_m"] == pytest.approx((3000.0 - plant.x_mm) / 1000.0, abs=1e-6)
 
 
+def test_a_stop_during_a_move_counts_as_a_restart_and_an_idle_one_does_not() -> None:
+    """A move stopped (HALT, lost vision, a stalled strategy: the station resets every
+    controller) starts again from where the robot is: a restart, as after it was lost (the
+    telemetry's line is then shorter than the way; a test read that as a wrong line)."""
+    ctrl = Algorithm1()
+    plant = Plant()
+    drive(ctrl, plant, B, 1.0)
+    before = ctrl.telemetry()["restarts"]
+    ctrl.reset()
+    ctrl.reset()  # (every tick of the stop resets again)
+    ctrl.step(plant.state(), B, DT)
+    tel = ctrl.telemetry()
+    assert tel["restarts"] == before + 1
+    assert tel["path_length_m"] == pytest.approx((3000.0 - plant.x_mm) / 1000.0, abs=1e-6)
+    idle = Algorithm1()
+    idle.reset()
+    idle.step(Plant().state(), B, DT)
+    assert idle.telemetry()["restarts"] == 0  # nothing was under way
+
+
 @pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_heading_control_turns_to_the_target_orientation_within_limits(algorithm: str) -> None:
     ctrl = make_controller(algorithm)  # type: ignore[arg-type]
