@@ -399,6 +399,12 @@ def alive(pid: int) -> bool:
         return False
 
 
+#: the call's own CPU time (its thread's) when the 0.25 s limit stops it: the limit counts the
+#: worker process's CPU time (ITIMER_PROF, every thread, sampled by the kernel's ticks), so on
+#: a loaded machine the call's thread has 215-229 ms of it then (seen at load 3-7)
+CPU_SEEN_MS = 200.0
+
+
 async def test_a_spin_is_stopped_at_its_cpu_limit_with_its_line(tmp_path: Path) -> None:
     """A ``while True:`` is stopped once it used its CPU limit (10 budgets, at least 0.25 s
     of CPU time), by the worker itself: the error names the CPU limit and the line where it
@@ -427,7 +433,7 @@ async def test_a_spin_is_stopped_at_its_cpu_limit_with_its_line(tmp_path: Path) 
         assert (e.file, e.line) in (("spin.py", 4), ("spin.py", 5), ("spin.py", 6)), e
         assert 'File "spin.py", line' in e.traceback and "CpuLimitExceeded" in e.traceback
         assert "worker.py" not in e.traceback  # how it was stopped is not the team's code
-        assert p.done and p.output is None and p.cpu_ms is not None and p.cpu_ms >= 240.0
+        assert p.done and p.output is None and p.cpu_ms is not None and p.cpu_ms >= CPU_SEEN_MS
         await until(lambda: not alive(pid), what="its worker ended")
         assert r.pid == 0
         # a fixed save starts a new worker
@@ -464,7 +470,7 @@ async def test_a_play_that_catches_its_cpu_limit_goes_on_and_a_later_crash_says_
         assert (await answer(r.send(game(), None, BUDGET))).output == []  # warm-up
         p = await answer(r.send(game(), None, BUDGET))
         assert p.reason.startswith("over its budget") and p.cpu_ms is not None and \
-            p.cpu_ms >= 240.0
+            p.cpu_ms >= CPU_SEEN_MS
         assert (r.run.state, r.run.overruns, r.pid) == ("running", 1, pid)
         r.send(game(), None, BUDGET)
         await until(lambda: r.run.state == "error", what="the crash")
