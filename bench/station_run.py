@@ -2,24 +2,23 @@
 process ids, ports, state folder and URL the launcher prints (TOUCHLINE_PIDS, TOUCHLINE_PORTS,
 TOUCHLINE_STATE_DIR, TOUCHLINE_READY; the words as ``launcher/started.py`` names them).
 
-Every bench that starts the launcher reads those lines here: a thread reads the launcher's
-output to its end (each line kept and, if asked, written to a log), so the pipe never fills
-while a long run goes on."""
+Every bench that starts the launcher reads those lines here, with launcher/started.py's reader:
+a thread reads the launcher's output to its end (each line kept and, if asked, written to a
+log), so the pipe never fills while a long run goes on."""
 
 from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
 import threading
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO
 
-from launcher.started import PIDS, PORTS, READY, STATE_DIR
+from launcher.started import PIDS, PORTS, READY, AnnouncedLines, Started
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -37,31 +36,18 @@ def full_scale_args(cameras: int = 8, hz: float = 75.0,
 
 
 @dataclass
-class Station:
-    proc: subprocess.Popen[str]
-    url: str
-    pids: dict[str, int] = field(default_factory=dict)
-    ports: dict[str, Any] = field(default_factory=dict)
-    #: the launcher's own temporary state folder (None when it did not print one)
-    state_dir: Path | None = None
-    #: every line read from the launcher's output so far, appended to as they come
-    lines: list[str] = field(default_factory=list)
-    #: the thread reading that output (joined by ``stop``, so a log holds every line)
+class Station(Started):
+    """launcher/started.py's ``Started``, with the thread reading the output."""
+
+    #: the thread reading the launcher's output (joined by ``stop``: a log then holds every
+    #: line)
     reader: threading.Thread | None = None
 
     def text(self) -> str:
-        return "".join(self.lines)
+        return "\n".join(self.lines)
 
     def stop(self, timeout_s: float = 20.0) -> int | None:
-        """SIGTERM (the launcher stops its children in order), then SIGKILL if it has not
-        ended within ``timeout_s``: its exit status, None if it had to be killed."""
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            code: int | None = self.proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-            code = None
+        code = super().stop(timeout_s)
         if self.reader is not None:  # bounded: a child left behind may hold the pipe open
             self.reader.join(5.0)
         return code
@@ -78,30 +64,8 @@ def start_station(launcher_args: list[str], stderr: int | IO[str] = subprocess.D
     proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated", *launcher_args],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=stderr, text=True,
                             env=None if env is None else {**os.environ, **env})
-    lines: list[str] = []
-    info: dict[str, str] = {}
-    over = threading.Event()  # ready, or the output ended
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line)
-            if log is not None:
-                log.write(line)
-                log.flush()
-            word, _, rest = line.partition(" ")
-            if word in (PORTS, STATE_DIR, PIDS, READY):
-                info[word] = rest.strip()
-                if word == READY:
-                    over.set()
-        over.set()
-
-    reader = threading.Thread(target=pump, daemon=True)
-    reader.start()
-    if not over.wait(timeout_s) or READY not in info:
-        proc.kill()
-        proc.wait()
-        raise RuntimeError("station did not start:\n" + "".join(lines[-40:]))
-    own = info.get(STATE_DIR)
-    return Station(proc, info[READY], json.loads(info.get(PIDS, "{}")),
-                   json.loads(info.get(PORTS, "{}")), Path(own) if own else None, lines, reader)
+    read = AnnouncedLines(proc, log)
+    read.wait_ready(timeout_s)
+    info = read.info
+    return Station(proc, info[READY], json.loads(info[PORTS]), json.loads(info.get(PIDS, "{}")),
+                   read.state_dir, read.lines, read.thread)
