@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from backend.world.decode import decode_detection
 from backend.world.model import WorldModel
 from fieldsim.config import SimConfig
-from fieldsim.vision import Vision
+from fieldsim.vision import Vision, WorldClockFrames
 from fieldsim.world import Team, World
 
 T0 = 1_700_000_000.0
@@ -58,8 +58,7 @@ def chip_run(speed: float, angle_deg: float, heading: float, start: tuple[float,
     model.flight.config.enabled = flight
     model.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
     out = ChipRun()
-    period = 1.0 / cfg.camera_hz
-    next_capture = list(v.phases)
+    frames = WorldClockFrames(v, w, T0)
     kicked = landed = False
     t_stop: float | None = None
     while w.t < 20.0:
@@ -73,41 +72,37 @@ def chip_run(speed: float, angle_deg: float, heading: float, start: tuple[float,
         elif kicked and not landed and w.ball.vz > vz_before:
             landed, out.t_land = True, T0 + w.t
             out.land = (w.ball.x * 1000, w.ball.y * 1000)
-        for k in range(len(next_capture)):
-            while next_capture[k] <= w.t:
-                tc = next_capture[k]
-                next_capture[k] += period
-                packet = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t)
-                model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
-                world = model.snapshot()
-                b = world.ball
-                out.other_ball_reports += len(world.other_balls)
-                if b is None or not kicked:
-                    continue
-                fl = model.flight.flight
-                if b.flying and math.isnan(out.t_recognised):
-                    out.t_recognised = world.t_capture
-                    if fl is not None:
-                        out.land_recog = (fl.land_x, fl.land_y)
-                if fl is not None and fl.hop == 0:
-                    out.land_pred = (fl.land_x, fl.land_y)
-                if b.flying and t_stop is not None:
-                    out.flying_reports_after += 1
-                # fieldsim's ball at the world's instant (it is at most a step ahead)
-                lag = T0 + w.t - world.t_capture
-                tz = w.ball.z - w.ball.vz * lag if w.ball.z > 0 else 0.0
-                tx = (w.ball.x - w.ball.vx * lag) * 1000
-                ty = (w.ball.y - w.ball.vy * lag) * 1000
-                if not landed:
-                    out.xy_err.append(math.hypot(b.x - tx, b.y - ty))
-                    out.z_err.append(abs(b.z - tz * 1000))
-                    if b.flying:
-                        out.xyz_err_flying.append(math.hypot(b.x - tx, b.y - ty,
-                                                             b.z - tz * 1000))
-                k_ = world.kicked_ball
-                if k_ is not None and out.stop_pred is None and (
-                        world.t_capture - out.t_kick >= 0.3):
-                    out.stop_pred = (k_.stop_x, k_.stop_y)
+        for _, tc, packet in frames.due():
+            model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
+            world = model.snapshot()
+            b = world.ball
+            out.other_ball_reports += len(world.other_balls)
+            if b is None or not kicked:
+                continue
+            fl = model.flight.flight
+            if b.flying and math.isnan(out.t_recognised):
+                out.t_recognised = world.t_capture
+                if fl is not None:
+                    out.land_recog = (fl.land_x, fl.land_y)
+            if fl is not None and fl.hop == 0:
+                out.land_pred = (fl.land_x, fl.land_y)
+            if b.flying and t_stop is not None:
+                out.flying_reports_after += 1
+            # fieldsim's ball at the world's instant (it is at most a step ahead)
+            lag = T0 + w.t - world.t_capture
+            tz = w.ball.z - w.ball.vz * lag if w.ball.z > 0 else 0.0
+            tx = (w.ball.x - w.ball.vx * lag) * 1000
+            ty = (w.ball.y - w.ball.vy * lag) * 1000
+            if not landed:
+                out.xy_err.append(math.hypot(b.x - tx, b.y - ty))
+                out.z_err.append(abs(b.z - tz * 1000))
+                if b.flying:
+                    out.xyz_err_flying.append(math.hypot(b.x - tx, b.y - ty,
+                                                         b.z - tz * 1000))
+            k_ = world.kicked_ball
+            if k_ is not None and out.stop_pred is None and (
+                    world.t_capture - out.t_kick >= 0.3):
+                out.stop_pred = (k_.stop_x, k_.stop_y)
         if kicked and t_stop is None and w.ball.z == 0.0 and math.hypot(
                 w.ball.vx, w.ball.vy) == 0.0:
             t_stop = w.t

@@ -18,9 +18,7 @@ shares, and take CPU figures from bench/loop_bench.py.
 from __future__ import annotations
 
 import argparse
-import os
 import pstats
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -28,7 +26,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from bench.station_run import full_scale_args  # noqa: E402
+from bench.station_run import full_scale_args, start_station  # noqa: E402
 
 
 def wait_for_file(path: Path, timeout_s: float) -> None:
@@ -55,28 +53,19 @@ def main() -> None:
     a = ap.parse_args()
     out = Path(a.out or f"/tmp/touchline-{a.part}.prof")
     out.unlink(missing_ok=True)
-    args = [sys.executable, "-m", "launcher", "--isolated",
-            *full_scale_args(a.cameras, a.hz, robots=a.robots, camera_phases=a.camera_phases)]
-    env = dict(os.environ, TOUCHLINE_PROFILE_CLOCK=a.clock)
+    args = full_scale_args(a.cameras, a.hz, robots=a.robots, camera_phases=a.camera_phases)
+    env = {"TOUCHLINE_PROFILE_CLOCK": a.clock}
     if a.part == "backend":
         env.update(TOUCHLINE_PROFILE=str(out), TOUCHLINE_PROFILE_AFTER="5",
                    TOUCHLINE_PROFILE_FOR=str(a.seconds))
     else:
         args.append(f"--relay-arg=--profile={out}")
-    proc = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_READY "):
-            break
-    else:
-        raise SystemExit("station did not start")
+    station = start_station(args, env=env)
     if a.part == "backend":  # the backend writes it 5 + N s after its start, still running
         wait_for_file(out, a.seconds + 30)
     else:
         time.sleep(a.seconds)
-    proc.terminate()
-    proc.wait(timeout=30)
+    station.stop(30)
     if a.part == "relay":  # the relay writes it as it stops
         wait_for_file(out, 10)
     st = pstats.Stats(str(out))

@@ -14,11 +14,8 @@ Run: ``PYTHONPATH=. .venv/bin/python bench/replay_bench.py [--mb 700] [--seconds
 from __future__ import annotations
 
 import argparse
-import json
 import random
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Iterator
@@ -28,6 +25,7 @@ from typing import Any
 
 import httpx
 
+from bench.station_run import start_station
 from ssllog.format import (
     RECORD_HEADER,
     TYPE_REFEREE_2013,
@@ -98,28 +96,11 @@ def make_log(dest: Path, target_bytes: int) -> float:
 
 @contextmanager
 def station(*args: str) -> Iterator[tuple[str, int]]:
-    proc = subprocess.Popen([sys.executable, "-m", "launcher", "--isolated", *args], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
-    pids: dict[str, int] = {}
-    url = ""
-    deadline = time.monotonic() + 90
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_PIDS "):
-            pids = json.loads(line.split(" ", 1)[1])
-        if line.startswith("TOUCHLINE_READY "):
-            url = line.split()[1]
-            break
-        if time.monotonic() > deadline:
-            break
-    if not url:
-        proc.kill()
-        raise RuntimeError("station did not start")
+    st = start_station(list(args))
     try:
-        yield url, pids["backend"]
+        yield st.url, st.pids["backend"]
     finally:
-        proc.terminate()
-        proc.wait(timeout=20)
+        st.stop()
 
 
 def rss_mb(pid: int, key: str = "VmHWM") -> float:

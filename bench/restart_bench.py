@@ -71,6 +71,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.station_run import Station, start_station  # noqa: E402
 from launcher.supervisor import (  # noqa: E402
     Ports,
     StationConfig,
@@ -246,46 +247,6 @@ def first_new_command(taps: list[SimTap], t_kill: float) -> float | None:
     return min(found) if found else None
 
 
-class Launched:
-    """``python -m launcher --isolated ...``: its machine-readable lines, its output kept."""
-
-    def __init__(self, argv: list[str], log_path: Path) -> None:
-        self.out = log_path.open("w")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "launcher", "--isolated", *argv], cwd=ROOT,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        self.info: dict[str, Any] = {}
-        self.lines: list[str] = []
-        self.ready = threading.Event()
-        threading.Thread(target=self._pump, daemon=True).start()
-
-    def _pump(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.out.write(line)
-            self.out.flush()
-            self.lines.append(line)
-            for key in ("TOUCHLINE_PORTS", "TOUCHLINE_PIDS", "TOUCHLINE_STATE_DIR",
-                        "TOUCHLINE_READY"):
-                if line.startswith(key + " "):
-                    self.info[key] = line.split(" ", 1)[1].strip()
-            if line.startswith("TOUCHLINE_READY "):
-                self.ready.set()
-
-    def text(self) -> str:
-        return "".join(self.lines)
-
-    def stop(self) -> None:
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            self.proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-        self.out.close()
-
-
 def supervisor_child(state_dir: Path, name: str) -> dict[str, Any] | None:
     try:
         status = json.loads((state_dir / "supervisor.json").read_text())
@@ -341,14 +302,14 @@ def backend_mode(args: argparse.Namespace) -> int:
             sim.start()
             taps[0].sim = ("127.0.0.1", sim_ports.sim_blue)
             taps[1].sim = ("127.0.0.1", sim_ports.sim_yellow)
-        station = Launched(argv, Path(tmp) / "launcher.log")
+        log = (Path(tmp) / "launcher.log").open("w")
+        station: Station | None = None
         try:
-            if not station.ready.wait(120):
-                raise SystemExit("the station did not start:\n" +
-                                 (Path(tmp) / "launcher.log").read_text()[-3000:])
-            ports = json.loads(station.info["TOUCHLINE_PORTS"])
-            state_dir = Path(station.info["TOUCHLINE_STATE_DIR"])
-            base = station.info["TOUCHLINE_READY"]
+            station = start_station(argv, stderr=subprocess.STDOUT, timeout_s=120,
+                                    env={"PYTHONUNBUFFERED": "1"}, log=log)
+            ports, base = station.ports, station.url
+            assert station.state_dir is not None  # --isolated: its own
+            state_dir = station.state_dir
             if not external:
                 taps[0].sim = ("127.0.0.1", ports["sim_blue"])
                 taps[1].sim = ("127.0.0.1", ports["sim_yellow"])
@@ -420,7 +381,9 @@ def backend_mode(args: argparse.Namespace) -> int:
                       f"command {first * 1000:6.1f} ms, web {_ms(web)} after the kill"
                       f"{startup}", flush=True)
         finally:
-            station.stop()
+            if station is not None:
+                station.stop()
+            log.close()
             if sim is not None:
                 sim.stop()
             stop.set()

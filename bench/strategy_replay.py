@@ -21,11 +21,9 @@ import argparse
 import cProfile
 import gc
 import math
-import os
 import pickle
 import pstats
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -35,30 +33,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from backend.processors.strategy import RECORD_ENV
 from backend.strategy.core import StrategyCore
+from bench.station_run import full_scale_args, start_station
 
-ROOT = Path(__file__).resolve().parent.parent
 DEFAULT = "/tmp/touchline-strategy.pkl"
 
 
 def record(a: argparse.Namespace) -> None:
-    sim = ["--division", "A", "--blue", "11", "--yellow", "11", "--cameras", "8",
-           "--camera-hz", "75"]
-    args = [sys.executable, "-m", "launcher", "--isolated", *(f"--sim-arg={x}" for x in sim),
-            "--backend-arg=--set", "--backend-arg=strategy.play=match"]
-    env = dict(os.environ, **{RECORD_ENV: a.out})
-    proc = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
+    station = start_station(full_scale_args(), env={RECORD_ENV: a.out})
     try:
-        for line in proc.stdout:
-            if line.startswith("TOUCHLINE_READY "):
-                break
-        else:
-            raise SystemExit("station did not start")
         time.sleep(a.seconds)  # the game plays meanwhile: a recording of that long
     finally:
-        proc.terminate()
-        proc.wait(timeout=30)
+        station.stop(30)
     print(f"recorded {len(load(a.out))} ticks to {a.out}")
 
 

@@ -36,7 +36,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -44,6 +43,8 @@ from typing import Any
 import httpx
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.station_run import start_station
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -87,20 +88,10 @@ def reload_bench(saves: int) -> dict[str, Any]:
     team = Path(tempfile.mkdtemp(prefix="touchline-team-bench-"))
     (team / "bench_py.py").write_text(PY_PLAY.format(x=-1000.0))
     (team / "bench_m.m").write_text(M_PLAY.format(x=-1000))
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "launcher", "--isolated", "--team-dir", str(team),
-         "--backend-arg=--play", "--backend-arg=bench_py"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    url = ""
-    assert proc.stdout is not None
-    for line in proc.stdout:
-        if line.startswith("TOUCHLINE_READY "):
-            url = line.split(" ", 1)[1].strip()
-            break
-    if not url:
-        raise SystemExit("the station did not start")
-    threading.Thread(target=lambda: [None for _ in proc.stdout or []], daemon=True).start()
+    station = start_station(
+        ["--team-dir", str(team), "--backend-arg=--play", "--backend-arg=bench_py"],
+        stderr=subprocess.STDOUT, env={"PYTHONUNBUFFERED": "1"})
+    url = station.url
     out: dict[str, Any] = {}
     try:
         with httpx.Client(base_url=url, timeout=5.0) as c:
@@ -138,8 +129,7 @@ def reload_bench(saves: int) -> dict[str, Any]:
                       f"{out[play]['max_ms']:.0f} ms, min {out[play]['min_ms']:.0f} ms "
                       f"({len(times)} saves)", flush=True)
     finally:
-        proc.terminate()
-        proc.wait(15)
+        station.stop(15)
     return out
 
 

@@ -25,14 +25,14 @@ import httpx
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from launcher.started import Started, start_isolated  # noqa: E402
+from bench.station_run import Station, start_station  # noqa: E402
 from tests.integration.blind import Camera, Simulator  # noqa: E402
 from tests.waiting import wait_until  # noqa: E402
 
 
-def launch() -> Started:
+def launch() -> Station:
     try:
-        return start_isolated(["--sim", "none"])
+        return start_station(["--sim", "none"])
     except RuntimeError:
         raise SystemExit("the station did not start") from None
 

@@ -128,15 +128,15 @@ def _kick_script(w: Any, chip: bool) -> None:
 
 
 def fieldsim(every: int, chip: bool) -> str:
+    from fieldsim.vision import WorldClockFrames
     from fieldsim.world import Team
 
     t0 = 1_700_000_000.0
-    cfg, w, v = _kick_scene("spread")
+    _, w, v = _kick_scene("spread")
     m = WorldModel()
     m.set_cameras({c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras})
     d = Digest()
-    period = 1.0 / cfg.camera_hz
-    nxt = list(v.phases)
+    frames = WorldClockFrames(v, w, t0)
     n = 0
     while w.t < 6.0:
         _kick_script(w, chip)
@@ -144,15 +144,11 @@ def fieldsim(every: int, chip: bool) -> str:
             for rid in (6, 7):
                 w.robots.pop((Team.YELLOW, rid), None)
         w.step()
-        for k in range(len(nxt)):
-            while nxt[k] <= w.t:
-                tc = nxt[k]
-                nxt[k] += period
-                det = v.detect(k, w, t0 + tc, t0 + tc + 0.001, tc - w.t).detection
-                m.update(decode_detection(det, int((t0 + tc + 0.002) * 1e9)))
-                n += 1
-                if n % every == 0:
-                    d.world(m.snapshot(), n)
+        for _, tc, packet in frames.due():
+            m.update(decode_detection(packet.detection, int((t0 + tc + 0.002) * 1e9)))
+            n += 1
+            if n % every == 0:
+                d.world(m.snapshot(), n)
     return f"{d} kicks {m.kicks.kicks} chips {m.flight.chips}"
 
 

@@ -47,15 +47,14 @@ def fieldsim_frames(phases: str, seconds: float, seed: int = 3) -> tuple[
         list[CameraFrame], dict[int, tuple[float, float, float]]]:
     """The frames in arrival order (a burst's in camera order) and the cameras' poses."""
     from fieldsim.config import SimConfig
-    from fieldsim.vision import Vision
+    from fieldsim.vision import Vision, WorldClockFrames
     from fieldsim.world import Team, World
 
     cfg = SimConfig(blue=11, yellow=11, seed=seed, cameras=8, division="A", camera_hz=75.0,
                     false_prob=0.05, camera_phases=phases)
     w = World(cfg)
     v = Vision(cfg, w.geometry)
-    period = 1.0 / cfg.camera_hz
-    nxt = list(v.phases)
+    frames = WorldClockFrames(v, w, T0)
     out: list[tuple[float, int, CameraFrame]] = []
     while w.t < seconds:
         for team in (Team.BLUE, Team.YELLOW):
@@ -65,13 +64,9 @@ def fieldsim_frames(phases: str, seconds: float, seed: int = 3) -> tuple[
                 w.set_command(team, rid, s, 0.2 * math.sin(w.t + rid),
                               1.0 if (w.t + 0.3 * rid) % 2 < 1 else -1.0)
         w.step()
-        for k in range(len(nxt)):
-            while nxt[k] <= w.t:
-                tc = nxt[k]
-                nxt[k] += period
-                det = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t).detection
-                recv = int((T0 + tc + 0.002) * 1e9) + 30_000 * k
-                out.append((recv, k, decode_detection(det, recv)))
+        for k, tc, packet in frames.due():
+            recv = int((T0 + tc + 0.002) * 1e9) + 30_000 * k
+            out.append((recv, k, decode_detection(packet.detection, recv)))
     out.sort(key=lambda p: (p[0], p[1]))
     poses = {c.camera_id: (c.cx, c.cy, c.height) for c in v.cameras}
     return [f for _, _, f in out], poses

@@ -16,7 +16,7 @@ function ref_array = geometry_src()
 end
 
 function a = get_angle(v1, v2)
-  % signed angle turning v1 onto v2, in (-pi, pi]
+  % signed angle turning v1 onto v2, in [-pi, pi)
   a = atan2(v1(:,1).*v2(:,2) - v1(:,2).*v2(:,1), v1(:,1).*v2(:,1) + v1(:,2).*v2(:,2));
   a = wrap_angle(a);
 end
@@ -43,8 +43,10 @@ function d = distance(a, b)
 end
 
 function a = wrap_angle(a)
-  a = pi - mod(pi - a, 2*pi);
-  a(a <= -pi) = a(a <= -pi) + 2*pi;
+  % into [-pi, pi), pi becomes -pi: Touchline's convention (domain/angles.py)
+  out = ~(a >= -pi & a < pi);
+  a(out) = mod(a(out) + pi, 2*pi) - pi;
+  a(a >= pi) = -pi;
 end
 
 function d = point_segment_distance(p, a, b)

@@ -13,6 +13,7 @@ other balls left on the field (``World.other_balls``) are detected like the ball
 from __future__ import annotations
 
 import random
+from collections.abc import Iterator
 
 from fieldsim.cameras import Camera, camera_calibration, make_cameras
 from fieldsim.config import SimConfig
@@ -21,7 +22,7 @@ from fieldsim.world import ROBOT_HEIGHT_M, Team, World, wrap_angle
 from sslpb import ssl_vision_detection_pb2 as det_pb
 from sslpb import ssl_vision_wrapper_pb2 as wrapper_pb
 
-__all__ = ["Camera", "Vision", "camera_calibration", "make_cameras"]
+__all__ = ["Camera", "Vision", "WorldClockFrames", "camera_calibration", "make_cameras"]
 
 
 class Vision:
@@ -146,3 +147,25 @@ class Vision:
         for cam in self.cameras:
             packet.geometry.calib.append(camera_calibration(cam))
         return packet
+
+
+class WorldClockFrames:
+    """Every camera's frames on the world's own clock, with no socket and no wall clock (the
+    loops of tests, benchmarks and digests; the server schedules its own): camera k captures
+    at its phase, then once a period; the capture stamped ``t0_unix + tc``, sent 1 ms later."""
+
+    def __init__(self, vision: Vision, world: World, t0_unix: float) -> None:
+        self.vision, self.world, self.t0_unix = vision, world, t0_unix
+        self.period = 1.0 / vision.config.camera_hz
+        self.next_capture = [world.t + ph for ph in vision.phases]
+
+    def due(self) -> Iterator[tuple[int, float, wrapper_pb.SSL_WrapperPacket]]:
+        """(camera, capture time ``tc`` on the world's clock, the packet) of each frame due by
+        the world's time, camera by camera; each made when the caller takes it."""
+        w, v, t0, nxt, period = self.world, self.vision, self.t0_unix, self.next_capture, \
+            self.period
+        for k in range(len(nxt)):
+            while nxt[k] <= w.t:
+                tc = nxt[k]
+                nxt[k] += period
+                yield k, tc, v.detect(k, w, t0 + tc, t0 + tc + 0.001, tc - w.t)

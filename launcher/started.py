@@ -4,8 +4,9 @@
 The launcher writes machine-readable lines on standard output once the backend answers
 (``announce`` in ``__main__.py``): ``TOUCHLINE_PORTS {json}``, ``TOUCHLINE_STATE_DIR path``
 (with its own temporary state folder), ``TOUCHLINE_PIDS {json}`` and last
-``TOUCHLINE_READY url``. ``start_isolated`` reads them on a thread that keeps reading to the
-end (every line kept, so the pipe never fills and a failure can show the log)."""
+``TOUCHLINE_READY url``. ``start_isolated`` reads them with ``AnnouncedLines``, a thread that
+keeps reading to the end (every line kept, so the pipe never fills and a failure can show the
+log); the benchmarks' ``bench/station_run.py`` reads them with it too."""
 
 from __future__ import annotations
 
@@ -18,12 +19,53 @@ import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from .supervisor import ROOT
 
 PORTS, STATE_DIR, PIDS, READY = ("TOUCHLINE_PORTS", "TOUCHLINE_STATE_DIR", "TOUCHLINE_PIDS",
                                  "TOUCHLINE_READY")
+
+
+class AnnouncedLines:
+    """A started launcher's output read on a thread to its end: every line kept in ``lines``
+    (without its line break; written to ``log`` as it comes), the announced ones in ``info``
+    by their word."""
+
+    def __init__(self, proc: subprocess.Popen[str], log: IO[str] | None = None) -> None:
+        self.lines: list[str] = []
+        self.info: dict[str, str] = {}
+        self._proc, self._log = proc, log
+        self._over = threading.Event()  # ready, or the output ended
+        self.thread = threading.Thread(target=self._pump, daemon=True)
+        self.thread.start()
+
+    def _pump(self) -> None:
+        assert self._proc.stdout is not None
+        for line in self._proc.stdout:
+            if self._log is not None:
+                self._log.write(line)
+                self._log.flush()
+            self.lines.append(line.rstrip())
+            word, _, rest = line.partition(" ")
+            if word in (PORTS, STATE_DIR, PIDS, READY):
+                self.info[word] = rest.strip()
+                if word == READY:
+                    self._over.set()
+        self._over.set()
+
+    def wait_ready(self, timeout_s: float) -> None:
+        """Returns once the launcher announced its URL; RuntimeError with the last 40 lines,
+        the launcher killed, if its output ended first or ``timeout_s`` passed."""
+        if not self._over.wait(timeout_s) or READY not in self.info:
+            self._proc.kill()
+            self._proc.wait()
+            raise RuntimeError("station did not start:\n" + "\n".join(self.lines[-40:]))
+
+    @property
+    def state_dir(self) -> Path | None:
+        own = self.info.get(STATE_DIR)
+        return Path(own) if own else None
 
 
 @dataclass
@@ -58,26 +100,8 @@ def start_isolated(args: Sequence[str] = (), timeout_s: float = 90.0) -> Started
         [sys.executable, "-m", "launcher", "--isolated", *args], cwd=ROOT,
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"})
-    lines: list[str] = []
-    info: dict[str, str] = {}
-    over = threading.Event()  # ready, or the output ended
-
-    def pump() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            lines.append(line.rstrip())
-            word, _, rest = line.partition(" ")
-            if word in (PORTS, STATE_DIR, PIDS, READY):
-                info[word] = rest.strip()
-                if word == READY:
-                    over.set()
-        over.set()
-
-    threading.Thread(target=pump, daemon=True).start()
-    if not over.wait(timeout_s) or READY not in info:
-        proc.kill()
-        proc.wait()
-        raise RuntimeError("station did not start:\n" + "\n".join(lines[-40:]))
-    own = info.get(STATE_DIR)
+    read = AnnouncedLines(proc)
+    read.wait_ready(timeout_s)
+    info = read.info
     return Started(proc, info[READY], json.loads(info[PORTS]), json.loads(info.get(PIDS, "{}")),
-                   Path(own) if own else None, lines)
+                   read.state_dir, read.lines)

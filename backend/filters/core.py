@@ -472,8 +472,8 @@ class AngleFilter:
         return a if ref is None else ref + wrap_angle(a - ref)
 
     # update, revise and estimate run for every robot in every camera frame: wrap_angle and
-    # _unwrap are written out in them (the same arithmetic: a call costs more than the
-    # expression)
+    # _unwrap are written out in them (the same arithmetic and the same guard against the
+    # modulo rounding up to 2 pi: a call costs more than the expression)
 
     def update(self, t_s: float, a: float) -> float:
         inner = self.inner
@@ -484,24 +484,32 @@ class AngleFilter:
         self._u_before = ref
         u = a if ref is None else ref + ((a - ref + _PI) % _TAU - _PI)
         self._u = u
-        return (inner.update(t_s, u, 0.0)[0] + _PI) % _TAU - _PI
+        w = (inner.update(t_s, u, 0.0)[0] + _PI) % _TAU - _PI
+        return -_PI if w == _PI else w
 
     def revise(self, a: float) -> float:
         ref = self._u_before
         u = a if ref is None else ref + ((a - ref + _PI) % _TAU - _PI)
         self._u = u
-        return (self.inner.revise(u, 0.0)[0] + _PI) % _TAU - _PI
+        w = (self.inner.revise(u, 0.0)[0] + _PI) % _TAU - _PI
+        return -_PI if w == _PI else w
 
     def estimate(self) -> float | None:
         e = self.inner.estimate()
-        return None if e is None else (e[0] + _PI) % _TAU - _PI
+        if e is None:
+            return None
+        w = (e[0] + _PI) % _TAU - _PI
+        return -_PI if w == _PI else w
 
     def rate(self) -> float:
         return self.inner.velocity()[0]
 
     def predict(self, t_s: float) -> float | None:
         p = self.inner.predict(t_s)
-        return None if p is None else (p[0] + _PI) % _TAU - _PI
+        if p is None:
+            return None
+        w = (p[0] + _PI) % _TAU - _PI
+        return -_PI if w == _PI else w
 
 
 #: the filters whose ``estimate()`` is None exactly while their ``t_last`` is (before the

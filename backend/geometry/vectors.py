@@ -63,26 +63,29 @@ def normalise(v: ArrayLike, eps: float = 0.0) -> Array:
 
 
 def wrap_angle(theta: ArrayLike) -> Array:
-    """Angle(s) wrapped to (-pi, pi] (pi stays pi, -pi becomes pi). NaN stays NaN."""
+    """Angle(s) wrapped to [-pi, pi) (pi becomes -pi); NaN and infinities become NaN.
+
+    Touchline's one convention, the same numbers as the scalar ``domain.angles.wrap_angle``
+    out of range (its arithmetic); angles already in range come back unchanged, bit for bit.
+    """
     t = as_scalars(theta)
-    r = math.pi - np.mod(math.pi - t, TWO_PI)
-    # np.mod can round up to 2 pi for tiny negative inputs: keep the interval half-open
-    r = np.where(r <= -math.pi, r + TWO_PI, r)
-    # angles already in range come back unchanged (bit for bit)
-    r = np.where((t > -math.pi) & (t <= math.pi), t, r)
+    r = np.mod(t + math.pi, TWO_PI) - math.pi
+    # np.mod rounds up to 2 pi just below -pi, which would give pi: keep the interval open
+    r = np.where(r == math.pi, -math.pi, r)
+    r = np.where((t >= -math.pi) & (t < math.pi), t, r)
     return np.asarray(r, dtype=np.float64)
 
 
 def angle_of(v: ArrayLike) -> Array:
-    """Direction of v in (-pi, pi]; 0 for a zero vector."""
+    """Direction of v in [-pi, pi); 0 for a zero vector."""
     pv = as_points(v)
     return wrap_angle(np.arctan2(pv[..., 1], pv[..., 0]))
 
 
 def signed_angle(a: ArrayLike, b: ArrayLike) -> Array:
-    """Angle that turns direction a onto direction b, in (-pi, pi], counter-clockwise positive.
+    """Angle that turns direction a onto direction b, in [-pi, pi), counter-clockwise positive.
 
-    0 when either vector is zero; pi (never -pi) for opposite vectors.
+    0 when either vector is zero; -pi (never pi) for opposite vectors.
     """
     return wrap_angle(np.arctan2(cross(a, b), dot(a, b)))
 

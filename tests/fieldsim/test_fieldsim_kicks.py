@@ -13,7 +13,7 @@ from backend.world.decode import decode_detection
 from backend.world.kick import KickedBall
 from backend.world.model import WorldModel
 from fieldsim.config import SimConfig
-from fieldsim.vision import Vision
+from fieldsim.vision import Vision, WorldClockFrames
 from fieldsim.world import Team, World
 
 T0 = 1_700_000_000.0  # Unix s of the simulation's t = 0
@@ -38,8 +38,7 @@ def run(speed: float, heading: float, start: tuple[float, float], seed: int = 1,
     d = cfg.robot_radius_m + cfg.ball_radius_m + 0.004
     w.teleport_ball(start[0] + d * math.cos(heading), start[1] + d * math.sin(heading))
     model = WorldModel()
-    period = 1.0 / cfg.camera_hz
-    next_capture = [ph for ph in v.phases]
+    frames = WorldClockFrames(v, w, T0)
     t_kick: float | None = None
     t_stop: float | None = None
     kicks: list[tuple[float, KickedBall]] = []
@@ -49,15 +48,11 @@ def run(speed: float, heading: float, start: tuple[float, float], seed: int = 1,
         w.step()
         if t_kick is None and w.stats.kicks:
             t_kick = w.t  # the ball leaves with the kick speed from the end of this step
-        for k in range(len(next_capture)):
-            while next_capture[k] <= w.t:
-                tc = next_capture[k]
-                next_capture[k] += period
-                packet = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t)
-                model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
-                world = model.snapshot()
-                if world.kicked_ball is not None:
-                    kicks.append((world.t_capture, world.kicked_ball))
+        for _, tc, packet in frames.due():
+            model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
+            world = model.snapshot()
+            if world.kicked_ball is not None:
+                kicks.append((world.t_capture, world.kicked_ball))
         if t_kick is not None and t_stop is None and math.hypot(w.ball.vx, w.ball.vy) == 0.0:
             t_stop = w.t
         if t_stop is not None and w.t > t_stop + 0.5:
@@ -120,16 +115,12 @@ def test_a_ball_rolling_past_fieldsim_robots_is_not_a_kick() -> None:
                              -math.pi / 2 if i else math.pi / 2)
     w.teleport_ball(-3.0, 0.0, vx=2.0)
     model = WorldModel()
-    next_capture = list(v.phases)
+    frames = WorldClockFrames(v, w, T0)
     while w.t < 4.0:
         w.step()
-        for k in range(len(next_capture)):
-            while next_capture[k] <= w.t:
-                tc = next_capture[k]
-                next_capture[k] += 1.0 / cfg.camera_hz
-                packet = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t)
-                model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
-                assert model.snapshot().kicked_ball is None
+        for _, tc, packet in frames.due():
+            model.update(decode_detection(packet.detection, int((T0 + tc + 0.002) * 1e9)))
+            assert model.snapshot().kicked_ball is None
     assert w.ball.x > 1.0 and abs(w.ball.y) < 0.01  # rolled past them all, untouched
     assert w.stats.kicks == 0 and model.kicks.kicks == 0
 

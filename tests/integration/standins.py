@@ -127,6 +127,20 @@ def robot_box_camera(ports: Mapping[str, Any], stop: threading.Event) -> None:
         sock.close()
 
 
+class RobotBoxCamera:
+    """``robot_box_camera`` on a thread from its creation until ``stop``."""
+
+    def __init__(self, ports: Mapping[str, Any]) -> None:
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=robot_box_camera, args=(ports, self._stop),
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(5)
+
+
 def box_ids(box: socket.socket) -> list[tuple[int, int]]:
     """(robot id, speedX byte) of every robot-box datagram waiting."""
     out: list[tuple[int, int]] = []

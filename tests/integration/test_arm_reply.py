@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import os
 import signal
-import threading
 import time
 from collections.abc import Iterator
 
@@ -15,23 +14,20 @@ import httpx
 import pytest
 
 from .conftest import StationHandle, launched, wait_until
-from .standins import robot_box_camera
+from .standins import RobotBoxCamera
 
 
 @pytest.fixture(scope="module")
 def station() -> Iterator[StationHandle]:
-    stop = threading.Event()
     with launched("--sim", "none") as st:
-        cam = threading.Thread(target=robot_box_camera, args=(st.ports, stop), daemon=True)
-        cam.start()
+        cam = RobotBoxCamera(st.ports)
         try:
             wait_until(lambda: st.get("/api/arm")["refusal"] is None, 20, what="vision seen")
             wait_until(lambda: st.get("/api/arm")["relay_armed"] is False, 10,
                        what="the relay's statistics")
             yield st
         finally:
-            stop.set()
-            cam.join(5)
+            cam.stop()
 
 
 def _arm(st: StationHandle, armed: bool) -> httpx.Response:

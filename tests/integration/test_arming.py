@@ -6,12 +6,11 @@ with a target set and vision arriving; armed, the robot is driven; after an e-st
 from __future__ import annotations
 
 import socket
-import threading
 
 import httpx
 
 from .conftest import StationHandle, arm, next_relay_stats, wait_until
-from .standins import box_ids, robot_box_camera
+from .standins import RobotBoxCamera, box_ids
 
 
 def _post(st: StationHandle, path: str, body: dict) -> httpx.Response:  # type: ignore[type-arg]
@@ -35,9 +34,7 @@ def _robots_held(st: StationHandle) -> int:
 def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
         box_station: tuple[StationHandle, socket.socket]) -> None:
     station, box = box_station
-    stop = threading.Event()
-    cam = threading.Thread(target=robot_box_camera, args=(station.ports, stop), daemon=True)
-    cam.start()
+    cam = RobotBoxCamera(station.ports)
     try:
         wait_until(lambda: len(station.get("/api/world")["robots"]) == 2, 20,
                    what="blue 3 and yellow 3 seen")
@@ -95,5 +92,4 @@ def test_nothing_reaches_the_robots_until_armed_and_the_estop_disarms(
     finally:
         httpx.delete(station.url + "/api/robots/blue/3/target", headers={"X-Touchline": "1"})
         _post(station, "/api/arm", {"armed": False})
-        stop.set()
-        cam.join(5)
+        cam.stop()

@@ -6,21 +6,18 @@ datagram for robot 3 ever comes from a yellow target."""
 from __future__ import annotations
 
 import socket
-import threading
 import time
 
 import httpx
 
 from .conftest import StationHandle, arm, next_relay_stats, wait_until
-from .standins import box_ids, robot_box_camera
+from .standins import RobotBoxCamera, box_ids
 
 
 def test_a_target_for_their_robot_never_drives_ours(
         box_station: tuple[StationHandle, socket.socket]) -> None:
     station, box = box_station
-    stop = threading.Event()
-    cam = threading.Thread(target=robot_box_camera, args=(station.ports, stop), daemon=True)
-    cam.start()
+    cam = RobotBoxCamera(station.ports)
     try:
         wait_until(lambda: len(station.get("/api/world")["robots"]) == 2, 20,
                    what="blue 3 and yellow 3 seen")
@@ -50,5 +47,4 @@ def test_a_target_for_their_robot_never_drives_ours(
                    what="our robot 3 driven")
     finally:
         httpx.delete(station.url + "/api/robots/blue/3/target", headers={"X-Touchline": "1"})
-        stop.set()
-        cam.join(5)
+        cam.stop()

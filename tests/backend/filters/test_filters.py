@@ -340,3 +340,14 @@ def test_angle_filter_does_not_unwrap_against_an_object_its_filter_forgot() -> N
     inner.forgot = False
     f.update(4 * DT, -2.9)
     assert inner.last_median[0] == pytest.approx(-2.9)  # unwrapped against -3.0
+
+
+def test_angle_filter_output_stays_below_pi_where_the_modulo_rounds_up() -> None:
+    # (a + pi) % 2 pi rounds up to 2 pi just below -pi: the filter's wrap, written out, keeps
+    # domain.angles' guard and answers -pi, never pi
+    a = math.nextafter(-math.pi, -math.inf)
+    f = AngleFilter(make_filter("raw", angle=True))
+    assert f.update(0.0, a) == -math.pi
+    assert f.estimate() == -math.pi
+    assert f.predict(DT) == -math.pi
+    assert f.revise(a) == -math.pi

@@ -27,9 +27,9 @@ def close(a: float, b: float, tol: float = 1e-6) -> bool:
 # -- scalar references -------------------------------------------------------------------
 
 def ref_wrap(t: float) -> float:
-    while t > math.pi:
+    while t >= math.pi:
         t -= 2 * math.pi
-    while t <= -math.pi:
+    while t < -math.pi:
         t += 2 * math.pi
     return t
 
@@ -88,7 +88,7 @@ def test_normalise_zero_vectors_in_a_batch() -> None:
 @given(st.floats(-1e6, 1e6, allow_nan=False))
 def test_wrap_angle_range_and_equivalence(t) -> None:  # type: ignore[no-untyped-def]
     w = float(g.wrap_angle(t))
-    assert -math.pi < w <= math.pi
+    assert -math.pi <= w < math.pi
     assert math.isclose(math.cos(w), math.cos(t), abs_tol=1e-6)
     assert math.isclose(math.sin(w), math.sin(t), abs_tol=1e-6)
     if abs(t) < 100:
@@ -97,7 +97,7 @@ def test_wrap_angle_range_and_equivalence(t) -> None:  # type: ignore[no-untyped
 
 def test_wrap_angle_edges() -> None:
     assert g.wrap_angle([math.pi, -math.pi, 3 * math.pi, 0.0, -1e-300]).tolist() == [
-        math.pi, math.pi, math.pi, 0.0, -1e-300]
+        -math.pi, -math.pi, -math.pi, 0.0, -1e-300]
     assert math.isnan(float(g.wrap_angle(math.nan)))
 
 
@@ -105,7 +105,7 @@ def test_wrap_angle_edges() -> None:
 def test_signed_angle_rotates_a_onto_b(a, b) -> None:  # type: ignore[no-untyped-def]
     assume(math.hypot(*a) > 1e-3 and math.hypot(*b) > 1e-3)
     th = float(g.signed_angle(a, b))
-    assert -math.pi < th <= math.pi
+    assert -math.pi <= th < math.pi
     ref = ref_wrap(math.atan2(b[1], b[0]) - math.atan2(a[1], a[0]))
     assert abs(ref_wrap(th - ref)) < 1e-9
     rotated = g.rotate(g.normalise(a), th)
@@ -115,8 +115,8 @@ def test_signed_angle_rotates_a_onto_b(a, b) -> None:  # type: ignore[no-untyped
 def test_signed_angle_hand_cases() -> None:
     assert float(g.signed_angle([1, 0], [0, 1])) == pytest.approx(math.pi / 2)
     assert float(g.signed_angle([1, 0], [0, -1])) == pytest.approx(-math.pi / 2)
-    assert float(g.signed_angle([1, 0], [-1, 0])) == math.pi
-    assert float(g.signed_angle([1, 0], [-1, -0.0])) == math.pi
+    assert float(g.signed_angle([1, 0], [-1, 0])) == -math.pi
+    assert float(g.signed_angle([1, 0], [-1, -0.0])) == -math.pi
     assert float(g.signed_angle([0, 0], [1, 1])) == 0.0
 
 

@@ -15,7 +15,7 @@ from backend.world.model import WorldModel
 from backend.world.state import WorldState
 from bench.chip_bench import chip_run
 from fieldsim.config import SimConfig
-from fieldsim.vision import Vision
+from fieldsim.vision import Vision, WorldClockFrames
 from fieldsim.world import World
 
 T0 = 1_700_000_000.0
@@ -153,22 +153,18 @@ def run(w: World, v: Vision, model: WorldModel, seconds: float,
     """Step fieldsim for ``seconds``, every camera frame into the model (ball detections for
     which ``drop(x, y)`` is true left out); the world after each frame."""
     out = []
-    period = 1.0 / w.config.camera_hz
     t_end = w.t + seconds
-    next_capture = [w.t + ph for ph in v.phases]
+    frames = WorldClockFrames(v, w, T0)
     while w.t < t_end:
         w.step()
-        for k in range(len(next_capture)):
-            while next_capture[k] <= w.t:
-                tc = next_capture[k]
-                next_capture[k] += period
-                det = v.detect(k, w, T0 + tc, T0 + tc + 0.001, tc - w.t).detection
-                if drop is not None:
-                    keep = [b for b in det.balls if not drop(b.x, b.y)]
-                    del det.balls[:]
-                    det.balls.extend(keep)
-                model.update(decode_detection(det, int((T0 + tc + 0.002) * 1e9)))
-                out.append(model.snapshot())
+        for _, tc, packet in frames.due():
+            det = packet.detection
+            if drop is not None:
+                keep = [b for b in det.balls if not drop(b.x, b.y)]
+                del det.balls[:]
+                det.balls.extend(keep)
+            model.update(decode_detection(det, int((T0 + tc + 0.002) * 1e9)))
+            out.append(model.snapshot())
     return out
 
 
