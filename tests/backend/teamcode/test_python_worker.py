@@ -158,9 +158,11 @@ async def test_an_exception_has_its_traceback(tmp_path: Path) -> None:
     r = await started(tmp_path, "raises.py")
     try:
         p = await answer(r.send(game(), None, 1.0))
-        assert p.output is None and p.reason == "failed"
         e = r.run.error
         assert e is not None and (e.kind, e.file, e.line) == ("exception", "lib/helpers.py", 2)
+        # the failing tick's robots say why, as every later tick's do (not a bare "failed")
+        assert p.output is None and p.reason == e.one_line()
+        assert p.reason.startswith("exception at lib/helpers.py:2: ZeroDivisionError"), p.reason
         assert e.message == "ZeroDivisionError: division by zero"
         assert 'File "raises.py", line 3, in play' in e.traceback
         assert 'File "lib/helpers.py", line 2, in divide' in e.traceback
@@ -199,8 +201,8 @@ async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) ->
         gate.touch()  # the import ends; the worker answers the load
         await until(lambda: r._task is None and not r.reloading, what="the load accounted")
         p = await answer(r.send(game(), None, 1.0))
-        assert p.reason == "failed"
         assert r.run.state == "error" and r.run.error is not None
+        assert p.reason == r.run.error.one_line()
         assert "mien" in r.run.error.message
         assert r.run.errors == 1
         assert r.send(game(), None, 1.0) is None  # failed: not asked again until a save
