@@ -179,8 +179,9 @@ class Loaded:
 class Host:
     """The worker's state: the team folder, the file it runs, what it loaded."""
 
-    def __init__(self, team_dir: Path) -> None:
+    def __init__(self, team_dir: Path, memory_mb: int = 0) -> None:
         self.team_dir = team_dir.resolve()
+        self.memory_mb = memory_mb  # the address-space limit (0: none), named in a MemoryError
         self.lib_dir = self.team_dir / "lib"
         self.loaded: Loaded | None = None
         #: what the last instance's keep() gave, until a version loads that restores it (a
@@ -226,6 +227,10 @@ class Host:
         for root in (str(self.team_dir) + os.sep,):
             text = text.replace(root, "")
         message = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        if isinstance(exc, MemoryError) and self.memory_mb > 0:
+            # a bare "MemoryError" says neither that the worker has a limit nor where it is set
+            message += (f" (over the worker's memory limit of {self.memory_mb} MB, the "
+                        "station's --team-memory-mb: allocate less, or raise the limit)")
         return {"kind": kind, "message": message, "file": file, "line": line,
                 "traceback": text}
 
@@ -333,7 +338,7 @@ def main() -> None:
     # answer is waiting, before it ends the worker
     faulthandler.register(signal.SIGPROF, file=dump, all_threads=True, chain=True)
     faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
-    host = Host(Path(config["team_dir"]))
+    host = Host(Path(config["team_dir"]), mb)
     name = ""
     send(proto_out, ("ready", os.getpid()))
     while True:

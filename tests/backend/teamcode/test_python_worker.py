@@ -651,6 +651,8 @@ async def test_the_memory_limit(tmp_path: Path) -> None:
         e = r.run.error
         assert e is not None and (e.kind, e.line) == ("exception", 2)
         assert "MemoryError" in e.message
+        # it says what the limit is and where it is set (a bare MemoryError did not)
+        assert "memory limit of 256 MB" in e.message and "--team-memory-mb" in e.message
     finally:
         await r.close()
 
