@@ -77,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("suite", help=f"a shipped suite ({', '.join(shipped_suites())}) or a folder")
     s.add_argument("--play", default=None, help="the play (default: each scenario's own)")
     s.add_argument("--param", action="append", type=_param, default=[], metavar="K=V")
-    s.add_argument("--only", action="append", default=[], help="only these scenarios")
+    s.add_argument("--only", action="append", default=[], metavar="SCENARIO",
+                   help="only this scenario (its name as `list` shows it; repeatable)")
     _backend_args(s)
     a = sub.add_parser("ab", help="two plays (or parameter sets) on one suite")
     a.add_argument("suite")
@@ -138,6 +139,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.cmd == "suite":
             suite = load_suite(args.suite)
+            names = [sc.name for sc in suite.scenarios]
+            unknown = [n for n in args.only if n not in names]
+            if unknown:  # else it ran nothing and reported "0/0 runs passed"
+                say(f"--only {', '.join(map(repr, unknown))}: no such scenario in the suite "
+                    f"{suite.name} (its scenarios: {', '.join(names)}; --only takes one name, "
+                    "repeat it for several)", err=True)
+                return 2
             out = args.out or default_out(REPORTS, suite.name)
             rep = run_suite(suite, _entrant(args.play, args.param, args.team_dir), out, backend,
                             progress, tuple(args.only), keep)

@@ -1,0 +1,28 @@
+"""``python -m evaluate`` as a teacher types it: a real process, its exit code and its words."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+pytestmark = pytest.mark.timeout(120)
+
+
+def evaluate(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "evaluate", *args], cwd=ROOT,
+                          capture_output=True, text=True, timeout=100)
+
+
+def test_only_with_a_name_the_suite_lacks_is_refused_with_its_names(tmp_path: Path) -> None:
+    """``--only drive_to_point`` (the exercise, not a scenario: they are drive_to_point_1 ..)
+    ran nothing and said "0/0 runs passed, mean score None" with exit code 0."""
+    out = tmp_path / "rep"
+    p = evaluate("suite", "exercises", "--only", "drive_to_point", "--out", str(out))
+    assert p.returncode == 2, (p.returncode, p.stdout, p.stderr)
+    assert "--only 'drive_to_point': no such scenario in the suite exercises" in p.stderr
+    assert "drive_to_point_1" in p.stderr and "stop_rules_5" in p.stderr
+    assert not out.exists()  # nothing ran, no empty report
