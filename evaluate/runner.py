@@ -48,7 +48,8 @@ class Entrant:
         if self.label:
             return self.label
         extra = ",".join(f"{k}={v}" for k, v in sorted(self.params.items()))
-        return (self.play or "?") + (f"[{extra}]" if extra else "")
+        # no play given: each scenario runs the play its file names (not "?" in the report)
+        return (self.play or "each scenario's play") + (f"[{extra}]" if extra else "")
 
 
 # -- scenarios --------------------------------------------------------------------------------

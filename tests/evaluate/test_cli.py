@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -26,3 +27,15 @@ def test_only_with_a_name_the_suite_lacks_is_refused_with_its_names(tmp_path: Pa
     assert "--only 'drive_to_point': no such scenario in the suite exercises" in p.stderr
     assert "drive_to_point_1" in p.stderr and "stop_rules_5" in p.stderr
     assert not out.exists()  # nothing ran, no empty report
+
+
+def test_a_suite_without_a_play_names_it_in_the_report(tmp_path: Path) -> None:
+    """Without ``--play`` each scenario runs its own play: the report said "quick: ?"."""
+    out = tmp_path / "rep"
+    p = evaluate("suite", str(ROOT / "tests" / "evaluate" / "quick"), "--only", "quick_goal",
+                 "--workers", "1", "--no-logs", "--out", str(out))
+    assert p.returncode == 0, (p.stdout, p.stderr)
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["title"] == "quick: each scenario's play", rep["title"]
+    assert rep["entrant"] == "each scenario's play"
+    assert [r["play"] for r in rep["runs"]] == ["idle"]  # the scenario's own
