@@ -120,13 +120,22 @@ def _opt_num(v: Any, what: str) -> float | None:
     return None if v is None else _num(v, what)
 
 
+def _not_a_dict_hint(result: Any) -> str:
+    """The usual slips behind an answer that is not a dict, said where the error is shown."""
+    if result is None:
+        return " (no return statement reached?)"
+    if isinstance(result, Target | Velocity):
+        return " (one order: say for which robot, {robot id: order})"
+    return ""
+
+
 def plain_orders(result: Any) -> list[Plain]:
     """A play's answer as plain tuples (the station checks values, ids and limits):
     ``("T", id, x, y, orientation|None, max_speed|None, kick, chip, dribble, avoid, role)``
     or ``("V", id, forward, left, turn, kick, chip, dribble, role)``."""
     if not isinstance(result, Mapping):
-        raise OutputError(f"the play returned {_describe(result)}: expected a dict "
-                          "{robot id: Target or Velocity}")
+        raise OutputError(f"the play returned {_describe(result)}{_not_a_dict_hint(result)}: "
+                          "expected a dict {robot id: Target or Velocity}")
     out: list[Plain] = []
     for rid, order in result.items():
         try:  # an int, or an integer numpy scalar (never a bool, a float, a string)
@@ -158,8 +167,8 @@ def plain_orders(result: Any) -> list[Plain]:
 def plain_outputs(result: Any) -> dict[str, float]:
     """A processor's answer as {name: float} (booleans as 0/1)."""
     if not isinstance(result, Mapping):
-        raise OutputError(f"tick returned {_describe(result)}: expected a dict "
-                          "{name: number}")
+        raise OutputError(f"tick returned {_describe(result)}{_not_a_dict_hint(result)}: "
+                          "expected a dict {name: number}")
     out: dict[str, float] = {}
     for k, v in result.items():
         if not isinstance(k, str) or not k.isidentifier():

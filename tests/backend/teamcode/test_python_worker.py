@@ -217,7 +217,9 @@ async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) ->
     ("return {'1': Target(0, 0)}", "a key of the play's dict is str"),
     ("return {1.5: Target(0, 0)}", "a key of the play's dict is float"),
     ("return {1: Target('a', 0)}", "robot 1's order x is str"),
-    ("return None", "the play returned NoneType"),
+    ("return None", "the play returned NoneType None (no return statement reached?)"),
+    ("pass", "the play returned NoneType None (no return statement reached?)"),
+    ("return Target(0, 0)", "(one order: say for which robot, {robot id: order})"),
 ])
 async def test_malformed_output_is_an_output_error(tmp_path: Path, body: str,
                                                    message: str) -> None:
@@ -276,6 +278,8 @@ def test_plain_data_both_ways() -> None:
         plain_outputs({"has space": 1.0})
     with pytest.raises(OutputError, match="not a number"):
         plain_outputs({"x": "1.0"})
+    with pytest.raises(OutputError, match=r"tick returned NoneType None \(no return statement"):
+        plain_outputs(None)  # a tick that forgot its return
     # what the station reads from a worker is plain data only: a class is refused
     assert plain_loads(pickle.dumps(("out", 1, [("T", 1)], 0.0, "v"))) == \
         ("out", 1, [("T", 1)], 0.0, "v")
