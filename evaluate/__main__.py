@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -51,7 +52,7 @@ def _param(item: str) -> tuple[str, Any]:
 
 
 def _backend_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", type=Path, help="the report's folder (default: var/reports/"
+    p.add_argument("--out", type=_user_path, help="the report's folder (default: var/reports/"
                    "<date>-<time>-<what>)")
     p.add_argument("--workers", type=int, default=None,
                    help="local pool workers (default: one per core)")
@@ -61,7 +62,13 @@ def _backend_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--memory-mb", type=int, default=DEFAULT_MEMORY_MB,
                    help="memory limit of each worker (MB; 0: none)")
     p.add_argument("--no-logs", action="store_true", help="keep no SSL log of the runs")
-    p.add_argument("--team-dir", default=None, help="the team folder team plays come from")
+    p.add_argument("--team-dir", type=os.path.expanduser, default=None,
+                   help="the team folder team plays come from")
+
+
+def _user_path(text: str) -> Path:
+    """A folder with ``~`` expanded (zsh leaves the ``~`` of ``make evaluate TEAM=~/x``)."""
+    return Path(text).expanduser()
 
 
 def _entrant(play: str | None, params: list[tuple[str, Any]], team_dir: str | None,
@@ -104,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
                         "work of both teams' world models)")
     _backend_args(m)
     c = sub.add_parser("class", help="a suite for every student of a class folder")
-    c.add_argument("class_dir", type=Path, help="one sub-folder per student (their plays)")
+    c.add_argument("class_dir", type=_user_path, help="one sub-folder per student (their plays)")
     c.add_argument("--suite", default="exercises")
     _backend_args(c)
     sub.add_parser("list", help="the shipped suites and their scenarios")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -39,3 +40,21 @@ def test_a_suite_without_a_play_names_it_in_the_report(tmp_path: Path) -> None:
     assert rep["title"] == "quick: each scenario's play", rep["title"]
     assert rep["entrant"] == "each scenario's play"
     assert [r["play"] for r in rep["runs"]] == ["idle"]  # the scenario's own
+
+
+def test_a_team_folder_with_a_tilde_is_the_home_folders(tmp_path: Path) -> None:
+    """``make evaluate TEAM=~/ann`` from zsh passes the ``~`` as it is: every run failed with
+    "no team folder ~/ann"."""
+    (tmp_path / "ann").mkdir()
+    (tmp_path / "ann" / "drive_to_point.py").write_text(
+        "from touchline import Target\n"
+        "def play(game):\n"
+        "    x, y = game.task['target_mm']\n"
+        "    return {game.task['robot']: Target(x, y)}\n")
+    p = subprocess.run([sys.executable, "-m", "evaluate", "suite", "exercises", "--only",
+                        "drive_to_point_1", "--team-dir", "~/ann", "--workers", "1",
+                        "--no-logs", "--out", str(tmp_path / "rep")], cwd=ROOT, capture_output=True,
+                       text=True, timeout=100, env={**os.environ, "HOME": str(tmp_path)})
+    assert p.returncode == 0, (p.stdout, p.stderr)
+    rep = json.loads((tmp_path / "rep" / "report.json").read_text())
+    assert [(r["passed"], r["error"]) for r in rep["runs"]] == [(True, None)], rep["runs"]
