@@ -134,7 +134,13 @@ def main(argv: list[str] | None = None) -> int:
         if res.get("kind") == "match" and isinstance(res.get("score"), dict):
             extra = f" {res['blue']} {res['score']['blue']}:{res['score']['yellow']} " \
                     f"{res['yellow']}"
-        err = f"  ({str(res['error']).splitlines()[0]})" if res.get("error") else ""
+        # a failed run says why on its line: the run's error, the play's failure, or the
+        # checks it failed (the report has the rest)
+        why = str(res.get("error") or res.get("team_error") or "").strip()
+        if not why and ok == "FAIL" and res.get("kind") == "scenario":
+            why = "failed: " + ", ".join(str(c.get("label") or c.get("name")) for c in
+                                         res.get("checks") or [] if not c.get("passed"))
+        err = f"  ({why.splitlines()[0]})" if why and why != "failed: " else ""
         say(f"[{done:>4}/{total}] {ok} {res['name']}{extra} {res.get('wall_s', 0):.1f} s{err}")
 
     try:

@@ -58,3 +58,26 @@ def test_a_team_folder_with_a_tilde_is_the_home_folders(tmp_path: Path) -> None:
     assert p.returncode == 0, (p.stdout, p.stderr)
     rep = json.loads((tmp_path / "rep" / "report.json").read_text())
     assert [(r["passed"], r["error"]) for r in rep["runs"]] == [(True, None)], rep["runs"]
+
+
+def test_a_failed_run_says_why_on_its_progress_line(tmp_path: Path) -> None:
+    """A teacher reads the progress lines: a run that failed said only "FAIL drive_to_point_1
+    0.6 s" (the play's error came once, on a log line of its own, and a failed check not at
+    all)."""
+    for who, body in (("crash", "    x, y = game.task['target']\n"),
+                      ("slow", "    x, y = game.task['target_mm']\n"
+                               "    return {0: Target(x, y, max_speed_mps=0.2)}\n")):
+        (tmp_path / who).mkdir()
+        (tmp_path / who / "drive_to_point.py").write_text(
+            f"from touchline import Target\ndef play(game):\n{body}")
+    lines = {}
+    for who in ("crash", "slow"):
+        p = evaluate("suite", "exercises", "--only", "drive_to_point_1", "--team-dir",
+                     str(tmp_path / who), "--workers", "1", "--no-logs", "--out",
+                     str(tmp_path / f"rep-{who}"))
+        assert p.returncode == 0, (p.stdout, p.stderr)
+        lines[who] = [ln for ln in p.stdout.splitlines() if "FAIL drive_to_point_1" in ln]
+    assert len(lines["crash"]) == 1 and lines["crash"][0].endswith(
+        "(exception at drive_to_point.py:3: KeyError: 'target')"), lines
+    assert len(lines["slow"]) == 1 and lines["slow"][0].endswith(
+        "(failed: there within 6 s)"), lines
