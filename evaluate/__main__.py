@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -51,7 +52,7 @@ def _param(item: str) -> tuple[str, Any]:
 
 
 def _backend_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", type=Path, help="the report's folder (default: var/reports/"
+    p.add_argument("--out", type=_user_path, help="the report's folder (default: var/reports/"
                    "<date>-<time>-<what>)")
     p.add_argument("--workers", type=int, default=None,
                    help="local pool workers (default: one per core)")
@@ -61,7 +62,13 @@ def _backend_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--memory-mb", type=int, default=DEFAULT_MEMORY_MB,
                    help="memory limit of each worker (MB; 0: none)")
     p.add_argument("--no-logs", action="store_true", help="keep no SSL log of the runs")
-    p.add_argument("--team-dir", default=None, help="the team folder team plays come from")
+    p.add_argument("--team-dir", type=os.path.expanduser, default=None,
+                   help="the team folder team plays come from")
+
+
+def _user_path(text: str) -> Path:
+    """A folder with ``~`` expanded (zsh leaves the ``~`` of ``make evaluate TEAM=~/x``)."""
+    return Path(text).expanduser()
 
 
 def _entrant(play: str | None, params: list[tuple[str, Any]], team_dir: str | None,
@@ -77,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("suite", help=f"a shipped suite ({', '.join(shipped_suites())}) or a folder")
     s.add_argument("--play", default=None, help="the play (default: each scenario's own)")
     s.add_argument("--param", action="append", type=_param, default=[], metavar="K=V")
-    s.add_argument("--only", action="append", default=[], help="only these scenarios")
+    s.add_argument("--only", action="append", default=[], metavar="SCENARIO",
+                   help="only this scenario (its name as `list` shows it; repeatable)")
     _backend_args(s)
     a = sub.add_parser("ab", help="two plays (or parameter sets) on one suite")
     a.add_argument("suite")
@@ -103,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
                         "work of both teams' world models)")
     _backend_args(m)
     c = sub.add_parser("class", help="a suite for every student of a class folder")
-    c.add_argument("class_dir", type=Path, help="one sub-folder per student (their plays)")
+    c.add_argument("class_dir", type=_user_path, help="one sub-folder per student (their plays)")
     c.add_argument("--suite", default="exercises")
     _backend_args(c)
     sub.add_parser("list", help="the shipped suites and their scenarios")
@@ -132,7 +140,13 @@ def main(argv: list[str] | None = None) -> int:
         if res.get("kind") == "match" and isinstance(res.get("score"), dict):
             extra = f" {res['blue']} {res['score']['blue']}:{res['score']['yellow']} " \
                     f"{res['yellow']}"
-        err = f"  ({str(res['error']).splitlines()[0]})" if res.get("error") else ""
+        # a failed run says why on its line: the run's error, the play's failure, or the
+        # checks it failed (the report has the rest)
+        why = str(res.get("error") or res.get("team_error") or "").strip()
+        if not why and ok == "FAIL" and res.get("kind") == "scenario":
+            why = "failed: " + ", ".join(str(c.get("label") or c.get("name")) for c in
+                                         res.get("checks") or [] if not c.get("passed"))
+        err = f"  ({why.splitlines()[0]})" if why and why != "failed: " else ""
         say(f"[{done:>4}/{total}] {ok} {res['name']}{extra} {res.get('wall_s', 0):.1f} s{err}")
 
     try:
@@ -144,6 +158,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.cmd == "suite":
             suite = load_suite(args.suite)
+            names = [sc.name for sc in suite.scenarios]
+            unknown = [n for n in args.only if n not in names]
+            if unknown:  # else it ran nothing and reported "0/0 runs passed"
+                say(f"--only {', '.join(map(repr, unknown))}: no such scenario in the suite "
+                    f"{suite.name} (its scenarios: {', '.join(names)}; --only takes one name, "
+                    "repeat it for several)", err=True)
+                return 2
             out = args.out or default_out(REPORTS, suite.name)
             rep = run_suite(suite, _entrant(args.play, args.param, args.team_dir), out, backend,
                             progress, tuple(args.only), keep)

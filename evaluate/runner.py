@@ -54,7 +54,8 @@ class Entrant:
         if self.label:
             return self.label
         extra = ",".join(f"{k}={v}" for k, v in sorted(self.params.items()))
-        return (self.play or "?") + (f"[{extra}]" if extra else "")
+        # no play given: each scenario runs the play its file names (not "?" in the report)
+        return (self.play or "each scenario's play") + (f"[{extra}]" if extra else "")
 
 
 # -- scenarios --------------------------------------------------------------------------------
@@ -443,6 +444,9 @@ def run_scenario_task(task: ScenarioTask) -> dict[str, Any]:
         # the file's own error (with its line) says most; else why its robots stood still
         files = [e for e in errs if e.robot is None]
         res["team_error"] = (files or errs)[0].detail if errs else None
+        if files:  # the play failed (not a tick held): no credit for what its stopped robots
+            # "did" (a crashed keeper standing at the goal centre "saved" the shots that missed)
+            res.update(passed=False, score=0.0)
         res["events"] = _events_summary(run)
     except RunError as exc:
         res.update(passed=False, score=0.0, checks=[], error=str(exc))

@@ -91,6 +91,12 @@ def http_port_taken(host: str, port: int) -> str | None:
     return None
 
 
+def _user_path(text: str) -> str:
+    """A folder or file flag with ``~`` expanded: zsh (macOS's shell) leaves the ``~`` of
+    ``make run TEAM=~/my-team`` as it is, bash expands it."""
+    return os.path.expanduser(text)
+
+
 def main() -> int:
     p = argparse.ArgumentParser(prog="python -m launcher", description=__doc__)
     p.add_argument("--sim", choices=["builtin", "none"], default="builtin")
@@ -102,7 +108,7 @@ def main() -> int:
     p.add_argument("--sim-host", default="127.0.0.1", help="simulator address for commands")
     p.add_argument("--our-team", choices=["blue", "yellow"], default=None,
                    help="override the stored team parameter")
-    p.add_argument("--state-dir", default=None,
+    p.add_argument("--state-dir", type=_user_path, default=None,
                    help="parameters and presets folder (default var/, or TOUCHLINE_STATE_DIR; "
                         "--isolated: a temp dir)")
     p.add_argument("--seed", type=int, default=1)
@@ -114,25 +120,27 @@ def main() -> int:
                    help="extra flag for fieldsim (repeatable), e.g. --sim-arg=--false-prob=0.2")
     p.add_argument("--relay-arg", dest="relay_args", action="append", default=[])
     p.add_argument("--backend-arg", dest="backend_args", action="append", default=[])
-    p.add_argument("--log", default=None, metavar="FILE",
+    p.add_argument("--log", type=_user_path, default=None, metavar="FILE",
                    help="replay this SSL log (.log or .log.gz) instead of live input: no "
                         "simulator, nothing sent to robots (make run LOG=FILE)")
-    p.add_argument("--log-dir", dest="log_dirs", action="append", default=[], metavar="DIR",
+    p.add_argument("--log-dir", type=_user_path, dest="log_dirs", action="append", default=[],
+                   metavar="DIR",
                    help="a folder whose logs the page may open (repeatable)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record this session into the recording folder (var/logs)")
-    p.add_argument("--record-dir", default=None, metavar="DIR",
+    p.add_argument("--record-dir", type=_user_path, default=None, metavar="DIR",
                    help="record into DIR (default: logs/ in the state folder; or "
                         "TOUCHLINE_RECORD_DIR)")
-    p.add_argument("--scripts-dir", default=None, metavar="DIR",
+    p.add_argument("--scripts-dir", type=_user_path, default=None, metavar="DIR",
                    help="the .m files the Octave engine runs (default engine_scripts/; or "
                         "TOUCHLINE_SCRIPTS_DIR). Folders are set here, never as parameters")
-    p.add_argument("--reports-dir", default=None, metavar="DIR",
+    p.add_argument("--reports-dir", type=_user_path, default=None, metavar="DIR",
                    help="the Evaluate tab's reports (default: reports/ in the state folder; "
                         "or TOUCHLINE_REPORTS_DIR)")
-    p.add_argument("--suite-dir", dest="suite_dirs", action="append", default=[], metavar="DIR",
+    p.add_argument("--suite-dir", type=_user_path, dest="suite_dirs", action="append",
+                   default=[], metavar="DIR",
                    help="a folder of scenario suites the Evaluate tab offers (repeatable)")
-    p.add_argument("--class-dir", default=None, metavar="DIR",
+    p.add_argument("--class-dir", type=_user_path, default=None, metavar="DIR",
                    help="a class: one sub-folder per student (the Evaluate tab grades them)")
     p.add_argument("--eval-cluster", default=None, metavar="ADDRESS",
                    help="the Evaluate tab's jobs on a Dask cluster (tcp://host:8786, or "
@@ -151,7 +159,7 @@ def main() -> int:
                    help="keep no warm spare backend: a crashed backend is then started cold "
                         "(its imports take 1-8 s on a busy 2-core machine instead of none; "
                         "the spare costs the memory of an idle backend)")
-    p.add_argument("--team-dir", default=None, metavar="DIR",
+    p.add_argument("--team-dir", type=_user_path, default=None, metavar="DIR",
                    help="the team's code: plays, processors, libraries (make run TEAM=DIR; "
                         "default $TOUCHLINE_TEAM_DIR, else the example folder team/)")
     p.add_argument("--allow-code-edit", action="store_true",

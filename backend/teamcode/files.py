@@ -76,8 +76,10 @@ def save(team_dir: Path, name: str, text: str, base_version: str | None) -> tupl
             if now is None:
                 raise TeamFileError(409, f"{name} was deleted since version {base_version}")
             if base_version is None:
-                raise TeamFileError(409, f"{name} exists already (version {now}): open it "
-                                         "instead")
+                # a script sees this one (the page opens an existing file): say how to save
+                raise TeamFileError(409, f"{name} exists already (version {now}): to change "
+                                         f"it, send base_version \"{now}\" (GET "
+                                         f"/api/team/files/{name} gives the version)")
             raise TeamFileError(409, f"{name} changed on disk since version {base_version} "
                                      f"(now {now}): reload it, then edit")
         if name.startswith(LIB + "/"):

@@ -172,7 +172,7 @@ class Runner:
                 return
             self.over_in_a_row = 0
             if self.failed:  # a reply from before the failure (a reload was under way)
-                p.reason = "failed"
+                p.reason = self._why_failed()
                 return
             p.output = payload
             p.reason = ""
@@ -182,10 +182,16 @@ class Runner:
             if isinstance(cpu, int | float):
                 p.cpu_ms = float(cpu) * 1000.0
             self.fail(error_from(err, self.name))
-            p.reason = "failed"
+            p.reason = self._why_failed()
             return
-        p.reason = "failed"
         self.fail(ErrorInfo("crash", f"the worker answered {str(reply)[:120]}", self.name))
+        p.reason = self._why_failed()
+
+    def _why_failed(self) -> str:
+        """The reason a failed call's robots stand still: the file's error with its line (as
+        on every later tick), not a bare "failed" the page would show for this one tick."""
+        err = self.run.error
+        return err.one_line() if err is not None else "failed"
 
     # ---- (re)starting: a save during a start is one more start, not one each ----
 

@@ -120,13 +120,22 @@ def _opt_num(v: Any, what: str) -> float | None:
     return None if v is None else _num(v, what)
 
 
+def _not_a_dict_hint(result: Any) -> str:
+    """The usual slips behind an answer that is not a dict, said where the error is shown."""
+    if result is None:
+        return " (no return statement reached?)"
+    if isinstance(result, Target | Velocity):
+        return " (one order: say for which robot, {robot id: order})"
+    return ""
+
+
 def plain_orders(result: Any) -> list[Plain]:
     """A play's answer as plain tuples (the station checks values, ids and limits):
     ``("T", id, x, y, orientation|None, max_speed|None, kick, chip, dribble, avoid, role)``
     or ``("V", id, forward, left, turn, kick, chip, dribble, role)``."""
     if not isinstance(result, Mapping):
-        raise OutputError(f"the play returned {_describe(result)}: expected a dict "
-                          "{robot id: Target or Velocity}")
+        raise OutputError(f"the play returned {_describe(result)}{_not_a_dict_hint(result)}: "
+                          "expected a dict {robot id: Target or Velocity}")
     out: list[Plain] = []
     for rid, order in result.items():
         try:  # an int, or an integer numpy scalar (never a bool, a float, a string)
@@ -158,8 +167,8 @@ def plain_orders(result: Any) -> list[Plain]:
 def plain_outputs(result: Any) -> dict[str, float]:
     """A processor's answer as {name: float} (booleans as 0/1)."""
     if not isinstance(result, Mapping):
-        raise OutputError(f"tick returned {_describe(result)}: expected a dict "
-                          "{name: number}")
+        raise OutputError(f"tick returned {_describe(result)}{_not_a_dict_hint(result)}: "
+                          "expected a dict {name: number}")
     out: dict[str, float] = {}
     for k, v in result.items():
         if not isinstance(k, str) or not k.isidentifier():
@@ -179,8 +188,9 @@ class Loaded:
 class Host:
     """The worker's state: the team folder, the file it runs, what it loaded."""
 
-    def __init__(self, team_dir: Path) -> None:
+    def __init__(self, team_dir: Path, memory_mb: int = 0) -> None:
         self.team_dir = team_dir.resolve()
+        self.memory_mb = memory_mb  # the address-space limit (0: none), named in a MemoryError
         self.lib_dir = self.team_dir / "lib"
         self.loaded: Loaded | None = None
         #: what the last instance's keep() gave, until a version loads that restores it (a
@@ -226,6 +236,10 @@ class Host:
         for root in (str(self.team_dir) + os.sep,):
             text = text.replace(root, "")
         message = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        if isinstance(exc, MemoryError) and self.memory_mb > 0:
+            # a bare "MemoryError" says neither that the worker has a limit nor where it is set
+            message += (f" (over the worker's memory limit of {self.memory_mb} MB, the "
+                        "station's --team-memory-mb: allocate less, or raise the limit)")
         return {"kind": kind, "message": message, "file": file, "line": line,
                 "traceback": text}
 
@@ -333,7 +347,7 @@ def main() -> None:
     # answer is waiting, before it ends the worker
     faulthandler.register(signal.SIGPROF, file=dump, all_threads=True, chain=True)
     faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
-    host = Host(Path(config["team_dir"]))
+    host = Host(Path(config["team_dir"]), mb)
     name = ""
     send(proto_out, ("ready", os.getpid()))
     while True:

@@ -5,6 +5,7 @@ team-code host, stops it), and the grade table says why."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -59,3 +60,20 @@ def test_a_missing_play_is_a_failed_run_that_says_so(tmp_path: Path) -> None:
                                          Entrant(None, {}, str(tmp_path)), None))
     assert not res["passed"]
     assert res["error"].startswith("missing: no play 'drive_to_point'") and "other" in res["error"]
+
+
+def test_a_play_that_fails_fails_its_run_whatever_its_checks_say(tmp_path: Path) -> None:
+    """Robot 0 starts on its target: a play that raises on its first tick leaves it there, and
+    both checks (reach, stopped) pass. Such a run passed with score 1.0 before; in the
+    exercises a crashing keeper scored 0.75 (standing at the goal centre, it "saved" the
+    shots that missed). The docs say a crash fails the student's run."""
+    suite = load_suite(str(HERE / "class_suite"))
+    sc = suite.scenarios[0]
+    sc = replace(sc, robots=tuple(replace(r, x=0.0, y=0.0) for r in sc.robots))  # on target
+    (tmp_path / "drive_to_point.py").write_text(
+        "def play(game):\n    return {0: game.nothing}\n")
+    res = run_scenario_task(ScenarioTask(sc, 0, Entrant(None, {}, str(tmp_path)), None,
+                                         suite.checks_file))
+    assert [c["passed"] for c in res["checks"]] == [True, True]  # what the robot "did"
+    assert res["team_error"].startswith("exception at drive_to_point.py:2: AttributeError")
+    assert (res["passed"], res["score"]) == (False, 0.0)

@@ -158,9 +158,11 @@ async def test_an_exception_has_its_traceback(tmp_path: Path) -> None:
     r = await started(tmp_path, "raises.py")
     try:
         p = await answer(r.send(game(), None, 1.0))
-        assert p.output is None and p.reason == "failed"
         e = r.run.error
         assert e is not None and (e.kind, e.file, e.line) == ("exception", "lib/helpers.py", 2)
+        # the failing tick's robots say why, as every later tick's do (not a bare "failed")
+        assert p.output is None and p.reason == e.one_line()
+        assert p.reason.startswith("exception at lib/helpers.py:2: ZeroDivisionError"), p.reason
         assert e.message == "ZeroDivisionError: division by zero"
         assert 'File "raises.py", line 3, in play' in e.traceback
         assert 'File "lib/helpers.py", line 2, in divide' in e.traceback
@@ -199,8 +201,8 @@ async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) ->
         gate.touch()  # the import ends; the worker answers the load
         await until(lambda: r._task is None and not r.reloading, what="the load accounted")
         p = await answer(r.send(game(), None, 1.0))
-        assert p.reason == "failed"
         assert r.run.state == "error" and r.run.error is not None
+        assert p.reason == r.run.error.one_line()
         assert "mien" in r.run.error.message
         assert r.run.errors == 1
         assert r.send(game(), None, 1.0) is None  # failed: not asked again until a save
@@ -215,7 +217,9 @@ async def test_a_failure_right_after_a_reload_is_counted_once(tmp_path: Path) ->
     ("return {'1': Target(0, 0)}", "a key of the play's dict is str"),
     ("return {1.5: Target(0, 0)}", "a key of the play's dict is float"),
     ("return {1: Target('a', 0)}", "robot 1's order x is str"),
-    ("return None", "the play returned NoneType"),
+    ("return None", "the play returned NoneType None (no return statement reached?)"),
+    ("pass", "the play returned NoneType None (no return statement reached?)"),
+    ("return Target(0, 0)", "(one order: say for which robot, {robot id: order})"),
 ])
 async def test_malformed_output_is_an_output_error(tmp_path: Path, body: str,
                                                    message: str) -> None:
@@ -274,6 +278,8 @@ def test_plain_data_both_ways() -> None:
         plain_outputs({"has space": 1.0})
     with pytest.raises(OutputError, match="not a number"):
         plain_outputs({"x": "1.0"})
+    with pytest.raises(OutputError, match=r"tick returned NoneType None \(no return statement"):
+        plain_outputs(None)  # a tick that forgot its return
     # what the station reads from a worker is plain data only: a class is refused
     assert plain_loads(pickle.dumps(("out", 1, [("T", 1)], 0.0, "v"))) == \
         ("out", 1, [("T", 1)], 0.0, "v")
@@ -655,6 +661,8 @@ async def test_the_memory_limit(tmp_path: Path) -> None:
         e = r.run.error
         assert e is not None and (e.kind, e.line) == ("exception", 2)
         assert "MemoryError" in e.message
+        # it says what the limit is and where it is set (a bare MemoryError did not)
+        assert "memory limit of 256 MB" in e.message and "--team-memory-mb" in e.message
     finally:
         await r.close()
 

@@ -109,7 +109,9 @@ def test_a_save_over_a_changed_file_is_refused(local: TestClient, tmp_path: Path
     assert (tmp_path / "team" / "ring.py").read_text().endswith("# edited in an editor\n")
     # a "new" file that exists
     r = local.put("/api/team/files/ring.py", json={"text": "x = 1\n", "base_version": None})
+    now = local.get("/api/team/files/ring.py").json()["version"]
     assert r.status_code == 409 and "exists already" in r.json()["detail"]
+    assert f'send base_version "{now}"' in r.json()["detail"]  # how to save it, from a script
     # a base for a file that is gone
     r = local.put("/api/team/files/gone.py", json={"text": "x = 1\n", "base_version": base})
     assert r.status_code == 409 and not (tmp_path / "team" / "gone.py").exists()
