@@ -7,7 +7,7 @@ import math
 import select
 import struct
 import time
-from collections import Counter, deque
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -311,8 +311,12 @@ class RelayIngest(SocketProcessor):
             if self._burst_n:
                 sizes = self._burst_sizes
                 sizes.append(self._burst_n)
-                (size, times), *_ = sorted(Counter(sizes).items(), key=lambda st: (-st[1], st[0]))
-                self.burst_expected = size if times >= 2 else 0
+                best, times = 0, 1  # the most common size, seen twice, the smaller on a tie
+                for size in set(sizes):
+                    k = sizes.count(size)
+                    if k > times or (k == times and size < best):
+                        best, times = size, k
+                self.burst_expected = best
             self._burst_n = 1
         self._burst_last, self._burst_capture = t, capture
 
