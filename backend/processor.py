@@ -80,6 +80,24 @@ class Processor:
         not supported, the runner's task waits in ``wait_input``."""
         return False
 
+    #: for a watched source whose ``hold_pass`` holds the pass: the longest the runner lets
+    #: a pass wait, from the first of its ticks that held it (seconds)
+    hold_max_s = 0.0
+
+    def hold_pass(self) -> float | None:
+        """For a watched source (``watch_input``), asked after each of its ticks: seconds the
+        pass may wait for more of its input (the rest of a burst of camera frames), or None
+        (the default): the pass now. The runner does not wait in it: it goes back to the
+        loop and runs the pass at that time (never later than ``hold_max_s`` after the first
+        held tick), after this source's next tick that answers None, or when anything else
+        runs a pass (a timer's tick, a deadline, a topic written from outside: a stop never
+        waits for it), whichever comes first, once; then it calls ``held_pass_ran``."""
+        return None
+
+    def held_pass_ran(self) -> None:
+        """The pass this source held (``hold_pass``) has run: what its ticks wrote was read."""
+        return None
+
     async def teardown(self) -> None:
         return None
 
@@ -215,10 +233,13 @@ class Runner:
     a timer's: no task, no future, no second turn of the event loop per frame. Processors
     implementing ``step`` are plain calls; a coroutine ``tick`` is stepped by hand and
     finishes there unless it really waits (then it, and the rest of its pass, go on in a
-    task). A topic written from outside a pass (an operator's command between two ticks)
-    starts a pass of its own, once per burst. Topic-triggered processors with ``max_wait_s``
-    also run when nothing arrived for that long (a task per processor sleeps until that
-    deadline).
+    task). A watched source may hold the pass after its tick (``Processor.hold_pass``: the
+    relay ingest, for the rest of a burst of camera frames): the runner goes back to the loop
+    with a timer and runs the pass at its time or as soon as something else asks for one,
+    never blocking the thread. A topic written from outside a pass (an operator's command
+    between two ticks) starts a pass of its own, once per burst. Topic-triggered processors
+    with ``max_wait_s`` also run when nothing arrived for that long (a task per processor
+    sleeps until that deadline).
 
     Stats are counters bumped in the pass (``ProcessorStats``); rates are computed when read.
     """
@@ -244,6 +265,13 @@ class Runner:
         #: the clock (perf_counter) at the end of the last tick ``_run_now`` finished: the
         #: start of the pass that follows a source's tick
         self._t_end = 0.0
+        #: a pass held by a watched source (``Processor.hold_pass``): the source, its timer,
+        #: the timer's time and the time the pass is held until (it moves on with each held
+        #: tick; the timer is set again when it fires before), the hold's last possible time
+        #: (loop.time())
+        self._held_by: Processor | None = None
+        self._hold_timer: asyncio.TimerHandle | None = None
+        self._hold_at = self._hold_until = self._hold_end = 0.0
 
     def add(self, proc: Processor) -> Processor:
         self.processors.append(proc)
@@ -272,6 +300,10 @@ class Runner:
 
     async def stop(self) -> None:
         self._loop = None  # no pass is scheduled from here on
+        if self._hold_timer is not None:
+            self._hold_timer.cancel()
+            self._hold_timer = None
+        self._held_by = None
         for timer in self._timers.values():
             timer.cancel()
         self._timers.clear()
@@ -390,6 +422,8 @@ class Runner:
         stats' ``record``: four ticks a camera frame)."""
         if self._passing:
             return
+        if self._held_by is not None:  # this pass is the one a source held
+            self._release()
         self._passing = True
         clock = time.perf_counter
         if t is None:
@@ -428,6 +462,54 @@ class Runner:
             self._passing = False
             raise
         self._passing = False
+
+    # ---- a pass held by a source ----
+
+    def _hold(self, proc: Processor, wait_s: float) -> bool:
+        """``proc``'s tick asked to hold the pass for ``wait_s``: True if it is held (a timer
+        at its time, capped by ``hold_max_s`` from the hold's first tick), False if the pass
+        is to run now (another source holds it, or the cap is reached)."""
+        loop = self._loop
+        assert loop is not None
+        now = loop.time()
+        if self._held_by is None:
+            self._held_by, self._hold_end = proc, now + proc.hold_max_s
+        elif self._held_by is not proc:
+            return False
+        until = min(now + wait_s, self._hold_end)
+        if until <= now:
+            return False
+        self._hold_until = until
+        timer = self._hold_timer
+        # one timer a hold: a later time waits for it to fire (``_held``), an earlier one
+        # (the cap, a shorter wait) replaces it
+        if timer is None or until < self._hold_at:
+            if timer is not None:
+                timer.cancel()
+            self._hold_at = until
+            self._hold_timer = loop.call_at(until, self._held)
+        return True
+
+    def _held(self) -> None:
+        """The held pass's timer: the pass, unless its time moved on meanwhile."""
+        self._hold_timer = None
+        loop = self._loop
+        if loop is None or self._held_by is None:
+            return
+        if self._hold_until > self._hold_at:
+            self._hold_at = self._hold_until
+            self._hold_timer = loop.call_at(self._hold_until, self._held)
+            return
+        self._pass_now()
+
+    def _release(self) -> None:
+        """The held pass runs now (whatever asked for it): no timer, and its source told."""
+        src, self._held_by = self._held_by, None
+        if self._hold_timer is not None:
+            self._hold_timer.cancel()
+            self._hold_timer = None
+        if src is not None:
+            src.held_pass_ran()
 
     def _continue_later(self, rest: _Waiting) -> None:
         """A tick of the pass waits: the pass (still ``_passing``) goes on in a task."""
@@ -475,6 +557,8 @@ class Runner:
         in this call."""
         step = plain_step(proc)
         clock = time.perf_counter
+        # only a source that may hold its pass is asked
+        hold = proc.hold_pass if type(proc).hold_pass is not Processor.hold_pass else None
 
         def ready() -> None:
             if self._loop is None:  # stopped
@@ -491,6 +575,14 @@ class Runner:
             if rest is not None:  # a source tick that waits: finished in a task
                 self._continue_later(rest)
                 return
+            if hold is not None:
+                try:
+                    wait_s = hold()
+                except Exception as exc:  # counted like its tick's: the pass now
+                    self._failed(proc, exc)
+                    wait_s = None
+                if wait_s is not None and self._hold(proc, wait_s):
+                    return  # back to the loop: the pass at the hold's time or sooner
             self._pass_now(self._t_end)
 
         return ready

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import math
-import select
 import struct
 import time
 from collections import deque
@@ -42,6 +41,9 @@ BURST_GAPS = 64
 #: once seen twice (the smaller on a tie): a frame lost, or a burst split by a late one, does
 #: not end the waiting as the smaller of the last two did
 BURST_HISTORY = 8
+#: the pass is never held longer than this after the first tick that held it (the runner's
+#: cap, ``hold_max_s``): well within a camera period (13.3 ms at 75 Hz)
+BURST_HOLD_MAX_NS = 3_000_000
 _DOUBLE = struct.Struct("<d")
 
 
@@ -99,7 +101,7 @@ class RelayIngest(SocketProcessor):
         #: clock); the newest vision frame's stamp and its capture time (None: unread, the
         #: stamp groups it), the frames of its burst so far, the sizes of the last whole
         #: bursts and the size expected; the gaps between the stamps of a burst's frames and
-        #: the wait they give; the times a tick waited for the rest of a burst
+        #: the wait they give; the times a tick held the pass for the rest of a burst
         self.clock_ns: Callable[[], int] = time.time_ns
         self._burst_last = 0
         self._burst_capture: int | None = None
@@ -109,6 +111,15 @@ class RelayIngest(SocketProcessor):
         self._burst_gaps: list[int] = []
         self.burst_wait_ns = BURST_GAP_NS
         self.held = 0
+        self.hold_max_s = BURST_HOLD_MAX_NS / 1e9
+        #: messages put on the bus since the pass last ran (while the pass is held, the
+        #: ticks' drains together stay within the smallest ingest topic); whether the pass
+        #: is held; this tick's: a live camera frame, anything else (a referee packet, an
+        #: answer, the relay's statistics: the pass at once)
+        self._unpassed = 0
+        self._holding = False
+        self._fed = False
+        self._urgent = False
 
     async def wait_input(self) -> None:
         """Until a message waits. Through the socket's own file descriptor, watched by the
@@ -186,8 +197,9 @@ class RelayIngest(SocketProcessor):
 
     def step(self) -> None:
         # drain what is there through the plain socket (no future per message), at most what
-        # the smallest ingest topic holds: the pass after this tick takes the lot through the
-        # pipeline before the next drain, so a burst is never overwritten on the bus unread.
+        # the smallest ingest topic holds less what is on it unread (the ticks since a held
+        # pass): the pass after this tick takes the lot through the pipeline before the next
+        # drain, so a burst is never overwritten on the bus unread.
         # Called when a message waits: ``zmq.EVENTS`` after each message (each asks libzmq
         # to take its commands: a system call), not before; not a recv until ``zmq.Again``
         # (the same system call and an exception). Either re-arms the edge-triggered
@@ -197,8 +209,11 @@ class RelayIngest(SocketProcessor):
         # ``get``, which looks the option up in an enum: ~0.8 us a message of two parts)
         out = self._out
         recv, get = out.recv, out.get
+        if not self._holding:
+            self._unpassed = 0
+        self._fed = self._urgent = False
         limit = min(self.vision_packets.capacity, self.referee_packets.capacity,
-                    self.feedback_packets.capacity)
+                    self.feedback_packets.capacity) - self._unpassed
         handle = self._handle
         for _ in range(limit):
             try:
@@ -209,41 +224,45 @@ class RelayIngest(SocketProcessor):
             while part.more:
                 part = recv(_NOBLOCK, copy=False)
                 frames.append(part.bytes)
+            self._unpassed += 1
             handle(frames)
-            if not get(_EVENTS) & _POLLIN and not (
-                    self._burst_n < self.burst_expected and self._rest_of_burst()):
+            if not get(_EVENTS) & _POLLIN:
                 return
         if self._ready is not None and self._fd_loop is not None:
             # more than a topic holds: the rest after this pass, in the loop's next turn
             # (the descriptor will not signal what is already there)
             self._fd_loop.call_soon(self._fd_ready)
 
-    def _rest_of_burst(self) -> bool:
-        """Waits for the next frame of a burst under way (its cameras' frames came in bursts
-        of more than this one has so far, most of the last times): True once a message
-        waits, False when none came within ``burst_wait_ns`` of the newest frame's arrival at
-        the relay, or within half of it from now when this thread is that far behind the
-        relay (then the pass runs with what came). The relay forwards a burst's frames one by
-        one, tens of microseconds apart, and a pass takes longer than that: without the wait
-        the first frame or two got a pass of their own, the rest a second one. Blocks this
-        thread (at most ``BURST_WAIT_MAX_NS``: no timer of the station is that tight) on the
-        socket's descriptor, which signals a new message after ``zmq.EVENTS`` was asked.
-        Cameras with phases of their own (bursts of one) never wait."""
-        out, clock = self._out, self.clock_ns
-        fd = self._fd if self._fd >= 0 else out.get(zmq.FD)
-        now = clock()
+    def hold_pass(self) -> float | None:
+        """Holds the pass for the rest of a burst under way (its cameras' frames came in
+        bursts of more than this one has so far, most of the last times): seconds until
+        ``burst_wait_ns`` after the newest frame's arrival at the relay, or half of it from
+        now when this thread is that far behind the relay. The relay forwards a burst's
+        frames one by one, tens of microseconds to milliseconds apart, and a pass takes
+        longer than that: without the hold the first frame or two got a pass of their own,
+        the rest a second one. The runner does not block on it (timers, the other
+        processors, a stop run meanwhile); the pass runs once the burst is whole (this tick
+        answers None), or at that time. None (the pass now): a burst of one (cameras with
+        phases of their own never hold), a whole one, anything but camera frames in this
+        tick, or the smallest ingest topic full of unread messages."""
+        if (self._urgent or not self._fed or self._burst_n >= self.burst_expected
+                or self._unpassed >= min(self.vision_packets.capacity,
+                                         self.referee_packets.capacity,
+                                         self.feedback_packets.capacity)):
+            self._holding = False
+            return None
+        now = self.clock_ns()
+        wait = self.burst_wait_ns
         # from the newest frame's arrival at the relay or, if that is longer ago (this thread
         # woke late: the relay has forwarded the burst's frames before the rest came here),
-        # from now; never longer than the gap from now
-        wait = self.burst_wait_ns
+        # from now; never longer than the wait from now
         until = max(min(self._burst_last, now), now - wait // 2) + wait
-        while now < until:
-            select.select((fd,), (), (), (until - now) / 1e9)
-            if out.get(_EVENTS) & _POLLIN:
-                self.held += 1
-                return True
-            now = clock()
-        return False
+        self._holding = True
+        self.held += 1
+        return (until - now) / 1e9
+
+    def held_pass_ran(self) -> None:
+        self._holding = False
 
     def _parse(self, msg: Message, body: bytes, what: str) -> str | None:
         """Parses ``body`` into ``msg``: None, or the parser's words, counted under the reason
@@ -264,6 +283,8 @@ class RelayIngest(SocketProcessor):
             badlog.warning("zmq-frames", "relay message with %d frames ignored", len(frames))
             return
         topic, body = frames
+        if topic != b"vision":
+            self._urgent = True
         if topic == b"stats":
             stats = tl.RelayStats()
             if self._parse(stats, body, "stats") is None:
@@ -287,6 +308,7 @@ class RelayIngest(SocketProcessor):
             self.record(t, TYPE_VISION_2014, env.payload)
             if self.live():
                 self.vision_packets.write(env)
+                self._fed = True
                 self._burst(t, capture_ns(env.payload))
         elif topic == b"referee":
             self.record(env.receive_time_ns, TYPE_REFEREE_2013, env.payload)
