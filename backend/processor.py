@@ -81,7 +81,7 @@ class Processor:
         return False
 
     #: for a watched source whose ``hold_pass`` holds the pass: the longest the runner lets
-    #: a pass wait, from the first of its ticks that held it (seconds)
+    #: a pass wait, from the first of its ticks that held it (seconds; 0: never held)
     hold_max_s = 0.0
 
     def hold_pass(self) -> float | None:
@@ -89,9 +89,10 @@ class Processor:
         pass may wait for more of its input (the rest of a burst of camera frames), or None
         (the default): the pass now. The runner does not wait in it: it goes back to the
         loop and runs the pass at that time (never later than ``hold_max_s`` after the first
-        held tick), after this source's next tick that answers None, or when anything else
-        runs a pass (a timer's tick, a deadline, a topic written from outside: a stop never
-        waits for it), whichever comes first, once; then it calls ``held_pass_ran``."""
+        held tick) or after this source's next tick that answers None, whichever comes
+        first, once; then it calls ``held_pass_ran``. Meanwhile every other pass (a timer's
+        tick, a deadline, a topic written from outside: a stop never waits for the hold)
+        runs as ever but leaves what this source wrote to the held one."""
         return None
 
     def held_pass_ran(self) -> None:
@@ -268,8 +269,10 @@ class Runner:
         #: a pass held by a watched source (``Processor.hold_pass``): the source, its timer,
         #: the timer's time and the time the pass is held until (it moves on with each held
         #: tick; the timer is set again when it fires before), the hold's last possible time
-        #: (loop.time())
+        #: (loop.time()); the links reading what the source wrote meanwhile (every other
+        #: pass leaves them to the held one)
         self._held_by: Processor | None = None
+        self._held_links: set[_Link] = set()
         self._hold_timer: asyncio.TimerHandle | None = None
         self._hold_at = self._hold_until = self._hold_end = 0.0
 
@@ -304,6 +307,7 @@ class Runner:
             self._hold_timer.cancel()
             self._hold_timer = None
         self._held_by = None
+        self._held_links.clear()
         for timer in self._timers.values():
             timer.cancel()
         self._timers.clear()
@@ -422,8 +426,8 @@ class Runner:
         stats' ``record``: four ticks a camera frame)."""
         if self._passing:
             return
-        if self._held_by is not None:  # this pass is the one a source held
-            self._release()
+        # a pass held by a source: this one (not the held one) leaves what the source wrote
+        held = self._held_links if self._held_by is not None else None
         self._passing = True
         clock = time.perf_counter
         if t is None:
@@ -436,7 +440,7 @@ class Runner:
                     if link.proc.trigger is not link.trigger:
                         self._relink(link)
                     seq = link.topic._seq
-                    if seq == link.seen and not link.due:
+                    if (seq == link.seen and not link.due) or (held and link in held):
                         continue
                     link.seen = seq
                     link.due = False
@@ -479,6 +483,8 @@ class Runner:
         until = min(now + wait_s, self._hold_end)
         if until <= now:
             return False
+        # what the source wrote so far is the held pass's (a few links: only held ticks)
+        self._held_links.update(link for link in self._links if link.topic._seq != link.seen)
         self._hold_until = until
         timer = self._hold_timer
         # one timer a hold: a later time waits for it to fire (``_held``), an earlier one
@@ -500,11 +506,13 @@ class Runner:
             self._hold_at = self._hold_until
             self._hold_timer = loop.call_at(self._hold_until, self._held)
             return
+        self._release()
         self._pass_now()
 
     def _release(self) -> None:
-        """The held pass runs now (whatever asked for it): no timer, and its source told."""
+        """The held pass is to run now: no timer, nothing held, and its source told."""
         src, self._held_by = self._held_by, None
+        self._held_links.clear()
         if self._hold_timer is not None:
             self._hold_timer.cancel()
             self._hold_timer = None
@@ -583,6 +591,8 @@ class Runner:
                     wait_s = None
                 if wait_s is not None and self._hold(proc, wait_s):
                     return  # back to the loop: the pass at the hold's time or sooner
+            if self._held_by is not None:  # the held pass, now (or another source's)
+                self._release()
             self._pass_now(self._t_end)
 
         return ready

@@ -114,8 +114,8 @@ class RelayIngest(SocketProcessor):
         self.hold_max_s = BURST_HOLD_MAX_NS / 1e9
         #: messages put on the bus since the pass last ran (while the pass is held, the
         #: ticks' drains together stay within the smallest ingest topic); whether the pass
-        #: is held; this tick's: a live camera frame, anything else (a referee packet, an
-        #: answer, the relay's statistics: the pass at once)
+        #: is held; this tick's: a live camera frame, a referee packet (a HALT's way in: the
+        #: pass at once; a robot's answer or the relay's statistics wait with the frames)
         self._unpassed = 0
         self._holding = False
         self._fed = False
@@ -243,9 +243,11 @@ class RelayIngest(SocketProcessor):
         the rest a second one. The runner does not block on it (timers, the other
         processors, a stop run meanwhile); the pass runs once the burst is whole (this tick
         answers None), or at that time. None (the pass now): a burst of one (cameras with
-        phases of their own never hold), a whole one, anything but camera frames in this
-        tick, or the smallest ingest topic full of unread messages."""
-        if (self._urgent or not self._fed or self._burst_n >= self.burst_expected
+        phases of their own never hold), a whole one, a referee packet in this tick, no
+        camera frame in it and none held, or the smallest ingest topic full of unread
+        messages."""
+        if (self._urgent or not (self._fed or self._holding)
+                or self._burst_n >= self.burst_expected
                 or self._unpassed >= min(self.vision_packets.capacity,
                                          self.referee_packets.capacity,
                                          self.feedback_packets.capacity)):
@@ -283,8 +285,6 @@ class RelayIngest(SocketProcessor):
             badlog.warning("zmq-frames", "relay message with %d frames ignored", len(frames))
             return
         topic, body = frames
-        if topic != b"vision":
-            self._urgent = True
         if topic == b"stats":
             stats = tl.RelayStats()
             if self._parse(stats, body, "stats") is None:
@@ -311,6 +311,7 @@ class RelayIngest(SocketProcessor):
                 self._fed = True
                 self._burst(t, capture_ns(env.payload))
         elif topic == b"referee":
+            self._urgent = True
             self.record(env.receive_time_ns, TYPE_REFEREE_2013, env.payload)
             if self.live():
                 self.referee_packets.write(env)
