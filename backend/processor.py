@@ -236,11 +236,12 @@ class Runner:
     finishes there unless it really waits (then it, and the rest of its pass, go on in a
     task). A watched source may hold the pass after its tick (``Processor.hold_pass``: the
     relay ingest, for the rest of a burst of camera frames): the runner goes back to the loop
-    with a timer and runs the pass at its time or as soon as something else asks for one,
-    never blocking the thread. A topic written from outside a pass (an operator's command
-    between two ticks) starts a pass of its own, once per burst. Topic-triggered processors
-    with ``max_wait_s`` also run when nothing arrived for that long (a task per processor
-    sleeps until that deadline).
+    with a timer and runs the pass at its time or once the source's input is whole, never
+    blocking the thread; every other pass meanwhile (a timer's, a deadline's: a stop) runs
+    at once and leaves the held input to the held pass. A topic written from outside a pass
+    (an operator's command between two ticks) starts a pass of its own, once per burst.
+    Topic-triggered processors with ``max_wait_s`` also run when nothing arrived for that
+    long (a task per processor sleeps until that deadline).
 
     Stats are counters bumped in the pass (``ProcessorStats``); rates are computed when read.
     """
