@@ -276,6 +276,8 @@ class Runner:
         self._held_links: set[_Link] = set()
         self._hold_timer: asyncio.TimerHandle | None = None
         self._hold_at = self._hold_until = self._hold_end = 0.0
+        #: topics a write to which ends a held pass at once (``end_hold_on``)
+        self._ending: list[Topic[Any]] = []
 
     def add(self, proc: Processor) -> Processor:
         self.processors.append(proc)
@@ -309,6 +311,9 @@ class Runner:
             self._hold_timer = None
         self._held_by = None
         self._held_links.clear()
+        for topic in self._ending:
+            topic.on_write = None
+        self._ending.clear()
         for timer in self._timers.values():
             timer.cancel()
         self._timers.clear()
@@ -496,6 +501,25 @@ class Runner:
             self._hold_at = until
             self._hold_timer = loop.call_at(until, self._held)
         return True
+
+    def end_hold_on(self, topic: Topic[Any]) -> None:
+        """A write to ``topic`` (the emergency stop: control reads it in the pass, it does
+        not trigger one) ends a held pass: it runs in the loop's next turn, so the stop
+        is not held behind the rest of a burst. Without a hold nothing changes."""
+        if topic.on_write is not None:
+            raise RuntimeError(f"topic {topic.name!r} already has a writer hook")
+        self._ending.append(topic)
+
+        def written() -> None:
+            if self._held_by is not None and self._loop is not None:
+                self._loop.call_soon(self._end_hold)
+
+        topic.on_write = written
+
+    def _end_hold(self) -> None:
+        if self._held_by is not None and self._loop is not None:
+            self._release()
+            self._pass_now()
 
     def _held(self) -> None:
         """The held pass's timer: the pass, unless its time moved on meanwhile."""

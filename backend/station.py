@@ -262,6 +262,8 @@ class Station:
         for p in self.processors:
             self.runner.add(p)
         await self.runner.start()
+        # the emergency stop is never held behind the rest of a burst of camera frames
+        self.runner.end_hold_on(self.bus.of(topics.ESTOP))
         self.team_watcher.start(self.team_watcher_listing())
         if s.log is not None:  # make run LOG=...: the log instead of live input
             self.replay.open_at_start(str(s.log))

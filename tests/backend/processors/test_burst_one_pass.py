@@ -138,6 +138,7 @@ async def rig(vision_endpoint: str, sizes: dict[str, int] | None = None) -> Asyn
     for p in procs:
         runner.add(p)
     await runner.start()
+    runner.end_hold_on(bus.of(topics.ESTOP))  # as the station does
     try:
         for _ in range(500):  # both subscriptions join: a probe frame a turn until the
             r.send(0, time.time_ns(), time.time(), 0)  # relay's SUB hears a command set
@@ -406,6 +407,33 @@ async def test_the_controls_deadline_runs_while_a_pass_is_held() -> None:
         assert runs["vision-ingest"] == runs["world-model"] == 1, runs
         w = r.world.world.latest_value()
         assert w is not None and sorted(f.camera_id for f in w.cameras) == list(range(N))
+        assert r.runner._held_by is None and r.runner._hold_timer is None
+
+
+async def test_the_emergency_stop_runs_a_held_pass_at_once() -> None:
+    """The emergency stop pressed while a burst's pass is held (the control reads it in the
+    pass; nothing else would run the control before the hold's time): the held pass runs
+    at once, with the frame it held, and its command set stops every robot."""
+    async with rig("tcp") as r:
+        b = await learn(r, 16_600_000, 20_000)
+        packets = r.bus.of(topics.VISION_PACKETS)
+        r.sets.clear()
+        runs0 = r.runs()
+        r.ingest.clock_ns = lambda: b[0][0] + 100_000
+        r.ingest.burst_wait_ns, r.ingest.hold_max_s = LONG_NS, 2 * LONG_NS / 1e9
+        held0, seq0 = r.ingest.held, packets.seq
+        r.send(0, b[0][0], b[0][1], 0)
+        await until(lambda: r.ingest.held > held0, 10.0, what="the pass held")
+        assert r.runs()["control"] == runs0["control"]
+        r.bus.of(topics.ESTOP).write(True)
+        await until(lambda: r.runs()["control"] > runs0["control"] and r.heard(), 10.0,
+                    what="the stop's pass and command set")
+        runs = {k: v - runs0[k] for k, v in r.runs().items()}
+        assert runs == {"relay-ingest": 1, "vision-ingest": 1, "world-model": 1,
+                        "control": 1}, runs
+        assert packets.seq == seq0 + 1
+        assert r.sets[-1].stop_all or all(
+            c.forward_mps == 0 and c.left_mps == 0 for c in r.sets[-1].commands)
         assert r.runner._held_by is None and r.runner._hold_timer is None
 
 
