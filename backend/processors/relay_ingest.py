@@ -316,7 +316,6 @@ class RelayIngest(SocketProcessor):
             if self.live():
                 self.referee_packets.write(env)
 
-
     def _burst(self, t: int, capture: int | None) -> None:
         """Counts a vision frame (relay stamp ``t``, capture time ``capture``) into its burst."""
         before = self._burst_capture
