@@ -368,10 +368,24 @@ def _placement(f: _Fields, team_default: TeamSide | None = None) -> Placement:
 
 
 def _ball(f: _Fields) -> BallState:
-    b = BallState(f.number("x", unit="m", lo=-7.0, hi=7.0),
-                  f.number("y", unit="m", lo=-5.5, hi=5.5),
-                  f.number("vx", 0.0, lo=-10.0, hi=10.0, unit="m/s"),
-                  f.number("vy", 0.0, lo=-10.0, hi=10.0, unit="m/s"))
+    """A ball's place and velocity: ``vx``, ``vy``, or ``speed`` towards the point ``aim`` (a
+    shot at a spot: ``vary`` its ``aim[1]`` and every run's shot is on target, which
+    independent ranges of vx and vy cannot say)."""
+    x = f.number("x", unit="m", lo=-7.0, hi=7.0)
+    y = f.number("y", unit="m", lo=-5.5, hi=5.5)
+    if f.has("aim") or f.has("speed"):
+        if f.has("vx") or f.has("vy"):
+            raise f.err("aim", "give vx and vy, or aim and speed, not both")
+        aim = f.point("aim")
+        assert aim is not None  # (required: point raises when it is missing)
+        speed = f.number("speed", lo=0.0, hi=10.0, unit="m/s")
+        d = math.hypot(aim[0] - x, aim[1] - y)
+        if d == 0.0:
+            raise f.err("aim", "the ball is at its aim: no direction to shoot in")
+        b = BallState(x, y, speed * (aim[0] - x) / d, speed * (aim[1] - y) / d)
+    else:
+        b = BallState(x, y, f.number("vx", 0.0, lo=-10.0, hi=10.0, unit="m/s"),
+                      f.number("vy", 0.0, lo=-10.0, hi=10.0, unit="m/s"))
     f.done()
     return b
 

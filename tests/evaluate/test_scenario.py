@@ -212,3 +212,32 @@ def test_the_documentation_names_every_field_and_check() -> None:
     assert example is not None
     sc = parse_scenario_text(example.group(1), "example", "docs/evaluate.md")
     assert sc.runs == 20 and [c.name for c in sc.checks] == ["keeper_saved"]
+
+
+def test_a_shot_aimed_at_a_spot() -> None:
+    """``aim`` and ``speed`` instead of vx, vy: the velocity towards the spot, and a ``vary`` of
+    the spot keeps every run's shot on it (independent vx and vy ranges sent 12 of the
+    goalkeeper exercise's 20 shots wide: a keeper doing nothing scored 0.75)."""
+    text = GOOD.replace("vx = -4.0\nvy = 0.0", "aim = [-4.5, 0.2]\nspeed = 5.0", 1).replace(
+        '"ball.vy" = [-0.5, 0.5]', '"ball.aim[1]" = [-0.4, 0.4]', 1)
+    sc = parse_scenario_text(text, "keeper", "keeper.toml")
+    assert sc.ball is not None
+    assert math.hypot(sc.ball.vx, sc.ball.vy) == pytest.approx(5.0)
+    assert sc.ball.vy / sc.ball.vx == pytest.approx((0.2 - 0.5) / (-4.5 + 1.0))
+    for i in range(3):  # each run: a line from the ball through a spot inside the posts
+        b = sc.for_run(i).ball
+        assert b is not None
+        y_at_goal = b.y + (-4.5 - b.x) * b.vy / b.vx
+        assert -0.4 <= y_at_goal <= 0.4 and math.hypot(b.vx, b.vy) == pytest.approx(5.0)
+
+
+@pytest.mark.parametrize(("change", "says"), [
+    ("aim = [-4.5, 0.2]\nspeed = 5.0\nvx = -4.0\nvy = 0.0", "not both"),
+    ("aim = [-4.5, 0.2]", "missing"),
+    ("aim = [-1.0, 0.5]\nspeed = 5.0", "no direction"),
+])
+def test_a_bad_aim_is_named(change: str, says: str) -> None:
+    text = GOOD.replace("vx = -4.0\nvy = 0.0", change, 1)
+    with pytest.raises(ScenarioError) as err:
+        parse_scenario_text(text, "keeper", "keeper.toml")
+    assert err.value.field.startswith("ball.") and says in str(err.value), str(err.value)
