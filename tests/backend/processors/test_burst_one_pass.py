@@ -266,36 +266,36 @@ async def frame_by_frame(r: Rig, b: Burst, hold_ns: int = LONG_NS
     return runs0, sent0, r.ingest.held - held0
 
 
+async def one_pass_frame_by_frame(period_ns: int, spread_ns: int,
+                                  sizes: tuple[int, ...] = (N,) * LEARN) -> None:
+    """Through TCP, bursts of N learnt (``learn``'s stamps ``period_ns`` apart, a burst's
+    frames ``spread_ns``), then one more sent frame by frame: held after each frame but the
+    last, one pass for its N frames."""
+    async with rig("tcp") as r:
+        b = await learn(r, period_ns, spread_ns, sizes=sizes)
+        runs0, sent0, held = await frame_by_frame(r, b)
+        check_one_pass(r, runs0, sent0, b[-1][0], ticks=N)
+        assert held == N - 1
+
+
 async def test_a_burst_arriving_frame_by_frame_is_one_pass() -> None:
     """Through TCP, as the relay forwards a burst. After bursts of N (the relay's stamps
     20 us apart), the pass is held after each of the burst's frames but the last: one pass
     for its N frames."""
-    async with rig("tcp") as r:
-        b = await learn(r, 13_300_000, 20_000)
-        runs0, sent0, held = await frame_by_frame(r, b)
-        check_one_pass(r, runs0, sent0, b[-1][0], ticks=N)
-        assert held == N - 1
+    await one_pass_frame_by_frame(13_300_000, 20_000)
 
 
 async def test_a_burst_the_relay_stamped_far_apart_is_one_pass_by_its_capture_time() -> None:
     """grSim's four cameras of a step share one capture time, but the relay stamps them
     after its recvfrom, spread by its scheduling (1 ms apart here: more than the 0.3 ms gap;
     by the stamps every frame was a burst of its own and had a pass of its own)."""
-    async with rig("tcp") as r:
-        b = await learn(r, 16_600_000, 1_000_000)
-        runs0, sent0, held = await frame_by_frame(r, b)
-        check_one_pass(r, runs0, sent0, b[-1][0], ticks=N)
-        assert held == N - 1
+    await one_pass_frame_by_frame(16_600_000, 1_000_000)
 
 
 async def test_a_burst_with_a_frame_lost_before_does_not_end_the_holding() -> None:
     """Bursts of N, then one of N - 1 (a datagram lost): the next burst of N is still one
     pass (the smaller of the last two bursts' sizes held it for N - 1 frames only)."""
-    async with rig("tcp") as r:
-        b = await learn(r, 16_600_000, 20_000, sizes=(N,) * (LEARN - 1) + (N - 1,))
-        runs0, sent0, held = await frame_by_frame(r, b)
-        check_one_pass(r, runs0, sent0, b[-1][0], ticks=N)
-        assert held == N - 1
+    await one_pass_frame_by_frame(16_600_000, 20_000, sizes=(N,) * (LEARN - 1) + (N - 1,))
 
 
 async def test_cameras_with_phases_of_their_own_never_hold_the_pass() -> None:
